@@ -1,0 +1,164 @@
+#include "host/broadphase/broadphase.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "kernels/broadphase/bounds.h"
+#include "kernels/sort/segments.h"
+
+namespace impact::host {
+namespace {
+
+constexpr uint64_t kMaxPairs = 0xffffffffull;  // kernels index pairs with uint32
+
+kernels::GridParams choose_grid(const kernels::BoundsSummary& s, uint32_t n, GridInfo* info) {
+  kernels::GridParams g{};
+  double extent[3];
+  double max_extent = 0;
+  for (int k = 0; k < 3; ++k) {
+    g.origin[k] = s.lo[k];
+    extent[k] = static_cast<double>(s.hi[k]) - static_cast<double>(s.lo[k]);
+    max_extent = std::max(max_extent, extent[k]);
+  }
+  // The cell must exceed the largest box edge (see grid.h); the small relative
+  // margin absorbs the rounding of the double cell computation.
+  double cell = static_cast<double>(s.max_edge) * (1.0 + 0x1p-20);
+  // Never more than kGridMaxDim - 1 cells across; zero-size boxes get a cell that
+  // spreads them over roughly one cell per box.
+  const double min_cell = max_extent / static_cast<double>(kernels::kGridMaxDim - 2);
+  if (s.max_edge == 0.0f) cell = max_extent / std::max(1.0, std::cbrt(static_cast<double>(n)));
+  cell = std::max(cell, min_cell);
+  if (!(cell > 0.0) || !std::isfinite(cell)) cell = 1.0;
+  g.inv_cell = 1.0 / cell;
+  double cells = 1.0;
+  for (int k = 0; k < 3; ++k) {
+    const double d = std::floor(extent[k] * g.inv_cell) + 1.0;
+    g.dims[k] = static_cast<uint32_t>(std::min<double>(d, kernels::kGridMaxDim));
+    cells *= g.dims[k];
+  }
+  // Dense (row-major buckets, no hashing) when the cell count is a small multiple of n.
+  const double dense_limit = std::max(4.0 * n, 4096.0);
+  if (cells <= dense_limit) {
+    g.dense = 1;
+    g.table_bits = 0;
+    g.bucket_count = static_cast<uint32_t>(cells);
+  } else {
+    g.dense = 0;
+    g.table_bits = std::min<uint32_t>(bits_for(std::max<uint64_t>(2ull * n, 2) - 1), 31);
+    g.bucket_count = 1u << g.table_bits;
+  }
+  info->cell = cell;
+  for (int k = 0; k < 3; ++k) info->dims[k] = g.dims[k];
+  info->dense = g.dense != 0;
+  info->buckets = g.bucket_count;
+  return g;
+}
+
+}  // namespace
+
+Status GridBroadPhase::find_pairs(const Executor& exec, kernels::AabbSoA boxes,
+                                  kernels::PairFilter filter, uint32_t n,
+                                  Buffer<kernels::Pair>* out) {
+  out->clear();
+  if (n < 2) return Status();
+
+  // 1. Union of the boxes and largest edge: one partial per chunk, combined in order.
+  const uint32_t chunks = chunk_count(n, kKeyGrain);
+  kernels::BoundsSummary* partial = scratch(partial_bounds_, chunks);
+  exec.for_each_chunk(n, kKeyGrain, [&](uint32_t b, uint32_t e, uint32_t c) {
+    partial[c] = kernels::reduce_bounds(boxes, {b, e});
+  });
+  kernels::BoundsSummary sum = kernels::empty_bounds_summary();
+  for (uint32_t c = 0; c < chunks; ++c) sum = kernels::combine(sum, partial[c]);
+  const kernels::GridParams g = choose_grid(sum, n, &info_);
+
+  // 2. Keys, sorted on the bucket bits.
+  uint64_t* keys = scratch(keys_, n);
+  exec.for_each_chunk(n, kKeyGrain, [&](uint32_t b, uint32_t e, uint32_t) {
+    kernels::grid_keys(g, boxes, keys, {b, e});
+  });
+  sorter_.sort(exec, keys, n, 32, 32 + bits_for(g.bucket_count - 1));
+
+  // 3. Gather into sorted order.
+  const bool filtered = filter.layer != nullptr;
+  kernels::GridSorted sorted{scratch(index_, n),
+                             scratch(cell_, n),
+                             {scratch(box_[0], n), scratch(box_[1], n), scratch(box_[2], n),
+                              scratch(box_[3], n), scratch(box_[4], n), scratch(box_[5], n)},
+                             filtered ? scratch(layer_, n) : nullptr,
+                             filtered ? scratch(mask_, n) : nullptr,
+                             filtered ? scratch(static_, n) : nullptr};
+  exec.for_each_chunk(n, kKeyGrain, [&](uint32_t b, uint32_t e, uint32_t) {
+    kernels::grid_gather(g, keys, boxes, filter, sorted, {b, e});
+  });
+
+  // 4. Bucket ranges.
+  uint32_t* starts = scratch(bucket_start_, static_cast<size_t>(g.bucket_count) + 1);
+  exec.for_each_chunk(n, kKeyGrain, [&](uint32_t b, uint32_t e, uint32_t) {
+    kernels::segment_starts(keys, n, 32, g.bucket_count, starts, {b, e});
+  });
+
+  // 5. Pairs: count, scan, write.
+  const kernels::GridView view{g,
+                               sorted.index,
+                               sorted.cell,
+                               {sorted.box.min_x, sorted.box.min_y, sorted.box.min_z, sorted.box.max_x,
+                                sorted.box.max_y, sorted.box.max_z},
+                               sorted.layer,
+                               sorted.mask,
+                               sorted.is_static,
+                               starts};
+  return count_scan_write<kernels::Pair>(
+      exec, n, kPairGrain, chunk_offsets_, kMaxPairs, "grid broad phase pairs",
+      [&](uint32_t b, uint32_t e) { return kernels::grid_count_pairs(view, {b, e}); },
+      [&](uint32_t b, uint32_t e, kernels::Pair* dst, uint64_t off) {
+        kernels::grid_write_pairs(view, dst + off, {b, e});
+      },
+      out);
+}
+
+namespace {
+
+template <bool kFiltered, class Emit>
+void brute_force_row(kernels::AabbSoA x, kernels::PairFilter f, uint32_t n, uint32_t i, Emit&& emit) {
+  for (uint32_t j = i + 1; j < n; ++j) {
+    if (x.min_x[i] <= x.max_x[j] && x.min_x[j] <= x.max_x[i] && x.min_y[i] <= x.max_y[j] &&
+        x.min_y[j] <= x.max_y[i] && x.min_z[i] <= x.max_z[j] && x.min_z[j] <= x.max_z[i]) {
+      if constexpr (kFiltered) {
+        if ((f.layer[i] & f.mask[j]) == 0 || (f.layer[j] & f.mask[i]) == 0) continue;
+        if (f.is_static[i] && f.is_static[j]) continue;
+      }
+      emit(i, j);
+    }
+  }
+}
+
+}  // namespace
+
+Status BruteForceBroadPhase::find_pairs(const Executor& exec, kernels::AabbSoA boxes,
+                                        kernels::PairFilter filter, uint32_t n,
+                                        Buffer<kernels::Pair>* out) {
+  out->clear();
+  if (n < 2) return Status();
+  constexpr uint32_t kGrain = 64;
+  auto rows = [&](uint32_t b, uint32_t e, auto&& emit) {
+    for (uint32_t i = b; i < e; ++i) {
+      if (filter.layer) brute_force_row<true>(boxes, filter, n, i, emit);
+      else brute_force_row<false>(boxes, filter, n, i, emit);
+    }
+  };
+  return count_scan_write<kernels::Pair>(
+      exec, n, kGrain, chunk_offsets_, kMaxPairs, "brute-force broad phase pairs",
+      [&](uint32_t b, uint32_t e) {
+        uint64_t c = 0;
+        rows(b, e, [&](uint32_t, uint32_t) { ++c; });
+        return c;
+      },
+      [&](uint32_t b, uint32_t e, kernels::Pair* dst, uint64_t off) {
+        rows(b, e, [&](uint32_t i, uint32_t j) { dst[off++] = kernels::Pair{i, j}; });
+      },
+      out);
+}
+
+}  // namespace impact::host

@@ -1,0 +1,95 @@
+// Host drivers of the broad-phase kernels. Both structures share one contract:
+// given n boxes (SoA) and an optional filter, replace *out with every pair of
+// overlapping boxes (a < b) that passes the filter, in a deterministic order.
+#pragma once
+
+#include <cstdint>
+#include <string>
+
+#include "host/buffer.h"
+#include "host/parallel.h"
+#include "host/radix_sort.h"
+#include "impact/status.h"
+#include "kernels/broadphase/grid.h"
+
+namespace impact::host {
+
+/// What the last grid build chose (for benchmarks and diagnostics).
+struct GridInfo {
+  double cell = 0;
+  uint32_t dims[3] = {0, 0, 0};
+  bool dense = false;
+  uint32_t buckets = 0;
+};
+
+class GridBroadPhase {
+ public:
+  Status find_pairs(const Executor& exec, kernels::AabbSoA boxes, kernels::PairFilter filter,
+                    uint32_t n, Buffer<kernels::Pair>* out);
+  const GridInfo& info() const { return info_; }
+
+  static constexpr uint32_t kKeyGrain = 1u << 14;   // boxes per chunk in streaming passes
+  static constexpr uint32_t kPairGrain = 1u << 11;  // query slots per chunk in the pair pass
+
+ private:
+  RadixSorter sorter_;
+  Buffer<uint64_t> keys_;
+  Buffer<uint32_t> index_;
+  Buffer<uint64_t> cell_;
+  Buffer<float> box_[6];
+  Buffer<uint32_t> layer_, mask_;
+  Buffer<uint8_t> static_;
+  Buffer<uint32_t> bucket_start_;
+  Buffer<uint64_t> chunk_offsets_;
+  Buffer<kernels::BoundsSummary> partial_bounds_;
+  GridInfo info_;
+};
+
+class BruteForceBroadPhase {
+ public:
+  Status find_pairs(const Executor& exec, kernels::AabbSoA boxes, kernels::PairFilter filter,
+                    uint32_t n, Buffer<kernels::Pair>* out);
+
+ private:
+  Buffer<uint64_t> chunk_offsets_;
+};
+
+/// Runs count(begin, end) per chunk and turns the counts into exclusive offsets
+/// (offsets[c] = first output of chunk c, offsets[chunks] = total). Returns total.
+template <class Count>
+uint64_t count_and_scan(const Executor& exec, uint64_t n, uint32_t grain, Buffer<uint64_t>& offsets,
+                        Count&& count) {
+  const uint32_t chunks = chunk_count(n, grain);
+  uint64_t* off = scratch(offsets, static_cast<size_t>(chunks) + 1);
+  exec.for_each_chunk(n, grain, [&](uint32_t b, uint32_t e, uint32_t c) { off[c] = count(b, e); });
+  uint64_t total = 0;
+  for (uint32_t c = 0; c < chunks; ++c) {
+    const uint64_t k = off[c];
+    off[c] = total;
+    total += k;
+  }
+  off[chunks] = total;
+  return total;
+}
+
+/// count_and_scan, then resize *out to the total and run write(begin, end, out, offset)
+/// per chunk. Fails (out emptied) if the total exceeds max_total, naming `what`.
+template <class T, class Count, class Write>
+Status count_scan_write(const Executor& exec, uint64_t n, uint32_t grain, Buffer<uint64_t>& offsets,
+                        uint64_t max_total, const char* what, Count&& count, Write&& write,
+                        Buffer<T>* out) {
+  const uint64_t total = count_and_scan(exec, n, grain, offsets, count);
+  if (total > max_total) {
+    out->clear();
+    return Status(StatusCode::kCapacityExceeded,
+                  std::string(what) + ": " + std::to_string(total) +
+                      " outputs exceed the limit of " + std::to_string(max_total));
+  }
+  out->resize(total);
+  T* dst = out->data();
+  const uint64_t* off = offsets.data();
+  exec.for_each_chunk(n, grain, [&](uint32_t b, uint32_t e, uint32_t c) { write(b, e, dst, off[c]); });
+  return Status();
+}
+
+}  // namespace impact::host

@@ -1,0 +1,234 @@
+// One fixed step of a sphere world as a sequence of flat passes:
+//   integrate velocities -> integrate positions -> bounds -> broad phase
+//   -> narrow phase (sphere-sphere on pairs, sphere-plane on bodies)
+//   -> contact solve (velocity iterations) -> position correction.
+// Every pass is for_each_chunk over a kernel; variable-size outputs use
+// count -> scan -> write, so results are identical for any thread count.
+#include <algorithm>
+#include <chrono>
+#include <cstring>
+#include <string>
+
+#include "host/world_impl.h"
+#include "kernels/broadphase/bounds.h"
+#include "kernels/integrate/semi_implicit_euler.h"
+#include "kernels/narrowphase/sphere_plane.h"
+#include "kernels/narrowphase/sphere_sphere.h"
+#include "kernels/solver/contact_solver.h"
+#include "kernels/sort/segments.h"
+
+namespace impact {
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double ms_since(Clock::time_point& t) {
+  const auto now = Clock::now();
+  const double ms = std::chrono::duration<double, std::milli>(now - t).count();
+  t = now;
+  return ms;
+}
+
+constexpr uint32_t kBodyGrain = 1u << 14;     // bodies per chunk, streaming passes
+constexpr uint32_t kContactGrain = 1u << 13;  // contacts or pairs per chunk
+
+}  // namespace
+
+void ContactStore::resize(size_t n) {
+  for (auto* v : {&a, &b}) v->resize(n);
+  b_is_plane.resize(n);
+  for (auto* v : {&normal_x, &normal_y, &normal_z, &depth, &point_x, &point_y, &point_z, &mass,
+                  &target, &impulse, &delta})
+    v->resize(n);
+  count = n;
+}
+
+Status WorldImpl::step() {
+  StepStats& st = last;
+  st = StepStats{};
+  const auto t_start = Clock::now();
+  auto t = t_start;
+  const uint32_t n = static_cast<uint32_t>(bodies.size());
+  const float dt = desc.fixed_dt;
+  BodyStore& s = bodies;
+
+  // --- integrate (semi-implicit Euler) -------------------------------------------------
+  if (desc.interpolation) {
+    exec.for_each_chunk(n, kBodyGrain, [&](uint32_t b, uint32_t e, uint32_t) {
+      const size_t bytes = sizeof(float) * (e - b);
+      std::memcpy(s.prev_x.data() + b, s.pos_x.data() + b, bytes);
+      std::memcpy(s.prev_y.data() + b, s.pos_y.data() + b, bytes);
+      std::memcpy(s.prev_z.data() + b, s.pos_z.data() + b, bytes);
+    });
+  }
+  const kernels::Vec3f g{desc.gravity.x(), desc.gravity.y(), desc.gravity.z()};
+  exec.for_each_chunk(n, kBodyGrain, [&](uint32_t b, uint32_t e, uint32_t) {
+    kernels::integrate_velocities(dt, g, s.inv_mass.data(), s.vel_x.data(), s.vel_y.data(),
+                                  s.vel_z.data(), {b, e});
+    kernels::integrate_positions(dt, s.vel_x.data(), s.vel_y.data(), s.vel_z.data(), s.pos_x.data(),
+                                 s.pos_y.data(), s.pos_z.data(), {b, e});
+  });
+  st.ms.integrate = ms_since(t);
+
+  // --- bounds ----------------------------------------------------------------------------
+  kernels::AabbSoAOut boxes_out{host::scratch(box[0], n), host::scratch(box[1], n),
+                                host::scratch(box[2], n), host::scratch(box[3], n),
+                                host::scratch(box[4], n), host::scratch(box[5], n)};
+  exec.for_each_chunk(n, kBodyGrain, [&](uint32_t b, uint32_t e, uint32_t) {
+    kernels::sphere_bounds(s.pos_x.data(), s.pos_y.data(), s.pos_z.data(), s.radius.data(),
+                           boxes_out, {b, e});
+  });
+  const kernels::AabbSoA boxes{boxes_out.min_x, boxes_out.min_y, boxes_out.min_z,
+                               boxes_out.max_x, boxes_out.max_y, boxes_out.max_z};
+  st.ms.bounds = ms_since(t);
+
+  // --- broad phase -------------------------------------------------------------------------
+  const kernels::PairFilter filter{s.layer.data(), s.mask.data(), s.is_static.data()};
+  Status bp = desc.broad_phase == BroadPhaseKind::kBruteForce
+                  ? brute_force.find_pairs(exec, boxes, filter, n, &pairs)
+                  : grid.find_pairs(exec, boxes, filter, n, &pairs);
+  if (!bp.ok()) {  // more pairs than 32-bit indices can hold: never drop them silently
+    contacts.resize(0);
+    return bp;
+  }
+  st.pairs = pairs.size();
+  st.ms.broad_phase = ms_since(t);
+
+  // --- narrow phase ----------------------------------------------------------------------
+  const kernels::SphereView sv{s.pos_x.data(), s.pos_y.data(), s.pos_z.data(), s.radius.data()};
+  const kernels::PlaneView pv{planes.normal_x.data(), planes.normal_y.data(),
+                              planes.normal_z.data(), planes.offset.data(),
+                              planes.layer.data(),    planes.mask.data(),
+                              static_cast<uint32_t>(planes.size())};
+  const kernels::BodyFilter bf{s.inv_mass.data(), s.layer.data(), s.mask.data()};
+  const uint32_t np = static_cast<uint32_t>(pairs.size());
+  const uint64_t n_pair_contacts = host::count_and_scan(
+      exec, np, kContactGrain, pair_offsets,
+      [&](uint32_t b, uint32_t e) { return kernels::sphere_sphere_count(pairs.data(), sv, {b, e}); });
+  const uint64_t n_plane_contacts =
+      pv.count == 0 ? 0
+                    : host::count_and_scan(exec, n, kBodyGrain, plane_offsets, [&](uint32_t b, uint32_t e) {
+                        return kernels::sphere_plane_count(sv, bf, pv, {b, e});
+                      });
+  // Two keys per contact index the solver's CSR with 32 bits.
+  if (n_pair_contacts + n_plane_contacts > 0x7fffffffull) {
+    contacts.resize(0);
+    return Status(StatusCode::kCapacityExceeded,
+                  "step: " + std::to_string(n_pair_contacts + n_plane_contacts) +
+                      " contacts exceed the limit of 2^31 - 1");
+  }
+  ContactStore& c = contacts;
+  c.resize(n_pair_contacts + n_plane_contacts);
+  const kernels::ContactSoA cs{c.a.data(),        c.b.data(),        c.b_is_plane.data(),
+                               c.normal_x.data(), c.normal_y.data(), c.normal_z.data(),
+                               c.depth.data(),    c.point_x.data(),  c.point_y.data(),
+                               c.point_z.data()};
+  exec.for_each_chunk(np, kContactGrain, [&](uint32_t b, uint32_t e, uint32_t k) {
+    kernels::sphere_sphere_write(pairs.data(), sv, cs, pair_offsets[k], {b, e});
+  });
+  if (n_plane_contacts > 0) {
+    exec.for_each_chunk(n, kBodyGrain, [&](uint32_t b, uint32_t e, uint32_t k) {
+      kernels::sphere_plane_write(sv, bf, pv, cs, n_pair_contacts + plane_offsets[k], {b, e});
+    });
+  }
+  st.contacts = c.count;
+  st.plane_contacts = n_plane_contacts;
+  st.ms.narrow_phase = ms_since(t);
+
+  // --- contact solver ----------------------------------------------------------------------
+  const uint32_t nc = static_cast<uint32_t>(c.count);
+  const SolverDesc& sd = desc.solver;
+  if (nc > 0) {
+    kernels::SolverContacts sc{c.a.data(),        c.b.data(),        c.b_is_plane.data(),
+                               c.normal_x.data(), c.normal_y.data(), c.normal_z.data(),
+                               c.depth.data(),    c.mass.data(),     c.target.data(),
+                               c.impulse.data(),  c.delta.data()};
+    const kernels::SolverBodies sb{s.vel_x.data(), s.vel_y.data(), s.vel_z.data(), s.inv_mass.data(),
+                                   s.restitution.data(), n};
+    const kernels::SolverParams sp{sd.restitution_threshold, sd.position_correction,
+                                   sd.penetration_slop};
+    // Body -> contact adjacency (CSR) by sorting (body, 2*contact+side) keys.
+    const uint32_t nk = 2 * nc;
+    uint64_t* keys = host::scratch(csr_keys, nk);
+    exec.for_each_chunk(nc, kContactGrain, [&](uint32_t b, uint32_t e, uint32_t) {
+      kernels::contact_body_keys(sc, s.inv_mass.data(), n, keys, {b, e});
+    });
+    sorter.sort(exec, keys, nk, 32, 32 + host::bits_for(n));
+    uint32_t* start = host::scratch(body_start, static_cast<size_t>(n) + 1);
+    exec.for_each_chunk(nk, kContactGrain, [&](uint32_t b, uint32_t e, uint32_t) {
+      kernels::segment_starts(keys, nk, 32, n, start, {b, e});
+    });
+    const kernels::BodyContacts adj{keys, start};
+    auto apply = [&](const kernels::SolverBodies& sbody) {
+      exec.for_each_chunk(n, kBodyGrain, [&](uint32_t b, uint32_t e, uint32_t) {
+        kernels::body_apply_velocity(sc, sbody, adj, {b, e});
+      });
+    };
+    auto iterate = [&](const kernels::SolverBodies& sbody, uint32_t iterations) {
+      for (uint32_t it = 0; it < iterations; ++it) {
+        exec.for_each_chunk(nc, kContactGrain, [&](uint32_t b, uint32_t e, uint32_t) {
+          kernels::contact_solve(sc, sbody, {b, e});
+        });
+        apply(sbody);
+      }
+    };
+    exec.for_each_chunk(nc, kContactGrain, [&](uint32_t b, uint32_t e, uint32_t) {
+      kernels::contact_prepare(sp, sc, sb, planes.restitution.data(), adj, {b, e});
+    });
+
+    // Warm start from last step's impulses of the same (a, b) contacts.
+    uint64_t* pkeys = host::scratch(pair_keys, nc);
+    exec.for_each_chunk(nc, kContactGrain, [&](uint32_t b, uint32_t e, uint32_t) {
+      kernels::contact_pair_keys(sc, pkeys, {b, e});
+    });
+    if (sd.warm_start > 0.0f && !prev_keys.empty()) {
+      exec.for_each_chunk(nc, kContactGrain, [&](uint32_t b, uint32_t e, uint32_t) {
+        kernels::contact_warm_start(sc, pkeys, prev_keys.data(), prev_impulse.data(),
+                                    static_cast<uint32_t>(prev_keys.size()), sd.warm_start, {b, e});
+      });
+      apply(sb);
+    }
+    iterate(sb, sd.velocity_iterations);
+
+    // Remember (key, impulse) sorted by key for the next step's warm start.
+    prev_keys.assign(pkeys, pkeys + nc);
+    prev_impulse.resize(nc);
+    static_assert(sizeof(float) == sizeof(uint32_t));
+    std::memcpy(prev_impulse.data(), c.impulse.data(), sizeof(float) * nc);
+    sorter.sort_kv(exec, prev_keys.data(), reinterpret_cast<uint32_t*>(prev_impulse.data()), nc, 0,
+                   32 + host::bits_for(n));
+
+    if (sd.position_iterations > 0 && sd.position_correction > 0.0f) {
+      // Same iteration on displacements; impulse/target/delta are reused as scratch,
+      // so the velocity impulses are copied out first (impulse_out, read by contacts()).
+      impulse_out.assign(c.impulse.begin(), c.impulse.begin() + nc);
+      float* dx = host::scratch(disp[0], n);
+      float* dy = host::scratch(disp[1], n);
+      float* dz = host::scratch(disp[2], n);
+      exec.for_each_chunk(n, kBodyGrain, [&](uint32_t b, uint32_t e, uint32_t) {
+        const size_t bytes = sizeof(float) * (e - b);
+        std::memset(dx + b, 0, bytes);
+        std::memset(dy + b, 0, bytes);
+        std::memset(dz + b, 0, bytes);
+      });
+      exec.for_each_chunk(nc, kContactGrain, [&](uint32_t b, uint32_t e, uint32_t) {
+        kernels::contact_position_target(sp, sc, {b, e});
+      });
+      const kernels::SolverBodies sd_bodies{dx, dy, dz, s.inv_mass.data(), s.restitution.data(), n};
+      iterate(sd_bodies, sd.position_iterations);
+      exec.for_each_chunk(n, kBodyGrain, [&](uint32_t b, uint32_t e, uint32_t) {
+        kernels::body_commit_displacement(dx, dy, dz, s.pos_x.data(), s.pos_y.data(), s.pos_z.data(),
+                                          {b, e});
+      });
+      std::memcpy(c.impulse.data(), impulse_out.data(), sizeof(float) * nc);
+    }
+  } else {
+    prev_keys.clear();
+    prev_impulse.clear();
+  }
+  st.ms.solve = ms_since(t);
+  st.ms.total = std::chrono::duration<double, std::milli>(Clock::now() - t_start).count();
+  return Status();
+}
+
+}  // namespace impact

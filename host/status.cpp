@@ -1,0 +1,26 @@
+#include "impact/status.h"
+#include "impact/types.h"
+
+namespace impact {
+
+const char* to_string(StatusCode code) {
+  switch (code) {
+    case StatusCode::kOk: return "ok";
+    case StatusCode::kInvalidArgument: return "invalid argument";
+    case StatusCode::kSizeMismatch: return "size mismatch";
+    case StatusCode::kStaleHandle: return "stale handle";
+    case StatusCode::kCapacityExceeded: return "capacity exceeded";
+    case StatusCode::kUnsupported: return "unsupported";
+  }
+  return "?";
+}
+
+const char* to_string(BroadPhaseKind kind) {
+  switch (kind) {
+    case BroadPhaseKind::kGrid: return "grid";
+    case BroadPhaseKind::kBruteForce: return "brute-force";
+  }
+  return "?";
+}
+
+}  // namespace impact

@@ -1,0 +1,554 @@
+// impact::World: validation at the API boundary, SoA storage, handles, time.
+// Every mutating call validates its whole input first and only then writes, so a
+// rejected call leaves the world exactly as it was.
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <string>
+#include <vector>
+
+#include "host/world_impl.h"
+#include "impact/world.h"
+
+namespace impact {
+namespace {
+
+constexpr uint64_t kMaxBodies = 0xfffffff0ull;  // kernels use index n as a sentinel
+
+std::string fmt_float(float v) {
+  char buf[48];
+  std::snprintf(buf, sizeof buf, "%.9g", static_cast<double>(v));
+  return buf;
+}
+
+Status invalid(const std::string& where, const std::string& what) {
+  return Status(StatusCode::kInvalidArgument, where + ": " + what);
+}
+
+bool finite3(const Eigen::Vector3f& v) {
+  return std::isfinite(v.x()) && std::isfinite(v.y()) && std::isfinite(v.z());
+}
+
+std::string vec_str(const Eigen::Vector3f& v) {
+  return "(" + fmt_float(v.x()) + ", " + fmt_float(v.y()) + ", " + fmt_float(v.z()) + ")";
+}
+
+// Position magnitudes beyond this overflow box arithmetic (p +- r, extents) in float.
+constexpr float kMaxCoordinate = 1e18f;
+
+Status check_position(const std::string& who, const Eigen::Vector3f& p) {
+  if (!finite3(p)) return invalid(who, "position must be finite, got " + vec_str(p));
+  if (p.cwiseAbs().maxCoeff() > kMaxCoordinate)
+    return invalid(who, "position magnitude must be <= 1e18 m, got " + vec_str(p));
+  return Status();
+}
+
+Status check_velocity(const std::string& who, const Eigen::Vector3f& v) {
+  if (!finite3(v)) return invalid(who, "velocity must be finite, got " + vec_str(v));
+  return Status();
+}
+
+Status check_body(const std::string& who, const Eigen::Vector3f& pos, const Eigen::Vector3f& vel,
+                  float inv_mass, float radius, float restitution) {
+  if (Status s = check_position(who, pos); !s.ok()) return s;
+  if (Status s = check_velocity(who, vel); !s.ok()) return s;
+  if (!(std::isfinite(inv_mass) && inv_mass >= 0.0f))
+    return invalid(who, "inv_mass must be finite and >= 0 (0 = static), got " + fmt_float(inv_mass));
+  if (!(std::isfinite(radius) && radius > 0.0f && radius <= kMaxCoordinate))
+    return invalid(who, "radius must be finite and > 0, got " + fmt_float(radius));
+  if (!(restitution >= 0.0f && restitution <= 1.0f))
+    return invalid(who, "restitution must be in [0, 1], got " + fmt_float(restitution));
+  return Status();
+}
+
+std::string handle_str(BodyHandle h) {
+  return "{index " + std::to_string(h.index) + ", generation " + std::to_string(h.generation) + "}";
+}
+
+Status check_desc(const WorldDesc& d) {
+  const std::string w = "WorldDesc";
+  if (!finite3(d.gravity)) return invalid(w, "gravity must be finite, got " + vec_str(d.gravity));
+  if (!(std::isfinite(d.fixed_dt) && d.fixed_dt > 0.0f))
+    return invalid(w, "fixed_dt must be finite and > 0, got " + fmt_float(d.fixed_dt));
+  if (d.max_steps_per_frame == 0) return invalid(w, "max_steps_per_frame must be >= 1");
+  const SolverDesc& s = d.solver;
+  if (!(s.position_correction >= 0.0f && s.position_correction <= 1.0f))
+    return invalid(w, "solver.position_correction must be in [0, 1], got " + fmt_float(s.position_correction));
+  if (!(std::isfinite(s.penetration_slop) && s.penetration_slop >= 0.0f))
+    return invalid(w, "solver.penetration_slop must be finite and >= 0, got " + fmt_float(s.penetration_slop));
+  if (!(std::isfinite(s.restitution_threshold) && s.restitution_threshold >= 0.0f))
+    return invalid(w, "solver.restitution_threshold must be finite and >= 0, got " +
+                          fmt_float(s.restitution_threshold));
+  if (!(s.warm_start >= 0.0f && s.warm_start <= 1.0f))
+    return invalid(w, "solver.warm_start must be in [0, 1], got " + fmt_float(s.warm_start));
+  if (d.broad_phase != BroadPhaseKind::kGrid && d.broad_phase != BroadPhaseKind::kBruteForce)
+    return invalid(w, "broad_phase is not a known BroadPhaseKind");
+  Backend b;
+  if (!host::resolve_backend(d.backend, &b))
+    return Status(StatusCode::kUnsupported,
+                  std::string("WorldDesc: backend '") + to_string(d.backend) + "' is not built into this library");
+  return Status();
+}
+
+template <class T>
+void push(host::Buffer<T>& v, T x) {
+  v.push_back(x);
+}
+
+}  // namespace
+
+WorldImpl::WorldImpl(const WorldDesc& d) : desc(d), exec(d.backend, d.threads) {}
+
+void WorldImpl::swap_remove_body(uint32_t slot) {
+  BodyStore& s = bodies;
+  const uint32_t last_slot = static_cast<uint32_t>(s.size() - 1);
+  auto move = [&](auto& v) {
+    if (v.empty()) return;
+    v[slot] = v[last_slot];
+    v.pop_back();
+  };
+  for (auto* v : {&s.pos_x, &s.pos_y, &s.pos_z, &s.vel_x, &s.vel_y, &s.vel_z, &s.inv_mass, &s.radius,
+                  &s.restitution, &s.prev_x, &s.prev_y, &s.prev_z})
+    move(*v);
+  move(s.layer);
+  move(s.mask);
+  move(s.is_static);
+  const BodyHandle gone = s.handle[slot];
+  if (slot != last_slot) {
+    s.handle[slot] = s.handle[last_slot];
+    body_handles.rebind(s.handle[slot].index, slot);
+  }
+  s.handle.pop_back();
+  body_handles.release(gone.index);
+}
+
+// --- World ------------------------------------------------------------------------------
+
+World::World(std::unique_ptr<WorldImpl> impl) : impl_(std::move(impl)) {}
+World::~World() = default;
+
+Status World::create(const WorldDesc& desc, std::unique_ptr<World>* out) {
+  if (out == nullptr) return invalid("World::create", "out must not be null");
+  out->reset();
+  if (Status s = check_desc(desc); !s.ok()) return s;
+  out->reset(new World(std::make_unique<WorldImpl>(desc)));
+  return Status();
+}
+
+namespace {
+
+// Appends one validated body; returns its handle.
+BodyHandle append_body(WorldImpl& w, const Eigen::Vector3f& p, const Eigen::Vector3f& v,
+                       float inv_mass, float radius, float restitution, uint32_t layer,
+                       uint32_t mask) {
+  BodyStore& s = w.bodies;
+  const uint32_t slot = static_cast<uint32_t>(s.size());
+  push(s.pos_x, p.x());
+  push(s.pos_y, p.y());
+  push(s.pos_z, p.z());
+  push(s.vel_x, v.x());
+  push(s.vel_y, v.y());
+  push(s.vel_z, v.z());
+  push(s.inv_mass, inv_mass);
+  push(s.radius, radius);
+  push(s.restitution, restitution);
+  push(s.layer, layer);
+  push(s.mask, mask);
+  push(s.is_static, static_cast<uint8_t>(inv_mass == 0.0f));
+  if (w.desc.interpolation) {
+    push(s.prev_x, p.x());
+    push(s.prev_y, p.y());
+    push(s.prev_z, p.z());
+  }
+  BodyHandle h;
+  w.body_handles.acquire(slot, &h.index, &h.generation);
+  s.handle.push_back(h);
+  return h;
+}
+
+void reserve_bodies(WorldImpl& w, size_t extra) {
+  BodyStore& s = w.bodies;
+  const size_t n = s.size() + extra;
+  for (auto* v : {&s.pos_x, &s.pos_y, &s.pos_z, &s.vel_x, &s.vel_y, &s.vel_z, &s.inv_mass, &s.radius,
+                  &s.restitution})
+    v->reserve(n);
+  if (w.desc.interpolation)
+    for (auto* v : {&s.prev_x, &s.prev_y, &s.prev_z}) v->reserve(n);
+  s.layer.reserve(n);
+  s.mask.reserve(n);
+  s.is_static.reserve(n);
+  s.handle.reserve(n);
+}
+
+Status check_capacity(const WorldImpl& w, size_t extra, const char* where) {
+  if (w.bodies.size() + extra > kMaxBodies)
+    return Status(StatusCode::kCapacityExceeded,
+                  std::string(where) + ": body count would exceed " + std::to_string(kMaxBodies));
+  return Status();
+}
+
+}  // namespace
+
+Status World::create_bodies(std::span<const BodyDesc> descs, std::span<BodyHandle> out) {
+  if (out.size() != descs.size())
+    return Status(StatusCode::kSizeMismatch, "create_bodies: out has " + std::to_string(out.size()) +
+                                                 " handles for " + std::to_string(descs.size()) + " bodies");
+  if (Status s = check_capacity(*impl_, descs.size(), "create_bodies"); !s.ok()) return s;
+  for (size_t i = 0; i < descs.size(); ++i) {
+    const BodyDesc& d = descs[i];
+    if (Status s = check_body("create_bodies: body " + std::to_string(i), d.position, d.velocity,
+                              d.inv_mass, d.radius, d.restitution);
+        !s.ok())
+      return s;
+  }
+  reserve_bodies(*impl_, descs.size());
+  for (size_t i = 0; i < descs.size(); ++i) {
+    const BodyDesc& d = descs[i];
+    out[i] = append_body(*impl_, d.position, d.velocity, d.inv_mass, d.radius, d.restitution, d.layer,
+                         d.mask);
+  }
+  return Status();
+}
+
+Status World::create_bodies(const Eigen::Ref<const Eigen::Matrix3Xf>& positions,
+                            const Eigen::Ref<const Eigen::Matrix3Xf>& velocities,
+                            const Eigen::Ref<const Eigen::VectorXf>& radii,
+                            const Eigen::Ref<const Eigen::VectorXf>& inv_masses, const BodyDesc& common,
+                            std::span<BodyHandle> out) {
+  const size_t n = static_cast<size_t>(positions.cols());
+  auto mismatch = [&](const char* what, size_t got) {
+    return Status(StatusCode::kSizeMismatch, std::string("create_bodies: ") + what + " has " +
+                                                 std::to_string(got) + " entries for " +
+                                                 std::to_string(n) + " positions");
+  };
+  if (velocities.cols() != 0 && static_cast<size_t>(velocities.cols()) != n)
+    return mismatch("velocities", static_cast<size_t>(velocities.cols()));
+  if (static_cast<size_t>(radii.size()) != n) return mismatch("radii", static_cast<size_t>(radii.size()));
+  if (static_cast<size_t>(inv_masses.size()) != n)
+    return mismatch("inv_masses", static_cast<size_t>(inv_masses.size()));
+  if (out.size() != n) return mismatch("out", out.size());
+  if (Status s = check_capacity(*impl_, n, "create_bodies"); !s.ok()) return s;
+  const bool has_vel = velocities.cols() != 0;
+  auto vel = [&](size_t i) -> Eigen::Vector3f {
+    return has_vel ? Eigen::Vector3f(velocities.col(static_cast<Eigen::Index>(i))) : Eigen::Vector3f::Zero();
+  };
+  for (size_t i = 0; i < n; ++i) {
+    const auto c = static_cast<Eigen::Index>(i);
+    if (Status s = check_body("create_bodies: body " + std::to_string(i), positions.col(c), vel(i),
+                              inv_masses[c], radii[c], common.restitution);
+        !s.ok())
+      return s;
+  }
+  reserve_bodies(*impl_, n);
+  for (size_t i = 0; i < n; ++i) {
+    const auto c = static_cast<Eigen::Index>(i);
+    out[i] = append_body(*impl_, positions.col(c), vel(i), inv_masses[c], radii[c], common.restitution,
+                         common.layer, common.mask);
+  }
+  return Status();
+}
+
+namespace {
+
+// Resolves every handle to a slot, or reports the first bad one.
+Status resolve(const WorldImpl& w, std::span<const BodyHandle> handles, const char* where,
+               std::vector<uint32_t>* slots) {
+  slots->resize(handles.size());
+  for (size_t i = 0; i < handles.size(); ++i) {
+    const uint32_t slot = w.body_handles.lookup(handles[i].index, handles[i].generation);
+    if (slot == host::HandleTable::kNoSlot)
+      return Status(StatusCode::kStaleHandle, std::string(where) + ": body " + std::to_string(i) +
+                                                  " handle " + handle_str(handles[i]) +
+                                                  (handles[i].is_null() ? " is null" : " is stale or invalid"));
+    (*slots)[i] = slot;
+  }
+  return Status();
+}
+
+}  // namespace
+
+Status World::destroy_bodies(std::span<const BodyHandle> handles) {
+  std::vector<uint32_t> slots;
+  if (Status s = resolve(*impl_, handles, "destroy_bodies", &slots); !s.ok()) return s;
+  std::vector<uint32_t> sorted(slots);
+  std::sort(sorted.begin(), sorted.end());  // validation only; does not shape results
+  if (std::adjacent_find(sorted.begin(), sorted.end()) != sorted.end())
+    return invalid("destroy_bodies", "the same body is listed twice");
+  impl_->prev_keys.clear();  // slots move: last step's contact keys no longer apply
+  impl_->prev_impulse.clear();
+  for (const BodyHandle& h : handles) {
+    // Look up again: earlier removals may have moved this body to another slot.
+    impl_->swap_remove_body(impl_->body_handles.lookup(h.index, h.generation));
+  }
+  return Status();
+}
+
+Status World::set_positions(std::span<const BodyHandle> handles, std::span<const Eigen::Vector3f> values) {
+  if (handles.size() != values.size())
+    return Status(StatusCode::kSizeMismatch, "set_positions: handles and values differ in length");
+  std::vector<uint32_t> slots;
+  if (Status s = resolve(*impl_, handles, "set_positions", &slots); !s.ok()) return s;
+  for (size_t i = 0; i < values.size(); ++i)
+    if (Status s = check_position("set_positions: body " + std::to_string(i), values[i]); !s.ok()) return s;
+  BodyStore& b = impl_->bodies;
+  for (size_t i = 0; i < values.size(); ++i) {
+    const uint32_t k = slots[i];
+    b.pos_x[k] = values[i].x();
+    b.pos_y[k] = values[i].y();
+    b.pos_z[k] = values[i].z();
+    if (impl_->desc.interpolation) {  // a teleport does not interpolate
+      b.prev_x[k] = values[i].x();
+      b.prev_y[k] = values[i].y();
+      b.prev_z[k] = values[i].z();
+    }
+  }
+  return Status();
+}
+
+Status World::set_velocities(std::span<const BodyHandle> handles, std::span<const Eigen::Vector3f> values) {
+  if (handles.size() != values.size())
+    return Status(StatusCode::kSizeMismatch, "set_velocities: handles and values differ in length");
+  std::vector<uint32_t> slots;
+  if (Status s = resolve(*impl_, handles, "set_velocities", &slots); !s.ok()) return s;
+  for (size_t i = 0; i < values.size(); ++i)
+    if (Status s = check_velocity("set_velocities: body " + std::to_string(i), values[i]); !s.ok()) return s;
+  BodyStore& b = impl_->bodies;
+  for (size_t i = 0; i < values.size(); ++i) {
+    b.vel_x[slots[i]] = values[i].x();
+    b.vel_y[slots[i]] = values[i].y();
+    b.vel_z[slots[i]] = values[i].z();
+  }
+  return Status();
+}
+
+Status World::get_positions(std::span<const BodyHandle> handles, std::span<Eigen::Vector3f> out) const {
+  if (handles.size() != out.size())
+    return Status(StatusCode::kSizeMismatch, "get_positions: handles and out differ in length");
+  std::vector<uint32_t> slots;
+  if (Status s = resolve(*impl_, handles, "get_positions", &slots); !s.ok()) return s;
+  const BodyStore& b = impl_->bodies;
+  for (size_t i = 0; i < out.size(); ++i) out[i] = {b.pos_x[slots[i]], b.pos_y[slots[i]], b.pos_z[slots[i]]};
+  return Status();
+}
+
+Status World::get_velocities(std::span<const BodyHandle> handles, std::span<Eigen::Vector3f> out) const {
+  if (handles.size() != out.size())
+    return Status(StatusCode::kSizeMismatch, "get_velocities: handles and out differ in length");
+  std::vector<uint32_t> slots;
+  if (Status s = resolve(*impl_, handles, "get_velocities", &slots); !s.ok()) return s;
+  const BodyStore& b = impl_->bodies;
+  for (size_t i = 0; i < out.size(); ++i) out[i] = {b.vel_x[slots[i]], b.vel_y[slots[i]], b.vel_z[slots[i]]};
+  return Status();
+}
+
+Status World::slot_of(BodyHandle handle, uint32_t* out_slot) const {
+  std::vector<uint32_t> slots;
+  if (Status s = resolve(*impl_, std::span<const BodyHandle>(&handle, 1), "slot_of", &slots); !s.ok()) return s;
+  *out_slot = slots[0];
+  return Status();
+}
+
+size_t World::body_count() const { return impl_->bodies.size(); }
+
+BodyArrays World::bodies() const {
+  const BodyStore& b = impl_->bodies;
+  const size_t n = b.size();
+  return BodyArrays{{b.pos_x.data(), n},    {b.pos_y.data(), n},  {b.pos_z.data(), n},
+                    {b.vel_x.data(), n},    {b.vel_y.data(), n},  {b.vel_z.data(), n},
+                    {b.inv_mass.data(), n}, {b.radius.data(), n}, {b.restitution.data(), n},
+                    {b.layer.data(), n},    {b.mask.data(), n},   {b.handle.data(), n}};
+}
+
+// --- planes -----------------------------------------------------------------------------
+
+Status World::create_planes(std::span<const PlaneDesc> descs, std::span<PlaneHandle> out) {
+  if (out.size() != descs.size())
+    return Status(StatusCode::kSizeMismatch, "create_planes: out and descs differ in length");
+  for (size_t i = 0; i < descs.size(); ++i) {
+    const PlaneDesc& d = descs[i];
+    const std::string who = "create_planes: plane " + std::to_string(i);
+    if (!finite3(d.normal)) return invalid(who, "normal must be finite, got " + vec_str(d.normal));
+    const float len = d.normal.norm();
+    if (!(len > 0.0f) || !std::isfinite(len))
+      return invalid(who, "normal must be non-zero, got " + vec_str(d.normal));
+    if (!std::isfinite(d.offset)) return invalid(who, "offset must be finite, got " + fmt_float(d.offset));
+    if (!(d.restitution >= 0.0f && d.restitution <= 1.0f))
+      return invalid(who, "restitution must be in [0, 1], got " + fmt_float(d.restitution));
+  }
+  PlaneStore& p = impl_->planes;
+  for (size_t i = 0; i < descs.size(); ++i) {
+    const PlaneDesc& d = descs[i];
+    const float len = d.normal.norm();
+    const Eigen::Vector3f n = d.normal / len;
+    p.normal_x.push_back(n.x());
+    p.normal_y.push_back(n.y());
+    p.normal_z.push_back(n.z());
+    p.offset.push_back(d.offset / len);  // n.x <= offset scales with the normal
+    p.restitution.push_back(d.restitution);
+    p.layer.push_back(d.layer);
+    p.mask.push_back(d.mask);
+    PlaneHandle h;
+    impl_->plane_handles.acquire(static_cast<uint32_t>(p.handle.size()), &h.index, &h.generation);
+    p.handle.push_back(h);
+    out[i] = h;
+  }
+  return Status();
+}
+
+Status World::destroy_planes(std::span<const PlaneHandle> handles) {
+  PlaneStore& p = impl_->planes;
+  std::vector<uint32_t> slots(handles.size());
+  for (size_t i = 0; i < handles.size(); ++i) {
+    const uint32_t slot = impl_->plane_handles.lookup(handles[i].index, handles[i].generation);
+    if (slot == host::HandleTable::kNoSlot)
+      return Status(StatusCode::kStaleHandle,
+                    "destroy_planes: plane " + std::to_string(i) + " handle {index " +
+                        std::to_string(handles[i].index) + ", generation " +
+                        std::to_string(handles[i].generation) + "} is stale or invalid");
+    slots[i] = slot;
+  }
+  std::vector<uint32_t> sorted(slots);
+  std::sort(sorted.begin(), sorted.end());
+  if (std::adjacent_find(sorted.begin(), sorted.end()) != sorted.end())
+    return invalid("destroy_planes", "the same plane is listed twice");
+  for (const PlaneHandle& h : handles) {
+    const uint32_t slot = impl_->plane_handles.lookup(h.index, h.generation);
+    const uint32_t last = static_cast<uint32_t>(p.size() - 1);
+    auto move = [&](auto& v) {
+      v[slot] = v[last];
+      v.pop_back();
+    };
+    for (auto* v : {&p.normal_x, &p.normal_y, &p.normal_z, &p.offset, &p.restitution}) move(*v);
+    move(p.layer);
+    move(p.mask);
+    if (slot != last) impl_->plane_handles.rebind(p.handle[last].index, slot);
+    move(p.handle);
+    impl_->plane_handles.release(h.index);
+  }
+  return Status();
+}
+
+size_t World::plane_count() const { return impl_->planes.size(); }
+
+// --- time -------------------------------------------------------------------------------
+
+Status World::step() { return impl_->step(); }
+
+Status World::advance(float frame_seconds, FrameResult* out) {
+  if (!(std::isfinite(frame_seconds) && frame_seconds >= 0.0f))
+    return invalid("advance", "frame_seconds must be finite and >= 0, got " + fmt_float(frame_seconds));
+  WorldImpl& w = *impl_;
+  const double dt = w.desc.fixed_dt;
+  w.accumulator += frame_seconds;
+  FrameResult r;
+  Status status;
+  while (w.accumulator >= dt && r.steps < w.desc.max_steps_per_frame) {
+    w.accumulator -= dt;
+    ++r.steps;
+    status = w.step();
+    if (!status.ok()) break;
+  }
+  if (w.accumulator >= dt) {  // over budget: keep only the sub-step remainder
+    const double drop = std::floor(w.accumulator / dt) * dt;
+    w.accumulator -= drop;
+    r.dropped = static_cast<float>(drop);
+  }
+  w.alpha = static_cast<float>(std::clamp(w.accumulator / dt, 0.0, 1.0));
+  r.alpha = w.alpha;
+  if (out) *out = r;
+  return status;
+}
+
+float World::interpolation_alpha() const { return impl_->alpha; }
+
+Status World::interpolated_positions(std::span<Eigen::Vector3f> out) const {
+  const WorldImpl& w = *impl_;
+  if (!w.desc.interpolation)
+    return Status(StatusCode::kUnsupported, "interpolated_positions: create the world with WorldDesc::interpolation");
+  if (out.size() != w.bodies.size())
+    return Status(StatusCode::kSizeMismatch, "interpolated_positions: out has " + std::to_string(out.size()) +
+                                                 " entries for " + std::to_string(w.bodies.size()) + " bodies");
+  const float a = w.alpha, b = 1.0f - w.alpha;
+  const BodyStore& s = w.bodies;
+  for (size_t i = 0; i < out.size(); ++i)
+    out[i] = {b * s.prev_x[i] + a * s.pos_x[i], b * s.prev_y[i] + a * s.pos_y[i],
+              b * s.prev_z[i] + a * s.pos_z[i]};
+  return Status();
+}
+
+// --- results ----------------------------------------------------------------------------
+
+const StepStats& World::last_step() const { return impl_->last; }
+
+ContactArrays World::contacts() const {
+  const ContactStore& c = impl_->contacts;
+  const size_t n = c.count;
+  return ContactArrays{{c.a.data(), n},        {c.b.data(), n},        {c.b_is_plane.data(), n},
+                       {c.normal_x.data(), n}, {c.normal_y.data(), n}, {c.normal_z.data(), n},
+                       {c.depth.data(), n},    {c.point_x.data(), n},  {c.point_y.data(), n},
+                       {c.point_z.data(), n},  {c.impulse.data(), n}};
+}
+
+static_assert(sizeof(BodyPair) == sizeof(kernels::Pair) && alignof(BodyPair) == alignof(kernels::Pair));
+
+std::span<const BodyPair> World::pairs() const {
+  const auto& p = impl_->pairs;
+  return {reinterpret_cast<const BodyPair*>(p.data()), p.size()};
+}
+
+uint64_t World::state_hash() const {
+  // FNV-1a over the bytes of every state array, in slot order.
+  uint64_t h = 1469598103934665603ull;
+  auto mix = [&](const void* data, size_t bytes) {
+    const auto* p = static_cast<const unsigned char*>(data);
+    for (size_t i = 0; i < bytes; ++i) {
+      h ^= p[i];
+      h *= 1099511628211ull;
+    }
+  };
+  const BodyStore& s = impl_->bodies;
+  const size_t n = s.size();
+  mix(&n, sizeof n);
+  for (const auto* v : {&s.pos_x, &s.pos_y, &s.pos_z, &s.vel_x, &s.vel_y, &s.vel_z})
+    mix(v->data(), n * sizeof(float));
+  return h;
+}
+
+// --- settings ---------------------------------------------------------------------------
+
+const WorldDesc& World::desc() const { return impl_->desc; }
+
+Status World::set_backend(Backend backend, uint32_t threads) {
+  Backend resolved;
+  if (!host::resolve_backend(backend, &resolved))
+    return Status(StatusCode::kUnsupported,
+                  std::string("set_backend: backend '") + to_string(backend) + "' is not built into this library");
+  impl_->exec = host::Executor(backend, threads);
+  impl_->desc.backend = backend;
+  impl_->desc.threads = threads;
+  return Status();
+}
+
+Status World::set_broad_phase(BroadPhaseKind kind) {
+  WorldDesc d = impl_->desc;
+  d.broad_phase = kind;
+  if (Status s = check_desc(d); !s.ok()) return s;
+  impl_->desc = d;
+  return Status();
+}
+
+Status World::set_solver(const SolverDesc& solver) {
+  WorldDesc d = impl_->desc;
+  d.solver = solver;
+  if (Status s = check_desc(d); !s.ok()) return s;
+  impl_->desc = d;
+  return Status();
+}
+
+Status World::set_gravity(const Eigen::Vector3f& gravity) {
+  if (!finite3(gravity)) return invalid("set_gravity", "gravity must be finite, got " + vec_str(gravity));
+  impl_->desc.gravity = gravity;
+  return Status();
+}
+
+}  // namespace impact

@@ -1,0 +1,80 @@
+// WorldImpl: the SoA storage behind impact::World, and the scratch of its step.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include "host/broadphase/broadphase.h"
+#include "host/buffer.h"
+#include "host/handle_table.h"
+#include "host/parallel.h"
+#include "impact/world.h"
+#include "kernels/broadphase/grid.h"
+
+namespace impact {
+
+/// Body state in dense slots. Hot (per-iteration) and cold fields are separate arrays.
+struct BodyStore {
+  host::Buffer<float> pos_x, pos_y, pos_z;
+  host::Buffer<float> vel_x, vel_y, vel_z;
+  host::Buffer<float> inv_mass, radius, restitution;
+  host::Buffer<uint32_t> layer, mask;
+  host::Buffer<uint8_t> is_static;
+  host::Buffer<float> prev_x, prev_y, prev_z;  // only with WorldDesc::interpolation
+  std::vector<BodyHandle> handle;              // slot -> handle
+  size_t size() const { return handle.size(); }
+};
+
+struct PlaneStore {
+  std::vector<float> normal_x, normal_y, normal_z, offset, restitution;
+  std::vector<uint32_t> layer, mask;
+  std::vector<PlaneHandle> handle;
+  size_t size() const { return handle.size(); }
+};
+
+/// Per-contact arrays: collision data plus solver rows.
+struct ContactStore {
+  host::Buffer<uint32_t> a, b;
+  host::Buffer<uint8_t> b_is_plane;
+  host::Buffer<float> normal_x, normal_y, normal_z, depth, point_x, point_y, point_z;
+  host::Buffer<float> mass, target, impulse, delta;
+  size_t count = 0;
+  void resize(size_t n);
+};
+
+class WorldImpl {
+ public:
+  explicit WorldImpl(const WorldDesc& desc);
+
+  Status step();
+  void swap_remove_body(uint32_t slot);
+
+  WorldDesc desc;
+  host::Executor exec;
+  BodyStore bodies;
+  PlaneStore planes;
+  host::HandleTable body_handles;
+  host::HandleTable plane_handles;
+
+  double accumulator = 0.0;  // s, in double so long runs keep sub-step precision
+  float alpha = 0.0f;
+  StepStats last;
+
+  // Step scratch, reused across steps.
+  host::Buffer<float> box[6];
+  host::Buffer<kernels::Pair> pairs;
+  ContactStore contacts;
+  host::Buffer<uint64_t> csr_keys;
+  host::Buffer<uint64_t> pair_keys;          // this step's contact keys (a << 32 | b | plane bit)
+  host::Buffer<uint64_t> prev_keys;          // last step's, sorted, for warm starting
+  host::Buffer<float> prev_impulse;          // their impulses
+  host::Buffer<float> impulse_out;
+  host::Buffer<float> disp[3];               // position-correction displacements
+  host::Buffer<uint32_t> body_start;
+  host::Buffer<uint64_t> pair_offsets, plane_offsets;
+  host::RadixSorter sorter;
+  host::GridBroadPhase grid;
+  host::BruteForceBroadPhase brute_force;
+};
+
+}  // namespace impact

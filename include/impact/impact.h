@@ -1,0 +1,8 @@
+// Umbrella header: everything a user needs.
+#pragma once
+
+#include "impact/status.h"
+#include "impact/types.h"
+#include "impact/world.h"
+#include "impact/broadphase.h"
+#include "impact/version.h"

@@ -1,0 +1,70 @@
+// Small value types shared by the public API: handles, descriptors, enums.
+#pragma once
+
+#include <cstdint>
+
+#include <Eigen/Core>
+
+namespace impact {
+
+/// Refers to a body. Generation 0 is never issued, so a zero handle is null.
+/// A handle goes stale when its body is destroyed; using it then is reported as
+/// StatusCode::kStaleHandle, never dereferenced.
+struct BodyHandle {
+  uint32_t index = 0;
+  uint32_t generation = 0;
+  bool is_null() const { return generation == 0; }
+  friend bool operator==(const BodyHandle&, const BodyHandle&) = default;
+};
+
+/// Refers to a static plane collider. Same rules as BodyHandle.
+struct PlaneHandle {
+  uint32_t index = 0;
+  uint32_t generation = 0;
+  bool is_null() const { return generation == 0; }
+  friend bool operator==(const PlaneHandle&, const PlaneHandle&) = default;
+};
+
+/// One invalid index value used throughout.
+inline constexpr uint32_t kInvalidIndex = 0xffffffffu;
+
+/// A sphere body. Units: m, m/s, 1/kg.
+struct BodyDesc {
+  Eigen::Vector3f position = Eigen::Vector3f::Zero();  ///< centre, m
+  Eigen::Vector3f velocity = Eigen::Vector3f::Zero();  ///< m/s
+  float inv_mass = 1.0f;      ///< 1/kg; 0 makes the body static (infinite mass). Must be >= 0.
+  float radius = 0.5f;        ///< m; must be > 0
+  float restitution = 0.0f;   ///< 0 = perfectly inelastic, 1 = perfectly elastic; in [0, 1]
+  uint32_t layer = 1u;        ///< layer bits this body belongs to
+  uint32_t mask = 0xffffffffu;  ///< layer bits this body collides with
+};
+
+/// A static half-space { x : dot(normal, x) <= offset }. The normal points out of
+/// the solid into free space; it need not be unit length (it is normalised) but
+/// must be finite and non-zero.
+struct PlaneDesc {
+  Eigen::Vector3f normal = Eigen::Vector3f::UnitY();
+  float offset = 0.0f;        ///< m, signed distance of the surface from the origin along normal
+  float restitution = 0.0f;   ///< in [0, 1]
+  uint32_t layer = 1u;
+  uint32_t mask = 0xffffffffu;
+};
+
+/// Which thread runtime executes the passes.
+enum class Backend : int {
+  kDefault = 0,  ///< the one chosen at build time by IMPACT_THREADS
+  kSerial,       ///< one thread, same code path and same chunking
+  kTbb,          ///< oneTBB task arena
+  kOpenMP,       ///< OpenMP parallel for
+};
+
+/// Broad-phase structure. Issue-tracked additions (LBVH, sweep-and-prune) slot in here.
+enum class BroadPhaseKind : int {
+  kGrid = 0,        ///< parallel radix-sorted uniform hash grid
+  kBruteForce = 1,  ///< all pairs, O(n^2): the reference oracle
+};
+
+const char* to_string(Backend backend);
+const char* to_string(BroadPhaseKind kind);
+
+}  // namespace impact

@@ -1,0 +1,4 @@
+#pragma once
+#define IMPACT_VERSION_MAJOR 0
+#define IMPACT_VERSION_MINOR 1
+#define IMPACT_VERSION_PATCH 0

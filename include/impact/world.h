@@ -1,0 +1,186 @@
+// World: a batch of sphere bodies and static planes stored as structure-of-arrays,
+// stepped by a fixed-timestep pipeline of flat data-parallel passes.
+//
+// Thread safety: a World is not internally synchronised. Calls on one World must
+// not overlap; different Worlds may be used from different threads.
+#pragma once
+
+#include <cstdint>
+#include <memory>
+#include <span>
+
+#include <Eigen/Core>
+
+#include "impact/status.h"
+#include "impact/types.h"
+
+namespace impact {
+
+/// Accuracy knobs of the contact solver (docs/solver.md has their measured cost and error).
+struct SolverDesc {
+  /// Velocity iterations (Jacobi with mass splitting). 1 is exact for an isolated
+  /// pair; stacks and piles need more, or warm starting to spread work over steps.
+  uint32_t velocity_iterations = 8;
+  /// Position-correction iterations; 0 turns position correction off.
+  uint32_t position_iterations = 4;
+  /// Fraction of the penetration beyond slop removed per step, in [0, 1].
+  float position_correction = 0.8f;
+  /// Penetration left uncorrected, m, >= 0; keeps resting contacts persistent.
+  float penetration_slop = 0.001f;
+  /// Approach speeds below this (m/s, >= 0) get no bounce, so resting bodies settle.
+  float restitution_threshold = 0.5f;
+  /// Fraction of last step's impulse a persisting contact starts from, in [0, 1]
+  /// (0 = cold start every step).
+  float warm_start = 1.0f;
+};
+
+/// Settings fixed at creation (some can be changed later through setters).
+struct WorldDesc {
+  Eigen::Vector3f gravity{0.0f, -9.81f, 0.0f};  ///< m/s^2
+  float fixed_dt = 1.0f / 60.0f;                ///< s, length of one step; > 0
+  /// Upper bound on steps run by one advance() call; time beyond it is dropped
+  /// (and reported) so a slow frame cannot snowball ("spiral of death").
+  uint32_t max_steps_per_frame = 8;
+  SolverDesc solver;
+  /// Keep last step's positions so interpolated_positions() can blend (costs 12 B/body).
+  bool interpolation = false;
+  BroadPhaseKind broad_phase = BroadPhaseKind::kGrid;
+  Backend backend = Backend::kDefault;
+  /// Worker threads; 0 = all hardware threads. Results do not depend on it.
+  uint32_t threads = 0;
+};
+
+/// Wall time of each pass of the last step, ms.
+struct PassTimes {
+  double integrate = 0, bounds = 0, broad_phase = 0, narrow_phase = 0, solve = 0, total = 0;
+};
+
+/// What the last step did.
+struct StepStats {
+  uint64_t pairs = 0;          ///< broad-phase candidate pairs (body-body)
+  uint64_t contacts = 0;       ///< narrow-phase contacts (body-body plus body-plane)
+  uint64_t plane_contacts = 0; ///< of which body-plane
+  PassTimes ms;
+};
+
+/// What one advance() call did.
+struct FrameResult {
+  uint32_t steps = 0;      ///< fixed steps run
+  float alpha = 0.0f;      ///< interpolation factor in [0, 1): leftover time / fixed_dt
+  float dropped = 0.0f;    ///< s of frame time discarded by max_steps_per_frame
+};
+
+/// Read-only SoA view of the bodies in dense storage order. Valid until the next
+/// call that creates or destroys bodies. Slot i belongs to handles[i].
+struct BodyArrays {
+  std::span<const float> pos_x, pos_y, pos_z;
+  std::span<const float> vel_x, vel_y, vel_z;
+  std::span<const float> inv_mass, radius, restitution;
+  std::span<const uint32_t> layer, mask;
+  std::span<const BodyHandle> handles;
+  size_t size() const { return handles.size(); }
+};
+
+/// Collision data of the last step, one entry per contact, in a deterministic
+/// order (body-body contacts in broad-phase pair order, then body-plane contacts
+/// by body slot then plane). The normal points from a to b; depth > 0 is overlap;
+/// point lies midway between the two surfaces' deepest points. The safe
+/// (overlap-free) positions are a - normal*depth*wa and b + normal*depth*wb with
+/// w = inv_mass / (inv_mass_a + inv_mass_b).
+struct ContactArrays {
+  std::span<const uint32_t> a;        ///< body slot
+  std::span<const uint32_t> b;        ///< body slot, or plane index if b_is_plane
+  std::span<const uint8_t> b_is_plane;
+  std::span<const float> normal_x, normal_y, normal_z;
+  std::span<const float> depth;
+  std::span<const float> point_x, point_y, point_z;
+  std::span<const float> impulse;     ///< accumulated normal impulse, N*s
+  size_t size() const { return a.size(); }
+};
+
+/// A broad-phase candidate pair of body slots, a < b.
+struct BodyPair {
+  uint32_t a;
+  uint32_t b;
+  friend bool operator==(const BodyPair&, const BodyPair&) = default;
+};
+
+class WorldImpl;
+
+class World {
+ public:
+  /// Validates desc and makes a world. On error *out is left empty.
+  [[nodiscard]] static Status create(const WorldDesc& desc, std::unique_ptr<World>* out);
+  ~World();
+  World(const World&) = delete;
+  World& operator=(const World&) = delete;
+
+  // --- bodies ------------------------------------------------------------------
+  /// Adds bodies; out receives one handle each (out.size() == descs.size()).
+  /// All-or-nothing: any invalid desc rejects the whole batch.
+  Status create_bodies(std::span<const BodyDesc> descs, std::span<BodyHandle> out);
+  /// Bulk import from column-major Eigen arrays (3 x n), read in place.
+  /// velocities may have 0 columns (all zero); radii and inv_masses have n entries;
+  /// restitution, layer and mask come from `common`.
+  Status create_bodies(const Eigen::Ref<const Eigen::Matrix3Xf>& positions,
+                       const Eigen::Ref<const Eigen::Matrix3Xf>& velocities,
+                       const Eigen::Ref<const Eigen::VectorXf>& radii,
+                       const Eigen::Ref<const Eigen::VectorXf>& inv_masses, const BodyDesc& common,
+                       std::span<BodyHandle> out);
+  /// Removes bodies; their handles go stale. All-or-nothing.
+  Status destroy_bodies(std::span<const BodyHandle> handles);
+  Status set_positions(std::span<const BodyHandle> handles, std::span<const Eigen::Vector3f> values);
+  Status set_velocities(std::span<const BodyHandle> handles, std::span<const Eigen::Vector3f> values);
+  Status get_positions(std::span<const BodyHandle> handles, std::span<Eigen::Vector3f> out) const;
+  Status get_velocities(std::span<const BodyHandle> handles, std::span<Eigen::Vector3f> out) const;
+  /// Dense slot of a live handle, or an error.
+  Status slot_of(BodyHandle handle, uint32_t* out_slot) const;
+  size_t body_count() const;
+  BodyArrays bodies() const;
+
+  // --- planes ------------------------------------------------------------------
+  Status create_planes(std::span<const PlaneDesc> descs, std::span<PlaneHandle> out);
+  Status destroy_planes(std::span<const PlaneHandle> handles);
+  size_t plane_count() const;
+
+  // --- time --------------------------------------------------------------------
+  /// Runs exactly one fixed step of desc().fixed_dt; last_step() then describes it.
+  /// Fails only when a capacity is exceeded (more than 2^32 - 1 pairs or 2^31 - 1
+  /// contacts); the bodies have then been integrated but not collided.
+  Status step();
+  /// Adds frame_seconds (>= 0, finite) to the accumulator and runs as many fixed
+  /// steps as fit (at most max_steps_per_frame). Invalid frame time runs nothing.
+  Status advance(float frame_seconds, FrameResult* out = nullptr);
+  /// Leftover accumulator time / fixed_dt after the last advance(), in [0, 1).
+  float interpolation_alpha() const;
+  /// (1-alpha)*previous + alpha*current per body, in slot order. Needs
+  /// WorldDesc::interpolation; out.size() == body_count().
+  Status interpolated_positions(std::span<Eigen::Vector3f> out) const;
+
+  // --- results -------------------------------------------------------------------
+  const StepStats& last_step() const;
+  ContactArrays contacts() const;
+  std::span<const BodyPair> pairs() const;
+  /// 64-bit hash of every body's state bytes in slot order; equal hashes across
+  /// thread counts and backends are the determinism contract.
+  uint64_t state_hash() const;
+
+  // --- settings ------------------------------------------------------------------
+  const WorldDesc& desc() const;
+  /// Switches the thread runtime; kUnsupported if it was not built in.
+  Status set_backend(Backend backend, uint32_t threads);
+  Status set_broad_phase(BroadPhaseKind kind);
+  Status set_solver(const SolverDesc& solver);
+  Status set_gravity(const Eigen::Vector3f& gravity);
+
+ private:
+  explicit World(std::unique_ptr<WorldImpl> impl);
+  std::unique_ptr<WorldImpl> impl_;
+};
+
+/// Backends compiled into this build.
+bool backend_available(Backend backend);
+/// Hardware threads visible to the process.
+uint32_t hardware_threads();
+
+}  // namespace impact

@@ -1,0 +1,63 @@
+#include "kernels/broadphase/bounds.h"
+
+#include <algorithm>
+#include <limits>
+
+namespace impact::kernels {
+
+BoundsSummary empty_bounds_summary() {
+  constexpr float inf = std::numeric_limits<float>::infinity();
+  return BoundsSummary{{inf, inf, inf}, {-inf, -inf, -inf}, 0.0f};
+}
+
+BoundsSummary combine(const BoundsSummary& a, const BoundsSummary& b) {
+  BoundsSummary s;
+  for (int k = 0; k < 3; ++k) {
+    s.lo[k] = std::min(a.lo[k], b.lo[k]);
+    s.hi[k] = std::max(a.hi[k], b.hi[k]);
+  }
+  s.max_edge = std::max(a.max_edge, b.max_edge);
+  return s;
+}
+
+void sphere_bounds(const float* IMPACT_RESTRICT px, const float* IMPACT_RESTRICT py,
+                   const float* IMPACT_RESTRICT pz, const float* IMPACT_RESTRICT radius,
+                   AabbSoAOut out, Range r) {
+  float* IMPACT_RESTRICT min_x = out.min_x;
+  float* IMPACT_RESTRICT min_y = out.min_y;
+  float* IMPACT_RESTRICT min_z = out.min_z;
+  float* IMPACT_RESTRICT max_x = out.max_x;
+  float* IMPACT_RESTRICT max_y = out.max_y;
+  float* IMPACT_RESTRICT max_z = out.max_z;
+#pragma omp simd
+  for (uint32_t i = r.begin; i < r.end; ++i) {
+    const float rad = radius[i];
+    min_x[i] = px[i] - rad;
+    min_y[i] = py[i] - rad;
+    min_z[i] = pz[i] - rad;
+    max_x[i] = px[i] + rad;
+    max_y[i] = py[i] + rad;
+    max_z[i] = pz[i] + rad;
+  }
+}
+
+BoundsSummary reduce_bounds(AabbSoA b, Range r) {
+  constexpr float inf = std::numeric_limits<float>::infinity();
+  float lx = inf, ly = inf, lz = inf, hx = -inf, hy = -inf, hz = -inf, edge = 0.0f;
+#pragma omp simd reduction(min : lx, ly, lz) reduction(max : hx, hy, hz, edge)
+  for (uint32_t i = r.begin; i < r.end; ++i) {
+    lx = std::min(lx, b.min_x[i]);
+    ly = std::min(ly, b.min_y[i]);
+    lz = std::min(lz, b.min_z[i]);
+    hx = std::max(hx, b.max_x[i]);
+    hy = std::max(hy, b.max_y[i]);
+    hz = std::max(hz, b.max_z[i]);
+    const float ex = b.max_x[i] - b.min_x[i];
+    const float ey = b.max_y[i] - b.min_y[i];
+    const float ez = b.max_z[i] - b.min_z[i];
+    edge = std::max(edge, std::max(ex, std::max(ey, ez)));
+  }
+  return BoundsSummary{{lx, ly, lz}, {hx, hy, hz}, edge};
+}
+
+}  // namespace impact::kernels

@@ -1,0 +1,50 @@
+// Bounds passes.
+//
+// sphere_bounds: per body, the AABB [p - r, p + r]. Streaming, vectorised.
+// reduce_bounds: over a range of boxes, the union box and the largest box edge
+//   (max over boxes and axes of max - min). The host combines one partial per
+//   chunk in chunk order, so the result does not depend on thread count (min/max
+//   are exact anyway).
+// Inputs finite (validated at ingest).
+#pragma once
+
+#include "kernels/common/kernel.h"
+
+namespace impact::kernels {
+
+struct AabbSoA {
+  const float* min_x;
+  const float* min_y;
+  const float* min_z;
+  const float* max_x;
+  const float* max_y;
+  const float* max_z;
+};
+
+struct AabbSoAOut {
+  float* min_x;
+  float* min_y;
+  float* min_z;
+  float* max_x;
+  float* max_y;
+  float* max_z;
+};
+
+/// Union of a set of boxes plus the largest edge of any member.
+struct BoundsSummary {
+  float lo[3];
+  float hi[3];
+  float max_edge;
+};
+
+/// Identity element of combine(): an empty summary.
+BoundsSummary empty_bounds_summary();
+BoundsSummary combine(const BoundsSummary& a, const BoundsSummary& b);
+
+void sphere_bounds(const float* IMPACT_RESTRICT px, const float* IMPACT_RESTRICT py,
+                   const float* IMPACT_RESTRICT pz, const float* IMPACT_RESTRICT radius,
+                   AabbSoAOut out, Range r);
+
+BoundsSummary reduce_bounds(AabbSoA boxes, Range r);
+
+}  // namespace impact::kernels

@@ -1,0 +1,92 @@
+// Uniform-grid broad phase over axis-aligned boxes, in four passes:
+//
+//   grid_keys      per box: cell of its min corner -> key = bucket << 32 | box index
+//   (radix sort of the keys on the bucket bits; stable, so ties keep index order)
+//   grid_gather    per sorted slot: copy the box, its cell and its filter data into
+//                  sorted order, so the pair pass reads memory in sequence
+//   segment_starts bucket -> [first slot, end slot)   (kernels/sort/segments.h)
+//   grid_count_pairs / grid_write_pairs
+//                  per sorted slot s: test the boxes later in s's own cell, then
+//                  every box of the 13 "forward" neighbour cells (half of the 26,
+//                  so each pair is met once); count first, then write at the
+//                  exclusive-scanned offset of the range.
+//
+// Correctness: the cell edge exceeds the largest box edge, so the min corners of
+// two overlapping boxes are less than one cell apart on every axis and their
+// cells differ by at most one per axis. Cell coordinates are computed in double
+// from float inputs, so rounding cannot push them two cells apart.
+// Buckets: "dense" grids (few enough cells) use the row-major cell index itself,
+// which keeps x-neighbours adjacent in memory; otherwise the 63-bit cell id is
+// hashed into 2^table_bits buckets, and slots of a bucket whose cell id differs
+// from the visited cell are skipped, so collisions cost time but never produce a
+// duplicate or a wrong pair.
+// Pair order: by query slot (bucket, then index), then own cell, then neighbour
+// offsets in (dz, dy, dx) lexicographic order, then slot. Each pair is (lo, hi)
+// box indices. Overlap includes touching (min <= max). Inputs finite.
+// Method: the spatial-hash grid of Teschner et al. 2003 ("Optimized Spatial
+// Hashing for Collision Detection of Deformable Objects") and GPU sorted grids
+// (Le Grand, GPU Gems 3 ch. 32), with a half neighbourhood.
+#pragma once
+
+#include "kernels/broadphase/bounds.h"
+#include "kernels/common/kernel.h"
+
+namespace impact::kernels {
+
+struct Pair {
+  uint32_t a;
+  uint32_t b;
+};
+
+inline constexpr uint32_t kGridAxisBits = 21;
+inline constexpr uint32_t kGridMaxDim = 1u << kGridAxisBits;  // cells per axis, at most
+
+struct GridParams {
+  double origin[3];   ///< min corner of the union of boxes
+  double inv_cell;    ///< 1 / cell edge
+  uint32_t dims[3];   ///< cells per axis, each in [1, kGridMaxDim]
+  uint32_t dense;     ///< 1: bucket = row-major cell index; 0: hashed
+  uint32_t table_bits;     ///< hashed mode: log2 of the bucket count
+  uint32_t bucket_count;   ///< number of buckets
+};
+
+/// Optional pair filter, per box (all null = no filter).
+struct PairFilter {
+  const uint32_t* layer;
+  const uint32_t* mask;
+  const uint8_t* is_static;
+};
+
+/// Arrays in sorted-slot order, produced by grid_gather.
+struct GridSorted {
+  uint32_t* index;
+  uint64_t* cell;
+  AabbSoAOut box;
+  uint32_t* layer;      // null when unfiltered
+  uint32_t* mask;
+  uint8_t* is_static;
+};
+
+struct GridView {
+  GridParams params;
+  const uint32_t* index;
+  const uint64_t* cell;
+  AabbSoA box;
+  const uint32_t* layer;  // null when unfiltered
+  const uint32_t* mask;
+  const uint8_t* is_static;
+  const uint32_t* bucket_start;  // bucket_count + 1 entries
+};
+
+void grid_keys(const GridParams& g, AabbSoA boxes, uint64_t* IMPACT_RESTRICT out_keys, Range r);
+
+void grid_gather(const GridParams& g, const uint64_t* IMPACT_RESTRICT sorted_keys, AabbSoA boxes,
+                 PairFilter filter, GridSorted out, Range r);
+
+/// Number of pairs whose query slot lies in r.
+uint64_t grid_count_pairs(const GridView& g, Range r);
+
+/// Writes those pairs to out[0 ...] in the documented order.
+void grid_write_pairs(const GridView& g, Pair* IMPACT_RESTRICT out, Range r);
+
+}  // namespace impact::kernels

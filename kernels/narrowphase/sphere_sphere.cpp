@@ -1,0 +1,56 @@
+#include "kernels/narrowphase/sphere_sphere.h"
+
+#include <cmath>
+
+namespace impact::kernels {
+
+uint64_t sphere_sphere_count(const Pair* IMPACT_RESTRICT pairs, SphereView s, Range r) {
+  uint64_t count = 0;
+#pragma omp simd reduction(+ : count)
+  for (uint32_t k = r.begin; k < r.end; ++k) {
+    const uint32_t a = pairs[k].a, b = pairs[k].b;
+    const float dx = s.pos_x[b] - s.pos_x[a];
+    const float dy = s.pos_y[b] - s.pos_y[a];
+    const float dz = s.pos_z[b] - s.pos_z[a];
+    const float rs = s.radius[a] + s.radius[b];
+    count += (dx * dx + dy * dy + dz * dz < rs * rs) ? 1u : 0u;
+  }
+  return count;
+}
+
+void sphere_sphere_write(const Pair* IMPACT_RESTRICT pairs, SphereView s, ContactSoA out,
+                         uint64_t offset, Range r) {
+  uint64_t c = offset;
+  for (uint32_t k = r.begin; k < r.end; ++k) {
+    const uint32_t a = pairs[k].a, b = pairs[k].b;
+    const float dx = s.pos_x[b] - s.pos_x[a];
+    const float dy = s.pos_y[b] - s.pos_y[a];
+    const float dz = s.pos_z[b] - s.pos_z[a];
+    const float ra = s.radius[a], rb = s.radius[b];
+    const float rs = ra + rb;
+    const float d2 = dx * dx + dy * dy + dz * dz;
+    if (!(d2 < rs * rs)) continue;
+    float nx = 0.0f, ny = 1.0f, nz = 0.0f, dist = 0.0f;
+    if (d2 > 0.0f) {
+      dist = std::sqrt(d2);
+      const float inv = 1.0f / dist;
+      nx = dx * inv;
+      ny = dy * inv;
+      nz = dz * inv;
+    }
+    out.a[c] = a;
+    out.b[c] = b;
+    out.b_is_plane[c] = 0;
+    out.normal_x[c] = nx;
+    out.normal_y[c] = ny;
+    out.normal_z[c] = nz;
+    out.depth[c] = rs - dist;
+    const float h = 0.5f * (ra - rb);
+    out.point_x[c] = 0.5f * (s.pos_x[a] + s.pos_x[b]) + nx * h;
+    out.point_y[c] = 0.5f * (s.pos_y[a] + s.pos_y[b]) + ny * h;
+    out.point_z[c] = 0.5f * (s.pos_z[a] + s.pos_z[b]) + nz * h;
+    ++c;
+  }
+}
+
+}  // namespace impact::kernels

@@ -1,0 +1,106 @@
+// Normal-impulse contact response with restitution and position correction, as
+// flat passes that parallelise without locks or float atomics.
+//
+// The solver is Jacobi iteration with mass splitting (Tonge, Benevolenski &
+// Voroshilov 2012, "Mass splitting for jitter-free parallel rigid body
+// simulation"): a body in k contacts is seen by each contact as k times lighter
+// (inverse mass w*k), each contact computes its impulse from the velocities at
+// the start of the iteration, and each body then adds up the impulses of its
+// contacts in a fixed (sorted) order. For an isolated pair (k = 1) one iteration
+// is the exact two-body impulse of the seeds:
+//   v_n' = -e v_n  with  e = max(e_a, e_b)  (1 elastic, 0 inelastic),
+// and infinite mass (inv_mass 0) gives the one-way cases. Approach speeds below
+// restitution_threshold get no bounce, so resting bodies settle.
+// Impulses accumulate and are clamped to >= 0 (contacts push, never pull).
+//
+// Body -> contact adjacency is a CSR built by sorting keys
+//   (body << 32) | (2 * contact + side),  side 0 = a (gets -n), 1 = b (gets +n);
+// static bodies and planes use the sentinel body id n_bodies and are skipped.
+//
+// Warm starting: each contact has a key (a << 32 | b, with bit 31 set when b is a
+// plane); last step's keys are kept sorted with their impulses, and a contact
+// that persists starts from warm_start * last impulse (Catto, "Iterative Dynamics
+// with Temporal Coherence", GDC 2005), so stacks converge over steps, not within one.
+//
+// Position correction runs the same Jacobi iteration on per-body displacements
+// instead of velocities ("split impulses" / pseudo-velocities): the target of a
+// contact is position_correction * max(depth - slop, 0), reached without adding
+// kinetic energy; then positions move by the displacement.
+//
+// Passes (each output element written by exactly one index):
+//   contact_body_keys        per contact: two CSR keys
+//   contact_prepare          per contact: effective mass, restitution target, impulse = 0
+//   contact_pair_keys        per contact: persistence key
+//   contact_warm_start       per contact: impulse = delta = warm * last impulse
+//   contact_solve            per contact: impulse increment of one iteration
+//   body_apply_velocity      per body: v += w * sum(side * delta * n)
+//   contact_position_target  per contact: position target, impulse = 0
+//   body_commit_displacement per body: p += d
+#pragma once
+
+#include "kernels/common/kernel.h"
+
+namespace impact::kernels {
+
+struct SolverParams {
+  float restitution_threshold;  ///< m/s
+  float position_correction;    ///< fraction in [0, 1]
+  float penetration_slop;       ///< m
+};
+
+/// The per-body state an iteration moves: velocities, or displacements in the
+/// position phase.
+struct SolverBodies {
+  float* vel_x;
+  float* vel_y;
+  float* vel_z;
+  const float* inv_mass;
+  const float* restitution;
+  uint32_t count;
+};
+
+struct SolverContacts {
+  const uint32_t* a;
+  const uint32_t* b;
+  const uint8_t* b_is_plane;
+  const float* normal_x;
+  const float* normal_y;
+  const float* normal_z;
+  const float* depth;
+  float* mass;     ///< 1 / (w_a k_a + w_b k_b), 0 if both immovable
+  float* target;   ///< desired relative normal velocity after the solve, m/s
+  float* impulse;  ///< accumulated normal impulse, N s
+  float* delta;    ///< increment of the current iteration
+};
+
+/// CSR adjacency: keys sorted, and start[body] for body in [0, count].
+struct BodyContacts {
+  const uint64_t* sorted_keys;
+  const uint32_t* start;
+};
+
+void contact_body_keys(SolverContacts c, const float* inv_mass, uint32_t body_count,
+                       uint64_t* IMPACT_RESTRICT out_keys, Range r);
+
+void contact_prepare(const SolverParams& p, SolverContacts c, const SolverBodies& b,
+                     const float* plane_restitution, BodyContacts adj, Range r);
+
+void contact_solve(SolverContacts c, const SolverBodies& b, Range r);
+
+void body_apply_velocity(SolverContacts c, const SolverBodies& b, BodyContacts adj, Range r);
+
+void contact_pair_keys(SolverContacts c, uint64_t* IMPACT_RESTRICT out_keys, Range r);
+
+/// prev_keys sorted ascending (unique), prev_impulse their impulses.
+void contact_warm_start(SolverContacts c, const uint64_t* IMPACT_RESTRICT keys,
+                        const uint64_t* IMPACT_RESTRICT prev_keys, const float* IMPACT_RESTRICT prev_impulse,
+                        uint32_t prev_count, float factor, Range r);
+
+/// Writes position targets to c.target and zeroes c.impulse and c.delta.
+void contact_position_target(const SolverParams& p, SolverContacts c, Range r);
+
+void body_commit_displacement(const float* IMPACT_RESTRICT dx, const float* IMPACT_RESTRICT dy,
+                              const float* IMPACT_RESTRICT dz, float* IMPACT_RESTRICT io_px,
+                              float* IMPACT_RESTRICT io_py, float* IMPACT_RESTRICT io_pz, Range r);
+
+}  // namespace impact::kernels

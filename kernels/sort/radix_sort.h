@@ -1,0 +1,42 @@
+// LSD radix sort building blocks for 64-bit keys, one 8-bit digit per pass.
+//
+// A pass over n keys split into chunks (fixed by n and a grain, never by the
+// thread count) is:
+//   1. radix_histogram  per chunk: count of each digit value in the chunk;
+//   2. radix_offsets    once (serial, 256 x chunks): exclusive scan in
+//      digit-major, chunk-minor order -> where each chunk writes each digit;
+//   3. radix_scatter    per chunk: stable scatter of the chunk's keys.
+// Because chunk c's keys with digit d land after those of chunks < c, the sort
+// is stable and its output bytes are the same for any number of workers.
+// Keys carry their payload: by convention the primary key sits in the high bits
+// and the original index in the low 32, so every tie has one defined winner.
+// Cost per pass: two reads and one scattered write of the keys.
+// Method: classic LSD radix sort (Knuth TAOCP vol. 3, 5.2.5); the per-chunk
+// histogram layout follows GPU radix sorts (Merrill & Grimshaw 2011).
+#pragma once
+
+#include "kernels/common/kernel.h"
+
+namespace impact::kernels {
+
+inline constexpr uint32_t kRadixBits = 8;
+inline constexpr uint32_t kRadixBuckets = 1u << kRadixBits;
+
+/// out_hist[d] = number of keys in r whose digit at `shift` is d (256 entries, overwritten).
+void radix_histogram(const uint64_t* IMPACT_RESTRICT keys, uint32_t shift, uint32_t* out_hist, Range r);
+
+/// Turns chunk histograms (chunk-major: hist[c * 256 + d]) into scatter offsets in
+/// place. Returns true when one digit value holds every key (the pass can be skipped).
+bool radix_offsets(uint32_t* io_hist, uint32_t chunk_count, uint64_t n);
+
+/// Stable scatter of the keys of r to out_keys at the chunk's offsets (256
+/// entries, advanced in place).
+void radix_scatter(const uint64_t* IMPACT_RESTRICT keys, uint32_t shift, uint32_t* io_offsets,
+                   uint64_t* IMPACT_RESTRICT out_keys, Range r);
+
+/// radix_scatter that moves a 32-bit value with each key.
+void radix_scatter_kv(const uint64_t* IMPACT_RESTRICT keys, const uint32_t* IMPACT_RESTRICT values,
+                      uint32_t shift, uint32_t* io_offsets, uint64_t* IMPACT_RESTRICT out_keys,
+                      uint32_t* IMPACT_RESTRICT out_values, Range r);
+
+}  // namespace impact::kernels

@@ -1,0 +1,19 @@
+#!/usr/bin/env bash
+# Quick start 2: build and run the whole test suite (ctest).
+#   scripts/test.sh             Release build in build/
+#   scripts/test.sh --sanitize  ASan + UBSan build in build-asan/
+set -euo pipefail
+root="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+"$root/scripts/install_deps.sh"
+if [ "${1:-}" = "--sanitize" ]; then
+  build="${IMPACT_BUILD_DIR:-$root/build-asan}"
+  flags=(-DCMAKE_BUILD_TYPE=RelWithDebInfo -DIMPACT_SANITIZE=ON)
+  export ASAN_OPTIONS="${ASAN_OPTIONS:-detect_leaks=1:abort_on_error=1}"
+  export UBSAN_OPTIONS="${UBSAN_OPTIONS:-print_stacktrace=1:halt_on_error=1}"
+else
+  build="${IMPACT_BUILD_DIR:-$root/build}"
+  flags=(-DCMAKE_BUILD_TYPE=Release)
+fi
+cmake -S "$root" -B "$build" "${flags[@]}" -DIMPACT_WERROR=ON >/dev/null
+cmake --build "$build" -j"$(nproc)"
+ctest --test-dir "$build" --output-on-failure -j"$(nproc)" --timeout 1500
