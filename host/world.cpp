@@ -274,8 +274,7 @@ Status World::destroy_bodies(std::span<const BodyHandle> handles) {
   std::sort(sorted.begin(), sorted.end());  // validation only; does not shape results
   if (std::adjacent_find(sorted.begin(), sorted.end()) != sorted.end())
     return invalid("destroy_bodies", "the same body is listed twice");
-  impl_->prev_keys.clear();  // slots move: last step's contact keys no longer apply
-  impl_->prev_impulse.clear();
+  impl_->prev_contacts = 0;  // slots move: last step's contact keys no longer apply
   for (const BodyHandle& h : handles) {
     // Look up again: earlier removals may have moved this body to another slot.
     impl_->swap_remove_body(impl_->body_handles.lookup(h.index, h.generation));
@@ -486,7 +485,7 @@ ContactArrays World::contacts() const {
   return ContactArrays{{c.a.data(), n},        {c.b.data(), n},        {c.b_is_plane.data(), n},
                        {c.normal_x.data(), n}, {c.normal_y.data(), n}, {c.normal_z.data(), n},
                        {c.depth.data(), n},    {c.point_x.data(), n},  {c.point_y.data(), n},
-                       {c.point_z.data(), n},  {c.impulse.data(), n}};
+                       {c.point_z.data(), n},  {impl_->impulse_out.data(), n}};
 }
 
 static_assert(sizeof(BodyPair) == sizeof(kernels::Pair) && alignof(BodyPair) == alignof(kernels::Pair));

@@ -10,6 +10,7 @@
 #include "host/parallel.h"
 #include "impact/world.h"
 #include "kernels/broadphase/grid.h"
+#include "kernels/solver/contact_solver.h"
 
 namespace impact {
 
@@ -37,7 +38,7 @@ struct ContactStore {
   host::Buffer<uint32_t> a, b;
   host::Buffer<uint8_t> b_is_plane;
   host::Buffer<float> normal_x, normal_y, normal_z, depth, point_x, point_y, point_z;
-  host::Buffer<float> mass, target, impulse, delta;
+  host::Buffer<float> mass, target, impulse, delta_vec;
   size_t count = 0;
   void resize(size_t n);
 };
@@ -47,6 +48,8 @@ class WorldImpl {
   explicit WorldImpl(const WorldDesc& desc);
 
   Status step();
+  /// Permutes body storage into the grid's spatial order of the last step.
+  void reorder_bodies();
   void swap_remove_body(uint32_t slot);
 
   WorldDesc desc;
@@ -68,8 +71,17 @@ class WorldImpl {
   host::Buffer<uint64_t> pair_keys;          // this step's contact keys (a << 32 | b | plane bit)
   host::Buffer<uint64_t> prev_keys;          // last step's, sorted, for warm starting
   host::Buffer<float> prev_impulse;          // their impulses
-  host::Buffer<float> impulse_out;
-  host::Buffer<float> disp[3];               // position-correction displacements
+  host::Buffer<uint32_t> prev_start;         // per body a: range in prev_keys
+  uint32_t prev_contacts = 0;
+  uint32_t prev_body_count = 0;
+  host::Buffer<float> impulse_out;           // velocity impulses of the last step, for contacts()
+  host::Buffer<kernels::BodyState> solver_state;
+  uint64_t steps_since_reorder = 0;
+  host::Buffer<uint32_t> perm, inv_perm;
+  host::Buffer<uint32_t> tmp_u32;
+  host::Buffer<uint8_t> tmp_u8;
+  host::Buffer<float> tmp_f32;
+  host::Buffer<uint64_t> tmp_u64;
   host::Buffer<uint32_t> body_start;
   host::Buffer<uint64_t> pair_offsets, plane_offsets;
   host::RadixSorter sorter;

@@ -61,6 +61,7 @@ Status GridBroadPhase::find_pairs(const Executor& exec, kernels::AabbSoA boxes,
                                   kernels::PairFilter filter, uint32_t n,
                                   Buffer<kernels::Pair>* out) {
   out->clear();
+  last_n_ = n;
   if (n < 2) return Status();
 
   // 1. Union of the boxes and largest edge: one partial per chunk, combined in order.
@@ -82,10 +83,8 @@ Status GridBroadPhase::find_pairs(const Executor& exec, kernels::AabbSoA boxes,
 
   // 3. Gather into sorted order.
   const bool filtered = filter.layer != nullptr;
-  kernels::GridSorted sorted{scratch(index_, n),
+  kernels::GridSorted sorted{scratch(sorted_box_, n),
                              scratch(cell_, n),
-                             {scratch(box_[0], n), scratch(box_[1], n), scratch(box_[2], n),
-                              scratch(box_[3], n), scratch(box_[4], n), scratch(box_[5], n)},
                              filtered ? scratch(layer_, n) : nullptr,
                              filtered ? scratch(mask_, n) : nullptr,
                              filtered ? scratch(static_, n) : nullptr};
@@ -101,19 +100,16 @@ Status GridBroadPhase::find_pairs(const Executor& exec, kernels::AabbSoA boxes,
 
   // 5. Pairs: count, scan, write.
   const kernels::GridView view{g,
-                               sorted.index,
+                               sorted.box,
                                sorted.cell,
-                               {sorted.box.min_x, sorted.box.min_y, sorted.box.min_z, sorted.box.max_x,
-                                sorted.box.max_y, sorted.box.max_z},
                                sorted.layer,
                                sorted.mask,
                                sorted.is_static,
                                starts};
-  return count_scan_write<kernels::Pair>(
-      exec, n, kPairGrain, chunk_offsets_, kMaxPairs, "grid broad phase pairs",
-      [&](uint32_t b, uint32_t e) { return kernels::grid_count_pairs(view, {b, e}); },
-      [&](uint32_t b, uint32_t e, kernels::Pair* dst, uint64_t off) {
-        kernels::grid_write_pairs(view, dst + off, {b, e});
+  return chunked_output<kernels::Pair>(
+      exec, n, kPairGrain, chunk_pairs_, chunk_offsets_, kMaxPairs, "grid broad phase pairs",
+      [&](uint32_t b, uint32_t e, kernels::Pair* dst, uint64_t capacity) {
+        return kernels::grid_find_pairs(view, dst, capacity, {b, e});
       },
       out);
 }
@@ -148,15 +144,15 @@ Status BruteForceBroadPhase::find_pairs(const Executor& exec, kernels::AabbSoA b
       else brute_force_row<false>(boxes, filter, n, i, emit);
     }
   };
-  return count_scan_write<kernels::Pair>(
-      exec, n, kGrain, chunk_offsets_, kMaxPairs, "brute-force broad phase pairs",
-      [&](uint32_t b, uint32_t e) {
-        uint64_t c = 0;
-        rows(b, e, [&](uint32_t, uint32_t) { ++c; });
-        return c;
-      },
-      [&](uint32_t b, uint32_t e, kernels::Pair* dst, uint64_t off) {
-        rows(b, e, [&](uint32_t i, uint32_t j) { dst[off++] = kernels::Pair{i, j}; });
+  return chunked_output<kernels::Pair>(
+      exec, n, kGrain, chunk_pairs_, chunk_offsets_, kMaxPairs, "brute-force broad phase pairs",
+      [&](uint32_t b, uint32_t e, kernels::Pair* dst, uint64_t capacity) {
+        uint64_t k = 0;
+        rows(b, e, [&](uint32_t i, uint32_t j) {
+          if (k < capacity) dst[k] = kernels::Pair{i, j};
+          ++k;
+        });
+        return k;
       },
       out);
 }

@@ -4,7 +4,9 @@
 #pragma once
 
 #include <cstdint>
+#include <cstring>
 #include <string>
+#include <vector>
 
 #include "host/buffer.h"
 #include "host/parallel.h"
@@ -27,6 +29,9 @@ class GridBroadPhase {
   Status find_pairs(const Executor& exec, kernels::AabbSoA boxes, kernels::PairFilter filter,
                     uint32_t n, Buffer<kernels::Pair>* out);
   const GridInfo& info() const { return info_; }
+  /// The boxes of the last call in sorted (spatial) order; empty if it had < 2 boxes.
+  const kernels::SortedBox* sorted() const { return last_n_ >= 2 ? sorted_box_.data() : nullptr; }
+  uint32_t sorted_count() const { return last_n_ >= 2 ? last_n_ : 0; }
 
   static constexpr uint32_t kKeyGrain = 1u << 14;   // boxes per chunk in streaming passes
   static constexpr uint32_t kPairGrain = 1u << 11;  // query slots per chunk in the pair pass
@@ -34,13 +39,14 @@ class GridBroadPhase {
  private:
   RadixSorter sorter_;
   Buffer<uint64_t> keys_;
-  Buffer<uint32_t> index_;
+  Buffer<kernels::SortedBox> sorted_box_;
+  uint32_t last_n_ = 0;
   Buffer<uint64_t> cell_;
-  Buffer<float> box_[6];
   Buffer<uint32_t> layer_, mask_;
   Buffer<uint8_t> static_;
   Buffer<uint32_t> bucket_start_;
   Buffer<uint64_t> chunk_offsets_;
+  std::vector<Buffer<kernels::Pair>> chunk_pairs_;
   Buffer<kernels::BoundsSummary> partial_bounds_;
   GridInfo info_;
 };
@@ -52,6 +58,7 @@ class BruteForceBroadPhase {
 
  private:
   Buffer<uint64_t> chunk_offsets_;
+  std::vector<Buffer<kernels::Pair>> chunk_pairs_;
 };
 
 /// Runs count(begin, end) per chunk and turns the counts into exclusive offsets
@@ -89,6 +96,48 @@ Status count_scan_write(const Executor& exec, uint64_t n, uint32_t grain, Buffer
   T* dst = out->data();
   const uint64_t* off = offsets.data();
   exec.for_each_chunk(n, grain, [&](uint32_t b, uint32_t e, uint32_t c) { write(b, e, dst, off[c]); });
+  return Status();
+}
+
+/// Runs find(begin, end, dst, capacity) -> count per chunk, each chunk into its
+/// own buffer (grown and rerun when the count exceeds its capacity, so nothing is
+/// dropped), then concatenates the chunks in chunk order into *out. One traversal
+/// in the common case, and the output order does not depend on the thread count.
+template <class T, class Find>
+Status chunked_output(const Executor& exec, uint64_t n, uint32_t grain, std::vector<Buffer<T>>& bufs,
+                      Buffer<uint64_t>& offsets, uint64_t max_total, const char* what, Find&& find,
+                      Buffer<T>* out) {
+  const uint32_t chunks = chunk_count(n, grain);
+  if (bufs.size() < chunks) bufs.resize(chunks);
+  uint64_t* off = scratch(offsets, static_cast<size_t>(chunks) + 1);
+  exec.for_each_chunk(n, grain, [&](uint32_t b, uint32_t e, uint32_t c) {
+    Buffer<T>& buf = bufs[c];
+    if (buf.empty()) buf.resize(4ull * grain);
+    uint64_t count = find(b, e, buf.data(), static_cast<uint64_t>(buf.size()));
+    if (count > buf.size()) {
+      buf.resize(count + count / 4);
+      count = find(b, e, buf.data(), static_cast<uint64_t>(buf.size()));
+    }
+    off[c] = count;
+  });
+  uint64_t total = 0;
+  for (uint32_t c = 0; c < chunks; ++c) {
+    const uint64_t k = off[c];
+    off[c] = total;
+    total += k;
+  }
+  off[chunks] = total;
+  if (total > max_total) {
+    out->clear();
+    return Status(StatusCode::kCapacityExceeded, std::string(what) + ": " + std::to_string(total) +
+                                                     " outputs exceed the limit of " +
+                                                     std::to_string(max_total));
+  }
+  out->resize(total);
+  T* dst = out->data();
+  exec.for_each_chunk(n, grain, [&](uint32_t, uint32_t, uint32_t c) {
+    std::memcpy(dst + off[c], bufs[c].data(), sizeof(T) * (off[c + 1] - off[c]));
+  });
   return Status();
 }
 

@@ -11,6 +11,7 @@
 
 #include "host/world_impl.h"
 #include "kernels/broadphase/bounds.h"
+#include "kernels/common/permute.h"
 #include "kernels/integrate/semi_implicit_euler.h"
 #include "kernels/narrowphase/sphere_plane.h"
 #include "kernels/narrowphase/sphere_sphere.h"
@@ -38,9 +39,63 @@ void ContactStore::resize(size_t n) {
   for (auto* v : {&a, &b}) v->resize(n);
   b_is_plane.resize(n);
   for (auto* v : {&normal_x, &normal_y, &normal_z, &depth, &point_x, &point_y, &point_z, &mass,
-                  &target, &impulse, &delta})
+                  &target, &impulse})
     v->resize(n);
+  delta_vec.resize(4 * n);
   count = n;
+}
+
+void WorldImpl::reorder_bodies() {
+  const uint32_t n = static_cast<uint32_t>(bodies.size());
+  if (grid.sorted_count() != n || n < 2) return;
+  const kernels::SortedBox* order = grid.sorted();
+  uint32_t* p = host::scratch(perm, n);
+  uint32_t* inv = host::scratch(inv_perm, n);
+  exec.for_each_chunk(n, kBodyGrain, [&](uint32_t b, uint32_t e, uint32_t) {
+    for (uint32_t i = b; i < e; ++i) p[i] = order[i].index;
+  });
+  exec.for_each_chunk(n, kBodyGrain, [&](uint32_t b, uint32_t e, uint32_t) {
+    kernels::invert_permutation(p, inv, {b, e});
+  });
+  auto permute = [&](auto& v, auto& tmp) {
+    if (v.size() != n) return;  // optional arrays that are off
+    auto* dst = host::scratch(tmp, n);
+    exec.for_each_chunk(n, kBodyGrain, [&](uint32_t b, uint32_t e, uint32_t) {
+      kernels::gather(v.data(), p, dst, {b, e});
+    });
+    exec.for_each_chunk(n, kBodyGrain, [&](uint32_t b, uint32_t e, uint32_t) {
+      std::memcpy(v.data() + b, dst + b, sizeof(v[0]) * (e - b));
+    });
+  };
+  BodyStore& s = bodies;
+  for (auto* v : {&s.pos_x, &s.pos_y, &s.pos_z, &s.vel_x, &s.vel_y, &s.vel_z, &s.inv_mass, &s.radius,
+                  &s.restitution, &s.prev_x, &s.prev_y, &s.prev_z})
+    permute(*v, tmp_f32);
+  permute(s.layer, tmp_u32);
+  permute(s.mask, tmp_u32);
+  permute(s.is_static, tmp_u8);
+  std::vector<BodyHandle> handles(n);
+  for (uint32_t i = 0; i < n; ++i) {
+    handles[i] = s.handle[p[i]];
+    body_handles.rebind(handles[i].index, i);
+  }
+  s.handle.swap(handles);
+  // Last step's contact keys name slots: renumber them and restore their order.
+  if (prev_contacts > 0) {
+    exec.for_each_chunk(prev_contacts, kContactGrain, [&](uint32_t b, uint32_t e, uint32_t) {
+      kernels::remap_pair_keys(inv, prev_keys.data(), {b, e});
+    });
+    sorter.sort_kv(exec, prev_keys.data(), reinterpret_cast<uint32_t*>(prev_impulse.data()), prev_contacts,
+                   0, 32 + host::bits_for(n));
+    uint32_t* ps = host::scratch(prev_start, static_cast<size_t>(n) + 1);
+    exec.for_each_chunk(prev_contacts, kContactGrain, [&](uint32_t b, uint32_t e, uint32_t) {
+      kernels::segment_starts(prev_keys.data(), prev_contacts, 32, n, ps, {b, e});
+    });
+  }
+  // Results of the last step name old slots.
+  pairs.clear();
+  contacts.resize(0);
+  impulse_out.clear();
 }
 
 Status WorldImpl::step() {
@@ -48,6 +103,11 @@ Status WorldImpl::step() {
   st = StepStats{};
   const auto t_start = Clock::now();
   auto t = t_start;
+  if (desc.reorder_interval > 0 && desc.broad_phase == BroadPhaseKind::kGrid &&
+      ++steps_since_reorder >= desc.reorder_interval) {
+    steps_since_reorder = 0;
+    reorder_bodies();
+  }
   const uint32_t n = static_cast<uint32_t>(bodies.size());
   const float dt = desc.fixed_dt;
   BodyStore& s = bodies;
@@ -139,14 +199,19 @@ Status WorldImpl::step() {
   const uint32_t nc = static_cast<uint32_t>(c.count);
   const SolverDesc& sd = desc.solver;
   if (nc > 0) {
-    kernels::SolverContacts sc{c.a.data(),        c.b.data(),        c.b_is_plane.data(),
-                               c.normal_x.data(), c.normal_y.data(), c.normal_z.data(),
-                               c.depth.data(),    c.mass.data(),     c.target.data(),
-                               c.impulse.data(),  c.delta.data()};
-    const kernels::SolverBodies sb{s.vel_x.data(), s.vel_y.data(), s.vel_z.data(), s.inv_mass.data(),
-                                   s.restitution.data(), n};
+    const kernels::SolverContacts sc{c.a.data(),        c.b.data(),         c.b_is_plane.data(),
+                                     c.normal_x.data(), c.normal_y.data(),  c.normal_z.data(),
+                                     c.depth.data(),    c.mass.data(),      c.target.data(),
+                                     c.impulse.data(),  c.delta_vec.data()};
     const kernels::SolverParams sp{sd.restitution_threshold, sd.position_correction,
                                    sd.penetration_slop};
+    // Hot per-body state; entry n is the immovable zero body that planes use.
+    kernels::BodyState* state = host::scratch(solver_state, static_cast<size_t>(n) + 1);
+    state[n] = kernels::BodyState{0.0f, 0.0f, 0.0f, 0.0f};
+    exec.for_each_chunk(n, kBodyGrain, [&](uint32_t b, uint32_t e, uint32_t) {
+      kernels::pack_velocity_state(s.vel_x.data(), s.vel_y.data(), s.vel_z.data(), s.inv_mass.data(),
+                                   state, {b, e});
+    });
     // Body -> contact adjacency (CSR) by sorting (body, 2*contact+side) keys.
     const uint32_t nk = 2 * nc;
     uint64_t* keys = host::scratch(csr_keys, nk);
@@ -159,21 +224,19 @@ Status WorldImpl::step() {
       kernels::segment_starts(keys, nk, 32, n, start, {b, e});
     });
     const kernels::BodyContacts adj{keys, start};
-    auto apply = [&](const kernels::SolverBodies& sbody) {
-      exec.for_each_chunk(n, kBodyGrain, [&](uint32_t b, uint32_t e, uint32_t) {
-        kernels::body_apply_velocity(sc, sbody, adj, {b, e});
-      });
-    };
-    auto iterate = [&](const kernels::SolverBodies& sbody, uint32_t iterations) {
+    auto iterate = [&](uint32_t iterations) {
       for (uint32_t it = 0; it < iterations; ++it) {
         exec.for_each_chunk(nc, kContactGrain, [&](uint32_t b, uint32_t e, uint32_t) {
-          kernels::contact_solve(sc, sbody, {b, e});
+          kernels::contact_solve(sc, state, n, {b, e});
         });
-        apply(sbody);
+        exec.for_each_chunk(n, kBodyGrain, [&](uint32_t b, uint32_t e, uint32_t) {
+          kernels::body_apply(sc, adj, state, {b, e});
+        });
       }
     };
     exec.for_each_chunk(nc, kContactGrain, [&](uint32_t b, uint32_t e, uint32_t) {
-      kernels::contact_prepare(sp, sc, sb, planes.restitution.data(), adj, {b, e});
+      kernels::contact_prepare(sp, sc, state, n, s.restitution.data(), planes.restitution.data(), adj,
+                               {b, e});
     });
 
     // Warm start from last step's impulses of the same (a, b) contacts.
@@ -181,50 +244,51 @@ Status WorldImpl::step() {
     exec.for_each_chunk(nc, kContactGrain, [&](uint32_t b, uint32_t e, uint32_t) {
       kernels::contact_pair_keys(sc, pkeys, {b, e});
     });
-    if (sd.warm_start > 0.0f && !prev_keys.empty()) {
+    if (sd.warm_start > 0.0f && prev_contacts > 0) {
+      const kernels::WarmStart ws{prev_keys.data(), prev_impulse.data(), prev_start.data(),
+                                  prev_body_count, sd.warm_start};
       exec.for_each_chunk(nc, kContactGrain, [&](uint32_t b, uint32_t e, uint32_t) {
-        kernels::contact_warm_start(sc, pkeys, prev_keys.data(), prev_impulse.data(),
-                                    static_cast<uint32_t>(prev_keys.size()), sd.warm_start, {b, e});
+        kernels::contact_warm_start(sc, pkeys, ws, {b, e});
       });
-      apply(sb);
+      exec.for_each_chunk(n, kBodyGrain, [&](uint32_t b, uint32_t e, uint32_t) {
+        kernels::body_apply(sc, adj, state, {b, e});
+      });
     }
-    iterate(sb, sd.velocity_iterations);
+    iterate(sd.velocity_iterations);
+    exec.for_each_chunk(n, kBodyGrain, [&](uint32_t b, uint32_t e, uint32_t) {
+      kernels::unpack_velocity_state(state, s.vel_x.data(), s.vel_y.data(), s.vel_z.data(), {b, e});
+    });
 
-    // Remember (key, impulse) sorted by key for the next step's warm start.
-    prev_keys.assign(pkeys, pkeys + nc);
-    prev_impulse.resize(nc);
-    static_assert(sizeof(float) == sizeof(uint32_t));
-    std::memcpy(prev_impulse.data(), c.impulse.data(), sizeof(float) * nc);
-    sorter.sort_kv(exec, prev_keys.data(), reinterpret_cast<uint32_t*>(prev_impulse.data()), nc, 0,
-                   32 + host::bits_for(n));
+    // Remember (key, impulse) sorted by key, and per-body ranges, for the next warm start.
+    uint64_t* pk = host::scratch(prev_keys, nc);
+    float* pi = host::scratch(prev_impulse, nc);
+    std::memcpy(pk, pkeys, sizeof(uint64_t) * nc);
+    std::memcpy(pi, c.impulse.data(), sizeof(float) * nc);
+    sorter.sort_kv(exec, pk, reinterpret_cast<uint32_t*>(pi), nc, 0, 32 + host::bits_for(n));
+    uint32_t* ps = host::scratch(prev_start, static_cast<size_t>(n) + 1);
+    exec.for_each_chunk(nc, kContactGrain, [&](uint32_t b, uint32_t e, uint32_t) {
+      kernels::segment_starts(pk, nc, 32, n, ps, {b, e});
+    });
+    prev_contacts = nc;
+    prev_body_count = n;
+    impulse_out.assign(c.impulse.begin(), c.impulse.begin() + nc);
 
     if (sd.position_iterations > 0 && sd.position_correction > 0.0f) {
-      // Same iteration on displacements; impulse/target/delta are reused as scratch,
-      // so the velocity impulses are copied out first (impulse_out, read by contacts()).
-      impulse_out.assign(c.impulse.begin(), c.impulse.begin() + nc);
-      float* dx = host::scratch(disp[0], n);
-      float* dy = host::scratch(disp[1], n);
-      float* dz = host::scratch(disp[2], n);
+      // The same iteration on displacements (impulse/target/delta_vec reused as scratch).
       exec.for_each_chunk(n, kBodyGrain, [&](uint32_t b, uint32_t e, uint32_t) {
-        const size_t bytes = sizeof(float) * (e - b);
-        std::memset(dx + b, 0, bytes);
-        std::memset(dy + b, 0, bytes);
-        std::memset(dz + b, 0, bytes);
+        kernels::pack_displacement_state(s.inv_mass.data(), state, {b, e});
       });
       exec.for_each_chunk(nc, kContactGrain, [&](uint32_t b, uint32_t e, uint32_t) {
         kernels::contact_position_target(sp, sc, {b, e});
       });
-      const kernels::SolverBodies sd_bodies{dx, dy, dz, s.inv_mass.data(), s.restitution.data(), n};
-      iterate(sd_bodies, sd.position_iterations);
+      iterate(sd.position_iterations);
       exec.for_each_chunk(n, kBodyGrain, [&](uint32_t b, uint32_t e, uint32_t) {
-        kernels::body_commit_displacement(dx, dy, dz, s.pos_x.data(), s.pos_y.data(), s.pos_z.data(),
-                                          {b, e});
+        kernels::commit_displacement_state(state, s.pos_x.data(), s.pos_y.data(), s.pos_z.data(), {b, e});
       });
-      std::memcpy(c.impulse.data(), impulse_out.data(), sizeof(float) * nc);
     }
   } else {
-    prev_keys.clear();
-    prev_impulse.clear();
+    prev_contacts = 0;
+    impulse_out.clear();
   }
   st.ms.solve = ms_since(t);
   st.ms.total = std::chrono::duration<double, std::milli>(Clock::now() - t_start).count();

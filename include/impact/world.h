@@ -42,6 +42,10 @@ struct WorldDesc {
   /// (and reported) so a slow frame cannot snowball ("spiral of death").
   uint32_t max_steps_per_frame = 8;
   SolverDesc solver;
+  /// Steps between spatial re-sorts of body storage (0 = never). Re-sorting puts
+  /// bodies that are close in space close in memory, which speeds up every pass
+  /// of large scenes; it changes slots (bodies().handles maps them), never handles.
+  uint32_t reorder_interval = 32;
   /// Keep last step's positions so interpolated_positions() can blend (costs 12 B/body).
   bool interpolation = false;
   BroadPhaseKind broad_phase = BroadPhaseKind::kGrid;
@@ -71,7 +75,8 @@ struct FrameResult {
 };
 
 /// Read-only SoA view of the bodies in dense storage order. Valid until the next
-/// call that creates or destroys bodies. Slot i belongs to handles[i].
+/// call that creates or destroys bodies or steps (a step may re-sort slots, see
+/// WorldDesc::reorder_interval). Slot i belongs to handles[i].
 struct BodyArrays {
   std::span<const float> pos_x, pos_y, pos_z;
   std::span<const float> vel_x, vel_y, vel_z;

@@ -52,9 +52,8 @@ constexpr Offset kForward[13] = {
 // Calls emit(lo, hi) for every pair whose query slot is s, in the documented order.
 template <bool kFiltered, bool kDense, class Emit>
 IMPACT_INLINE void visit_slot(const GridView& g, uint32_t s, Emit&& emit) {
-  const float ax0 = g.box.min_x[s], ay0 = g.box.min_y[s], az0 = g.box.min_z[s];
-  const float ax1 = g.box.max_x[s], ay1 = g.box.max_y[s], az1 = g.box.max_z[s];
-  const uint32_t ia = g.index[s];
+  const SortedBox A = g.box[s];
+  const uint32_t ia = A.index;
   uint32_t la = 0, ma = 0;
   uint8_t sa = 0;
   if constexpr (kFiltered) {
@@ -65,46 +64,58 @@ IMPACT_INLINE void visit_slot(const GridView& g, uint32_t s, Emit&& emit) {
   const uint64_t cell = g.cell[s];
 
   auto test = [&](uint32_t t) {
-    const bool overlap = ax0 <= g.box.max_x[t] && g.box.min_x[t] <= ax1 &&  //
-                         ay0 <= g.box.max_y[t] && g.box.min_y[t] <= ay1 &&  //
-                         az0 <= g.box.max_z[t] && g.box.min_z[t] <= az1;
+    const SortedBox& B = g.box[t];
+    // Bitwise & (not &&): one hard-to-predict branch instead of six.
+    const bool overlap = (A.min_x <= B.max_x) & (B.min_x <= A.max_x) &  //
+                         (A.min_y <= B.max_y) & (B.min_y <= A.max_y) &  //
+                         (A.min_z <= B.max_z) & (B.min_z <= A.max_z);
     if (!overlap) return;
     if constexpr (kFiltered) {
       if ((la & g.mask[t]) == 0 || (g.layer[t] & ma) == 0) return;
       if (sa && g.is_static[t]) return;
     }
-    const uint32_t ib = g.index[t];
+    const uint32_t ib = B.index;
     emit(ia < ib ? ia : ib, ia < ib ? ib : ia);
   };
 
-  // Own cell: the slots after s in its bucket.
-  {
-    const uint32_t b = bucket_of(g.params, cell);
-    const uint32_t end = g.bucket_start[b + 1];
-    for (uint32_t t = s + 1; t < end; ++t) {
-      if constexpr (!kDense) {
-        if (g.cell[t] != cell) continue;
-      }
-      test(t);
-    }
-  }
   const int64_t cx = static_cast<int64_t>(cell & kAxisMask);
   const int64_t cy = static_cast<int64_t>((cell >> kGridAxisBits) & kAxisMask);
   const int64_t cz = static_cast<int64_t>(cell >> (2 * kGridAxisBits));
-  for (const Offset& o : kForward) {
-    const int64_t nx = cx + o.dx, ny = cy + o.dy, nz = cz + o.dz;
-    if (nx < 0 || ny < 0 || nx >= g.params.dims[0] || ny >= g.params.dims[1] ||
-        nz >= g.params.dims[2])
-      continue;  // nz >= 0 always: dz >= 0
-    const uint64_t ncell = cell_id(static_cast<uint64_t>(nx), static_cast<uint64_t>(ny),
-                                   static_cast<uint64_t>(nz));
-    const uint32_t b = bucket_of(g.params, ncell);
-    const uint32_t end = g.bucket_start[b + 1];
-    for (uint32_t t = g.bucket_start[b]; t < end; ++t) {
-      if constexpr (!kDense) {
-        if (g.cell[t] != ncell) continue;
-      }
-      test(t);
+  const int64_t dimx = g.params.dims[0], dimy = g.params.dims[1], dimz = g.params.dims[2];
+
+  if constexpr (kDense) {
+    // Row-major buckets: the cells x-1..x+1 of a row are consecutive buckets, so
+    // each of the 5 forward rows of the half neighbourhood is one slot range:
+    // own row from s + 1 to the end of cell x+1, then rows (dy, dz) = (1, 0),
+    // (-1, 1), (0, 1), (1, 1), each over x-1..x+1.
+    const int64_t x_lo = cx > 0 ? cx - 1 : 0;
+    const int64_t x_hi = cx + 1 < dimx ? cx + 1 : dimx - 1;
+    const uint32_t row0 = static_cast<uint32_t>(g.params.dims[0] * (cy + dimy * cz));
+    for (uint32_t t = s + 1, end = g.bucket_start[row0 + x_hi + 1]; t < end; ++t) test(t);
+    constexpr int8_t kRows[4][2] = {{1, 0}, {-1, 1}, {0, 1}, {1, 1}};
+    for (const auto& row : kRows) {
+      const int64_t ny = cy + row[0], nz = cz + row[1];
+      if (ny < 0 || ny >= dimy || nz >= dimz) continue;
+      const uint32_t base = static_cast<uint32_t>(dimx * (ny + dimy * nz));
+      for (uint32_t t = g.bucket_start[base + x_lo], end = g.bucket_start[base + x_hi + 1]; t < end; ++t)
+        test(t);
+    }
+  } else {
+    // Hashed buckets hold several cells: visit cells one by one and skip slots
+    // whose cell differs. Own cell first (slots after s), then the 13 forward cells.
+    {
+      const uint32_t end = g.bucket_start[bucket_of(g.params, cell) + 1];
+      for (uint32_t t = s + 1; t < end; ++t)
+        if (g.cell[t] == cell) test(t);
+    }
+    for (const Offset& o : kForward) {
+      const int64_t nx = cx + o.dx, ny = cy + o.dy, nz = cz + o.dz;
+      if (nx < 0 || ny < 0 || nx >= dimx || ny >= dimy || nz >= dimz) continue;  // dz >= 0
+      const uint64_t ncell = cell_id(static_cast<uint64_t>(nx), static_cast<uint64_t>(ny),
+                                     static_cast<uint64_t>(nz));
+      const uint32_t b = bucket_of(g.params, ncell);
+      for (uint32_t t = g.bucket_start[b], end = g.bucket_start[b + 1]; t < end; ++t)
+        if (g.cell[t] == ncell) test(t);
     }
   }
 }
@@ -134,15 +145,9 @@ void grid_gather(const GridParams& g, const uint64_t* IMPACT_RESTRICT sorted_key
                  PairFilter filter, GridSorted out, Range r) {
   for (uint32_t s = r.begin; s < r.end; ++s) {
     const uint32_t i = static_cast<uint32_t>(sorted_keys[s]);
-    out.index[s] = i;
     const float x0 = boxes.min_x[i], y0 = boxes.min_y[i], z0 = boxes.min_z[i];
     out.cell[s] = box_cell(g, x0, y0, z0);
-    out.box.min_x[s] = x0;
-    out.box.min_y[s] = y0;
-    out.box.min_z[s] = z0;
-    out.box.max_x[s] = boxes.max_x[i];
-    out.box.max_y[s] = boxes.max_y[i];
-    out.box.max_z[s] = boxes.max_z[i];
+    out.box[s] = SortedBox{x0, y0, z0, i, boxes.max_x[i], boxes.max_y[i], boxes.max_z[i], 0u};
     if (filter.layer) {
       out.layer[s] = filter.layer[i];
       out.mask[s] = filter.mask[i];
@@ -151,20 +156,16 @@ void grid_gather(const GridParams& g, const uint64_t* IMPACT_RESTRICT sorted_key
   }
 }
 
-uint64_t grid_count_pairs(const GridView& g, Range r) {
-  uint64_t count = 0;
-  dispatch(g, [&]<bool kF, bool kD>() {
-    for (uint32_t s = r.begin; s < r.end; ++s) visit_slot<kF, kD>(g, s, [&](uint32_t, uint32_t) { ++count; });
-  });
-  return count;
-}
-
-void grid_write_pairs(const GridView& g, Pair* IMPACT_RESTRICT out, Range r) {
+uint64_t grid_find_pairs(const GridView& g, Pair* IMPACT_RESTRICT out, uint64_t capacity, Range r) {
   uint64_t k = 0;
   dispatch(g, [&]<bool kF, bool kD>() {
     for (uint32_t s = r.begin; s < r.end; ++s)
-      visit_slot<kF, kD>(g, s, [&](uint32_t a, uint32_t b) { out[k++] = Pair{a, b}; });
+      visit_slot<kF, kD>(g, s, [&](uint32_t a, uint32_t b) {
+        if (k < capacity) out[k] = Pair{a, b};
+        ++k;
+      });
   });
+  return k;
 }
 
 }  // namespace impact::kernels

@@ -5,11 +5,11 @@
 //   grid_gather    per sorted slot: copy the box, its cell and its filter data into
 //                  sorted order, so the pair pass reads memory in sequence
 //   segment_starts bucket -> [first slot, end slot)   (kernels/sort/segments.h)
-//   grid_count_pairs / grid_write_pairs
-//                  per sorted slot s: test the boxes later in s's own cell, then
+//   grid_find_pairs per sorted slot s: test the boxes later in s's own cell, then
 //                  every box of the 13 "forward" neighbour cells (half of the 26,
-//                  so each pair is met once); count first, then write at the
-//                  exclusive-scanned offset of the range.
+//                  so each pair is met once). The host gives each chunk of slots
+//                  its own output buffer, then concatenates them in chunk order
+//                  at exclusive-scanned offsets.
 //
 // Correctness: the cell edge exceeds the largest box edge, so the min corners of
 // two overlapping boxes are less than one cell apart on every axis and their
@@ -20,9 +20,11 @@
 // hashed into 2^table_bits buckets, and slots of a bucket whose cell id differs
 // from the visited cell are skipped, so collisions cost time but never produce a
 // duplicate or a wrong pair.
-// Pair order: by query slot (bucket, then index), then own cell, then neighbour
-// offsets in (dz, dy, dx) lexicographic order, then slot. Each pair is (lo, hi)
-// box indices. Overlap includes touching (min <= max). Inputs finite.
+// Pair order: by query slot (bucket, then index); then, for dense grids, the own
+// row (own cell after s, cell x+1) and rows (dy, dz) = (1,0), (-1,1), (0,1),
+// (1,1) over x-1..x+1, each in slot order; for hashed grids, the own cell, then
+// the 13 forward cells in (dz, dy, dx) order, each in slot order. Each pair
+// holds (lo, hi) box indices. Overlap includes touching (min <= max). Inputs finite.
 // Method: the spatial-hash grid of Teschner et al. 2003 ("Optimized Spatial
 // Hashing for Collision Detection of Deformable Objects") and GPU sorted grids
 // (Le Grand, GPU Gems 3 ch. 32), with a half neighbourhood.
@@ -57,11 +59,20 @@ struct PairFilter {
   const uint8_t* is_static;
 };
 
+/// A box in sorted-slot order with its original index: 32 bytes, so the pair
+/// pass touches one cache line per candidate instead of one per field.
+struct alignas(32) SortedBox {
+  float min_x, min_y, min_z;
+  uint32_t index;
+  float max_x, max_y, max_z;
+  uint32_t pad;
+};
+static_assert(sizeof(SortedBox) == 32);
+
 /// Arrays in sorted-slot order, produced by grid_gather.
 struct GridSorted {
-  uint32_t* index;
+  SortedBox* box;
   uint64_t* cell;
-  AabbSoAOut box;
   uint32_t* layer;      // null when unfiltered
   uint32_t* mask;
   uint8_t* is_static;
@@ -69,9 +80,8 @@ struct GridSorted {
 
 struct GridView {
   GridParams params;
-  const uint32_t* index;
+  const SortedBox* box;
   const uint64_t* cell;
-  AabbSoA box;
   const uint32_t* layer;  // null when unfiltered
   const uint32_t* mask;
   const uint8_t* is_static;
@@ -83,10 +93,9 @@ void grid_keys(const GridParams& g, AabbSoA boxes, uint64_t* IMPACT_RESTRICT out
 void grid_gather(const GridParams& g, const uint64_t* IMPACT_RESTRICT sorted_keys, AabbSoA boxes,
                  PairFilter filter, GridSorted out, Range r);
 
-/// Number of pairs whose query slot lies in r.
-uint64_t grid_count_pairs(const GridView& g, Range r);
-
-/// Writes those pairs to out[0 ...] in the documented order.
-void grid_write_pairs(const GridView& g, Pair* IMPACT_RESTRICT out, Range r);
+/// Writes the pairs whose query slot lies in r to out[0, capacity) in the
+/// documented order and returns how many there are; when that exceeds capacity
+/// only the first `capacity` are written and the caller reruns with more room.
+uint64_t grid_find_pairs(const GridView& g, Pair* IMPACT_RESTRICT out, uint64_t capacity, Range r);
 
 }  // namespace impact::kernels

@@ -5,114 +5,138 @@
 namespace impact::kernels {
 namespace {
 
-IMPACT_INLINE uint32_t body_b(SolverContacts c, uint32_t k) {
-  return c.b_is_plane[k] ? kInvalidBody : c.b[k];
+// Solver slot of body b: planes map to the immovable zero entry at body_count.
+IMPACT_INLINE uint32_t solver_b(SolverContacts c, uint32_t k, uint32_t body_count) {
+  return c.b_is_plane[k] ? body_count : c.b[k];
 }
 
-// Relative normal velocity (b minus a) along n; planes do not move.
-IMPACT_INLINE float normal_velocity(SolverContacts c, const SolverBodies& b, uint32_t k) {
-  const uint32_t ia = c.a[k];
-  float rx = -b.vel_x[ia], ry = -b.vel_y[ia], rz = -b.vel_z[ia];
-  if (!c.b_is_plane[k]) {
-    const uint32_t ib = c.b[k];
-    rx += b.vel_x[ib];
-    ry += b.vel_y[ib];
-    rz += b.vel_z[ib];
-  }
-  return rx * c.normal_x[k] + ry * c.normal_y[k] + rz * c.normal_z[k];
+// Relative normal velocity (b minus a) along n.
+IMPACT_INLINE float normal_velocity(SolverContacts c, const BodyState* s, uint32_t body_count, uint32_t k) {
+  const BodyState& A = s[c.a[k]];
+  const BodyState& B = s[solver_b(c, k, body_count)];
+  return (B.x - A.x) * c.normal_x[k] + (B.y - A.y) * c.normal_y[k] + (B.z - A.z) * c.normal_z[k];
 }
 
-// Sum over a body's contacts of side * delta * n, in CSR order.
-IMPACT_INLINE void gather(SolverContacts c, BodyContacts adj, uint32_t body, float* sx, float* sy,
-                          float* sz) {
-  float x = 0.0f, y = 0.0f, z = 0.0f;
-  for (uint32_t e = adj.start[body]; e < adj.start[body + 1]; ++e) {
-    const uint32_t entry = static_cast<uint32_t>(adj.sorted_keys[e]);
-    const uint32_t k = entry >> 1;
-    const float d = (entry & 1u) ? c.delta[k] : -c.delta[k];
-    x += d * c.normal_x[k];
-    y += d * c.normal_y[k];
-    z += d * c.normal_z[k];
-  }
-  *sx = x;
-  *sy = y;
-  *sz = z;
+IMPACT_INLINE void set_delta(SolverContacts c, uint32_t k, float d) {
+  float* v = c.delta_vec + 4ull * k;
+  v[0] = d * c.normal_x[k];
+  v[1] = d * c.normal_y[k];
+  v[2] = d * c.normal_z[k];
+  v[3] = 0.0f;
 }
 
 }  // namespace
+
+void pack_velocity_state(const float* IMPACT_RESTRICT vx, const float* IMPACT_RESTRICT vy,
+                         const float* IMPACT_RESTRICT vz, const float* IMPACT_RESTRICT inv_mass,
+                         BodyState* IMPACT_RESTRICT out, Range r) {
+  for (uint32_t i = r.begin; i < r.end; ++i) out[i] = BodyState{vx[i], vy[i], vz[i], inv_mass[i]};
+}
+
+void pack_displacement_state(const float* IMPACT_RESTRICT inv_mass, BodyState* IMPACT_RESTRICT out, Range r) {
+  for (uint32_t i = r.begin; i < r.end; ++i) out[i] = BodyState{0.0f, 0.0f, 0.0f, inv_mass[i]};
+}
+
+void unpack_velocity_state(const BodyState* IMPACT_RESTRICT s, float* IMPACT_RESTRICT vx,
+                           float* IMPACT_RESTRICT vy, float* IMPACT_RESTRICT vz, Range r) {
+  for (uint32_t i = r.begin; i < r.end; ++i) {
+    vx[i] = s[i].x;
+    vy[i] = s[i].y;
+    vz[i] = s[i].z;
+  }
+}
+
+void commit_displacement_state(const BodyState* IMPACT_RESTRICT s, float* IMPACT_RESTRICT px,
+                               float* IMPACT_RESTRICT py, float* IMPACT_RESTRICT pz, Range r) {
+  for (uint32_t i = r.begin; i < r.end; ++i) {
+    px[i] += s[i].x;
+    py[i] += s[i].y;
+    pz[i] += s[i].z;
+  }
+}
 
 void contact_body_keys(SolverContacts c, const float* inv_mass, uint32_t body_count,
                        uint64_t* IMPACT_RESTRICT out_keys, Range r) {
   for (uint32_t k = r.begin; k < r.end; ++k) {
     const uint32_t ia = c.a[k];
-    const uint32_t ib = body_b(c, k);
     const uint64_t ka = inv_mass[ia] > 0.0f ? ia : body_count;
-    const uint64_t kb = (ib != kInvalidBody && inv_mass[ib] > 0.0f) ? ib : body_count;
+    const uint64_t kb = (!c.b_is_plane[k] && inv_mass[c.b[k]] > 0.0f) ? c.b[k] : body_count;
     out_keys[2ull * k] = (ka << 32) | (2ull * k);
     out_keys[2ull * k + 1] = (kb << 32) | (2ull * k + 1);
   }
 }
 
-void contact_prepare(const SolverParams& p, SolverContacts c, const SolverBodies& b,
-                     const float* plane_restitution, BodyContacts adj, Range r) {
+void contact_prepare(const SolverParams& p, SolverContacts c, const BodyState* s, uint32_t body_count,
+                     const float* restitution, const float* plane_restitution, BodyContacts adj, Range r) {
   for (uint32_t k = r.begin; k < r.end; ++k) {
     const uint32_t ia = c.a[k];
-    const float ka = static_cast<float>(adj.start[ia + 1] - adj.start[ia]);
-    float w = b.inv_mass[ia] * ka;
-    float e = b.restitution[ia];
+    float w = s[ia].inv_mass * static_cast<float>(adj.start[ia + 1] - adj.start[ia]);
+    float e = restitution[ia];
     if (c.b_is_plane[k]) {
       e = std::max(e, plane_restitution[c.b[k]]);
     } else {
       const uint32_t ib = c.b[k];
-      const float kb = static_cast<float>(adj.start[ib + 1] - adj.start[ib]);
-      w += b.inv_mass[ib] * kb;
-      e = std::max(e, b.restitution[ib]);
+      w += s[ib].inv_mass * static_cast<float>(adj.start[ib + 1] - adj.start[ib]);
+      e = std::max(e, restitution[ib]);
     }
     c.mass[k] = w > 0.0f ? 1.0f / w : 0.0f;
-    const float vn = normal_velocity(c, b, k);
+    const float vn = normal_velocity(c, s, body_count, k);
     c.target[k] = vn < -p.restitution_threshold ? -e * vn : 0.0f;
     c.impulse[k] = 0.0f;
-    c.delta[k] = 0.0f;
-  }
-}
-
-void contact_solve(SolverContacts c, const SolverBodies& b, Range r) {
-  for (uint32_t k = r.begin; k < r.end; ++k) {
-    const float vn = normal_velocity(c, b, k);
-    const float old = c.impulse[k];
-    const float next = std::max(old + c.mass[k] * (c.target[k] - vn), 0.0f);
-    c.impulse[k] = next;
-    c.delta[k] = next - old;
-  }
-}
-
-void body_apply_velocity(SolverContacts c, const SolverBodies& b, BodyContacts adj, Range r) {
-  for (uint32_t i = r.begin; i < r.end; ++i) {
-    if (adj.start[i] == adj.start[i + 1]) continue;
-    float sx, sy, sz;
-    gather(c, adj, i, &sx, &sy, &sz);
-    const float w = b.inv_mass[i];
-    b.vel_x[i] += w * sx;
-    b.vel_y[i] += w * sy;
-    b.vel_z[i] += w * sz;
   }
 }
 
 void contact_pair_keys(SolverContacts c, uint64_t* IMPACT_RESTRICT out_keys, Range r) {
   for (uint32_t k = r.begin; k < r.end; ++k)
-    out_keys[k] = (static_cast<uint64_t>(c.a[k]) << 32) | c.b[k] |
-                  (c.b_is_plane[k] ? 0x80000000ull : 0ull);
+    out_keys[k] = (static_cast<uint64_t>(c.a[k]) << 32) | c.b[k] | (c.b_is_plane[k] ? 0x80000000ull : 0ull);
 }
 
-void contact_warm_start(SolverContacts c, const uint64_t* IMPACT_RESTRICT keys,
-                        const uint64_t* IMPACT_RESTRICT prev_keys, const float* IMPACT_RESTRICT prev_impulse,
-                        uint32_t prev_count, float factor, Range r) {
+void contact_warm_start(SolverContacts c, const uint64_t* IMPACT_RESTRICT keys, WarmStart prev, Range r) {
   for (uint32_t k = r.begin; k < r.end; ++k) {
     const uint64_t key = keys[k];
-    const uint64_t* it = std::lower_bound(prev_keys, prev_keys + prev_count, key);
-    const float imp = (it != prev_keys + prev_count && *it == key) ? factor * prev_impulse[it - prev_keys] : 0.0f;
+    const uint32_t a = c.a[k];
+    float imp = 0.0f;
+    if (a < prev.body_count) {
+      // Last step's contacts of body a: a handful, scanned linearly.
+      for (uint32_t j = prev.start[a]; j < prev.start[a + 1]; ++j) {
+        if (prev.keys[j] == key) {
+          imp = prev.factor * prev.impulse[j];
+          break;
+        }
+      }
+    }
     c.impulse[k] = imp;
-    c.delta[k] = imp;
+    set_delta(c, k, imp);
+  }
+}
+
+void contact_solve(SolverContacts c, const BodyState* s, uint32_t body_count, Range r) {
+  for (uint32_t k = r.begin; k < r.end; ++k) {
+    const float vn = normal_velocity(c, s, body_count, k);
+    const float old = c.impulse[k];
+    const float next = std::max(old + c.mass[k] * (c.target[k] - vn), 0.0f);
+    c.impulse[k] = next;
+    set_delta(c, k, next - old);
+  }
+}
+
+void body_apply(SolverContacts c, BodyContacts adj, BodyState* io, Range r) {
+  for (uint32_t i = r.begin; i < r.end; ++i) {
+    const uint32_t e0 = adj.start[i], e1 = adj.start[i + 1];
+    if (e0 == e1) continue;
+    float x = 0.0f, y = 0.0f, z = 0.0f;
+    for (uint32_t e = e0; e < e1; ++e) {
+      const uint32_t entry = static_cast<uint32_t>(adj.sorted_keys[e]);
+      const float* d = c.delta_vec + 4ull * (entry >> 1);
+      const float sign = (entry & 1u) ? 1.0f : -1.0f;
+      x += sign * d[0];
+      y += sign * d[1];
+      z += sign * d[2];
+    }
+    const float w = io[i].inv_mass;
+    io[i].x += w * x;
+    io[i].y += w * y;
+    io[i].z += w * z;
   }
 }
 
@@ -121,18 +145,6 @@ void contact_position_target(const SolverParams& p, SolverContacts c, Range r) {
   for (uint32_t k = r.begin; k < r.end; ++k) {
     c.target[k] = p.position_correction * std::max(c.depth[k] - p.penetration_slop, 0.0f);
     c.impulse[k] = 0.0f;
-    c.delta[k] = 0.0f;
-  }
-}
-
-void body_commit_displacement(const float* IMPACT_RESTRICT dx, const float* IMPACT_RESTRICT dy,
-                              const float* IMPACT_RESTRICT dz, float* IMPACT_RESTRICT io_px,
-                              float* IMPACT_RESTRICT io_py, float* IMPACT_RESTRICT io_pz, Range r) {
-#pragma omp simd
-  for (uint32_t i = r.begin; i < r.end; ++i) {
-    io_px[i] += dx[i];
-    io_py[i] += dy[i];
-    io_pz[i] += dz[i];
   }
 }
 

@@ -28,14 +28,16 @@
 // kinetic energy; then positions move by the displacement.
 //
 // Passes (each output element written by exactly one index):
+//   pack_*_state             per body: hot 16-byte state (velocity or displacement, w)
 //   contact_body_keys        per contact: two CSR keys
 //   contact_prepare          per contact: effective mass, restitution target, impulse = 0
 //   contact_pair_keys        per contact: persistence key
-//   contact_warm_start       per contact: impulse = delta = warm * last impulse
+//   contact_warm_start       per contact: impulse = warm * last impulse (looked up among
+//                            last step's contacts of the same body a)
 //   contact_solve            per contact: impulse increment of one iteration
-//   body_apply_velocity      per body: v += w * sum(side * delta * n)
+//   body_apply               per body: state += w * sum(side * increment * n)
 //   contact_position_target  per contact: position target, impulse = 0
-//   body_commit_displacement per body: p += d
+//   unpack / commit          per body: velocities back, or p += displacement
 #pragma once
 
 #include "kernels/common/kernel.h"
@@ -48,16 +50,15 @@ struct SolverParams {
   float penetration_slop;       ///< m
 };
 
-/// The per-body state an iteration moves: velocities, or displacements in the
-/// position phase.
-struct SolverBodies {
-  float* vel_x;
-  float* vel_y;
-  float* vel_z;
-  const float* inv_mass;
-  const float* restitution;
-  uint32_t count;
+/// Hot per-body solver state, 16 bytes: the velocity (or, in the position phase,
+/// the displacement) and the inverse mass, packed so that a contact reads one
+/// cache line per body (Box2D's b2BodyState idea). Slot n (one past the last
+/// body) is a zero, immovable entry that plane contacts use as body b.
+struct alignas(16) BodyState {
+  float x, y, z;
+  float inv_mass;
 };
+static_assert(sizeof(BodyState) == 16);
 
 struct SolverContacts {
   const uint32_t* a;
@@ -67,10 +68,10 @@ struct SolverContacts {
   const float* normal_y;
   const float* normal_z;
   const float* depth;
-  float* mass;     ///< 1 / (w_a k_a + w_b k_b), 0 if both immovable
-  float* target;   ///< desired relative normal velocity after the solve, m/s
-  float* impulse;  ///< accumulated normal impulse, N s
-  float* delta;    ///< increment of the current iteration
+  float* mass;       ///< 1 / (w_a k_a + w_b k_b), 0 if both immovable
+  float* target;     ///< desired relative normal velocity (or displacement) after the solve
+  float* impulse;    ///< accumulated normal impulse, N s
+  float* delta_vec;  ///< 4 per contact: this iteration's impulse increment times n (xyz, 0)
 };
 
 /// CSR adjacency: keys sorted, and start[body] for body in [0, count].
@@ -79,28 +80,42 @@ struct BodyContacts {
   const uint32_t* start;
 };
 
+/// Last step's contacts for warm starting: keys sorted ascending (unique), their
+/// impulses, and start[a] over the a-half of the key for a in [0, body_count].
+struct WarmStart {
+  const uint64_t* keys;
+  const float* impulse;
+  const uint32_t* start;
+  uint32_t body_count;
+  float factor;
+};
+
+void pack_velocity_state(const float* IMPACT_RESTRICT vx, const float* IMPACT_RESTRICT vy,
+                         const float* IMPACT_RESTRICT vz, const float* IMPACT_RESTRICT inv_mass,
+                         BodyState* IMPACT_RESTRICT out, Range r);
+void pack_displacement_state(const float* IMPACT_RESTRICT inv_mass, BodyState* IMPACT_RESTRICT out, Range r);
+void unpack_velocity_state(const BodyState* IMPACT_RESTRICT s, float* IMPACT_RESTRICT vx,
+                           float* IMPACT_RESTRICT vy, float* IMPACT_RESTRICT vz, Range r);
+/// p += displacement.
+void commit_displacement_state(const BodyState* IMPACT_RESTRICT s, float* IMPACT_RESTRICT px,
+                               float* IMPACT_RESTRICT py, float* IMPACT_RESTRICT pz, Range r);
+
 void contact_body_keys(SolverContacts c, const float* inv_mass, uint32_t body_count,
                        uint64_t* IMPACT_RESTRICT out_keys, Range r);
 
-void contact_prepare(const SolverParams& p, SolverContacts c, const SolverBodies& b,
-                     const float* plane_restitution, BodyContacts adj, Range r);
-
-void contact_solve(SolverContacts c, const SolverBodies& b, Range r);
-
-void body_apply_velocity(SolverContacts c, const SolverBodies& b, BodyContacts adj, Range r);
+void contact_prepare(const SolverParams& p, SolverContacts c, const BodyState* s, uint32_t body_count,
+                     const float* restitution, const float* plane_restitution, BodyContacts adj, Range r);
 
 void contact_pair_keys(SolverContacts c, uint64_t* IMPACT_RESTRICT out_keys, Range r);
 
-/// prev_keys sorted ascending (unique), prev_impulse their impulses.
-void contact_warm_start(SolverContacts c, const uint64_t* IMPACT_RESTRICT keys,
-                        const uint64_t* IMPACT_RESTRICT prev_keys, const float* IMPACT_RESTRICT prev_impulse,
-                        uint32_t prev_count, float factor, Range r);
+void contact_warm_start(SolverContacts c, const uint64_t* IMPACT_RESTRICT keys, WarmStart prev, Range r);
 
-/// Writes position targets to c.target and zeroes c.impulse and c.delta.
+void contact_solve(SolverContacts c, const BodyState* s, uint32_t body_count, Range r);
+
+/// Per body: state += inv_mass * sum over its contacts of side * delta_vec.
+void body_apply(SolverContacts c, BodyContacts adj, BodyState* io, Range r);
+
+/// Writes position targets to c.target and zeroes c.impulse.
 void contact_position_target(const SolverParams& p, SolverContacts c, Range r);
-
-void body_commit_displacement(const float* IMPACT_RESTRICT dx, const float* IMPACT_RESTRICT dy,
-                              const float* IMPACT_RESTRICT dz, float* IMPACT_RESTRICT io_px,
-                              float* IMPACT_RESTRICT io_py, float* IMPACT_RESTRICT io_pz, Range r);
 
 }  // namespace impact::kernels

@@ -1,0 +1,19 @@
+#include "kernels/common/permute.h"
+
+namespace impact::kernels {
+
+void invert_permutation(const uint32_t* IMPACT_RESTRICT perm, uint32_t* IMPACT_RESTRICT inv, Range r) {
+  for (uint32_t i = r.begin; i < r.end; ++i) inv[perm[i]] = i;
+}
+
+void remap_pair_keys(const uint32_t* IMPACT_RESTRICT inv, uint64_t* IMPACT_RESTRICT io_keys, Range r) {
+  for (uint32_t k = r.begin; k < r.end; ++k) {
+    const uint64_t key = io_keys[k];
+    const uint32_t a = inv[key >> 32];
+    const uint32_t lo = static_cast<uint32_t>(key);
+    const uint32_t b = (lo & 0x80000000u) ? lo : inv[lo];
+    io_keys[k] = (static_cast<uint64_t>(a) << 32) | b;
+  }
+}
+
+}  // namespace impact::kernels
