@@ -73,6 +73,9 @@ bool resolve_backend(Backend requested, Backend* out) {
 Executor::Executor(Backend backend, uint32_t threads) {
   if (!resolve_backend(backend, &backend_)) backend_ = Backend::kSerial;
   threads_ = backend_ == Backend::kSerial ? 1u : (threads == 0 ? hardware_threads() : threads);
+  // TBB caps its workers at the hardware threads (and warns when asked for more);
+  // results do not depend on the count, so ask for no more than it will run.
+  if (backend_ == Backend::kTbb) threads_ = std::min(threads_, hardware_threads());
   if (backend_ == Backend::kTbb) impl_ = std::make_unique<ExecutorImpl>(threads_);
 }
 

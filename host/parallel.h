@@ -56,6 +56,8 @@ class Executor {
 
   void for_each_chunk(uint64_t n, uint32_t grain, ChunkFn fn) const;
 
+  /// The resolved backend (never kDefault) and the threads it runs (TBB: at most
+  /// the hardware threads; OpenMP may oversubscribe).
   Backend backend() const { return backend_; }
   uint32_t threads() const { return threads_; }
 

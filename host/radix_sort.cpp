@@ -1,5 +1,6 @@
 #include "host/radix_sort.h"
 
+#include <algorithm>
 #include <cstring>
 #include <utility>
 
@@ -28,15 +29,18 @@ void RadixSorter::sort_impl(const Executor& exec, uint64_t* keys, uint32_t* valu
   uint64_t* dst = scratch(tmp_, n);
   uint32_t* vsrc = values;
   uint32_t* vdst = kWithValues ? scratch(tmp_values_, n) : nullptr;
+  hi_bit = std::min<uint32_t>(hi_bit, 64);
   for (uint32_t shift = lo_bit; shift < hi_bit; shift += kernels::kRadixBits) {
+    const uint32_t bits = std::min(kernels::kRadixBits, hi_bit - shift);
+    const kernels::RadixDigit digit{shift, (1u << bits) - 1};
     exec.for_each_chunk(n, kGrain, [&](uint32_t b, uint32_t e, uint32_t c) {
-      kernels::radix_histogram(src, shift, hist + static_cast<size_t>(c) * kRadixBuckets, {b, e});
+      kernels::radix_histogram(src, digit, hist + static_cast<size_t>(c) * kRadixBuckets, {b, e});
     });
     if (kernels::radix_offsets(hist, chunks, n)) continue;  // one digit value: order unchanged
     exec.for_each_chunk(n, kGrain, [&](uint32_t b, uint32_t e, uint32_t c) {
       uint32_t* off = hist + static_cast<size_t>(c) * kRadixBuckets;
-      if constexpr (kWithValues) kernels::radix_scatter_kv(src, vsrc, shift, off, dst, vdst, {b, e});
-      else kernels::radix_scatter(src, shift, off, dst, {b, e});
+      if constexpr (kWithValues) kernels::radix_scatter_kv(src, vsrc, digit, off, dst, vdst, {b, e});
+      else kernels::radix_scatter(src, digit, off, dst, {b, e});
     });
     std::swap(src, dst);
     if constexpr (kWithValues) std::swap(vsrc, vdst);

@@ -367,22 +367,25 @@ Status World::create_planes(std::span<const PlaneDesc> descs, std::span<PlaneHan
     const PlaneDesc& d = descs[i];
     const std::string who = "create_planes: plane " + std::to_string(i);
     if (!finite3(d.normal)) return invalid(who, "normal must be finite, got " + vec_str(d.normal));
-    const float len = d.normal.norm();
-    if (!(len > 0.0f) || !std::isfinite(len))
-      return invalid(who, "normal must be non-zero, got " + vec_str(d.normal));
+    // Length in double: float would overflow for 1e20 and underflow for 1e-30.
+    const double len = d.normal.cast<double>().norm();
+    if (!(len > 0.0)) return invalid(who, "normal must be non-zero, got " + vec_str(d.normal));
     if (!std::isfinite(d.offset)) return invalid(who, "offset must be finite, got " + fmt_float(d.offset));
+    if (std::fabs(d.offset / len) > kMaxCoordinate)
+      return invalid(who, "offset / |normal| must be <= 1e18 m, got " + std::to_string(d.offset / len));
     if (!(d.restitution >= 0.0f && d.restitution <= 1.0f))
       return invalid(who, "restitution must be in [0, 1], got " + fmt_float(d.restitution));
   }
   PlaneStore& p = impl_->planes;
   for (size_t i = 0; i < descs.size(); ++i) {
     const PlaneDesc& d = descs[i];
-    const float len = d.normal.norm();
-    const Eigen::Vector3f n = d.normal / len;
+    const Eigen::Vector3d nd = d.normal.cast<double>();
+    const double len = nd.norm();
+    const Eigen::Vector3f n = (nd / len).cast<float>();
     p.normal_x.push_back(n.x());
     p.normal_y.push_back(n.y());
     p.normal_z.push_back(n.z());
-    p.offset.push_back(d.offset / len);  // n.x <= offset scales with the normal
+    p.offset.push_back(static_cast<float>(d.offset / len));  // n.x <= offset scales with the normal
     p.restitution.push_back(d.restitution);
     p.layer.push_back(d.layer);
     p.mask.push_back(d.mask);
@@ -410,6 +413,7 @@ Status World::destroy_planes(std::span<const PlaneHandle> handles) {
   std::sort(sorted.begin(), sorted.end());
   if (std::adjacent_find(sorted.begin(), sorted.end()) != sorted.end())
     return invalid("destroy_planes", "the same plane is listed twice");
+  impl_->prev_contacts = 0;  // plane slots move: last step's contact keys no longer apply
   for (const PlaneHandle& h : handles) {
     const uint32_t slot = impl_->plane_handles.lookup(h.index, h.generation);
     const uint32_t last = static_cast<uint32_t>(p.size() - 1);
@@ -452,7 +456,8 @@ Status World::advance(float frame_seconds, FrameResult* out) {
     w.accumulator -= drop;
     r.dropped = static_cast<float>(drop);
   }
-  w.alpha = static_cast<float>(std::clamp(w.accumulator / dt, 0.0, 1.0));
+  // Clamp after rounding to float: a remainder just below dt must not round to 1.
+  w.alpha = std::clamp(static_cast<float>(w.accumulator / dt), 0.0f, std::nextafter(1.0f, 0.0f));
   r.alpha = w.alpha;
   if (out) *out = r;
   return status;
@@ -516,6 +521,9 @@ uint64_t World::state_hash() const {
 // --- settings ---------------------------------------------------------------------------
 
 const WorldDesc& World::desc() const { return impl_->desc; }
+
+Backend World::backend() const { return impl_->exec.backend(); }
+uint32_t World::threads() const { return impl_->exec.threads(); }
 
 Status World::set_backend(Backend backend, uint32_t threads) {
   Backend resolved;

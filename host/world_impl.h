@@ -38,7 +38,7 @@ struct ContactStore {
   host::Buffer<uint32_t> a, b;
   host::Buffer<uint8_t> b_is_plane;
   host::Buffer<float> normal_x, normal_y, normal_z, depth, point_x, point_y, point_z;
-  host::Buffer<float> mass, target, impulse, delta_vec;
+  host::Buffer<float> mass, target, impulse;
   size_t count = 0;
   void resize(size_t n);
 };
@@ -66,8 +66,11 @@ class WorldImpl {
   // Step scratch, reused across steps.
   host::Buffer<float> box[6];
   host::Buffer<kernels::Pair> pairs;
+  host::Buffer<kernels::BoundsSummary> bounds_partials;
   ContactStore contacts;
   host::Buffer<uint64_t> csr_keys;
+  host::Buffer<uint32_t> entry_pos;          // CSR position of each (contact, side)
+  host::Buffer<float> entry_delta;           // 4 floats per CSR entry
   host::Buffer<uint64_t> pair_keys;          // this step's contact keys (a << 32 | b | plane bit)
   host::Buffer<uint64_t> prev_keys;          // last step's, sorted, for warm starting
   host::Buffer<float> prev_impulse;          // their impulses

@@ -30,15 +30,31 @@ kernels::GridParams choose_grid(const kernels::BoundsSummary& s, uint32_t n, Gri
   if (s.max_edge == 0.0f) cell = max_extent / std::max(1.0, std::cbrt(static_cast<double>(n)));
   cell = std::max(cell, min_cell);
   if (!(cell > 0.0) || !std::isfinite(cell)) cell = 1.0;
-  g.inv_cell = 1.0 / cell;
-  double cells = 1.0;
-  for (int k = 0; k < 3; ++k) {
-    const double d = std::floor(extent[k] * g.inv_cell) + 1.0;
-    g.dims[k] = static_cast<uint32_t>(std::min<double>(d, kernels::kGridMaxDim));
-    cells *= g.dims[k];
-  }
-  // Dense (row-major buckets, no hashing) when the cell count is a small multiple of n.
+  auto count_cells = [&](double c) {
+    const double inv = 1.0 / c;
+    double cells = 1.0;
+    for (int k = 0; k < 3; ++k)
+      cells *= std::min<double>(std::floor(extent[k] * inv) + 1.0, kernels::kGridMaxDim);
+    return cells;
+  };
+  // Dense (row-major buckets, no hashing, spatial locality) when the cell count is
+  // a small multiple of n. A moderately sparse scene may coarsen its cells up to
+  // 2x to stay dense (more candidates per cell, far fewer cache misses); sparser
+  // scenes hash.
   const double dense_limit = std::max(4.0 * n, 4096.0);
+  double cells = count_cells(cell);
+  if (cells > dense_limit) {
+    const double grow = std::cbrt(cells / dense_limit) * (1.0 + 0x1p-10);
+    if (grow <= 2.0 && count_cells(cell * grow) <= dense_limit) {
+      cell *= grow;
+      cells = count_cells(cell);
+    }
+  }
+  g.inv_cell = 1.0 / cell;
+  for (int k = 0; k < 3; ++k)
+    g.dims[k] = static_cast<uint32_t>(std::min<double>(std::floor(extent[k] * g.inv_cell) + 1.0,
+                                                       kernels::kGridMaxDim));
+  cells = static_cast<double>(g.dims[0]) * g.dims[1] * g.dims[2];
   if (cells <= dense_limit) {
     g.dense = 1;
     g.table_bits = 0;
@@ -57,21 +73,28 @@ kernels::GridParams choose_grid(const kernels::BoundsSummary& s, uint32_t n, Gri
 
 }  // namespace
 
-Status GridBroadPhase::find_pairs(const Executor& exec, kernels::AabbSoA boxes,
-                                  kernels::PairFilter filter, uint32_t n,
-                                  Buffer<kernels::Pair>* out) {
-  out->clear();
-  last_n_ = n;
-  if (n < 2) return Status();
-
-  // 1. Union of the boxes and largest edge: one partial per chunk, combined in order.
-  const uint32_t chunks = chunk_count(n, kKeyGrain);
-  kernels::BoundsSummary* partial = scratch(partial_bounds_, chunks);
-  exec.for_each_chunk(n, kKeyGrain, [&](uint32_t b, uint32_t e, uint32_t c) {
+kernels::BoundsSummary summarize_bounds(const Executor& exec, kernels::AabbSoA boxes, uint32_t n,
+                                        Buffer<kernels::BoundsSummary>& partials) {
+  constexpr uint32_t kGrain = GridBroadPhase::kKeyGrain;
+  const uint32_t chunks = chunk_count(n, kGrain);
+  kernels::BoundsSummary* partial = scratch(partials, chunks);
+  exec.for_each_chunk(n, kGrain, [&](uint32_t b, uint32_t e, uint32_t c) {
     partial[c] = kernels::reduce_bounds(boxes, {b, e});
   });
   kernels::BoundsSummary sum = kernels::empty_bounds_summary();
   for (uint32_t c = 0; c < chunks; ++c) sum = kernels::combine(sum, partial[c]);
+  return sum;
+}
+
+Status GridBroadPhase::find_pairs(const Executor& exec, kernels::AabbSoA boxes,
+                                  kernels::PairFilter filter, uint32_t n,
+                                  Buffer<kernels::Pair>* out, const kernels::BoundsSummary* summary) {
+  out->clear();
+  last_n_ = n;
+  if (n < 2) return Status();
+
+  // 1. Union of the boxes and largest edge.
+  const kernels::BoundsSummary sum = summary ? *summary : summarize_bounds(exec, boxes, n, partial_bounds_);
   const kernels::GridParams g = choose_grid(sum, n, &info_);
 
   // 2. Keys, sorted on the bucket bits.

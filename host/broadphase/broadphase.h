@@ -12,6 +12,7 @@
 #include "host/parallel.h"
 #include "host/radix_sort.h"
 #include "impact/status.h"
+#include "kernels/broadphase/bounds.h"
 #include "kernels/broadphase/grid.h"
 
 namespace impact::host {
@@ -26,8 +27,11 @@ struct GridInfo {
 
 class GridBroadPhase {
  public:
+  /// `summary`, when given, is the boxes' union and largest edge (the caller
+  /// computed it already); otherwise it is computed here.
   Status find_pairs(const Executor& exec, kernels::AabbSoA boxes, kernels::PairFilter filter,
-                    uint32_t n, Buffer<kernels::Pair>* out);
+                    uint32_t n, Buffer<kernels::Pair>* out,
+                    const kernels::BoundsSummary* summary = nullptr);
   const GridInfo& info() const { return info_; }
   /// The boxes of the last call in sorted (spatial) order; empty if it had < 2 boxes.
   const kernels::SortedBox* sorted() const { return last_n_ >= 2 ? sorted_box_.data() : nullptr; }
@@ -60,6 +64,10 @@ class BruteForceBroadPhase {
   Buffer<uint64_t> chunk_offsets_;
   std::vector<Buffer<kernels::Pair>> chunk_pairs_;
 };
+
+/// Union box and largest edge of n boxes: one partial per chunk, combined in chunk order.
+kernels::BoundsSummary summarize_bounds(const Executor& exec, kernels::AabbSoA boxes, uint32_t n,
+                                        Buffer<kernels::BoundsSummary>& partials);
 
 /// Runs count(begin, end) per chunk and turns the counts into exclusive offsets
 /// (offsets[c] = first output of chunk c, offsets[chunks] = total). Returns total.
@@ -134,9 +142,10 @@ Status chunked_output(const Executor& exec, uint64_t n, uint32_t grain, std::vec
                                                      std::to_string(max_total));
   }
   out->resize(total);
+  if (total == 0) return Status();
   T* dst = out->data();
   exec.for_each_chunk(n, grain, [&](uint32_t, uint32_t, uint32_t c) {
-    std::memcpy(dst + off[c], bufs[c].data(), sizeof(T) * (off[c + 1] - off[c]));
+    if (off[c + 1] > off[c]) std::memcpy(dst + off[c], bufs[c].data(), sizeof(T) * (off[c + 1] - off[c]));
   });
   return Status();
 }

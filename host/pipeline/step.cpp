@@ -6,6 +6,7 @@
 // count -> scan -> write, so results are identical for any thread count.
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstring>
 #include <string>
 
@@ -31,6 +32,13 @@ double ms_since(Clock::time_point& t) {
 }
 
 constexpr uint32_t kBodyGrain = 1u << 14;     // bodies per chunk, streaming passes
+constexpr float kMaxCoordinate = 1e18f;       // m; the API's limit on positions
+
+bool in_range(const kernels::BoundsSummary& s) {
+  for (int k = 0; k < 3; ++k)
+    if (!(std::fabs(s.lo[k]) <= kMaxCoordinate && std::fabs(s.hi[k]) <= kMaxCoordinate)) return false;
+  return std::isfinite(s.max_edge);
+}
 constexpr uint32_t kContactGrain = 1u << 13;  // contacts or pairs per chunk
 
 }  // namespace
@@ -41,7 +49,6 @@ void ContactStore::resize(size_t n) {
   for (auto* v : {&normal_x, &normal_y, &normal_z, &depth, &point_x, &point_y, &point_z, &mass,
                   &target, &impulse})
     v->resize(n);
-  delta_vec.resize(4 * n);
   count = n;
 }
 
@@ -140,13 +147,36 @@ Status WorldImpl::step() {
   });
   const kernels::AabbSoA boxes{boxes_out.min_x, boxes_out.min_y, boxes_out.min_z,
                                boxes_out.max_x, boxes_out.max_y, boxes_out.max_z};
+  // Finite inputs can still integrate out of range (a huge speed for long enough):
+  // stop before Inf or NaN reaches the grid's cell arithmetic or the sort keys.
+  const kernels::BoundsSummary summary = host::summarize_bounds(exec, boxes, n, bounds_partials);
+  if (n > 0 && !in_range(summary)) {
+    for (uint32_t i = 0; i < n; ++i) {
+      const float v[6] = {boxes.min_x[i], boxes.min_y[i], boxes.min_z[i], boxes.max_x[i], boxes.max_y[i], boxes.max_z[i]};
+      for (float x : v) {
+        if (!(std::fabs(x) <= kMaxCoordinate)) {
+          pairs.clear();
+          contacts.resize(0);
+          impulse_out.clear();
+          const BodyHandle h = s.handle[i];
+          return Status(StatusCode::kInvalidArgument,
+                        "step: body {index " + std::to_string(h.index) + ", generation " +
+                            std::to_string(h.generation) + "} position (" + std::to_string(s.pos_x[i]) + ", " +
+                            std::to_string(s.pos_y[i]) + ", " + std::to_string(s.pos_z[i]) +
+                            ") left the supported range |x| <= 1e18 m (velocity (" + std::to_string(s.vel_x[i]) +
+                            ", " + std::to_string(s.vel_y[i]) + ", " + std::to_string(s.vel_z[i]) +
+                            ")); fix it with set_positions/set_velocities or destroy it");
+        }
+      }
+    }
+  }
   st.ms.bounds = ms_since(t);
 
   // --- broad phase -------------------------------------------------------------------------
   const kernels::PairFilter filter{s.layer.data(), s.mask.data(), s.is_static.data()};
   Status bp = desc.broad_phase == BroadPhaseKind::kBruteForce
                   ? brute_force.find_pairs(exec, boxes, filter, n, &pairs)
-                  : grid.find_pairs(exec, boxes, filter, n, &pairs);
+                  : grid.find_pairs(exec, boxes, filter, n, &pairs, &summary);
   if (!bp.ok()) {  // more pairs than 32-bit indices can hold: never drop them silently
     contacts.resize(0);
     return bp;
@@ -202,7 +232,7 @@ Status WorldImpl::step() {
     const kernels::SolverContacts sc{c.a.data(),        c.b.data(),         c.b_is_plane.data(),
                                      c.normal_x.data(), c.normal_y.data(),  c.normal_z.data(),
                                      c.depth.data(),    c.mass.data(),      c.target.data(),
-                                     c.impulse.data(),  c.delta_vec.data()};
+                                     c.impulse.data()};
     const kernels::SolverParams sp{sd.restitution_threshold, sd.position_correction,
                                    sd.penetration_slop};
     // Hot per-body state; entry n is the immovable zero body that planes use.
@@ -223,14 +253,18 @@ Status WorldImpl::step() {
     exec.for_each_chunk(nk, kContactGrain, [&](uint32_t b, uint32_t e, uint32_t) {
       kernels::segment_starts(keys, nk, 32, n, start, {b, e});
     });
-    const kernels::BodyContacts adj{keys, start};
+    uint32_t* pos = host::scratch(entry_pos, nk);
+    exec.for_each_chunk(nk, kContactGrain, [&](uint32_t b, uint32_t e, uint32_t) {
+      kernels::contact_entry_positions(keys, pos, {b, e});
+    });
+    const kernels::BodyContacts adj{start, pos, host::scratch(entry_delta, 4ull * nk)};
     auto iterate = [&](uint32_t iterations) {
       for (uint32_t it = 0; it < iterations; ++it) {
         exec.for_each_chunk(nc, kContactGrain, [&](uint32_t b, uint32_t e, uint32_t) {
-          kernels::contact_solve(sc, state, n, {b, e});
+          kernels::contact_solve(sc, adj, state, n, {b, e});
         });
         exec.for_each_chunk(n, kBodyGrain, [&](uint32_t b, uint32_t e, uint32_t) {
-          kernels::body_apply(sc, adj, state, {b, e});
+          kernels::body_apply(adj, state, {b, e});
         });
       }
     };
@@ -248,10 +282,10 @@ Status WorldImpl::step() {
       const kernels::WarmStart ws{prev_keys.data(), prev_impulse.data(), prev_start.data(),
                                   prev_body_count, sd.warm_start};
       exec.for_each_chunk(nc, kContactGrain, [&](uint32_t b, uint32_t e, uint32_t) {
-        kernels::contact_warm_start(sc, pkeys, ws, {b, e});
+        kernels::contact_warm_start(sc, adj, pkeys, ws, {b, e});
       });
       exec.for_each_chunk(n, kBodyGrain, [&](uint32_t b, uint32_t e, uint32_t) {
-        kernels::body_apply(sc, adj, state, {b, e});
+        kernels::body_apply(adj, state, {b, e});
       });
     }
     iterate(sd.velocity_iterations);

@@ -172,6 +172,9 @@ class World {
 
   // --- settings ------------------------------------------------------------------
   const WorldDesc& desc() const;
+  /// The thread runtime in use (kDefault resolved) and how many threads it runs.
+  Backend backend() const;
+  uint32_t threads() const;
   /// Switches the thread runtime; kUnsupported if it was not built in.
   Status set_backend(Backend backend, uint32_t threads);
   Status set_broad_phase(BroadPhaseKind kind);

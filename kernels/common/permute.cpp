@@ -11,8 +11,12 @@ void remap_pair_keys(const uint32_t* IMPACT_RESTRICT inv, uint64_t* IMPACT_RESTR
     const uint64_t key = io_keys[k];
     const uint32_t a = inv[key >> 32];
     const uint32_t lo = static_cast<uint32_t>(key);
-    const uint32_t b = (lo & 0x80000000u) ? lo : inv[lo];
-    io_keys[k] = (static_cast<uint64_t>(a) << 32) | b;
+    if (lo & 0x80000000u) {  // body-plane: a is the body, the plane index stays
+      io_keys[k] = (static_cast<uint64_t>(a) << 32) | lo;
+    } else {  // body-body keys are (lower slot, higher slot), as the broad phase emits them
+      const uint32_t b = inv[lo];
+      io_keys[k] = (static_cast<uint64_t>(a < b ? a : b) << 32) | (a < b ? b : a);
+    }
   }
 }
 

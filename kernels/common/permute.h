@@ -3,7 +3,9 @@
 // gather:        dst[i] = src[perm[i]]          (perm: new slot -> old slot)
 // invert:        inv[perm[i]] = i
 // remap_pair_keys: contact keys (a << 32 | b, bit 31 of b marks a plane) with a
-//                and body b renumbered through inv; planes keep their index.
+//                and body b renumbered through inv; body-body keys are rewritten
+//                as (lower, higher) slot, the order the broad phase emits;
+//                planes keep their index.
 // perm must be a permutation of [0, n). Cost: one random read per element.
 #pragma once
 

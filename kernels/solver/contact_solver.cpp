@@ -17,12 +17,18 @@ IMPACT_INLINE float normal_velocity(SolverContacts c, const BodyState* s, uint32
   return (B.x - A.x) * c.normal_x[k] + (B.y - A.y) * c.normal_y[k] + (B.z - A.z) * c.normal_z[k];
 }
 
-IMPACT_INLINE void set_delta(SolverContacts c, uint32_t k, float d) {
-  float* v = c.delta_vec + 4ull * k;
-  v[0] = d * c.normal_x[k];
-  v[1] = d * c.normal_y[k];
-  v[2] = d * c.normal_z[k];
-  v[3] = 0.0f;
+IMPACT_INLINE void set_delta(SolverContacts c, BodyContacts adj, uint32_t k, float d) {
+  const float x = d * c.normal_x[k], y = d * c.normal_y[k], z = d * c.normal_z[k];
+  float* va = adj.delta + 4ull * adj.pos[2ull * k];
+  float* vb = adj.delta + 4ull * adj.pos[2ull * k + 1];
+  va[0] = -x;
+  va[1] = -y;
+  va[2] = -z;
+  va[3] = 0.0f;
+  vb[0] = x;
+  vb[1] = y;
+  vb[2] = z;
+  vb[3] = 0.0f;
 }
 
 }  // namespace
@@ -66,6 +72,11 @@ void contact_body_keys(SolverContacts c, const float* inv_mass, uint32_t body_co
   }
 }
 
+void contact_entry_positions(const uint64_t* IMPACT_RESTRICT sorted_keys, uint32_t* IMPACT_RESTRICT out_pos,
+                             Range r) {
+  for (uint32_t e = r.begin; e < r.end; ++e) out_pos[static_cast<uint32_t>(sorted_keys[e])] = e;
+}
+
 void contact_prepare(const SolverParams& p, SolverContacts c, const BodyState* s, uint32_t body_count,
                      const float* restitution, const float* plane_restitution, BodyContacts adj, Range r) {
   for (uint32_t k = r.begin; k < r.end; ++k) {
@@ -91,7 +102,8 @@ void contact_pair_keys(SolverContacts c, uint64_t* IMPACT_RESTRICT out_keys, Ran
     out_keys[k] = (static_cast<uint64_t>(c.a[k]) << 32) | c.b[k] | (c.b_is_plane[k] ? 0x80000000ull : 0ull);
 }
 
-void contact_warm_start(SolverContacts c, const uint64_t* IMPACT_RESTRICT keys, WarmStart prev, Range r) {
+void contact_warm_start(SolverContacts c, BodyContacts adj, const uint64_t* IMPACT_RESTRICT keys,
+                        WarmStart prev, Range r) {
   for (uint32_t k = r.begin; k < r.end; ++k) {
     const uint64_t key = keys[k];
     const uint32_t a = c.a[k];
@@ -106,32 +118,30 @@ void contact_warm_start(SolverContacts c, const uint64_t* IMPACT_RESTRICT keys, 
       }
     }
     c.impulse[k] = imp;
-    set_delta(c, k, imp);
+    set_delta(c, adj, k, imp);
   }
 }
 
-void contact_solve(SolverContacts c, const BodyState* s, uint32_t body_count, Range r) {
+void contact_solve(SolverContacts c, BodyContacts adj, const BodyState* s, uint32_t body_count, Range r) {
   for (uint32_t k = r.begin; k < r.end; ++k) {
     const float vn = normal_velocity(c, s, body_count, k);
     const float old = c.impulse[k];
     const float next = std::max(old + c.mass[k] * (c.target[k] - vn), 0.0f);
     c.impulse[k] = next;
-    set_delta(c, k, next - old);
+    set_delta(c, adj, k, next - old);
   }
 }
 
-void body_apply(SolverContacts c, BodyContacts adj, BodyState* io, Range r) {
+void body_apply(BodyContacts adj, BodyState* io, Range r) {
   for (uint32_t i = r.begin; i < r.end; ++i) {
     const uint32_t e0 = adj.start[i], e1 = adj.start[i + 1];
     if (e0 == e1) continue;
     float x = 0.0f, y = 0.0f, z = 0.0f;
     for (uint32_t e = e0; e < e1; ++e) {
-      const uint32_t entry = static_cast<uint32_t>(adj.sorted_keys[e]);
-      const float* d = c.delta_vec + 4ull * (entry >> 1);
-      const float sign = (entry & 1u) ? 1.0f : -1.0f;
-      x += sign * d[0];
-      y += sign * d[1];
-      z += sign * d[2];
+      const float* d = adj.delta + 4ull * e;
+      x += d[0];
+      y += d[1];
+      z += d[2];
     }
     const float w = io[i].inv_mass;
     io[i].x += w * x;

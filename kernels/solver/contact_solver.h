@@ -71,13 +71,17 @@ struct SolverContacts {
   float* mass;       ///< 1 / (w_a k_a + w_b k_b), 0 if both immovable
   float* target;     ///< desired relative normal velocity (or displacement) after the solve
   float* impulse;    ///< accumulated normal impulse, N s
-  float* delta_vec;  ///< 4 per contact: this iteration's impulse increment times n (xyz, 0)
 };
 
-/// CSR adjacency: keys sorted, and start[body] for body in [0, count].
+/// CSR adjacency of bodies to contacts. Entry e in [start[i], start[i+1]) belongs
+/// to body i. Each contact writes its signed impulse increment (-d n for a, +d n
+/// for b) straight into its two entries (positions pos[2k], pos[2k+1]), so a body
+/// sums a contiguous run instead of gathering from scattered contacts: scattered
+/// writes, streaming reads.
 struct BodyContacts {
-  const uint64_t* sorted_keys;
-  const uint32_t* start;
+  const uint32_t* start;  ///< body_count + 1 entries
+  const uint32_t* pos;    ///< 2 per contact: entry index of side a, side b
+  float* delta;           ///< 4 per entry: impulse increment times signed normal (xyz, 0)
 };
 
 /// Last step's contacts for warm starting: keys sorted ascending (unique), their
@@ -103,17 +107,22 @@ void commit_displacement_state(const BodyState* IMPACT_RESTRICT s, float* IMPACT
 void contact_body_keys(SolverContacts c, const float* inv_mass, uint32_t body_count,
                        uint64_t* IMPACT_RESTRICT out_keys, Range r);
 
+/// pos[entry] = e for each sorted CSR key e in r (entry = low 32 bits of the key).
+void contact_entry_positions(const uint64_t* IMPACT_RESTRICT sorted_keys, uint32_t* IMPACT_RESTRICT out_pos,
+                             Range r);
+
 void contact_prepare(const SolverParams& p, SolverContacts c, const BodyState* s, uint32_t body_count,
                      const float* restitution, const float* plane_restitution, BodyContacts adj, Range r);
 
 void contact_pair_keys(SolverContacts c, uint64_t* IMPACT_RESTRICT out_keys, Range r);
 
-void contact_warm_start(SolverContacts c, const uint64_t* IMPACT_RESTRICT keys, WarmStart prev, Range r);
+void contact_warm_start(SolverContacts c, BodyContacts adj, const uint64_t* IMPACT_RESTRICT keys,
+                        WarmStart prev, Range r);
 
-void contact_solve(SolverContacts c, const BodyState* s, uint32_t body_count, Range r);
+void contact_solve(SolverContacts c, BodyContacts adj, const BodyState* s, uint32_t body_count, Range r);
 
-/// Per body: state += inv_mass * sum over its contacts of side * delta_vec.
-void body_apply(SolverContacts c, BodyContacts adj, BodyState* io, Range r);
+/// Per body: state += inv_mass * sum of its entries' deltas.
+void body_apply(BodyContacts adj, BodyState* io, Range r);
 
 /// Writes position targets to c.target and zeroes c.impulse.
 void contact_position_target(const SolverParams& p, SolverContacts c, Range r);

@@ -2,17 +2,19 @@
 
 namespace impact::kernels {
 
-void radix_histogram(const uint64_t* IMPACT_RESTRICT keys, uint32_t shift, uint32_t* out_hist, Range r) {
+void radix_histogram(const uint64_t* IMPACT_RESTRICT keys, RadixDigit digit, uint32_t* out_hist, Range r) {
+  const uint32_t shift = digit.shift;
+  const uint64_t m = digit.mask;
   // Four interleaved sub-histograms break the store-to-load dependency on hot digits.
   uint32_t h[4][kRadixBuckets] = {};
   uint32_t i = r.begin;
   for (; i + 4 <= r.end; i += 4) {
-    ++h[0][(keys[i + 0] >> shift) & 0xff];
-    ++h[1][(keys[i + 1] >> shift) & 0xff];
-    ++h[2][(keys[i + 2] >> shift) & 0xff];
-    ++h[3][(keys[i + 3] >> shift) & 0xff];
+    ++h[0][(keys[i + 0] >> shift) & m];
+    ++h[1][(keys[i + 1] >> shift) & m];
+    ++h[2][(keys[i + 2] >> shift) & m];
+    ++h[3][(keys[i + 3] >> shift) & m];
   }
-  for (; i < r.end; ++i) ++h[0][(keys[i] >> shift) & 0xff];
+  for (; i < r.end; ++i) ++h[0][(keys[i] >> shift) & m];
   for (uint32_t d = 0; d < kRadixBuckets; ++d) out_hist[d] = h[0][d] + h[1][d] + h[2][d] + h[3][d];
 }
 
@@ -33,20 +35,24 @@ bool radix_offsets(uint32_t* io_hist, uint32_t chunk_count, uint64_t n) {
   return single;
 }
 
-void radix_scatter(const uint64_t* IMPACT_RESTRICT keys, uint32_t shift, uint32_t* io_offsets,
+void radix_scatter(const uint64_t* IMPACT_RESTRICT keys, RadixDigit digit, uint32_t* io_offsets,
                    uint64_t* IMPACT_RESTRICT out_keys, Range r) {
+  const uint32_t shift = digit.shift;
+  const uint64_t m = digit.mask;
   for (uint32_t i = r.begin; i < r.end; ++i) {
     const uint64_t k = keys[i];
-    out_keys[io_offsets[(k >> shift) & 0xff]++] = k;
+    out_keys[io_offsets[(k >> shift) & m]++] = k;
   }
 }
 
 void radix_scatter_kv(const uint64_t* IMPACT_RESTRICT keys, const uint32_t* IMPACT_RESTRICT values,
-                      uint32_t shift, uint32_t* io_offsets, uint64_t* IMPACT_RESTRICT out_keys,
+                      RadixDigit digit, uint32_t* io_offsets, uint64_t* IMPACT_RESTRICT out_keys,
                       uint32_t* IMPACT_RESTRICT out_values, Range r) {
+  const uint32_t shift = digit.shift;
+  const uint64_t m = digit.mask;
   for (uint32_t i = r.begin; i < r.end; ++i) {
     const uint64_t k = keys[i];
-    const uint32_t dst = io_offsets[(k >> shift) & 0xff]++;
+    const uint32_t dst = io_offsets[(k >> shift) & m]++;
     out_keys[dst] = k;
     out_values[dst] = values[i];
   }

@@ -22,8 +22,15 @@ namespace impact::kernels {
 inline constexpr uint32_t kRadixBits = 8;
 inline constexpr uint32_t kRadixBuckets = 1u << kRadixBits;
 
-/// out_hist[d] = number of keys in r whose digit at `shift` is d (256 entries, overwritten).
-void radix_histogram(const uint64_t* IMPACT_RESTRICT keys, uint32_t shift, uint32_t* out_hist, Range r);
+/// One pass's digit: (key >> shift) & mask, mask < 256 (narrower for the last
+/// pass, so bits above the sort range never affect the order).
+struct RadixDigit {
+  uint32_t shift;
+  uint32_t mask;
+};
+
+/// out_hist[d] = number of keys in r whose digit is d (256 entries, overwritten).
+void radix_histogram(const uint64_t* IMPACT_RESTRICT keys, RadixDigit digit, uint32_t* out_hist, Range r);
 
 /// Turns chunk histograms (chunk-major: hist[c * 256 + d]) into scatter offsets in
 /// place. Returns true when one digit value holds every key (the pass can be skipped).
@@ -31,12 +38,12 @@ bool radix_offsets(uint32_t* io_hist, uint32_t chunk_count, uint64_t n);
 
 /// Stable scatter of the keys of r to out_keys at the chunk's offsets (256
 /// entries, advanced in place).
-void radix_scatter(const uint64_t* IMPACT_RESTRICT keys, uint32_t shift, uint32_t* io_offsets,
+void radix_scatter(const uint64_t* IMPACT_RESTRICT keys, RadixDigit digit, uint32_t* io_offsets,
                    uint64_t* IMPACT_RESTRICT out_keys, Range r);
 
 /// radix_scatter that moves a 32-bit value with each key.
 void radix_scatter_kv(const uint64_t* IMPACT_RESTRICT keys, const uint32_t* IMPACT_RESTRICT values,
-                      uint32_t shift, uint32_t* io_offsets, uint64_t* IMPACT_RESTRICT out_keys,
+                      RadixDigit digit, uint32_t* io_offsets, uint64_t* IMPACT_RESTRICT out_keys,
                       uint32_t* IMPACT_RESTRICT out_values, Range r);
 
 }  // namespace impact::kernels

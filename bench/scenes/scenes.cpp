@@ -1,0 +1,191 @@
+// Benchmark scenes; see scenes.h.
+#include "bench/scenes/scenes.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <numbers>
+#include <string>
+
+namespace impact::bench {
+namespace {
+
+constexpr std::array<std::string_view, 3> kSceneNames = {"box", "rain", "uniform"};
+
+// Grid of the box scenes: horizontal pitch (> the largest diameter, 1 m, plus twice
+// the jitter, so no two spheres start overlapping) and target number of layers,
+// which fixes the footprint: ~16 layers of cols x cols spheres.
+constexpr float kPitch = 1.1f;    // m
+constexpr float kJitter = 0.04f;  // m, +- per axis in "box"
+constexpr uint32_t kLayers = 16;
+
+// Mass grows with volume: a 1 m diameter sphere weighs 1 kg.
+float inv_mass_of(float radius) {
+  return 1.0f / (8.0f * radius * radius * radius);
+}
+
+// Spheres per side of one layer, so that n spheres make about kLayers layers.
+uint32_t columns_for(uint32_t n) {
+  return std::max(1u, static_cast<uint32_t>(std::ceil(std::sqrt(static_cast<double>(n) / kLayers))));
+}
+
+// Floor y = 0 plus four walls at x, z = +-half_extent; each normal points into the box.
+std::vector<PlaneDesc> open_box(float half_extent) {
+  std::vector<PlaneDesc> planes;
+  const Eigen::Vector3f normals[5] = {Eigen::Vector3f::UnitY(), Eigen::Vector3f::UnitX(),
+                                      -Eigen::Vector3f::UnitX(), Eigen::Vector3f::UnitZ(),
+                                      -Eigen::Vector3f::UnitZ()};
+  for (int k = 0; k < 5; ++k) {
+    PlaneDesc p;
+    p.normal = normals[k];
+    // Solid side is { x : dot(n, x) <= offset }: the floor's surface at 0, each wall's at -half_extent.
+    p.offset = k == 0 ? 0.0f : -half_extent;
+    p.restitution = 0.0f;
+    planes.push_back(p);
+  }
+  return planes;
+}
+
+BodyDesc random_sphere(Rng& rng, const Eigen::Vector3f& position, const Eigen::Vector3f& velocity) {
+  BodyDesc d;
+  d.position = position;
+  d.velocity = velocity;
+  d.radius = rng.uniform(kMinRadius, kMaxRadius);
+  d.inv_mass = inv_mass_of(d.radius);
+  d.restitution = rng.uniform(0.0f, 0.5f);
+  return d;
+}
+
+void make_box(uint32_t n, uint64_t seed, bool rain, Scene* s) {
+  Rng rng(seed);
+  const uint32_t cols = columns_for(n);
+  const float half = 0.5f * kPitch * static_cast<float>(cols);
+  s->planes = open_box(half + 0.05f);
+  s->bodies.reserve(n);
+  // Rain: layers 2.5 m apart with +-0.6 m vertical jitter, so they arrive spread in time.
+  const float layer_pitch = rain ? 2.5f : kPitch;
+  const float y0 = rain ? 3.0f : kMaxRadius + 0.1f;
+  for (uint32_t i = 0; i < n; ++i) {
+    const uint32_t layer = i / (cols * cols);
+    const uint32_t in_layer = i % (cols * cols);
+    const float cx = -half + kPitch * (static_cast<float>(in_layer % cols) + 0.5f);
+    const float cz = -half + kPitch * (static_cast<float>(in_layer / cols) + 0.5f);
+    const float cy = y0 + layer_pitch * static_cast<float>(layer);
+    const float jy = rain ? 0.6f : kJitter;
+    const Eigen::Vector3f p(cx + rng.uniform(-kJitter, kJitter), cy + rng.uniform(-jy, jy),
+                            cz + rng.uniform(-kJitter, kJitter));
+    Eigen::Vector3f v = Eigen::Vector3f::Zero();
+    if (rain)
+      v = Eigen::Vector3f(rng.uniform(-1.0f, 1.0f), -rng.uniform(4.0f, 12.0f), rng.uniform(-1.0f, 1.0f));
+    s->bodies.push_back(random_sphere(rng, p, v));
+  }
+}
+
+void make_uniform(uint32_t n, uint64_t seed, Scene* s) {
+  Rng rng(seed);
+  const float side = sphere_cube_side(n, kMinRadius, kMaxRadius, 1.0);
+  s->gravity = Eigen::Vector3f::Zero();
+  s->bodies.reserve(n);
+  for (uint32_t i = 0; i < n; ++i) {
+    const Eigen::Vector3f p(rng.uniform(-0.5f, 0.5f) * side, rng.uniform(-0.5f, 0.5f) * side,
+                            rng.uniform(-0.5f, 0.5f) * side);
+    s->bodies.push_back(random_sphere(rng, p, Eigen::Vector3f::Zero()));
+  }
+}
+
+// E[r^k] for r uniform in [a, b].
+double uniform_moment(double a, double b, int k) {
+  if (b <= a) return std::pow(a, k);
+  return (std::pow(b, k + 1) - std::pow(a, k + 1)) / ((k + 1) * (b - a));
+}
+
+}  // namespace
+
+std::span<const std::string_view> scene_names() {
+  return kSceneNames;
+}
+
+std::string_view scene_summary(std::string_view name) {
+  if (name == "box") return "spheres on a jittered grid fall into an open box (floor + 4 walls)";
+  if (name == "rain") return "spheres rain into the open box at 4..12 m/s";
+  if (name == "uniform")
+    return "spheres uniformly in a cube, ~1 overlapping pair per body, no gravity, no planes";
+  return "";
+}
+
+Status make_scene(std::string_view name, uint32_t bodies, uint64_t seed, Scene* out) {
+  if (bodies == 0) return Status(StatusCode::kInvalidArgument, "scene needs at least one body");
+  Scene s;
+  s.name = std::string(name);
+  if (name == "box") {
+    make_box(bodies, seed, /*rain=*/false, &s);
+  } else if (name == "rain") {
+    make_box(bodies, seed, /*rain=*/true, &s);
+  } else if (name == "uniform") {
+    make_uniform(bodies, seed, &s);
+  } else {
+    std::string known;
+    for (std::string_view k : kSceneNames) known += (known.empty() ? "" : ", ") + std::string(k);
+    return Status(StatusCode::kInvalidArgument,
+                  "unknown scene '" + std::string(name) + "' (known: " + known + ")");
+  }
+  *out = std::move(s);
+  return Status();
+}
+
+Status load_scene(const Scene& scene, WorldDesc desc, std::unique_ptr<World>* out) {
+  desc.gravity = scene.gravity;
+  std::unique_ptr<World> world;
+  if (Status s = World::create(desc, &world); !s.ok()) return s;
+  std::vector<BodyHandle> handles(scene.bodies.size());
+  if (Status s = world->create_bodies(scene.bodies, handles); !s.ok()) return s;
+  std::vector<PlaneHandle> planes(scene.planes.size());
+  if (Status s = world->create_planes(scene.planes, planes); !s.ok()) return s;
+  *out = std::move(world);
+  return Status();
+}
+
+float sphere_cube_side(uint32_t n, float r_min, float r_max, double pairs_per_body) {
+  // (ra + rb)^3 expanded, ra and rb independent: 2 E[r^3] + 6 E[r^2] E[r].
+  const double a = r_min, b = r_max;
+  const double e_d3 = 2.0 * uniform_moment(a, b, 3) + 6.0 * uniform_moment(a, b, 2) * uniform_moment(a, b, 1);
+  const double others = std::max(1.0, static_cast<double>(n) - 1.0);
+  const double volume = 0.5 * others * (4.0 / 3.0) * std::numbers::pi * e_d3 / pairs_per_body;
+  return static_cast<float>(std::cbrt(volume));
+}
+
+float box_cube_side(uint32_t n, float half_extent, double pairs_per_body) {
+  const double w = 4.0 * half_extent;
+  const double others = std::max(1.0, static_cast<double>(n) - 1.0);
+  return static_cast<float>(std::cbrt(0.5 * others * w * w * w / pairs_per_body));
+}
+
+AabbInput UniformBoxes::view() const {
+  AabbInput in;
+  in.min_x = min_x;
+  in.min_y = min_y;
+  in.min_z = min_z;
+  in.max_x = max_x;
+  in.max_y = max_y;
+  in.max_z = max_z;
+  return in;
+}
+
+UniformBoxes make_uniform_boxes(uint32_t n, float radius, double pairs_per_body, uint64_t seed) {
+  UniformBoxes b;
+  b.side = box_cube_side(n, radius, pairs_per_body);
+  for (auto* v : {&b.min_x, &b.min_y, &b.min_z, &b.max_x, &b.max_y, &b.max_z}) v->resize(n);
+  Rng rng(seed);
+  for (uint32_t i = 0; i < n; ++i) {
+    const float x = rng.uniform() * b.side, y = rng.uniform() * b.side, z = rng.uniform() * b.side;
+    b.min_x[i] = x - radius;
+    b.min_y[i] = y - radius;
+    b.min_z[i] = z - radius;
+    b.max_x[i] = x + radius;
+    b.max_y[i] = y + radius;
+    b.max_z[i] = z + radius;
+  }
+  return b;
+}
+
+}  // namespace impact::bench

@@ -1,0 +1,102 @@
+// Benchmark scenes: deterministic body and plane sets shared by the throughput tool
+// (bench/scenes/throughput.cpp) and the Google Benchmark micro-benchmarks
+// (bench/broadphase_bench.cpp).
+//
+// Every scene is a pure function of (name, body count, seed): positions come from a
+// counter-based generator (SplitMix64), not <random> distributions, whose output is
+// implementation-defined. So the same arguments give the same bodies, and hence the
+// same final state_hash, on every standard library — a hash printed by one machine
+// can be checked on another (with the same ISA and FP-contraction setting).
+//
+// Units: m, m/s, kg.
+#pragma once
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <memory>
+#include <span>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "impact/impact.h"
+
+namespace impact::bench {
+
+/// Small deterministic PRNG (SplitMix64, Steele et al. 2014). Not for cryptography.
+class Rng {
+ public:
+  explicit Rng(uint64_t seed) : state_(seed) {}
+  uint64_t next_u64() {
+    uint64_t z = (state_ += 0x9e3779b97f4a7c15ull);
+    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
+    z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
+    return z ^ (z >> 31);
+  }
+  /// Uniform in [0, 1), 24 random bits.
+  float uniform() { return static_cast<float>(next_u64() >> 40) * 0x1.0p-24f; }
+  /// Uniform in [lo, hi).
+  float uniform(float lo, float hi) { return lo + (hi - lo) * uniform(); }
+
+ private:
+  uint64_t state_;
+};
+
+/// Default seed of every scene.
+inline constexpr uint64_t kDefaultSeed = 0x1badb002u;
+
+/// Sphere radii of the mixed-size scenes, m.
+inline constexpr float kMinRadius = 0.25f;
+inline constexpr float kMaxRadius = 0.5f;
+
+/// A scene ready to be loaded into a World.
+struct Scene {
+  std::string name;
+  std::vector<BodyDesc> bodies;
+  std::vector<PlaneDesc> planes;
+  Eigen::Vector3f gravity{0.0f, -9.81f, 0.0f};  ///< m/s^2
+};
+
+/// Names accepted by make_scene(), in the order --help lists them.
+std::span<const std::string_view> scene_names();
+/// One line describing a scene, for --help.
+std::string_view scene_summary(std::string_view name);
+
+/// Builds a scene:
+///  - "box":     spheres (r in [0.25, 0.5] m, restitution in [0, 0.5]) on a jittered grid
+///               above the floor of an open box (5 static planes), falling under gravity.
+///  - "rain":    the same box; spheres start higher and sparser, already moving down
+///               at 4..12 m/s with some sideways drift.
+///  - "uniform": spheres uniformly at random in a cube sized for about one overlapping
+///               pair per body; no gravity, no planes.
+/// Fails with kInvalidArgument for an unknown name or bodies == 0.
+Status make_scene(std::string_view name, uint32_t bodies, uint64_t seed, Scene* out);
+
+/// Creates a world from desc (gravity taken from the scene) and loads the scene into it.
+Status load_scene(const Scene& scene, WorldDesc desc, std::unique_ptr<World>* out);
+
+/// Edge length (m) of a cube holding n spheres with radii uniform in [r_min, r_max]
+/// placed uniformly at random, such that the expected number of overlapping pairs
+/// is pairs_per_body * n. Two spheres overlap when their centres are closer than
+/// ra + rb, so E[pairs] = n^2/2 * (4/3 pi E[(ra+rb)^3]) / side^3.
+float sphere_cube_side(uint32_t n, float r_min, float r_max, double pairs_per_body);
+
+/// Edge length (m) of a cube holding n axis-aligned cubes of edge 2*half_extent at
+/// uniformly random centres, such that the expected number of overlapping box pairs
+/// is pairs_per_body * n (two boxes overlap when |dx|, |dy|, |dz| < 2*half_extent, a
+/// volume of (4*half_extent)^3).
+float box_cube_side(uint32_t n, float half_extent, double pairs_per_body);
+
+/// SoA bounding boxes of n spheres of one radius at uniformly random centres in a
+/// cube; owns its arrays, view() borrows them.
+struct UniformBoxes {
+  std::vector<float> min_x, min_y, min_z, max_x, max_y, max_z;
+  float side = 0.0f;  ///< cube edge, m
+  AabbInput view() const;
+};
+
+/// n unit-radius (by default) spheres' boxes, about pairs_per_body overlapping
+/// pairs per body.
+UniformBoxes make_uniform_boxes(uint32_t n, float radius, double pairs_per_body, uint64_t seed);
+
+}  // namespace impact::bench

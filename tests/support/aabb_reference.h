@@ -1,0 +1,148 @@
+// Independent double-precision reference for the broad phase: boxes as SoA,
+// an O(n^2) all-pairs oracle and a sort-and-sweep oracle for large inputs, both
+// written from the documented contract (include/impact/broadphase.h):
+//   boxes i < j pair  <=>  min <= max on all axes (touching counts),
+//                          (layer_i & mask_j) && (layer_j & mask_i),
+//                          not (static_i && static_j).
+#pragma once
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cstdint>
+#include <iterator>
+#include <numeric>
+#include <random>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "impact/impact.h"
+
+namespace impact::test {
+
+using PairVec = std::vector<std::pair<uint32_t, uint32_t>>;
+
+struct Boxes {
+  std::vector<float> min_x, min_y, min_z, max_x, max_y, max_z;
+  std::vector<uint32_t> layer, mask;
+  std::vector<uint8_t> is_static;
+
+  size_t size() const { return min_x.size(); }
+  void add(float cx, float cy, float cz, float hx, float hy, float hz) {
+    min_x.push_back(cx - hx);
+    min_y.push_back(cy - hy);
+    min_z.push_back(cz - hz);
+    max_x.push_back(cx + hx);
+    max_y.push_back(cy + hy);
+    max_z.push_back(cz + hz);
+  }
+  void add_box(float x0, float y0, float z0, float x1, float y1, float z1) {
+    min_x.push_back(x0);
+    min_y.push_back(y0);
+    min_z.push_back(z0);
+    max_x.push_back(x1);
+    max_y.push_back(y1);
+    max_z.push_back(z1);
+  }
+  bool filtered() const { return !layer.empty(); }
+  AabbInput input() const {
+    return AabbInput{min_x, min_y, min_z, max_x, max_y, max_z, layer, mask, is_static};
+  }
+};
+
+inline bool ref_overlap(const Boxes& b, size_t i, size_t j) {
+  auto le = [](float x, float y) { return static_cast<double>(x) <= static_cast<double>(y); };
+  return le(b.min_x[i], b.max_x[j]) && le(b.min_x[j], b.max_x[i]) && le(b.min_y[i], b.max_y[j]) &&
+         le(b.min_y[j], b.max_y[i]) && le(b.min_z[i], b.max_z[j]) && le(b.min_z[j], b.max_z[i]);
+}
+
+inline bool ref_filter(const Boxes& b, size_t i, size_t j) {
+  if (!b.filtered()) return true;
+  if ((b.layer[i] & b.mask[j]) == 0 || (b.layer[j] & b.mask[i]) == 0) return false;
+  return !(b.is_static[i] && b.is_static[j]);
+}
+
+// O(n^2), double precision, sorted (a, b) with a < b.
+inline PairVec reference_pairs_n2(const Boxes& b) {
+  PairVec out;
+  for (size_t i = 0; i < b.size(); ++i)
+    for (size_t j = i + 1; j < b.size(); ++j)
+      if (ref_overlap(b, i, j) && ref_filter(b, i, j))
+        out.emplace_back(static_cast<uint32_t>(i), static_cast<uint32_t>(j));
+  return out;
+}
+
+// Sort-and-sweep on min_x (double), for inputs too large for O(n^2). Sorted output.
+inline PairVec reference_pairs_sweep(const Boxes& b) {
+  std::vector<uint32_t> order(b.size());
+  std::iota(order.begin(), order.end(), 0u);
+  std::sort(order.begin(), order.end(), [&](uint32_t p, uint32_t q) {
+    return b.min_x[p] != b.min_x[q] ? b.min_x[p] < b.min_x[q] : p < q;
+  });
+  PairVec out;
+  for (size_t s = 0; s < order.size(); ++s) {
+    const uint32_t i = order[s];
+    for (size_t t = s + 1; t < order.size(); ++t) {
+      const uint32_t j = order[t];
+      if (static_cast<double>(b.min_x[j]) > static_cast<double>(b.max_x[i])) break;
+      if (ref_overlap(b, i, j) && ref_filter(b, i, j)) out.emplace_back(std::min(i, j), std::max(i, j));
+    }
+  }
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+inline PairVec reference_pairs(const Boxes& b) {
+  return b.size() <= 6000 ? reference_pairs_n2(b) : reference_pairs_sweep(b);
+}
+
+/// Any range of structs with .a and .b (BodyPair, kernels::Pair) as (a, b) pairs.
+template <class Range>
+PairVec to_vec(const Range& p) {
+  PairVec v;
+  v.reserve(p.size());
+  for (const auto& q : p) v.emplace_back(q.a, q.b);
+  return v;
+}
+
+// a < b, in range, no duplicates; then equal to ref as sets.
+template <class Range>
+void expect_same_set(const Range& got, const PairVec& ref, size_t n, const std::string& what) {
+  PairVec g = to_vec(got);
+  for (const auto& [a, b] : g) {
+    ASSERT_LT(a, b) << what;
+    ASSERT_LT(b, n) << what;
+  }
+  std::sort(g.begin(), g.end());
+  const auto dup = std::adjacent_find(g.begin(), g.end());
+  ASSERT_TRUE(dup == g.end()) << what << ": duplicate pair (" << dup->first << ", " << dup->second << ")";
+  if (g == ref) return;
+  PairVec missing, extra;
+  std::set_difference(ref.begin(), ref.end(), g.begin(), g.end(), std::back_inserter(missing));
+  std::set_difference(g.begin(), g.end(), ref.begin(), ref.end(), std::back_inserter(extra));
+  ADD_FAILURE() << what << ": " << g.size() << " pairs, reference " << ref.size() << "; missing "
+                << missing.size()
+                << (missing.empty() ? ""
+                                    : " e.g. (" + std::to_string(missing[0].first) + ", " +
+                                          std::to_string(missing[0].second) + ")")
+                << ", extra " << extra.size()
+                << (extra.empty() ? ""
+                                  : " e.g. (" + std::to_string(extra[0].first) + ", " +
+                                        std::to_string(extra[0].second) + ")");
+}
+
+/// Random layers (one of 4 bits), masks (all, or all but one bit) and static flags.
+inline void add_random_filter(Boxes& b, uint32_t seed, double static_fraction) {
+  std::mt19937 rng(seed);
+  std::uniform_int_distribution<uint32_t> bits(0, 3);
+  std::bernoulli_distribution is_static(static_fraction);
+  std::bernoulli_distribution full_mask(0.5);
+  for (size_t i = 0; i < b.size(); ++i) {
+    b.layer.push_back(1u << bits(rng));
+    b.mask.push_back(full_mask(rng) ? 0xffffffffu : (0xfu & ~(1u << bits(rng))));
+    b.is_static.push_back(is_static(rng) ? 1 : 0);
+  }
+}
+
+}  // namespace impact::test

@@ -1,0 +1,138 @@
+// Shared helpers of the test suite: problem-size scaling, the list of thread
+// configurations every determinism check runs over, Status matchers, float ulp
+// distance, and a snapshot of a world's observable state.
+#pragma once
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <bit>
+#include <cmath>
+#include <cstdint>
+#include <cstdlib>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "impact/impact.h"
+
+#ifndef IMPACT_TEST_SANITIZE
+#define IMPACT_TEST_SANITIZE 0
+#endif
+
+namespace impact::test {
+
+/// True in a -DIMPACT_SANITIZE=ON build (for tests that must shorten runs there;
+/// none needs to today).
+inline constexpr bool kSanitized = IMPACT_TEST_SANITIZE != 0;
+
+/// IMPACT_TEST_INTENSITY (default 1, clamped to [1, 1000]): multiplies problem sizes.
+/// Only scales up: the default sizes are the smallest that still exercise every
+/// chunking path (several 2^11..2^16-element chunks) and the tests' thresholds.
+inline double intensity() {
+  const char* s = std::getenv("IMPACT_TEST_INTENSITY");
+  if (s == nullptr || *s == '\0') return 1.0;
+  const double v = std::atof(s);
+  if (!(v > 0.0)) return 1.0;
+  return std::clamp(v, 1.0, 1000.0);
+}
+
+/// base * intensity, at least `at_least`.
+inline uint32_t scaled(uint32_t base, uint32_t at_least = 1) {
+  const double v = std::round(static_cast<double>(base) * intensity());
+  return std::max(at_least, static_cast<uint32_t>(std::min(v, 4.0e9)));
+}
+
+/// One way of running the passes.
+struct ExecCase {
+  Backend backend;
+  uint32_t threads;
+};
+
+inline std::string to_string(const ExecCase& c) {
+  return std::string(impact::to_string(c.backend)) + "/" + std::to_string(c.threads);
+}
+
+/// Serial, then every built-in parallel backend with 1, 2, 3 and 8 threads.
+inline std::vector<ExecCase> exec_cases() {
+  std::vector<ExecCase> out{{Backend::kSerial, 1}};
+  for (Backend b : {Backend::kTbb, Backend::kOpenMP}) {
+    if (!backend_available(b)) continue;
+    for (uint32_t t : {1u, 2u, 3u, 8u}) out.push_back({b, t});
+  }
+  return out;
+}
+
+inline ::testing::AssertionResult IsOk(const Status& s) {
+  if (s.ok()) return ::testing::AssertionSuccess();
+  return ::testing::AssertionFailure() << "status " << impact::to_string(s.code()) << ": " << s.message();
+}
+
+/// Checks code and that the message contains every fragment.
+inline ::testing::AssertionResult IsError(const Status& s, StatusCode code,
+                                          std::initializer_list<const char*> fragments = {}) {
+  if (s.code() != code)
+    return ::testing::AssertionFailure() << "expected " << impact::to_string(code) << ", got "
+                                         << impact::to_string(s.code()) << " (" << s.message() << ")";
+  for (const char* f : fragments)
+    if (s.message().find(f) == std::string::npos)
+      return ::testing::AssertionFailure() << "message '" << s.message() << "' lacks '" << f << "'";
+  return ::testing::AssertionSuccess();
+}
+
+#define IMPACT_ASSERT_OK(expr) ASSERT_TRUE(::impact::test::IsOk(expr))
+#define IMPACT_EXPECT_OK(expr) EXPECT_TRUE(::impact::test::IsOk(expr))
+
+/// Distance in units in the last place between two finite floats (0 = equal bits,
+/// +0 and -0 count as equal).
+inline uint32_t ulp_distance(float a, float b) {
+  if (a == b) return 0;
+  auto ordered = [](float f) {
+    const int32_t i = std::bit_cast<int32_t>(f);
+    return i < 0 ? static_cast<int64_t>(INT32_MIN) - i : static_cast<int64_t>(i);
+  };
+  const int64_t d = ordered(a) - ordered(b);
+  return static_cast<uint32_t>(std::min<int64_t>(d < 0 ? -d : d, UINT32_MAX));
+}
+
+/// A world made from desc; fails the test (returns null) when creation fails.
+inline std::unique_ptr<World> make_world(const WorldDesc& desc) {
+  std::unique_ptr<World> w;
+  const Status s = World::create(desc, &w);
+  EXPECT_TRUE(IsOk(s));
+  return w;
+}
+
+/// Gravity-free world: isolates collision tests from integration.
+inline WorldDesc zero_gravity_desc() {
+  WorldDesc d;
+  d.gravity = Eigen::Vector3f::Zero();
+  return d;
+}
+
+/// Every observable per-body array plus counts and the hash, for "unchanged" checks.
+struct WorldSnapshot {
+  size_t body_count = 0, plane_count = 0;
+  uint64_t hash = 0;
+  std::vector<float> floats;
+  std::vector<uint32_t> words;
+  friend bool operator==(const WorldSnapshot&, const WorldSnapshot&) = default;
+};
+
+inline WorldSnapshot snapshot(const World& w) {
+  WorldSnapshot s;
+  s.body_count = w.body_count();
+  s.plane_count = w.plane_count();
+  s.hash = w.state_hash();
+  const BodyArrays b = w.bodies();
+  for (auto sp : {b.pos_x, b.pos_y, b.pos_z, b.vel_x, b.vel_y, b.vel_z, b.inv_mass, b.radius, b.restitution})
+    s.floats.insert(s.floats.end(), sp.begin(), sp.end());
+  for (auto sp : {b.layer, b.mask}) s.words.insert(s.words.end(), sp.begin(), sp.end());
+  for (const BodyHandle& h : b.handles) {
+    s.words.push_back(h.index);
+    s.words.push_back(h.generation);
+  }
+  return s;
+}
+
+}  // namespace impact::test
