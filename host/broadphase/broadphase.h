@@ -69,14 +69,9 @@ class BruteForceBroadPhase {
 kernels::BoundsSummary summarize_bounds(const Executor& exec, kernels::AabbSoA boxes, uint32_t n,
                                         Buffer<kernels::BoundsSummary>& partials);
 
-/// Runs count(begin, end) per chunk and turns the counts into exclusive offsets
-/// (offsets[c] = first output of chunk c, offsets[chunks] = total). Returns total.
-template <class Count>
-uint64_t count_and_scan(const Executor& exec, uint64_t n, uint32_t grain, Buffer<uint64_t>& offsets,
-                        Count&& count) {
-  const uint32_t chunks = chunk_count(n, grain);
-  uint64_t* off = scratch(offsets, static_cast<size_t>(chunks) + 1);
-  exec.for_each_chunk(n, grain, [&](uint32_t b, uint32_t e, uint32_t c) { off[c] = count(b, e); });
+/// Turns per-chunk counts off[0, chunks) into exclusive offsets, sets
+/// off[chunks] to the total and returns it (serial: chunks are few).
+inline uint64_t exclusive_scan_chunks(uint64_t* off, uint32_t chunks) {
   uint64_t total = 0;
   for (uint32_t c = 0; c < chunks; ++c) {
     const uint64_t k = off[c];
@@ -87,24 +82,15 @@ uint64_t count_and_scan(const Executor& exec, uint64_t n, uint32_t grain, Buffer
   return total;
 }
 
-/// count_and_scan, then resize *out to the total and run write(begin, end, out, offset)
-/// per chunk. Fails (out emptied) if the total exceeds max_total, naming `what`.
-template <class T, class Count, class Write>
-Status count_scan_write(const Executor& exec, uint64_t n, uint32_t grain, Buffer<uint64_t>& offsets,
-                        uint64_t max_total, const char* what, Count&& count, Write&& write,
-                        Buffer<T>* out) {
-  const uint64_t total = count_and_scan(exec, n, grain, offsets, count);
-  if (total > max_total) {
-    out->clear();
-    return Status(StatusCode::kCapacityExceeded,
-                  std::string(what) + ": " + std::to_string(total) +
-                      " outputs exceed the limit of " + std::to_string(max_total));
-  }
-  out->resize(total);
-  T* dst = out->data();
-  const uint64_t* off = offsets.data();
-  exec.for_each_chunk(n, grain, [&](uint32_t b, uint32_t e, uint32_t c) { write(b, e, dst, off[c]); });
-  return Status();
+/// Runs count(begin, end) per chunk and turns the counts into exclusive offsets
+/// (offsets[c] = first output of chunk c, offsets[chunks] = total). Returns total.
+template <class Count>
+uint64_t count_and_scan(const Executor& exec, uint64_t n, uint32_t grain, Buffer<uint64_t>& offsets,
+                        Count&& count) {
+  const uint32_t chunks = chunk_count(n, grain);
+  uint64_t* off = scratch(offsets, static_cast<size_t>(chunks) + 1);
+  exec.for_each_chunk(n, grain, [&](uint32_t b, uint32_t e, uint32_t c) { off[c] = count(b, e); });
+  return exclusive_scan_chunks(off, chunks);
 }
 
 /// Runs find(begin, end, dst, capacity) -> count per chunk, each chunk into its
@@ -128,13 +114,7 @@ Status chunked_output(const Executor& exec, uint64_t n, uint32_t grain, std::vec
     }
     off[c] = count;
   });
-  uint64_t total = 0;
-  for (uint32_t c = 0; c < chunks; ++c) {
-    const uint64_t k = off[c];
-    off[c] = total;
-    total += k;
-  }
-  off[chunks] = total;
+  const uint64_t total = exclusive_scan_chunks(off, chunks);
   if (total > max_total) {
     out->clear();
     return Status(StatusCode::kCapacityExceeded, std::string(what) + ": " + std::to_string(total) +
