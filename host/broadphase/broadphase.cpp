@@ -43,12 +43,12 @@ kernels::GridParams choose_grid(const kernels::BoundsSummary& s, uint32_t n, Gri
   // scenes hash.
   const double dense_limit = std::max(4.0 * n, 4096.0);
   double cells = count_cells(cell);
-  if (cells > dense_limit) {
-    const double grow = std::cbrt(cells / dense_limit) * (1.0 + 0x1p-10);
-    if (grow <= 2.0 && count_cells(cell * grow) <= dense_limit) {
-      cell *= grow;
-      cells = count_cells(cell);
-    }
+  if (cells > dense_limit && count_cells(2.0 * cell) <= dense_limit) {
+    // Smallest growth (in 1% steps) that fits; the "+1" per axis makes it inexact.
+    double grow = std::max(1.0, std::cbrt(cells / dense_limit));
+    while (count_cells(cell * grow) > dense_limit) grow *= 1.01;
+    cell *= grow;
+    cells = count_cells(cell);
   }
   g.inv_cell = 1.0 / cell;
   for (int k = 0; k < 3; ++k)
