@@ -293,9 +293,7 @@ int main(int argc, char** argv) {
   if (impact::Status s = impact::bench::load_scene(scene, desc, &world); !s.ok())
     return library_error("world setup", s);
   const double setup_ms = std::chrono::duration<double, std::milli>(Clock::now() - t_setup).count();
-  const uint32_t threads = opt.backend == impact::Backend::kSerial ? 1u
-                           : opt.threads == 0                      ? impact::hardware_threads()
-                                                                   : opt.threads;
+  const uint32_t threads = world->threads();  // what actually runs (kDefault resolved)
 
   // --- run ---------------------------------------------------------------------------
   std::vector<double> step_ms, integrate, bounds, broad, narrow, solve, total;
@@ -331,7 +329,7 @@ int main(int argc, char** argv) {
   const double n_steps = opt.steps;
   const double med = median(step_ms);
   const double body_steps_per_s = med > 0.0 ? opt.bodies / (med * 1e-3) : 0.0;
-  const char* backend = impact::to_string(opt.backend);
+  const char* backend = impact::to_string(world->backend());
   const char* broad_name = impact::to_string(opt.broad_phase);
   const uint32_t iterations = world->desc().solver.velocity_iterations;
   std::printf("impact_bench %d.%d.%d: scene %s, %u bodies, %zu planes, %u steps of %.6g s\n",
