@@ -61,7 +61,8 @@ kernels::GridParams choose_grid(const kernels::BoundsSummary& s, uint32_t n, Gri
     g.bucket_count = static_cast<uint32_t>(cells);
   } else {
     g.dense = 0;
-    g.table_bits = std::min<uint32_t>(bits_for(std::max<uint64_t>(2ull * n, 2) - 1), 31);
+    // At least 4 buckets: the 3 cells of a row must land in 3 distinct buckets.
+    g.table_bits = std::clamp<uint32_t>(bits_for(2ull * n - 1), 2, 31);
     g.bucket_count = 1u << g.table_bits;
   }
   info->cell = cell;

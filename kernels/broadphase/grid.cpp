@@ -18,18 +18,27 @@ IMPACT_INLINE uint64_t cell_id(uint64_t cx, uint64_t cy, uint64_t cz) {
   return cx | (cy << kGridAxisBits) | (cz << (2 * kGridAxisBits));
 }
 
+// Bucket of the first cell (x = 0) of row (cy, cz); cell x of the row is at
+// row_base + x. Dense: the row-major index, so rows never overlap. Hashed: a
+// splitmix64 hash of the row (never std::hash), so cells of one row stay
+// consecutive (modulo the table size) while rows scatter over the table.
+IMPACT_INLINE uint64_t row_base(const GridParams& g, uint64_t cy, uint64_t cz) {
+  if (g.dense) return g.dims[0] * (cy + g.dims[1] * cz);
+  uint64_t h = (cy | (cz << kGridAxisBits)) + 0x9e3779b97f4a7c15ull;
+  h = (h ^ (h >> 30)) * 0xbf58476d1ce4e5b9ull;
+  h = (h ^ (h >> 27)) * 0x94d049bb133111ebull;
+  return h ^ (h >> 31);
+}
+
+IMPACT_INLINE uint32_t bucket_mask(const GridParams& g) {
+  return g.dense ? 0xffffffffu : (g.table_bits == 0 ? 0u : (1u << g.table_bits) - 1u);
+}
+
 IMPACT_INLINE uint32_t bucket_of(const GridParams& g, uint64_t cell) {
   const uint64_t cx = cell & kAxisMask;
   const uint64_t cy = (cell >> kGridAxisBits) & kAxisMask;
   const uint64_t cz = cell >> (2 * kGridAxisBits);
-  if (g.dense) return static_cast<uint32_t>(cx + g.dims[0] * (cy + g.dims[1] * cz));
-  if (g.table_bits == 0) return 0;
-  // splitmix64 finaliser: a cheap, well-mixed, fixed hash (never std::hash).
-  uint64_t h = cell + 0x9e3779b97f4a7c15ull;
-  h = (h ^ (h >> 30)) * 0xbf58476d1ce4e5b9ull;
-  h = (h ^ (h >> 27)) * 0x94d049bb133111ebull;
-  h ^= h >> 31;
-  return static_cast<uint32_t>(h >> (64 - g.table_bits));
+  return static_cast<uint32_t>(row_base(g, cy, cz) + cx) & bucket_mask(g);
 }
 
 IMPACT_INLINE uint64_t box_cell(const GridParams& g, float x, float y, float z) {
@@ -37,17 +46,6 @@ IMPACT_INLINE uint64_t box_cell(const GridParams& g, float x, float y, float z) 
                  axis_cell(y, g.origin[1], g.inv_cell, g.dims[1]),
                  axis_cell(z, g.origin[2], g.inv_cell, g.dims[2]));
 }
-
-// The 13 neighbour offsets (dx, dy, dz) that are lexicographically after (0,0,0)
-// in (dz, dy, dx) order: the forward half of the 26-neighbourhood.
-struct Offset {
-  int8_t dx, dy, dz;
-};
-constexpr Offset kForward[13] = {
-    {1, 0, 0},                                                                  // dz=0, dy=0
-    {-1, 1, 0},  {0, 1, 0},  {1, 1, 0},                                         // dz=0, dy=1
-    {-1, -1, 1}, {0, -1, 1}, {1, -1, 1}, {-1, 0, 1}, {0, 0, 1}, {1, 0, 1},      // dz=1
-    {-1, 1, 1},  {0, 1, 1},  {1, 1, 1}};
 
 // Calls emit(lo, hi) for every pair whose query slot is s, in the documented order.
 template <bool kFiltered, bool kDense, class Emit>
@@ -82,41 +80,48 @@ IMPACT_INLINE void visit_slot(const GridView& g, uint32_t s, Emit&& emit) {
   const int64_t cy = static_cast<int64_t>((cell >> kGridAxisBits) & kAxisMask);
   const int64_t cz = static_cast<int64_t>(cell >> (2 * kGridAxisBits));
   const int64_t dimx = g.params.dims[0], dimy = g.params.dims[1], dimz = g.params.dims[2];
+  const int64_t x_lo = cx > 0 ? cx - 1 : 0;
+  const int64_t x_hi = cx + 1 < dimx ? cx + 1 : dimx - 1;
+  const uint32_t mask = bucket_mask(g.params);
 
-  if constexpr (kDense) {
-    // Row-major buckets: the cells x-1..x+1 of a row are consecutive buckets, so
-    // each of the 5 forward rows of the half neighbourhood is one slot range:
-    // own row from s + 1 to the end of cell x+1, then rows (dy, dz) = (1, 0),
-    // (-1, 1), (0, 1), (1, 1), each over x-1..x+1.
-    const int64_t x_lo = cx > 0 ? cx - 1 : 0;
-    const int64_t x_hi = cx + 1 < dimx ? cx + 1 : dimx - 1;
-    const uint32_t row0 = static_cast<uint32_t>(g.params.dims[0] * (cy + dimy * cz));
-    for (uint32_t t = s + 1, end = g.bucket_start[row0 + x_hi + 1]; t < end; ++t) test(t);
-    constexpr int8_t kRows[4][2] = {{1, 0}, {-1, 1}, {0, 1}, {1, 1}};
-    for (const auto& row : kRows) {
-      const int64_t ny = cy + row[0], nz = cz + row[1];
-      if (ny < 0 || ny >= dimy || nz >= dimz) continue;
-      const uint32_t base = static_cast<uint32_t>(dimx * (ny + dimy * nz));
-      for (uint32_t t = g.bucket_start[base + x_lo], end = g.bucket_start[base + x_hi + 1]; t < end; ++t)
-        test(t);
+  // Slots [t0, t1) of buckets that hold cells x_lo..x_hi of row (ny, nz), calling
+  // test() on those that really are in that row and x range (hashed tables may
+  // mix in other cells; dense ones never do). The buckets of a row are
+  // consecutive, except where a hashed row wraps around the table end.
+  auto scan = [&](uint32_t t0, uint32_t t1, uint64_t row, int64_t lo, int64_t hi) {
+    for (uint32_t t = t0; t < t1; ++t) {
+      if constexpr (!kDense) {
+        const uint64_t c = g.cell[t];
+        const int64_t x = static_cast<int64_t>(c & kAxisMask);
+        if ((c >> kGridAxisBits) != row || x < lo || x > hi) continue;
+      }
+      test(t);
     }
-  } else {
-    // Hashed buckets hold several cells: visit cells one by one and skip slots
-    // whose cell differs. Own cell first (slots after s), then the 13 forward cells.
-    {
-      const uint32_t end = g.bucket_start[bucket_of(g.params, cell) + 1];
-      for (uint32_t t = s + 1; t < end; ++t)
-        if (g.cell[t] == cell) test(t);
+  };
+  auto visit_row = [&](int64_t ny, int64_t nz, int64_t lo, int64_t hi, uint32_t first_slot) {
+    const uint64_t row = static_cast<uint64_t>(ny) | (static_cast<uint64_t>(nz) << kGridAxisBits);
+    const uint64_t base = row_base(g.params, static_cast<uint64_t>(ny), static_cast<uint64_t>(nz));
+    const uint32_t b_lo = static_cast<uint32_t>(base + static_cast<uint64_t>(lo)) & mask;
+    const uint32_t b_hi = static_cast<uint32_t>(base + static_cast<uint64_t>(hi)) & mask;
+    if (b_lo <= b_hi) {
+      const uint32_t t0 = first_slot != kInvalidBody ? first_slot : g.bucket_start[b_lo];
+      scan(t0, g.bucket_start[b_hi + 1], row, lo, hi);
+    } else {  // wraps: [b_lo, end of table) then [0, b_hi]
+      const uint32_t t0 = first_slot != kInvalidBody ? first_slot : g.bucket_start[b_lo];
+      scan(t0, g.bucket_start[mask + 1], row, lo, hi);
+      scan(g.bucket_start[0], g.bucket_start[b_hi + 1], row, lo, hi);
     }
-    for (const Offset& o : kForward) {
-      const int64_t nx = cx + o.dx, ny = cy + o.dy, nz = cz + o.dz;
-      if (nx < 0 || ny < 0 || nx >= dimx || ny >= dimy || nz >= dimz) continue;  // dz >= 0
-      const uint64_t ncell = cell_id(static_cast<uint64_t>(nx), static_cast<uint64_t>(ny),
-                                     static_cast<uint64_t>(nz));
-      const uint32_t b = bucket_of(g.params, ncell);
-      for (uint32_t t = g.bucket_start[b], end = g.bucket_start[b + 1]; t < end; ++t)
-        if (g.cell[t] == ncell) test(t);
-    }
+  };
+
+  // The half neighbourhood as 5 row ranges: the own row from slot s + 1 to the
+  // end of cell x + 1 (slots before s in the own cell met s already), then rows
+  // (dy, dz) = (1, 0), (-1, 1), (0, 1), (1, 1) over x - 1 .. x + 1.
+  visit_row(cy, cz, cx, x_hi, s + 1);
+  constexpr int8_t kRows[4][2] = {{1, 0}, {-1, 1}, {0, 1}, {1, 1}};
+  for (const auto& r : kRows) {
+    const int64_t ny = cy + r[0], nz = cz + r[1];
+    if (ny < 0 || ny >= dimy || nz >= dimz) continue;
+    visit_row(ny, nz, x_lo, x_hi, kInvalidBody);
   }
 }
 

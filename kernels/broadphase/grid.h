@@ -15,16 +15,19 @@
 // two overlapping boxes are less than one cell apart on every axis and their
 // cells differ by at most one per axis. Cell coordinates are computed in double
 // from float inputs, so rounding cannot push them two cells apart.
-// Buckets: "dense" grids (few enough cells) use the row-major cell index itself,
-// which keeps x-neighbours adjacent in memory; otherwise the 63-bit cell id is
-// hashed into 2^table_bits buckets, and slots of a bucket whose cell id differs
-// from the visited cell are skipped, so collisions cost time but never produce a
-// duplicate or a wrong pair.
-// Pair order: by query slot (bucket, then index); then, for dense grids, the own
-// row (own cell after s, cell x+1) and rows (dy, dz) = (1,0), (-1,1), (0,1),
-// (1,1) over x-1..x+1, each in slot order; for hashed grids, the own cell, then
-// the 13 forward cells in (dz, dy, dx) order, each in slot order. Each pair
-// holds (lo, hi) box indices. Overlap includes touching (min <= max). Inputs finite.
+// Buckets: cells are grouped in x-rows. "Dense" grids (few enough cells) use the
+// row-major cell index as the bucket; hashed grids put cell x of row (y, z) in
+// bucket (hash(y, z) + x) mod 2^table_bits. Either way the cells x-1..x+1 of a
+// row are consecutive buckets (modulo the table), so a query scans 5 slot
+// ranges, and the sorted order keeps x-neighbours together. In hashed tables
+// slots whose cell is not the visited one are skipped, so collisions cost time
+// but never produce a duplicate or a wrong pair (table size >= 4, so the three
+// cells of a row never share a bucket).
+// Pair order: by query slot (bucket, then index); then the own row (own cell
+// after s, then cell x+1) and rows (dy, dz) = (1,0), (-1,1), (0,1), (1,1) over
+// x-1..x+1, each in slot order (a hashed row that wraps the table end: the
+// buckets up to the end first, then from bucket 0). Each pair holds (lo, hi)
+// box indices. Overlap includes touching (min <= max). Inputs finite.
 // Method: the spatial-hash grid of Teschner et al. 2003 ("Optimized Spatial
 // Hashing for Collision Detection of Deformable Objects") and GPU sorted grids
 // (Le Grand, GPU Gems 3 ch. 32), with a half neighbourhood.
