@@ -1,6 +1,7 @@
 #include "kernels/narrowphase/sphere_sphere.h"
 
 #include <cmath>
+#include <limits>
 
 namespace impact::kernels {
 
@@ -31,7 +32,9 @@ void sphere_sphere_write(const Pair* IMPACT_RESTRICT pairs, SphereView s, Contac
     const float d2 = dx * dx + dy * dy + dz * dz;
     if (!(d2 < rs * rs)) continue;
     float nx = 0.0f, ny = 1.0f, nz = 0.0f, dist = 0.0f;
-    if (d2 > 0.0f) {
+    // Below FLT_MIN, d2 is subnormal and sqrt / division lose their precision:
+    // treat the centres as coincident rather than return a non-unit normal.
+    if (d2 >= std::numeric_limits<float>::min()) {
       dist = std::sqrt(d2);
       const float inv = 1.0f / dist;
       nx = dx * inv;

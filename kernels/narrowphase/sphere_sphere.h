@@ -1,8 +1,8 @@
 // Sphere-sphere narrow phase over a list of candidate pairs.
 //
 // A pair collides when |pb - pa| < ra + rb (touching is not a contact). Then
-//   n     = (pb - pa) / |pb - pa|, or +y when the centres coincide (so the normal
-//           is always finite and unit),
+//   n     = (pb - pa) / |pb - pa|, or +y when the centres coincide or |pb - pa|^2
+//           is below FLT_MIN (so the normal is always finite and unit),
 //   depth = ra + rb - |pb - pa|,
 //   point = midpoint of pa + n*ra and pb - n*rb.
 // count: number of colliding pairs in r. write: their contacts at out[offset ...]
