@@ -1,9 +1,14 @@
 // One fixed step of a sphere world as a sequence of flat passes:
-//   integrate velocities -> integrate positions -> bounds -> broad phase
-//   -> narrow phase (sphere-sphere on pairs, sphere-plane on bodies)
-//   -> contact solve (velocity iterations) -> position correction.
-// Every pass is for_each_chunk over a kernel; variable-size outputs use
-// count -> scan -> write, so results are identical for any thread count.
+//   integrate velocities (gravity) -> bounds -> broad phase
+//   -> narrow phase (sphere-sphere on pairs, sphere-plane on bodies), on the
+//      poses the step starts from
+//   -> contact solve (warm start + velocity iterations)
+//   -> integrate positions with the solved velocities (semi-implicit Euler)
+//   -> position correction (iterations on displacements).
+// Solving velocities before positions move keeps resting contacts from sinking
+// by g dt^2 every step. Every pass is for_each_chunk over a kernel;
+// variable-size outputs use count -> scan -> write or chunk-local buffers, so
+// results are identical for any thread count.
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -132,8 +137,6 @@ Status WorldImpl::step() {
   exec.for_each_chunk(n, kBodyGrain, [&](uint32_t b, uint32_t e, uint32_t) {
     kernels::integrate_velocities(dt, g, s.inv_mass.data(), s.vel_x.data(), s.vel_y.data(),
                                   s.vel_z.data(), {b, e});
-    kernels::integrate_positions(dt, s.vel_x.data(), s.vel_y.data(), s.vel_z.data(), s.pos_x.data(),
-                                 s.pos_y.data(), s.pos_z.data(), {b, e});
   });
   st.ms.integrate = ms_since(t);
 
@@ -225,6 +228,17 @@ Status WorldImpl::step() {
   st.plane_contacts = n_plane_contacts;
   st.ms.narrow_phase = ms_since(t);
 
+  // Positions move with the solved velocities (semi-implicit Euler's second half).
+  double positions_ms = 0.0;
+  auto integrate_positions = [&] {
+    const auto t0 = Clock::now();
+    exec.for_each_chunk(n, kBodyGrain, [&](uint32_t b, uint32_t e, uint32_t) {
+      kernels::integrate_positions(dt, s.vel_x.data(), s.vel_y.data(), s.vel_z.data(), s.pos_x.data(),
+                                   s.pos_y.data(), s.pos_z.data(), {b, e});
+    });
+    positions_ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+  };
+
   // --- contact solver ----------------------------------------------------------------------
   const uint32_t nc = static_cast<uint32_t>(c.count);
   const SolverDesc& sd = desc.solver;
@@ -307,13 +321,17 @@ Status WorldImpl::step() {
     prev_body_count = n;
     impulse_out.assign(c.impulse.begin(), c.impulse.begin() + nc);
 
-    if (sd.position_iterations > 0 && sd.position_correction > 0.0f) {
-      // The same iteration on displacements (impulse/target/delta_vec reused as scratch).
+    const bool correct = sd.position_iterations > 0 && sd.position_correction > 0.0f;
+    if (correct) {  // targets from the depth the solved velocities leave after this step
+      exec.for_each_chunk(nc, kContactGrain, [&](uint32_t b, uint32_t e, uint32_t) {
+        kernels::contact_position_target(sp, sc, state, n, dt, {b, e});
+      });
+    }
+    integrate_positions();
+    if (correct) {
+      // The same iteration on displacements (impulse/target reused as scratch).
       exec.for_each_chunk(n, kBodyGrain, [&](uint32_t b, uint32_t e, uint32_t) {
         kernels::pack_displacement_state(s.inv_mass.data(), state, {b, e});
-      });
-      exec.for_each_chunk(nc, kContactGrain, [&](uint32_t b, uint32_t e, uint32_t) {
-        kernels::contact_position_target(sp, sc, {b, e});
       });
       iterate(sd.position_iterations);
       exec.for_each_chunk(n, kBodyGrain, [&](uint32_t b, uint32_t e, uint32_t) {
@@ -323,8 +341,10 @@ Status WorldImpl::step() {
   } else {
     prev_contacts = 0;
     impulse_out.clear();
+    integrate_positions();
   }
-  st.ms.solve = ms_since(t);
+  st.ms.solve = ms_since(t) - positions_ms;
+  st.ms.integrate += positions_ms;
   st.ms.total = std::chrono::duration<double, std::milli>(Clock::now() - t_start).count();
   return Status();
 }

@@ -150,10 +150,11 @@ void body_apply(BodyContacts adj, BodyState* io, Range r) {
   }
 }
 
-void contact_position_target(const SolverParams& p, SolverContacts c, Range r) {
-#pragma omp simd
+void contact_position_target(const SolverParams& p, SolverContacts c, const BodyState* s, uint32_t body_count,
+                             float dt, Range r) {
   for (uint32_t k = r.begin; k < r.end; ++k) {
-    c.target[k] = p.position_correction * std::max(c.depth[k] - p.penetration_slop, 0.0f);
+    const float depth = c.depth[k] - dt * normal_velocity(c, s, body_count, k);
+    c.target[k] = p.position_correction * std::max(depth - p.penetration_slop, 0.0f);
     c.impulse[k] = 0.0f;
   }
 }

@@ -124,7 +124,10 @@ void contact_solve(SolverContacts c, BodyContacts adj, const BodyState* s, uint3
 /// Per body: state += inv_mass * sum of its entries' deltas.
 void body_apply(BodyContacts adj, BodyState* io, Range r);
 
-/// Writes position targets to c.target and zeroes c.impulse.
-void contact_position_target(const SolverParams& p, SolverContacts c, Range r);
+/// Writes position targets to c.target and zeroes c.impulse. The target is
+/// position_correction * max(depth' - slop, 0), where depth' = depth - dt * v_n is
+/// the overlap left once positions move with the solved velocities s.
+void contact_position_target(const SolverParams& p, SolverContacts c, const BodyState* s, uint32_t body_count,
+                             float dt, Range r);
 
 }  // namespace impact::kernels

@@ -1,8 +1,8 @@
 // Collision response (kernels/solver/contact_solver.*) through World: two spheres
 // (or a sphere and a plane) without gravity, solver defaults, just overlapping
 // and approaching faster than solver.restitution_threshold; one step; read the
-// velocities. A step integrates positions before detecting, so bodies start at
-// p1 - v dt where p1 is the overlapping pose wanted at detection time.
+// velocities. A step detects contacts on the positions it starts from (after
+// the gravity update of velocities), so bodies start at the overlapping pose.
 //
 // Analytic references (1D along the contact normal n, masses m = 1/inv_mass,
 // restitution e = max(e_a, e_b) as contact_solver.h documents):
@@ -32,7 +32,7 @@ struct Outcome {
   size_t contacts = 0;
 };
 
-// a and b are given at their detection-time (post-integration) positions.
+// a and b are given at their detection-time (= starting) positions.
 Outcome collide(BodyDesc a, BodyDesc b, const std::vector<PlaneDesc>& planes = {},
                 const SolverDesc& solver = SolverDesc{}) {
   WorldDesc d = test::zero_gravity_desc();
@@ -40,9 +40,6 @@ Outcome collide(BodyDesc a, BodyDesc b, const std::vector<PlaneDesc>& planes = {
   auto world = test::make_world(d);
   Outcome o;
   if (!world) return o;
-  const float dt = d.fixed_dt;
-  a.position -= a.velocity * dt;
-  b.position -= b.velocity * dt;
   std::vector<PlaneHandle> ph(planes.size());
   EXPECT_TRUE(test::IsOk(world->create_planes(planes, ph)));
   std::vector<BodyDesc> descs{a};
