@@ -68,6 +68,9 @@ void run_broad_phase(benchmark::State& state, impact::BroadPhaseKind kind) {
 void BM_GridBroadPhase(benchmark::State& state) {
   run_broad_phase(state, impact::BroadPhaseKind::kGrid);
 }
+void BM_LbvhBroadPhase(benchmark::State& state) {
+  run_broad_phase(state, impact::BroadPhaseKind::kLbvh);
+}
 void BM_BruteForceBroadPhase(benchmark::State& state) {
   run_broad_phase(state, impact::BroadPhaseKind::kBruteForce);
 }
@@ -118,6 +121,10 @@ void BM_WorldStepBox(benchmark::State& state) {
 }
 
 BENCHMARK(BM_GridBroadPhase)
+    ->ArgsProduct({{10000, 100000, 1000000}, {1, 2}})
+    ->UseRealTime()
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_LbvhBroadPhase)
     ->ArgsProduct({{10000, 100000, 1000000}, {1, 2}})
     ->UseRealTime()
     ->Unit(benchmark::kMillisecond);

@@ -19,6 +19,7 @@ const char* to_string(BroadPhaseKind kind) {
   switch (kind) {
     case BroadPhaseKind::kGrid: return "grid";
     case BroadPhaseKind::kBruteForce: return "brute-force";
+    case BroadPhaseKind::kLbvh: return "lbvh";
   }
   return "?";
 }

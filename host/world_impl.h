@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "host/broadphase/broadphase.h"
+#include "host/broadphase/lbvh.h"
 #include "host/buffer.h"
 #include "host/handle_table.h"
 #include "host/parallel.h"
@@ -90,6 +91,7 @@ class WorldImpl {
   host::RadixSorter sorter;
   host::GridBroadPhase grid;
   host::BruteForceBroadPhase brute_force;
+  host::LbvhBroadPhase lbvh;
 };
 
 }  // namespace impact

@@ -3,6 +3,7 @@
 #include <string>
 
 #include "host/broadphase/broadphase.h"
+#include "host/broadphase/lbvh.h"
 #include "impact/broadphase.h"
 
 namespace impact {
@@ -13,6 +14,7 @@ class BroadPhaseImpl {
   BroadPhaseKind kind;
   host::GridBroadPhase grid;
   host::BruteForceBroadPhase brute_force;
+  host::LbvhBroadPhase lbvh;
   host::Buffer<kernels::Pair> pairs;
   host::Executor exec;
   Backend exec_backend = Backend::kDefault;
@@ -82,8 +84,13 @@ Status BroadPhase::find_pairs(const AabbInput& boxes, std::vector<BodyPair>* out
                                    boxes.mask.empty() ? nullptr : boxes.mask.data(),
                                    boxes.is_static.empty() ? nullptr : boxes.is_static.data()};
   const uint32_t n = static_cast<uint32_t>(boxes.size());
-  Status s = b.kind == BroadPhaseKind::kBruteForce ? b.brute_force.find_pairs(b.exec, soa, filter, n, &b.pairs)
-                                                   : b.grid.find_pairs(b.exec, soa, filter, n, &b.pairs);
+  Status s;
+  switch (b.kind) {
+    case BroadPhaseKind::kBruteForce: s = b.brute_force.find_pairs(b.exec, soa, filter, n, &b.pairs); break;
+    case BroadPhaseKind::kLbvh: s = b.lbvh.find_pairs(b.exec, soa, filter, n, &b.pairs); break;
+    case BroadPhaseKind::kGrid: s = b.grid.find_pairs(b.exec, soa, filter, n, &b.pairs); break;
+    default: return Status(StatusCode::kInvalidArgument, "find_pairs: unknown BroadPhaseKind");
+  }
   if (!s.ok()) return s;
   out->resize(b.pairs.size());
   for (size_t i = 0; i < b.pairs.size(); ++i) (*out)[i] = BodyPair{b.pairs[i].a, b.pairs[i].b};

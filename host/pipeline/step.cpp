@@ -177,9 +177,12 @@ Status WorldImpl::step() {
 
   // --- broad phase -------------------------------------------------------------------------
   const kernels::PairFilter filter{s.layer.data(), s.mask.data(), s.is_static.data()};
-  Status bp = desc.broad_phase == BroadPhaseKind::kBruteForce
-                  ? brute_force.find_pairs(exec, boxes, filter, n, &pairs)
-                  : grid.find_pairs(exec, boxes, filter, n, &pairs, &summary);
+  Status bp;
+  switch (desc.broad_phase) {
+    case BroadPhaseKind::kBruteForce: bp = brute_force.find_pairs(exec, boxes, filter, n, &pairs); break;
+    case BroadPhaseKind::kLbvh: bp = lbvh.find_pairs(exec, boxes, filter, n, &pairs, &summary); break;
+    case BroadPhaseKind::kGrid: bp = grid.find_pairs(exec, boxes, filter, n, &pairs, &summary); break;
+  }
   if (!bp.ok()) {  // more pairs than 32-bit indices can hold: never drop them silently
     contacts.resize(0);
     return bp;

@@ -62,6 +62,7 @@ enum class Backend : int {
 enum class BroadPhaseKind : int {
   kGrid = 0,        ///< parallel radix-sorted uniform hash grid
   kBruteForce = 1,  ///< all pairs, O(n^2): the reference oracle
+  kLbvh = 2,        ///< linear BVH: Morton sort + Karras build, rebuilt each call (docs/lbvh.md)
 };
 
 const char* to_string(Backend backend);

@@ -1,0 +1,525 @@
+// LBVH broad phase (kernels/bvh/, host/broadphase/lbvh.h) against the independent
+// double-precision reference of tests/support/aabb_reference.h: pairs compared as
+// sets (each pair (a < b) once), on random and adversarial inputs, after many frames
+// of refit, with filters; pair order compared byte for byte across every backend and
+// thread count; tree invariants (every leaf reachable once, parent links, node
+// bounds exactly the union of the children, subtree leaf ranges, depth bound).
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "host/broadphase/lbvh.h"
+#include "host/parallel.h"
+#include "kernels/bvh/lbvh_build.h"
+#include "kernels/bvh/lbvh_traverse.h"
+#include "kernels/bvh/morton.h"
+#include "support/aabb_reference.h"
+#include "support/test_support.h"
+
+namespace impact {
+namespace {
+
+using host::Buffer;
+using host::Executor;
+using host::LbvhBroadPhase;
+using host::LbvhOptions;
+using kernels::Pair;
+using test::Boxes;
+using test::expect_same_set;
+using test::PairVec;
+using test::reference_pairs;
+using test::scaled;
+
+kernels::AabbSoA soa(const Boxes& b) {
+  return {b.min_x.data(), b.min_y.data(), b.min_z.data(), b.max_x.data(), b.max_y.data(), b.max_z.data()};
+}
+kernels::PairFilter filter_of(const Boxes& b) {
+  if (!b.filtered()) return {nullptr, nullptr, nullptr};
+  return {b.layer.data(), b.mask.data(), b.is_static.data()};
+}
+uint32_t count(const Boxes& b) { return static_cast<uint32_t>(b.size()); }
+
+const Executor& serial() {
+  static const Executor e(Backend::kSerial, 1);
+  return e;
+}
+
+// --- tree invariants ----------------------------------------------------------------------
+
+template <class A, class B>
+bool same_bounds(const A& a, const B& b) {
+  return a.min_x == b.min_x && a.min_y == b.min_y && a.min_z == b.min_z && a.max_x == b.max_x &&
+         a.max_y == b.max_y && a.max_z == b.max_z;
+}
+
+// Every leaf and internal node reachable from the root exactly once; parent links
+// match; each internal node's bounds are exactly the union of its children's (so
+// they contain them); `last` is the subtree's rightmost leaf and subtrees cover
+// contiguous leaf ranges; depth within kLbvhMaxDepth; leaves hold the boxes.
+void check_tree(const LbvhBroadPhase& bp, const Boxes& boxes, const std::string& what) {
+  SCOPED_TRACE(what);
+  const kernels::LbvhView v = bp.view();
+  const uint32_t n = v.n;
+  ASSERT_EQ(n, boxes.size());
+  if (n == 0) return;
+  std::vector<int> seen_box(n, 0);
+  for (uint32_t s = 0; s < n; ++s) {
+    const uint32_t i = bp.leaf_index()[s];
+    ASSERT_LT(i, n);
+    ++seen_box[i];
+    const kernels::SortedBox& l = v.leaves[s];
+    ASSERT_EQ(l.index, i);
+    ASSERT_TRUE(l.min_x == boxes.min_x[i] && l.min_y == boxes.min_y[i] && l.min_z == boxes.min_z[i] &&
+                l.max_x == boxes.max_x[i] && l.max_y == boxes.max_y[i] && l.max_z == boxes.max_z[i]);
+  }
+  for (uint32_t i = 0; i < n; ++i) ASSERT_EQ(seen_box[i], 1) << "box " << i;
+  if (n < 2) return;
+  ASSERT_EQ(bp.internal_parent()[0], kernels::kInvalidBody);
+  std::vector<int> seen_leaf(n, 0), seen_node(n - 1, 0);
+  struct Item {
+    uint32_t node, depth, first, last;
+  };
+  std::vector<Item> stack{{0, 1, 0, n - 1}};
+  while (!stack.empty()) {
+    const Item it = stack.back();
+    stack.pop_back();
+    ASSERT_LT(it.node, n - 1);
+    ASSERT_LE(it.depth, kernels::kLbvhMaxDepth);
+    ++seen_node[it.node];
+    const kernels::LbvhNode& node = v.nodes[it.node];
+    ASSERT_EQ(node.last, it.last);
+    const uint32_t g = node.split & kernels::kLbvhSplitMask;
+    ASSERT_GE(g, it.first);
+    ASSERT_LT(g, it.last);
+    float lo[3] = {INFINITY, INFINITY, INFINITY}, hi[3] = {-INFINITY, -INFINITY, -INFINITY};
+    auto grow = [&](const auto& b) {
+      lo[0] = std::min(lo[0], b.min_x), lo[1] = std::min(lo[1], b.min_y), lo[2] = std::min(lo[2], b.min_z);
+      hi[0] = std::max(hi[0], b.max_x), hi[1] = std::max(hi[1], b.max_y), hi[2] = std::max(hi[2], b.max_z);
+    };
+    // Left child [first, g], right child [g + 1, last]; a leaf child iff its range is one leaf.
+    const bool left_leaf = (node.split & kernels::kLbvhLeftLeaf) != 0;
+    const bool right_leaf = (node.split & kernels::kLbvhRightLeaf) != 0;
+    ASSERT_EQ(left_leaf, g == it.first);
+    ASSERT_EQ(right_leaf, g + 1 == it.last);
+    if (left_leaf) {
+      ++seen_leaf[g];
+      ASSERT_EQ(bp.leaf_parent()[g], it.node);
+      grow(v.leaves[g]);
+    } else {
+      ASSERT_EQ(bp.internal_parent()[g], it.node);
+      grow(v.nodes[g]);
+      stack.push_back({g, it.depth + 1, it.first, g});
+    }
+    if (right_leaf) {
+      ++seen_leaf[g + 1];
+      ASSERT_EQ(bp.leaf_parent()[g + 1], it.node);
+      grow(v.leaves[g + 1]);
+    } else {
+      ASSERT_EQ(bp.internal_parent()[g + 1], it.node);
+      grow(v.nodes[g + 1]);
+      stack.push_back({g + 1, it.depth + 1, g + 1, it.last});
+    }
+    const kernels::SortedBox u{lo[0], lo[1], lo[2], 0, hi[0], hi[1], hi[2], 0};
+    ASSERT_TRUE(same_bounds(node, u)) << "node " << it.node << " is not the union of its children";
+  }
+  for (uint32_t s = 0; s < n; ++s) ASSERT_EQ(seen_leaf[s], 1) << "leaf " << s;
+  for (uint32_t i = 0; i + 1 < n; ++i) ASSERT_EQ(seen_node[i], 1) << "node " << i;
+}
+
+// Rebuild with each code width; pairs == reference as sets; tree invariants hold.
+void check_all(const Boxes& boxes, const std::string& what) {
+  const PairVec ref = reference_pairs(boxes);
+  for (uint32_t bits : {0u, 30u, 63u}) {
+    LbvhOptions o;
+    o.morton_bits = bits;
+    LbvhBroadPhase bp(o);
+    Buffer<Pair> out{{7, 3}};  // stale content must be replaced
+    const std::string w = what + " bits=" + std::to_string(bits);
+    IMPACT_ASSERT_OK(bp.find_pairs(serial(), soa(boxes), filter_of(boxes), count(boxes), &out));
+    expect_same_set(out, ref, boxes.size(), w);
+    check_tree(bp, boxes, w);
+    if (bits != 0 && boxes.size() > 0) {
+      EXPECT_EQ(bp.info().morton_bits, bits);
+    }
+  }
+}
+
+// --- generators ---------------------------------------------------------------------------
+
+Boxes uniform_boxes(uint32_t n, uint32_t seed, float half_lo, float half_hi, float offset = 0.0f,
+                    float scale = 1.0f) {
+  std::mt19937 rng(seed);
+  const float side = 2.2f * half_hi * std::cbrt(static_cast<float>(n));
+  std::uniform_real_distribution<float> pos(-0.5f * side, 0.5f * side);
+  std::uniform_real_distribution<float> half(half_lo, half_hi);
+  Boxes b;
+  for (uint32_t i = 0; i < n; ++i)
+    b.add(offset + scale * pos(rng), offset + scale * pos(rng), offset + scale * pos(rng),
+          scale * half(rng), scale * half(rng), scale * half(rng));
+  return b;
+}
+
+Boxes clustered_boxes(uint32_t n, uint32_t seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<float> centre(-50.0f, 50.0f);
+  std::vector<std::array<float, 3>> blobs(6);
+  for (auto& c : blobs) c = {centre(rng), centre(rng), centre(rng)};
+  std::normal_distribution<float> g(0.0f, 1.5f);
+  std::uniform_real_distribution<float> half(0.05f, 0.4f);
+  std::uniform_int_distribution<size_t> pick(0, blobs.size() - 1);
+  Boxes b;
+  for (uint32_t i = 0; i < n; ++i) {
+    const auto& c = blobs[pick(rng)];
+    b.add(c[0] + g(rng), c[1] + g(rng), c[2] + g(rng), half(rng), half(rng), half(rng));
+  }
+  return b;
+}
+
+// Half sizes log-uniform over [0.01, 10]: 1000x.
+Boxes mixed_size_boxes(uint32_t n, uint32_t seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<float> pos(-60.0f, 60.0f);
+  std::uniform_real_distribution<float> lg(std::log(0.01f), std::log(10.0f));
+  Boxes b;
+  for (uint32_t i = 0; i < n; ++i)
+    b.add(pos(rng), pos(rng), pos(rng), std::exp(lg(rng)), std::exp(lg(rng)), std::exp(lg(rng)));
+  return b;
+}
+
+// --- Morton codes -------------------------------------------------------------------------
+
+uint64_t naive_interleave(uint64_t x, uint64_t y, uint64_t z, uint32_t bits) {
+  uint64_t c = 0;
+  for (uint32_t k = 0; k < bits; ++k)
+    c |= ((x >> k) & 1) << (3 * k) | ((y >> k) & 1) << (3 * k + 1) | ((z >> k) & 1) << (3 * k + 2);
+  return c;
+}
+
+TEST(LbvhMorton, InterleaveMatchesNaive) {
+  std::mt19937_64 rng(1);
+  for (int t = 0; t < 20000; ++t) {
+    const uint64_t r = rng();
+    const uint32_t x = r & 0x3ff, y = (r >> 10) & 0x3ff, z = (r >> 20) & 0x3ff;
+    ASSERT_EQ(kernels::morton30(x, y, z), naive_interleave(x, y, z, 10));
+    const uint64_t X = r & 0x1fffff, Y = (r >> 21) & 0x1fffff, Z = (r >> 42) & 0x1fffff;
+    ASSERT_EQ(kernels::morton63(X, Y, Z), naive_interleave(X, Y, Z, 21));
+  }
+  EXPECT_EQ(kernels::morton30(1023, 1023, 1023), (1u << 30) - 1);
+  EXPECT_EQ(kernels::morton63(0x1fffff, 0x1fffff, 0x1fffff), (1ull << 63) - 1);
+}
+
+TEST(LbvhMorton, KeysQuantiseInDoubleFarFromOrigin) {
+  // Two boxes 1e6 m from the origin, 0.5 m apart on x, in a 1 m scene: different cells.
+  Boxes b;
+  b.add(1e6f, 1e6f, 1e6f, 0.25f, 0.25f, 0.25f);
+  b.add(1e6f + 0.5f, 1e6f, 1e6f, 0.25f, 0.25f, 0.25f);
+  const float lo[3] = {b.min_x[0], b.min_y[0], b.min_z[0]};
+  const float hi[3] = {b.max_x[1], b.max_y[1], b.max_z[1]};
+  const kernels::MortonParams p = kernels::morton_params(lo, hi, 10);
+  uint64_t keys[2];
+  kernels::morton_keys30(p, soa(b), keys, {0, 2});
+  EXPECT_EQ(static_cast<uint32_t>(keys[0]), 0u);
+  EXPECT_EQ(static_cast<uint32_t>(keys[1]), 1u);
+  // x: centres 0.25 and 0.75 of a 1 m extent -> cells 256, 768; y, z: mid-extent -> 512.
+  EXPECT_EQ(keys[0] >> 32, kernels::morton30(256, 512, 512));
+  EXPECT_EQ(keys[1] >> 32, kernels::morton30(768, 512, 512));
+  uint64_t codes[2];
+  uint32_t values[2];
+  kernels::morton_keys63(kernels::morton_params(lo, hi, 21), soa(b), codes, values, {0, 2});
+  EXPECT_EQ(codes[0], kernels::morton63(1u << 19, 1u << 20, 1u << 20));
+  EXPECT_EQ(codes[1], kernels::morton63(3u << 19, 1u << 20, 1u << 20));
+  EXPECT_EQ(values[1], 1u);
+}
+
+TEST(LbvhMorton, BitsRule) {
+  kernels::BoundsSummary s{{0, 0, 0}, {100, 100, 100}, 1.0f};
+  EXPECT_EQ(host::choose_morton_bits(s, 1000), 30u);
+  EXPECT_EQ(host::choose_morton_bits(s, (1u << 24) + 1), 63u);
+  s.hi[0] = 10000;  // 30-bit cell ~9.8 m > 4 x 1 m boxes
+  EXPECT_EQ(host::choose_morton_bits(s, 1000), 63u);
+  kernels::BoundsSummary point{{5, 5, 5}, {5, 5, 5}, 0.0f};
+  EXPECT_EQ(host::choose_morton_bits(point, 1000), 30u);
+}
+
+// --- pairs vs reference -------------------------------------------------------------------
+
+TEST(Lbvh, SmallCounts) {
+  check_all(Boxes{}, "n=0");
+  Boxes one;
+  one.add(1, 2, 3, 0.5f, 0.5f, 0.5f);
+  check_all(one, "n=1");
+  Boxes two_apart, two_touch, two_over;
+  two_apart.add(0, 0, 0, 0.5f, 0.5f, 0.5f);
+  two_apart.add(2, 0, 0, 0.5f, 0.5f, 0.5f);
+  check_all(two_apart, "n=2 apart");
+  two_touch.add_box(0, 0, 0, 1, 1, 1);
+  two_touch.add_box(1, 1, 1, 2, 2, 2);  // touching at a corner counts
+  check_all(two_touch, "n=2 touching");
+  two_over.add(0, 0, 0, 1, 1, 1);
+  two_over.add(0.5f, 0.5f, 0.5f, 1, 1, 1);
+  check_all(two_over, "n=2 overlapping");
+  for (int variant = 0; variant < 8; ++variant) {
+    Boxes three;
+    for (int k = 0; k < 3; ++k) {
+      const float x = ((variant >> k) & 1) ? 0.9f * static_cast<float>(k) : 3.0f * static_cast<float>(k);
+      three.add(x, 0, 0, 0.5f, 0.5f, 0.5f);
+    }
+    check_all(three, "n=3 variant " + std::to_string(variant));
+  }
+  Boxes same3;
+  for (int k = 0; k < 3; ++k) same3.add(1, 1, 1, 0.1f, 0.1f, 0.1f);
+  check_all(same3, "n=3 identical");
+}
+
+TEST(Lbvh, Uniform) {
+  check_all(uniform_boxes(scaled(3000), 11, 0.2f, 0.6f), "uniform");
+  // Several build, refit and pair chunks; sweep reference.
+  check_all(uniform_boxes(scaled(70000), 12, 0.2f, 0.6f), "uniform large");
+}
+
+TEST(Lbvh, Clustered) { check_all(clustered_boxes(scaled(4000), 21), "clustered"); }
+
+TEST(Lbvh, SizesSpanning1000x) { check_all(mixed_size_boxes(scaled(4000), 31), "mixed sizes"); }
+
+TEST(Lbvh, AllBoxesAtOnePoint) {
+  // Every Morton code equal: the tree splits on the sorted position alone.
+  Boxes b;
+  for (uint32_t i = 0; i < 700; ++i) b.add(3, -2, 7, 0.5f, 0.5f, 0.5f);
+  check_all(b, "one point, unit boxes");
+  Boxes z;
+  for (uint32_t i = 0; i < 300; ++i) z.add(3, -2, 7, 0, 0, 0);
+  check_all(z, "one point, zero-size boxes");
+}
+
+TEST(Lbvh, DeepTreeFromExponentialSpacing) {
+  // Centres at 2^k on every axis: each new code differs in a higher bit, so the tree
+  // is a long chain (plus index-split runs of duplicates at the low end), the worst
+  // case for the traversal stack; the depth check in check_tree covers it.
+  Boxes b;
+  for (int rep = 0; rep < 40; ++rep)
+    for (int k = 0; k < 40; ++k) {
+      const float c = std::ldexp(1.0f, k - 8);
+      b.add(c, c, c, 0.25f * c, 0.25f * c, 0.25f * c);
+    }
+  check_all(b, "exponential spacing");
+}
+
+TEST(Lbvh, ZeroSizeBoxes) {
+  // Points on a lattice (touching = same point), some repeated, plus a few unit boxes.
+  std::mt19937 rng(5);
+  std::uniform_int_distribution<int> cell(0, 12);
+  Boxes b;
+  for (uint32_t i = 0; i < 2500; ++i) {
+    const float x = 0.5f * static_cast<float>(cell(rng)), y = 0.5f * static_cast<float>(cell(rng)),
+                z = 0.5f * static_cast<float>(cell(rng));
+    if (i % 50 == 0) b.add(x, y, z, 0.5f, 0.5f, 0.5f);
+    else b.add(x, y, z, 0, 0, 0);
+  }
+  check_all(b, "zero-size");
+}
+
+TEST(Lbvh, Scales) {
+  check_all(uniform_boxes(scaled(3000), 41, 0.2f, 0.6f, 0.0f, 1e-4f), "tiny 1e-4");
+  check_all(uniform_boxes(scaled(3000), 42, 0.2f, 0.6f, 0.0f, 1e4f), "huge 1e4");
+  check_all(uniform_boxes(scaled(3000), 43, 0.2f, 0.6f, 1e6f), "offset 1e6");
+  check_all(uniform_boxes(scaled(3000), 44, 0.2f, 0.6f, -1e6f, 1e-2f), "offset -1e6, small boxes");
+}
+
+TEST(Lbvh, Filters) {
+  for (double static_fraction : {0.0, 0.3, 1.0}) {
+    Boxes b = uniform_boxes(scaled(4000), 51, 0.2f, 0.8f);
+    test::add_random_filter(b, 52, static_fraction);
+    check_all(b, "filtered, static fraction " + std::to_string(static_fraction));
+  }
+  Boxes c = clustered_boxes(scaled(3000), 53);
+  test::add_random_filter(c, 54, 0.2);
+  check_all(c, "filtered clustered");
+}
+
+// --- refit ----------------------------------------------------------------------------------
+
+// Random motion: most boxes jitter, a fraction `jumps` teleports across the scene,
+// sizes change too.
+void move(Boxes& b, std::mt19937& rng, float side, double jumps = 0.01) {
+  std::normal_distribution<float> jitter(0.0f, 0.15f);
+  std::uniform_real_distribution<float> pos(-0.5f * side, 0.5f * side);
+  std::uniform_real_distribution<float> half(0.1f, 0.7f);
+  std::bernoulli_distribution jump(jumps);
+  for (size_t i = 0; i < b.size(); ++i) {
+    float c[3] = {0.5f * (b.min_x[i] + b.max_x[i]), 0.5f * (b.min_y[i] + b.max_y[i]),
+                  0.5f * (b.min_z[i] + b.max_z[i])};
+    if (jump(rng)) {
+      for (float& v : c) v = pos(rng);
+    } else {
+      for (float& v : c) v += jitter(rng);
+    }
+    const float h = half(rng);
+    b.min_x[i] = c[0] - h, b.min_y[i] = c[1] - h, b.min_z[i] = c[2] - h;
+    b.max_x[i] = c[0] + h, b.max_y[i] = c[1] + h, b.max_z[i] = c[2] + h;
+  }
+}
+
+TEST(Lbvh, RefitHundredFrames) {
+  const uint32_t n = scaled(1500);
+  Boxes b = uniform_boxes(n, 61, 0.2f, 0.6f);
+  test::add_random_filter(b, 62, 0.2);
+  const float side = 2.2f * 0.6f * std::cbrt(static_cast<float>(n));
+  std::mt19937 rng(63);
+  LbvhBroadPhase bp;
+  Buffer<Pair> out;
+  IMPACT_ASSERT_OK(bp.find_pairs(serial(), soa(b), filter_of(b), n, &out));
+  const double sah0 = bp.sah_cost(serial());
+  for (int frame = 0; frame < 100; ++frame) {
+    move(b, rng, side);
+    IMPACT_ASSERT_OK(bp.refit(serial(), soa(b), filter_of(b), n, &out));
+    EXPECT_FALSE(bp.info().rebuilt);
+    expect_same_set(out, test::reference_pairs_n2(b), n, "refit frame " + std::to_string(frame));
+    if (frame % 10 == 9) check_tree(bp, b, "refit frame " + std::to_string(frame));
+    if (HasFailure()) return;
+  }
+  EXPECT_EQ(bp.info().refits_since_build, 100u);
+  // The aged tree is worse than a fresh one over the same boxes.
+  const double aged = bp.sah_cost(serial());
+  LbvhBroadPhase fresh;
+  IMPACT_ASSERT_OK(fresh.find_pairs(serial(), soa(b), filter_of(b), n, &out));
+  EXPECT_GT(aged, fresh.sah_cost(serial()));
+  EXPECT_GT(aged, sah0);
+}
+
+TEST(Lbvh, RefitKnobRebuildsWhenTreeDegrades) {
+  const uint32_t n = scaled(2000);
+  Boxes b = uniform_boxes(n, 71, 0.2f, 0.6f);
+  const float side = 2.2f * 0.6f * std::cbrt(static_cast<float>(n));
+  std::mt19937 rng(72);
+  LbvhOptions o;
+  o.refit_sah_limit = 1.3;
+  LbvhBroadPhase bp(o);
+  Buffer<Pair> out;
+  int rebuilds = 0, refits = 0;
+  for (int frame = 0; frame < 60; ++frame) {
+    IMPACT_ASSERT_OK(bp.find_pairs(serial(), soa(b), filter_of(b), n, &out));
+    (bp.info().rebuilt ? rebuilds : refits)++;
+    if (!bp.info().rebuilt) {
+      EXPECT_LE(bp.info().last_sah, 1.3 * bp.info().built_sah);
+    }
+    expect_same_set(out, test::reference_pairs_n2(b), n, "knob frame " + std::to_string(frame));
+    if (HasFailure()) return;
+    move(b, rng, side, 0.0);  // coherent motion: the tree ages slowly
+  }
+  EXPECT_GT(refits, 0);
+  EXPECT_GT(rebuilds, 1);  // the first call plus at least one forced by SAH growth
+  // A different n always rebuilds.
+  b.add(0, 0, 0, 1, 1, 1);
+  IMPACT_ASSERT_OK(bp.find_pairs(serial(), soa(b), filter_of(b), n + 1, &out));
+  EXPECT_TRUE(bp.info().rebuilt);
+}
+
+TEST(Lbvh, RefitRejectsMissingTreeOrOtherCount) {
+  Boxes b = uniform_boxes(100, 81, 0.2f, 0.6f);
+  LbvhBroadPhase bp;
+  Buffer<Pair> out{{1, 2}};
+  EXPECT_TRUE(test::IsError(bp.refit(serial(), soa(b), filter_of(b), 100, &out),
+                            StatusCode::kInvalidArgument, {"LBVH refit"}));
+  EXPECT_TRUE(out.empty());
+  IMPACT_ASSERT_OK(bp.find_pairs(serial(), soa(b), filter_of(b), 100, &out));
+  EXPECT_TRUE(test::IsError(bp.refit(serial(), soa(b), filter_of(b), 99, &out),
+                            StatusCode::kInvalidArgument, {"99"}));
+  IMPACT_EXPECT_OK(bp.refit(serial(), soa(b), filter_of(b), 100, &out));
+  expect_same_set(out, reference_pairs(b), 100, "refit same boxes");
+  LbvhBroadPhase empty;
+  IMPACT_ASSERT_OK(empty.find_pairs(serial(), soa(b), filter_of(b), 0, &out));
+  IMPACT_EXPECT_OK(empty.refit(serial(), soa(b), filter_of(b), 0, &out));
+  EXPECT_TRUE(out.empty());
+}
+
+// --- SAH ------------------------------------------------------------------------------------
+
+TEST(Lbvh, SahCost) {
+  // Two unit cubes 2 m apart: root 3x1x1 (area 14), two leaves (area 6 each).
+  Boxes b;
+  b.add_box(0, 0, 0, 1, 1, 1);
+  b.add_box(2, 0, 0, 3, 1, 1);
+  LbvhBroadPhase bp;
+  Buffer<Pair> out;
+  IMPACT_ASSERT_OK(bp.find_pairs(serial(), soa(b), filter_of(b), 2, &out));
+  EXPECT_DOUBLE_EQ(bp.sah_cost(serial()), (14.0 + 6.0 + 6.0) / 14.0);
+  // Degenerate root: n.
+  Boxes p;
+  for (int i = 0; i < 5; ++i) p.add(1, 1, 1, 0, 0, 0);
+  IMPACT_ASSERT_OK(bp.find_pairs(serial(), soa(p), filter_of(p), 5, &out));
+  EXPECT_EQ(bp.sah_cost(serial()), 5.0);
+  EXPECT_EQ(out.size(), 10u);
+}
+
+// --- determinism ----------------------------------------------------------------------------
+
+TEST(Lbvh, PairOrderIdenticalAcrossExecutors) {
+  const uint32_t n = scaled(60000);
+  Boxes b = uniform_boxes(n, 91, 0.2f, 0.7f);
+  test::add_random_filter(b, 92, 0.2);
+  Boxes moved = b;
+  std::mt19937 rng(93);
+  move(moved, rng, 2.2f * 0.7f * std::cbrt(static_cast<float>(n)));
+  const PairVec ref = reference_pairs(b), ref_moved = reference_pairs(moved);
+  for (uint32_t bits : {30u, 63u}) {
+    std::vector<Pair> first_build, first_refit;
+    std::vector<kernels::LbvhNode> first_nodes;
+    double first_sah = 0;
+    for (const test::ExecCase& c : test::exec_cases()) {
+      const std::string what = test::to_string(c) + " bits=" + std::to_string(bits);
+      SCOPED_TRACE(what);
+      const Executor exec(c.backend, c.threads);
+      LbvhOptions o;
+      o.morton_bits = bits;
+      LbvhBroadPhase bp(o);
+      Buffer<Pair> out;
+      IMPACT_ASSERT_OK(bp.find_pairs(exec, soa(b), filter_of(b), n, &out));
+      std::vector<Pair> build(out.begin(), out.end());
+      const double sah = bp.sah_cost(exec);
+      IMPACT_ASSERT_OK(bp.refit(exec, soa(moved), filter_of(moved), n, &out));
+      std::vector<Pair> refit(out.begin(), out.end());
+      const kernels::LbvhView v = bp.view();
+      std::vector<kernels::LbvhNode> nodes(v.nodes, v.nodes + (n - 1));
+      if (first_build.empty()) {
+        expect_same_set(build, ref, n, what + " build");
+        expect_same_set(refit, ref_moved, n, what + " refit");
+        first_build = build;
+        first_refit = refit;
+        first_nodes = nodes;
+        first_sah = sah;
+        continue;
+      }
+      ASSERT_EQ(build.size(), first_build.size());
+      EXPECT_EQ(0, std::memcmp(build.data(), first_build.data(), build.size() * sizeof(Pair)));
+      ASSERT_EQ(refit.size(), first_refit.size());
+      EXPECT_EQ(0, std::memcmp(refit.data(), first_refit.data(), refit.size() * sizeof(Pair)));
+      EXPECT_EQ(0, std::memcmp(nodes.data(), first_nodes.data(), nodes.size() * sizeof(kernels::LbvhNode)));
+      EXPECT_EQ(sah, first_sah);
+    }
+  }
+}
+
+TEST(Lbvh, PairOrderIsByQueryLeafThenTraversal) {
+  // Pairs come grouped by query leaf in sorted (Morton) order: the sorted position of
+  // the query box never decreases along the output.
+  Boxes b = uniform_boxes(5000, 101, 0.2f, 0.8f);
+  LbvhBroadPhase bp;
+  Buffer<Pair> out;
+  IMPACT_ASSERT_OK(bp.find_pairs(serial(), soa(b), filter_of(b), count(b), &out));
+  std::vector<uint32_t> slot(b.size());
+  for (uint32_t s = 0; s < b.size(); ++s) slot[bp.leaf_index()[s]] = s;
+  uint32_t prev = 0;
+  for (const Pair& p : out) {
+    const uint32_t q = std::min(slot[p.a], slot[p.b]);
+    ASSERT_GE(q, prev);
+    prev = q;
+  }
+}
+
+}  // namespace
+}  // namespace impact
