@@ -5,6 +5,7 @@
 #include <limits>
 
 #include "kernels/broadphase/bounds.h"
+#include "kernels/common/permute.h"
 #include "kernels/sort/segments.h"
 
 namespace impact::host {
@@ -87,25 +88,41 @@ kernels::BoundsSummary summarize_bounds(const Executor& exec, kernels::AabbSoA b
   return sum;
 }
 
-Status GridBroadPhase::find_pairs(const Executor& exec, kernels::AabbSoA boxes,
-                                  kernels::PairFilter filter, uint32_t n,
-                                  Buffer<kernels::Pair>* out, const kernels::BoundsSummary* summary) {
-  out->clear();
-  last_n_ = n;
-  if (n < 2) return Status();
+// Per-level state of the hierarchical grid.
+struct GridBroadPhase::Levels {
+  static constexpr uint32_t L = kernels::kGridMaxLevels;
+  Buffer<uint8_t> level;            // per box
+  Buffer<uint32_t> chunk_counts;    // chunks x L, then scatter offsets
+  Buffer<uint32_t> order;           // original indices, level by level
+  uint32_t start[L + 1] = {};
+  GridBroadPhase grid[L];
+  Buffer<float> box[L][6];
+  Buffer<uint32_t> layer[L], mask[L];
+  Buffer<uint8_t> is_static[L];
+  Buffer<kernels::Pair> pairs[L];       // within level l
+  Buffer<kernels::Pair> cross[L][L];    // level l queried against coarser level m
+  std::vector<Buffer<kernels::Pair>> chunk_pairs;
+  Buffer<uint64_t> chunk_offsets;
+};
 
-  // 1. Union of the boxes and largest edge.
-  const kernels::BoundsSummary sum = summary ? *summary : summarize_bounds(exec, boxes, n, partial_bounds_);
+GridBroadPhase::GridBroadPhase() = default;
+GridBroadPhase::~GridBroadPhase() = default;
+GridBroadPhase::GridBroadPhase(GridBroadPhase&&) noexcept = default;
+GridBroadPhase& GridBroadPhase::operator=(GridBroadPhase&&) noexcept = default;
+
+void GridBroadPhase::build(const Executor& exec, kernels::AabbSoA boxes, kernels::PairFilter filter,
+                           const uint32_t* original_index, uint32_t n, const kernels::BoundsSummary& sum) {
+  built_n_ = n;
   const kernels::GridParams g = choose_grid(sum, n, &info_);
 
-  // 2. Keys, sorted on the bucket bits.
+  // Keys, sorted on the bucket bits.
   uint64_t* keys = scratch(keys_, n);
   exec.for_each_chunk(n, kKeyGrain, [&](uint32_t b, uint32_t e, uint32_t) {
     kernels::grid_keys(g, boxes, keys, {b, e});
   });
   sorter_.sort(exec, keys, n, 32, 32 + bits_for(g.bucket_count - 1));
 
-  // 3. Gather into sorted order.
+  // Gather into sorted order.
   const bool filtered = filter.layer != nullptr;
   kernels::GridSorted sorted{scratch(sorted_box_, n),
                              scratch(cell_, n),
@@ -113,29 +130,157 @@ Status GridBroadPhase::find_pairs(const Executor& exec, kernels::AabbSoA boxes,
                              filtered ? scratch(mask_, n) : nullptr,
                              filtered ? scratch(static_, n) : nullptr};
   exec.for_each_chunk(n, kKeyGrain, [&](uint32_t b, uint32_t e, uint32_t) {
-    kernels::grid_gather(g, keys, boxes, filter, sorted, {b, e});
+    kernels::grid_gather(g, keys, boxes, filter, original_index, sorted, {b, e});
   });
 
-  // 4. Bucket ranges.
+  // Bucket ranges.
   uint32_t* starts = scratch(bucket_start_, static_cast<size_t>(g.bucket_count) + 1);
   exec.for_each_chunk(n, kKeyGrain, [&](uint32_t b, uint32_t e, uint32_t) {
     kernels::segment_starts(keys, n, 32, g.bucket_count, starts, {b, e});
   });
+  view_ = kernels::GridView{g, sorted.box, sorted.cell, sorted.layer, sorted.mask, sorted.is_static, starts};
+}
 
-  // 5. Pairs: count, scan, write.
-  const kernels::GridView view{g,
-                               sorted.box,
-                               sorted.cell,
-                               sorted.layer,
-                               sorted.mask,
-                               sorted.is_static,
-                               starts};
+Status GridBroadPhase::self_pairs(const Executor& exec, Buffer<kernels::Pair>* out) {
+  const kernels::GridView view = view_;
   return chunked_output<kernels::Pair>(
-      exec, n, kPairGrain, chunk_pairs_, chunk_offsets_, kMaxPairs, "grid broad phase pairs",
+      exec, built_n_, kPairGrain, chunk_pairs_, chunk_offsets_, kMaxPairs, "grid broad phase pairs",
       [&](uint32_t b, uint32_t e, kernels::Pair* dst, uint64_t capacity) {
         return kernels::grid_find_pairs(view, dst, capacity, {b, e});
       },
       out);
+}
+
+Status GridBroadPhase::find_pairs(const Executor& exec, kernels::AabbSoA boxes,
+                                  kernels::PairFilter filter, uint32_t n,
+                                  Buffer<kernels::Pair>* out, const kernels::BoundsSummary* summary) {
+  out->clear();
+  last_n_ = n;
+  levels_used_ = 1;
+  if (n < 2) return Status();
+  const kernels::BoundsSummary sum = summary ? *summary : summarize_bounds(exec, boxes, n, partial_bounds_);
+
+  if (level_fraction_ > 0 && sum.max_edge > 0.0f) {
+    // Size spread: count boxes per level (one count per chunk, summed in order).
+    if (!levels_) levels_ = std::make_unique<Levels>();
+    Levels& lv = *levels_;
+    constexpr uint32_t L = Levels::L;
+    const uint32_t chunks = chunk_count(n, kKeyGrain);
+    uint8_t* level = scratch(lv.level, n);
+    uint32_t* counts = scratch(lv.chunk_counts, static_cast<size_t>(chunks) * L);
+    exec.for_each_chunk(n, kKeyGrain, [&](uint32_t b, uint32_t e, uint32_t c) {
+      kernels::grid_levels(boxes, sum.max_edge, level, counts + static_cast<size_t>(c) * L, {b, e});
+    });
+    uint64_t fine = 0;
+    for (uint32_t c = 0; c < chunks; ++c)
+      for (uint32_t l = 2; l < L; ++l) fine += counts[static_cast<size_t>(c) * L + l];
+    if (fine * level_fraction_ >= n) return find_pairs_levels(exec, boxes, filter, n, out);
+  }
+  build(exec, boxes, filter, nullptr, n, sum);
+  return self_pairs(exec, out);
+}
+
+Status GridBroadPhase::find_pairs_levels(const Executor& exec, kernels::AabbSoA boxes,
+                                         kernels::PairFilter filter, uint32_t n,
+                                         Buffer<kernels::Pair>* out) {
+  Levels& lv = *levels_;
+  constexpr uint32_t L = Levels::L;
+  const uint32_t chunks = chunk_count(n, kKeyGrain);
+  uint32_t* counts = lv.chunk_counts.data();
+  // Scatter offsets, level-major then chunk: a stable split by level.
+  uint32_t running = 0;
+  for (uint32_t l = 0; l < L; ++l) {
+    lv.start[l] = running;
+    for (uint32_t c = 0; c < chunks; ++c) {
+      uint32_t& slot = counts[static_cast<size_t>(c) * L + l];
+      const uint32_t k = slot;
+      slot = running;
+      running += k;
+    }
+  }
+  lv.start[L] = running;
+  uint32_t* order = scratch(lv.order, n);
+  const uint8_t* level = lv.level.data();
+  exec.for_each_chunk(n, kKeyGrain, [&](uint32_t b, uint32_t e, uint32_t c) {
+    uint32_t* off = counts + static_cast<size_t>(c) * L;
+    for (uint32_t i = b; i < e; ++i) order[off[level[i]]++] = i;
+  });
+
+  // One grid per non-empty level, over that level's boxes, reporting original indices.
+  const bool filtered = filter.layer != nullptr;
+  uint32_t used = 0;
+  for (uint32_t l = 0; l < L; ++l) {
+    const uint32_t nl = lv.start[l + 1] - lv.start[l];
+    if (nl == 0) continue;
+    ++used;
+    const uint32_t* idx = order + lv.start[l];
+    float* bx[6];
+    for (int k = 0; k < 6; ++k) bx[k] = scratch(lv.box[l][k], nl);
+    const float* src[6] = {boxes.min_x, boxes.min_y, boxes.min_z, boxes.max_x, boxes.max_y, boxes.max_z};
+    uint32_t* layer = filtered ? scratch(lv.layer[l], nl) : nullptr;
+    uint32_t* mask = filtered ? scratch(lv.mask[l], nl) : nullptr;
+    uint8_t* is_static = filtered ? scratch(lv.is_static[l], nl) : nullptr;
+    exec.for_each_chunk(nl, kKeyGrain, [&](uint32_t b, uint32_t e, uint32_t) {
+      for (int k = 0; k < 6; ++k) kernels::gather(src[k], idx, bx[k], {b, e});
+      if (filtered) {
+        kernels::gather(filter.layer, idx, layer, {b, e});
+        kernels::gather(filter.mask, idx, mask, {b, e});
+        kernels::gather(filter.is_static, idx, is_static, {b, e});
+      }
+    });
+    const kernels::PairFilter lf{layer, mask, is_static};
+    const kernels::AabbSoA lb{bx[0], bx[1], bx[2], bx[3], bx[4], bx[5]};
+    GridBroadPhase& grid = lv.grid[l];
+    grid.level_fraction_ = 0;
+    grid.build(exec, lb, lf, idx, nl, summarize_bounds(exec, lb, nl, partial_bounds_));
+    if (Status st = grid.self_pairs(exec, &lv.pairs[l]); !st.ok()) return st;
+  }
+  levels_used_ = used;
+
+  // Across levels: every box of level l queries each coarser level m < l.
+  for (uint32_t l = 0; l < L; ++l) {
+    const uint32_t nl = lv.start[l + 1] - lv.start[l];
+    for (uint32_t m = 0; m < L; ++m) lv.cross[l][m].clear();
+    if (nl == 0) continue;
+    const kernels::GridView& fine = lv.grid[l].view_;
+    const kernels::PairFilter qf{fine.layer, fine.mask, fine.is_static};
+    for (uint32_t m = 0; m < l; ++m) {
+      if (lv.start[m + 1] == lv.start[m]) continue;
+      const kernels::GridView coarse = lv.grid[m].view_;
+      Status st = chunked_output<kernels::Pair>(
+          exec, nl, kPairGrain, lv.chunk_pairs, lv.chunk_offsets, kMaxPairs, "grid broad phase pairs",
+          [&](uint32_t b, uint32_t e, kernels::Pair* dst, uint64_t capacity) {
+            return kernels::grid_query_pairs(coarse, fine.box, qf, dst, capacity, {b, e});
+          },
+          &lv.cross[l][m]);
+      if (!st.ok()) return st;
+    }
+  }
+
+  // Concatenate: level pairs (coarse to fine), then cross pairs (l, m ascending).
+  std::vector<const Buffer<kernels::Pair>*> parts;
+  for (uint32_t l = 0; l < L; ++l) parts.push_back(&lv.pairs[l]);
+  for (uint32_t l = 0; l < L; ++l)
+    for (uint32_t m = 0; m < l; ++m) parts.push_back(&lv.cross[l][m]);
+  uint64_t total = 0;
+  for (const auto* p : parts) total += p->size();
+  if (total > kMaxPairs)
+    return Status(StatusCode::kCapacityExceeded, "grid broad phase pairs: " + std::to_string(total) +
+                                                     " outputs exceed the limit of " + std::to_string(kMaxPairs));
+  out->resize(total);
+  uint64_t at = 0;
+  for (const auto* p : parts) {
+    if (!p->empty()) std::memcpy(out->data() + at, p->data(), sizeof(kernels::Pair) * p->size());
+    at += p->size();
+  }
+
+  // The spatial order for World's re-sort: each level's sorted boxes in turn.
+  kernels::SortedBox* all = scratch(sorted_box_, n);
+  for (uint32_t l = 0; l < L; ++l) {
+    const uint32_t nl = lv.start[l + 1] - lv.start[l];
+    if (nl > 0) std::memcpy(all + lv.start[l], lv.grid[l].view_.box, sizeof(kernels::SortedBox) * nl);
+  }
+  return Status();
 }
 
 namespace {

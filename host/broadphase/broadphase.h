@@ -5,6 +5,7 @@
 
 #include <cstdint>
 #include <cstring>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -27,24 +28,46 @@ struct GridInfo {
 
 class GridBroadPhase {
  public:
+  GridBroadPhase();
+  ~GridBroadPhase();
+  GridBroadPhase(GridBroadPhase&&) noexcept;
+  GridBroadPhase& operator=(GridBroadPhase&&) noexcept;
+
   /// `summary`, when given, is the boxes' union and largest edge (the caller
-  /// computed it already); otherwise it is computed here.
+  /// computed it already); otherwise it is computed here. Boxes whose sizes span
+  /// orders of magnitude switch to hierarchical levels (kernels/broadphase/grid.h).
   Status find_pairs(const Executor& exec, kernels::AabbSoA boxes, kernels::PairFilter filter,
                     uint32_t n, Buffer<kernels::Pair>* out,
                     const kernels::BoundsSummary* summary = nullptr);
   const GridInfo& info() const { return info_; }
-  /// The boxes of the last call in sorted (spatial) order; empty if it had < 2 boxes.
+  /// Levels the last call used (1 = a single grid).
+  uint32_t levels_used() const { return levels_used_; }
+  /// The boxes of the last call in sorted (spatial) order, level by level when
+  /// hierarchical; empty if it had < 2 boxes.
   const kernels::SortedBox* sorted() const { return last_n_ >= 2 ? sorted_box_.data() : nullptr; }
   uint32_t sorted_count() const { return last_n_ >= 2 ? last_n_ : 0; }
+  /// Hierarchical levels when at least 1/kLevelFraction of the boxes are 16x or
+  /// more smaller than the largest (0 disables levels).
+  void set_level_fraction(uint32_t f) { level_fraction_ = f; }
 
   static constexpr uint32_t kKeyGrain = 1u << 14;   // boxes per chunk in streaming passes
   static constexpr uint32_t kPairGrain = 1u << 11;  // query slots per chunk in the pair pass
+  static constexpr uint32_t kLevelFraction = 8;
 
  private:
+  struct Levels;
+  // Builds the sorted grid over boxes (pairs reported with original_index[i] when given).
+  void build(const Executor& exec, kernels::AabbSoA boxes, kernels::PairFilter filter,
+             const uint32_t* original_index, uint32_t n, const kernels::BoundsSummary& sum);
+  Status self_pairs(const Executor& exec, Buffer<kernels::Pair>* out);
+  Status find_pairs_levels(const Executor& exec, kernels::AabbSoA boxes, kernels::PairFilter filter,
+                           uint32_t n, Buffer<kernels::Pair>* out);
+
   RadixSorter sorter_;
   Buffer<uint64_t> keys_;
   Buffer<kernels::SortedBox> sorted_box_;
   uint32_t last_n_ = 0;
+  uint32_t built_n_ = 0;
   Buffer<uint64_t> cell_;
   Buffer<uint32_t> layer_, mask_;
   Buffer<uint8_t> static_;
@@ -52,7 +75,11 @@ class GridBroadPhase {
   Buffer<uint64_t> chunk_offsets_;
   std::vector<Buffer<kernels::Pair>> chunk_pairs_;
   Buffer<kernels::BoundsSummary> partial_bounds_;
+  kernels::GridView view_{};
   GridInfo info_;
+  uint32_t levels_used_ = 1;
+  uint32_t level_fraction_ = kLevelFraction;
+  std::unique_ptr<Levels> levels_;
 };
 
 class BruteForceBroadPhase {

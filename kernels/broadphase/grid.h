@@ -93,12 +93,37 @@ struct GridView {
 
 void grid_keys(const GridParams& g, AabbSoA boxes, uint64_t* IMPACT_RESTRICT out_keys, Range r);
 
+/// original_index (may be null) maps box i to the index stored in SortedBox::index
+/// and reported in pairs (the hierarchical grid builds levels over subsets).
 void grid_gather(const GridParams& g, const uint64_t* IMPACT_RESTRICT sorted_keys, AabbSoA boxes,
-                 PairFilter filter, GridSorted out, Range r);
+                 PairFilter filter, const uint32_t* original_index, GridSorted out, Range r);
 
 /// Writes the pairs whose query slot lies in r to out[0, capacity) in the
 /// documented order and returns how many there are; when that exceeds capacity
 /// only the first `capacity` are written and the caller reruns with more room.
 uint64_t grid_find_pairs(const GridView& g, Pair* IMPACT_RESTRICT out, uint64_t capacity, Range r);
+
+// --- hierarchical levels -----------------------------------------------------------
+// Boxes whose sizes span orders of magnitude go to levels by their largest edge e:
+// level l holds top/4^(l+1) < e <= top/4^l (the last level everything smaller,
+// zero-size boxes included). Each level is its own grid with a cell fitted to its
+// boxes; pairs across levels come from each finer box querying every coarser
+// grid over the cells that can hold an overlapping box (at most 3 per axis, since
+// the finer box is smaller than the coarser cell). Cost stays O(n k) for k
+// candidates per box instead of the single grid's O(n^2) when a few huge boxes
+// force a huge cell. (Hierarchical hash grids: Mirtich 1996, Eitz & Lixu 2007.)
+
+inline constexpr uint32_t kGridMaxLevels = 6;  // spans 4^5 = 1024x between levels 0 and 5
+
+/// Level of each box in r, and the count per level in r (kGridMaxLevels entries).
+void grid_levels(AabbSoA boxes, float top_edge, uint8_t* IMPACT_RESTRICT out_level,
+                 uint32_t* IMPACT_RESTRICT out_count, Range r);
+
+/// For each query box in r (SortedBox with its reported index; query_filter in
+/// the same order, all null when unfiltered), every box of grid g that overlaps
+/// it and passes the filter. Writes up to capacity pairs (lo, hi), returns the
+/// count. Order: by query, then rows (z, y) ascending, then slot.
+uint64_t grid_query_pairs(const GridView& g, const SortedBox* IMPACT_RESTRICT queries, PairFilter query_filter,
+                          Pair* IMPACT_RESTRICT out, uint64_t capacity, Range r);
 
 }  // namespace impact::kernels

@@ -34,7 +34,7 @@ kernels::PairFilter filter(const Boxes& b) {
 
 // Runs the grid on every executor case; checks the set against the reference
 // and that the order is the same bytes everywhere. Returns the chosen mode.
-host::GridInfo run_grid(const Boxes& b, const char* what) {
+host::GridInfo run_grid(const Boxes& b, const char* what, uint32_t* levels_used = nullptr) {
   SCOPED_TRACE(what);
   const PairVec ref = test::reference_pairs(b);
   host::GridBroadPhase grid;
@@ -49,6 +49,7 @@ host::GridInfo run_grid(const Boxes& b, const char* what) {
       test::expect_same_set(pairs, ref, b.size(), "grid");
       first = pairs;
       info = grid.info();
+      if (levels_used) *levels_used = grid.levels_used();
       have_first = true;
       continue;
     }
@@ -122,6 +123,43 @@ TEST(GridBroadPhase, CellCountClampedPerAxis) {
   EXPECT_LE(info.dims[0], kernels::kGridMaxDim);
   EXPECT_GT(info.cell, 2e-3);
   EXPECT_GT(test::reference_pairs(b).size(), 1000u);
+}
+
+TEST(GridBroadPhase, HierarchicalLevelsForSizesSpanning1000x) {
+  // Log-uniform sizes over 1000x: one grid would need cells as large as the
+  // largest box (quadratic in the crowded small ones); the levels keep each
+  // size class in its own grid and pair across levels by queries.
+  std::mt19937 rng(6);
+  std::uniform_real_distribution<float> pos(0.0f, 60.0f);
+  std::uniform_real_distribution<float> expo(0.0f, 3.0f);
+  for (bool filtered : {false, true}) {
+    Boxes b;
+    for (uint32_t i = 0; i < test::scaled(6000); ++i) {
+      const float h = 0.005f * std::pow(10.0f, expo(rng));  // half extent 0.005 .. 5
+      b.add(pos(rng), pos(rng), pos(rng), h, h * 0.7f, h * 1.3f);
+    }
+    if (filtered) test::add_random_filter(b, 6, 0.3);
+    uint32_t levels = 0;
+    run_grid(b, filtered ? "1000x filtered" : "1000x", &levels);
+    EXPECT_GE(levels, 4u);
+  }
+}
+
+TEST(GridBroadPhase, HierarchicalFewHugeAmongManySmall) {
+  // A handful of huge boxes (a floor slab, walls) among many small ones, some
+  // levels holding a single box, plus zero-size boxes (the finest level).
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<float> pos(-20.0f, 20.0f);
+  Boxes b;
+  b.add_box(-25.0f, -1.0f, -25.0f, 25.0f, 0.0f, 25.0f);   // floor slab
+  b.add_box(-25.0f, 0.0f, -25.0f, -24.0f, 10.0f, 25.0f);  // wall
+  b.add(0.0f, 3.0f, 0.0f, 2.0f, 2.0f, 2.0f);               // one mid-size box
+  for (int i = 0; i < 3000; ++i) b.add(pos(rng), std::abs(pos(rng)) * 0.25f, pos(rng), 0.1f, 0.1f, 0.1f);
+  for (int i = 0; i < 50; ++i) b.add(pos(rng), 0.0f, pos(rng), 0.0f, 0.0f, 0.0f);
+  test::add_random_filter(b, 7, 0.1);
+  uint32_t levels = 0;
+  run_grid(b, "few huge", &levels);
+  EXPECT_GE(levels, 3u);
 }
 
 TEST(GridBroadPhase, BoundsReductionMatchesReference) {
