@@ -71,6 +71,9 @@ void BM_GridBroadPhase(benchmark::State& state) {
 void BM_LbvhBroadPhase(benchmark::State& state) {
   run_broad_phase(state, impact::BroadPhaseKind::kLbvh);
 }
+void BM_SweepAndPruneBroadPhase(benchmark::State& state) {
+  run_broad_phase(state, impact::BroadPhaseKind::kSweepAndPrune);
+}
 void BM_BruteForceBroadPhase(benchmark::State& state) {
   run_broad_phase(state, impact::BroadPhaseKind::kBruteForce);
 }
@@ -126,6 +129,11 @@ BENCHMARK(BM_GridBroadPhase)
     ->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_LbvhBroadPhase)
     ->ArgsProduct({{10000, 100000, 1000000}, {1, 2}})
+    ->UseRealTime()
+    ->Unit(benchmark::kMillisecond);
+// 1M would take ~10 s per call: a one-axis sweep meets ~n^(2/3) boxes per box in 3D.
+BENCHMARK(BM_SweepAndPruneBroadPhase)
+    ->ArgsProduct({{10000, 100000}, {1, 2}})
     ->UseRealTime()
     ->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_BruteForceBroadPhase)

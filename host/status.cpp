@@ -20,6 +20,7 @@ const char* to_string(BroadPhaseKind kind) {
     case BroadPhaseKind::kGrid: return "grid";
     case BroadPhaseKind::kBruteForce: return "brute-force";
     case BroadPhaseKind::kLbvh: return "lbvh";
+    case BroadPhaseKind::kSweepAndPrune: return "sweep-and-prune";
   }
   return "?";
 }

@@ -82,7 +82,7 @@ Status check_desc(const WorldDesc& d) {
   if (!(s.warm_start >= 0.0f && s.warm_start <= 1.0f))
     return invalid(w, "solver.warm_start must be in [0, 1], got " + fmt_float(s.warm_start));
   if (d.broad_phase != BroadPhaseKind::kGrid && d.broad_phase != BroadPhaseKind::kBruteForce &&
-      d.broad_phase != BroadPhaseKind::kLbvh)
+      d.broad_phase != BroadPhaseKind::kLbvh && d.broad_phase != BroadPhaseKind::kSweepAndPrune)
     return invalid(w, "broad_phase is not a known BroadPhaseKind");
   Backend b;
   if (!host::resolve_backend(d.backend, &b))

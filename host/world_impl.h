@@ -6,6 +6,7 @@
 
 #include "host/broadphase/broadphase.h"
 #include "host/broadphase/lbvh.h"
+#include "host/broadphase/sap.h"
 #include "host/buffer.h"
 #include "host/handle_table.h"
 #include "host/parallel.h"
@@ -92,6 +93,7 @@ class WorldImpl {
   host::GridBroadPhase grid;
   host::BruteForceBroadPhase brute_force;
   host::LbvhBroadPhase lbvh;
+  host::SapBroadPhase sap;
 };
 
 }  // namespace impact

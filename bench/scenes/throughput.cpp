@@ -62,7 +62,7 @@ void print_usage(std::FILE* f) {
                "  --steps N            fixed steps of 1/60 s, >= 1 (default 300)\n"
                "  --threads N          worker threads, 0 = all hardware threads (default 0)\n"
                "  --backend NAME       default | tbb | openmp | serial (default: the build's)\n"
-               "  --broadphase NAME    grid | lbvh | brute (default grid)\n"
+               "  --broadphase NAME    grid | lbvh | sap | brute (default grid)\n"
                "  --iterations N       solver velocity iterations (default: library default)\n"
                "  --seed N             scene seed (default %" PRIu64
                ")\n"
@@ -170,8 +170,10 @@ int parse_args(int argc, char** argv, Options* o) {
         o->broad_phase = impact::BroadPhaseKind::kBruteForce;
       else if (value == "lbvh")
         o->broad_phase = impact::BroadPhaseKind::kLbvh;
+      else if (value == "sap")
+        o->broad_phase = impact::BroadPhaseKind::kSweepAndPrune;
       else
-        return fail("unknown broad phase '" + std::string(value) + "' (known: grid, lbvh, brute)");
+        return fail("unknown broad phase '" + std::string(value) + "' (known: grid, lbvh, sap, brute)");
     } else if (arg == "--json") {
       if (!need_value() || value.empty()) return fail("--json needs a file name");
       o->json_path = std::string(value);

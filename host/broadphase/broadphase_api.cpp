@@ -4,6 +4,7 @@
 
 #include "host/broadphase/broadphase.h"
 #include "host/broadphase/lbvh.h"
+#include "host/broadphase/sap.h"
 #include "impact/broadphase.h"
 
 namespace impact {
@@ -15,6 +16,7 @@ class BroadPhaseImpl {
   host::GridBroadPhase grid;
   host::BruteForceBroadPhase brute_force;
   host::LbvhBroadPhase lbvh;
+  host::SapBroadPhase sap;
   host::Buffer<kernels::Pair> pairs;
   host::Executor exec;
   Backend exec_backend = Backend::kDefault;
@@ -88,6 +90,7 @@ Status BroadPhase::find_pairs(const AabbInput& boxes, std::vector<BodyPair>* out
   switch (b.kind) {
     case BroadPhaseKind::kBruteForce: s = b.brute_force.find_pairs(b.exec, soa, filter, n, &b.pairs); break;
     case BroadPhaseKind::kLbvh: s = b.lbvh.find_pairs(b.exec, soa, filter, n, &b.pairs); break;
+    case BroadPhaseKind::kSweepAndPrune: s = b.sap.find_pairs(b.exec, soa, filter, n, &b.pairs); break;
     case BroadPhaseKind::kGrid: s = b.grid.find_pairs(b.exec, soa, filter, n, &b.pairs); break;
     default: return Status(StatusCode::kInvalidArgument, "find_pairs: unknown BroadPhaseKind");
   }

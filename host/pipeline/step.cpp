@@ -181,6 +181,7 @@ Status WorldImpl::step() {
   switch (desc.broad_phase) {
     case BroadPhaseKind::kBruteForce: bp = brute_force.find_pairs(exec, boxes, filter, n, &pairs); break;
     case BroadPhaseKind::kLbvh: bp = lbvh.find_pairs(exec, boxes, filter, n, &pairs, &summary); break;
+    case BroadPhaseKind::kSweepAndPrune: bp = sap.find_pairs(exec, boxes, filter, n, &pairs, &summary); break;
     case BroadPhaseKind::kGrid: bp = grid.find_pairs(exec, boxes, filter, n, &pairs, &summary); break;
   }
   if (!bp.ok()) {  // more pairs than 32-bit indices can hold: never drop them silently

@@ -63,6 +63,9 @@ enum class BroadPhaseKind : int {
   kGrid = 0,        ///< parallel radix-sorted uniform hash grid
   kBruteForce = 1,  ///< all pairs, O(n^2): the reference oracle
   kLbvh = 2,        ///< linear BVH: Morton sort + Karras build, rebuilt each call (docs/lbvh.md)
+  /// Sweep-and-prune on the axis of greatest variance, incremental across calls
+  /// (docs/sap.md). Suits scenes spread along one axis; slow for dense 3D crowds.
+  kSweepAndPrune = 3,
 };
 
 const char* to_string(Backend backend);

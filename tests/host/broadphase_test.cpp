@@ -37,7 +37,8 @@ using test::scaled;
 void check_all(const Boxes& boxes, const char* what) {
   SCOPED_TRACE(what);
   const PairVec ref = reference_pairs(boxes);
-  for (BroadPhaseKind kind : {BroadPhaseKind::kGrid, BroadPhaseKind::kLbvh, BroadPhaseKind::kBruteForce}) {
+  for (BroadPhaseKind kind : {BroadPhaseKind::kGrid, BroadPhaseKind::kLbvh, BroadPhaseKind::kSweepAndPrune,
+                              BroadPhaseKind::kBruteForce}) {
     if (kind == BroadPhaseKind::kBruteForce && boxes.size() > 20000) continue;
     BroadPhase bp(kind);
     EXPECT_EQ(bp.kind(), kind);
@@ -386,6 +387,13 @@ TEST(WorldBroadPhase, PairsMatchReferenceWithFilters) {
     IMPACT_ASSERT_OK(lbvh->create_bodies(scene.descs, h));
     IMPACT_ASSERT_OK(lbvh->step());
     expect_same_set(copy_pairs(*lbvh), ref, boxes.size(), "world lbvh");
+
+    // And through sweep-and-prune.
+    auto sap = test::make_world(test::zero_gravity_desc());
+    IMPACT_ASSERT_OK(sap->set_broad_phase(BroadPhaseKind::kSweepAndPrune));
+    IMPACT_ASSERT_OK(sap->create_bodies(scene.descs, h));
+    IMPACT_ASSERT_OK(sap->step());
+    expect_same_set(copy_pairs(*sap), ref, boxes.size(), "world sweep-and-prune");
   }
 }
 
