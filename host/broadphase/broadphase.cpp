@@ -291,8 +291,8 @@ void brute_force_row(kernels::AabbSoA x, kernels::PairFilter f, uint32_t n, uint
     if (x.min_x[i] <= x.max_x[j] && x.min_x[j] <= x.max_x[i] && x.min_y[i] <= x.max_y[j] &&
         x.min_y[j] <= x.max_y[i] && x.min_z[i] <= x.max_z[j] && x.min_z[j] <= x.max_z[i]) {
       if constexpr (kFiltered) {
-        if ((f.layer[i] & f.mask[j]) == 0 || (f.layer[j] & f.mask[i]) == 0) continue;
-        if (f.is_static[i] && f.is_static[j]) continue;
+        if (!kernels::pair_allowed(f.layer[i], f.mask[i], f.is_static[i], f.layer[j], f.mask[j], f.is_static[j]))
+          continue;
       }
       emit(i, j);
     }

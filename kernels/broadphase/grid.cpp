@@ -98,14 +98,9 @@ IMPACT_INLINE void visit_slot(const GridView& g, uint32_t s, Emit&& emit) {
 
   auto test = [&](uint32_t t) {
     const SortedBox& B = g.box[t];
-    // Bitwise & (not &&): one hard-to-predict branch instead of six.
-    const bool overlap = (A.min_x <= B.max_x) & (B.min_x <= A.max_x) &  //
-                         (A.min_y <= B.max_y) & (B.min_y <= A.max_y) &  //
-                         (A.min_z <= B.max_z) & (B.min_z <= A.max_z);
-    if (!overlap) return;
+    if (!boxes_overlap(A, B)) return;
     if constexpr (kFiltered) {
-      if ((la & g.mask[t]) == 0 || (g.layer[t] & ma) == 0) return;
-      if (sa && g.is_static[t]) return;
+      if (!pair_allowed(la, ma, sa, g.layer[t], g.mask[t], g.is_static[t])) return;
     }
     const uint32_t ib = B.index;
     emit(ia < ib ? ia : ib, ia < ib ? ib : ia);
@@ -203,14 +198,10 @@ uint64_t grid_query_pairs(const GridView& g, const SortedBox* IMPACT_RESTRICT qu
         continue;
       auto test = [&](uint32_t t) {
         const SortedBox& B = g.box[t];
-        const bool overlap = (A.min_x <= B.max_x) & (B.min_x <= A.max_x) &  //
-                             (A.min_y <= B.max_y) & (B.min_y <= A.max_y) &  //
-                             (A.min_z <= B.max_z) & (B.min_z <= A.max_z);
-        if (!overlap) return;
-        if (filtered) {
-          if ((query_filter.layer[s] & g.mask[t]) == 0 || (g.layer[t] & query_filter.mask[s]) == 0) return;
-          if (query_filter.is_static[s] && g.is_static[t]) return;
-        }
+        if (!boxes_overlap(A, B)) return;
+        if (filtered && !pair_allowed(query_filter.layer[s], query_filter.mask[s], query_filter.is_static[s],
+                                      g.layer[t], g.mask[t], g.is_static[t]))
+          return;
         const uint32_t ia = A.index, ib = B.index;
         if (k < capacity) out[k] = Pair{ia < ib ? ia : ib, ia < ib ? ib : ia};
         ++k;

@@ -58,8 +58,7 @@ uint64_t sweep(const SapView& v, Pair* IMPACT_RESTRICT out, uint64_t capacity, R
           if (!hit[j]) continue;
           const uint32_t u = t + j;
           if constexpr (kFiltered) {
-            if ((la & v.mask[u]) == 0 || (v.layer[u] & ma) == 0) continue;
-            if (sa && v.is_static[u]) continue;
+            if (!pair_allowed(la, ma, sa, v.layer[u], v.mask[u], v.is_static[u])) continue;
           }
           const uint32_t ib = v.index[u];
           if (k < capacity) out[k] = Pair{ia < ib ? ia : ib, ia < ib ? ib : ia};

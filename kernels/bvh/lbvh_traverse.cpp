@@ -5,9 +5,7 @@ namespace {
 
 template <class B>
 IMPACT_INLINE bool overlaps(const SortedBox& q, const B& b) {
-  // Bitwise & (not &&): one branch instead of six, as in the grid.
-  return (q.min_x <= b.max_x) & (b.min_x <= q.max_x) & (q.min_y <= b.max_y) & (b.min_y <= q.max_y) &
-         (q.min_z <= b.max_z) & (b.min_z <= q.max_z);
+  return boxes_overlap(q, b);
 }
 
 template <class B>
@@ -33,8 +31,7 @@ IMPACT_INLINE void visit_leaf(const LbvhView& t, uint32_t s, Emit&& emit) {
     const SortedBox& b = t.leaves[u];
     if (!overlaps(q, b)) return;
     if constexpr (kFiltered) {
-      if ((lq & t.mask[u]) == 0 || (t.layer[u] & mq) == 0) return;
-      if (sq && t.is_static[u]) return;
+      if (!pair_allowed(lq, mq, sq, t.layer[u], t.mask[u], t.is_static[u])) return;
     }
     const uint32_t ib = b.index;
     emit(q.index < ib ? q.index : ib, q.index < ib ? ib : q.index);
