@@ -37,10 +37,17 @@ const impact::bench::UniformBoxes& boxes_for(uint32_t n) {
   return it->second;
 }
 
-void run_broad_phase(benchmark::State& state, impact::BroadPhaseKind kind) {
+const impact::bench::UniformBoxes& mixed_boxes_for(uint32_t n) {
+  static std::map<uint32_t, impact::bench::UniformBoxes> cache;
+  auto it = cache.find(n);
+  if (it == cache.end()) it = cache.emplace(n, impact::bench::make_mixed_boxes(n, impact::bench::kDefaultSeed)).first;
+  return it->second;
+}
+
+void run_broad_phase(benchmark::State& state, impact::BroadPhaseKind kind, bool mixed = false) {
   const uint32_t n = static_cast<uint32_t>(state.range(0));
   const impact::ExecConfig exec{impact::Backend::kDefault, static_cast<uint32_t>(state.range(1))};
-  const impact::AabbInput input = boxes_for(n).view();
+  const impact::AabbInput input = mixed ? mixed_boxes_for(n).view() : boxes_for(n).view();
   impact::BroadPhase bp(kind);
   std::vector<impact::BodyPair> pairs;
   // One untimed call grows the scratch buffers and the output.
@@ -73,6 +80,13 @@ void BM_LbvhBroadPhase(benchmark::State& state) {
 }
 void BM_SweepAndPruneBroadPhase(benchmark::State& state) {
   run_broad_phase(state, impact::BroadPhaseKind::kSweepAndPrune);
+}
+// Mixed sizes (100x): the grid switches to hierarchical levels.
+void BM_GridMixedSizes(benchmark::State& state) {
+  run_broad_phase(state, impact::BroadPhaseKind::kGrid, true);
+}
+void BM_LbvhMixedSizes(benchmark::State& state) {
+  run_broad_phase(state, impact::BroadPhaseKind::kLbvh, true);
 }
 void BM_BruteForceBroadPhase(benchmark::State& state) {
   run_broad_phase(state, impact::BroadPhaseKind::kBruteForce);
@@ -134,6 +148,14 @@ BENCHMARK(BM_LbvhBroadPhase)
 // 1M would take ~10 s per call: a one-axis sweep meets ~n^(2/3) boxes per box in 3D.
 BENCHMARK(BM_SweepAndPruneBroadPhase)
     ->ArgsProduct({{10000, 100000}, {1, 2}})
+    ->UseRealTime()
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_GridMixedSizes)
+    ->ArgsProduct({{100000, 1000000}, {1, 2}})
+    ->UseRealTime()
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_LbvhMixedSizes)
+    ->ArgsProduct({{100000, 1000000}, {1, 2}})
     ->UseRealTime()
     ->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_BruteForceBroadPhase)

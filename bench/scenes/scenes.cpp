@@ -160,6 +160,25 @@ float box_cube_side(uint32_t n, float half_extent, double pairs_per_body) {
   return static_cast<float>(std::cbrt(0.5 * others * w * w * w / pairs_per_body));
 }
 
+UniformBoxes make_mixed_boxes(uint32_t n, uint64_t seed) {
+  UniformBoxes b;
+  b.side = static_cast<float>(std::cbrt(n * 0.004));  // small-small window 0.2^3 m^3: ~1 pair each
+  for (auto* v : {&b.min_x, &b.min_y, &b.min_z, &b.max_x, &b.max_y, &b.max_z}) v->resize(n);
+  const uint32_t big = std::max<uint32_t>(1, n / 10000);
+  Rng rng(seed);
+  for (uint32_t i = 0; i < n; ++i) {
+    const float h = i < big ? 0.5f * std::pow(10.0f, rng.uniform()) : 0.05f;
+    const float x = rng.uniform() * b.side, y = rng.uniform() * b.side, z = rng.uniform() * b.side;
+    b.min_x[i] = x - h;
+    b.min_y[i] = y - h;
+    b.min_z[i] = z - h;
+    b.max_x[i] = x + h;
+    b.max_y[i] = y + h;
+    b.max_z[i] = z + h;
+  }
+  return b;
+}
+
 AabbInput UniformBoxes::view() const {
   AabbInput in;
   in.min_x = min_x;

@@ -99,4 +99,10 @@ struct UniformBoxes {
 /// pairs per body.
 UniformBoxes make_uniform_boxes(uint32_t n, float radius, double pairs_per_body, uint64_t seed);
 
+/// Mixed sizes: n - n/10000 small boxes (half extent 0.05 m, ~1 overlapping pair
+/// each) plus n/10000 (at least 1) big ones with half extents log-uniform in
+/// [0.5, 5] m: a 100x spread where one grid cell sized for the big boxes would
+/// hold thousands of small ones.
+UniformBoxes make_mixed_boxes(uint32_t n, uint64_t seed);
+
 }  // namespace impact::bench
