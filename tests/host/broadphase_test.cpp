@@ -25,6 +25,8 @@ namespace impact {
 namespace {
 
 using test::Boxes;
+using test::clustered_boxes;
+using test::uniform_boxes;
 using test::exec_cases;
 using test::ExecCase;
 using test::expect_same_set;
@@ -52,33 +54,7 @@ void check_all(const Boxes& boxes, const char* what) {
 
 // --- generators -------------------------------------------------------------------------
 
-Boxes uniform_boxes(uint32_t n, uint32_t seed, float half_lo, float half_hi, float offset = 0.0f) {
-  std::mt19937 rng(seed);
-  // Side chosen for a handful of overlaps per box.
-  const float side = 2.2f * half_hi * std::cbrt(static_cast<float>(n));
-  std::uniform_real_distribution<float> pos(-0.5f * side, 0.5f * side);
-  std::uniform_real_distribution<float> half(half_lo, half_hi);
-  Boxes b;
-  for (uint32_t i = 0; i < n; ++i)
-    b.add(offset + pos(rng), offset + pos(rng), offset + pos(rng), half(rng), half(rng), half(rng));
-  return b;
-}
 
-Boxes clustered_boxes(uint32_t n, uint32_t seed) {
-  std::mt19937 rng(seed);
-  std::uniform_real_distribution<float> centre(-50.0f, 50.0f);
-  std::vector<Eigen::Vector3f> blobs(6);
-  for (auto& c : blobs) c = {centre(rng), centre(rng), centre(rng)};
-  std::normal_distribution<float> g(0.0f, 1.5f);
-  std::uniform_real_distribution<float> half(0.05f, 0.4f);
-  std::uniform_int_distribution<size_t> pick(0, blobs.size() - 1);
-  Boxes b;
-  for (uint32_t i = 0; i < n; ++i) {
-    const Eigen::Vector3f& c = blobs[pick(rng)];
-    b.add(c.x() + g(rng), c.y() + g(rng), c.z() + g(rng), half(rng), half(rng), half(rng));
-  }
-  return b;
-}
 
 // Half sizes log-uniform over 100x.
 Boxes wide_size_boxes(uint32_t n, uint32_t seed) {

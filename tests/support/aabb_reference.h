@@ -9,6 +9,8 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
+#include <cmath>
 #include <cstdint>
 #include <iterator>
 #include <numeric>
@@ -143,6 +145,39 @@ inline void add_random_filter(Boxes& b, uint32_t seed, double static_fraction) {
     b.mask.push_back(full_mask(rng) ? 0xffffffffu : (0xfu & ~(1u << bits(rng))));
     b.is_static.push_back(is_static(rng) ? 1 : 0);
   }
+}
+
+/// n boxes, centres uniform in a cube sized for a handful of overlaps per box,
+/// half extents uniform in [half_lo, half_hi]; everything scaled by `scale`
+/// about the origin, then translated by `offset` on every axis.
+inline Boxes uniform_boxes(uint32_t n, uint32_t seed, float half_lo, float half_hi, float offset = 0.0f,
+                           float scale = 1.0f) {
+  std::mt19937 rng(seed);
+  const float side = 2.2f * half_hi * std::cbrt(static_cast<float>(n));
+  std::uniform_real_distribution<float> pos(-0.5f * side, 0.5f * side);
+  std::uniform_real_distribution<float> half(half_lo, half_hi);
+  Boxes b;
+  for (uint32_t i = 0; i < n; ++i)
+    b.add(offset + scale * pos(rng), offset + scale * pos(rng), offset + scale * pos(rng),
+          scale * half(rng), scale * half(rng), scale * half(rng));
+  return b;
+}
+
+/// n boxes (half extents 0.05 .. 0.4) in 6 gaussian blobs (sigma 1.5) in [-50, 50]^3.
+inline Boxes clustered_boxes(uint32_t n, uint32_t seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<float> centre(-50.0f, 50.0f);
+  std::vector<std::array<float, 3>> blobs(6);
+  for (auto& c : blobs) c = {centre(rng), centre(rng), centre(rng)};
+  std::normal_distribution<float> g(0.0f, 1.5f);
+  std::uniform_real_distribution<float> half(0.05f, 0.4f);
+  std::uniform_int_distribution<size_t> pick(0, blobs.size() - 1);
+  Boxes b;
+  for (uint32_t i = 0; i < n; ++i) {
+    const auto& c = blobs[pick(rng)];
+    b.add(c[0] + g(rng), c[1] + g(rng), c[2] + g(rng), half(rng), half(rng), half(rng));
+  }
+  return b;
 }
 
 }  // namespace impact::test

@@ -30,6 +30,8 @@ using host::LbvhBroadPhase;
 using host::LbvhOptions;
 using kernels::Pair;
 using test::Boxes;
+using test::clustered_boxes;
+using test::uniform_boxes;
 using test::expect_same_set;
 using test::PairVec;
 using test::reference_pairs;
@@ -151,34 +153,7 @@ void check_all(const Boxes& boxes, const std::string& what) {
 
 // --- generators ---------------------------------------------------------------------------
 
-Boxes uniform_boxes(uint32_t n, uint32_t seed, float half_lo, float half_hi, float offset = 0.0f,
-                    float scale = 1.0f) {
-  std::mt19937 rng(seed);
-  const float side = 2.2f * half_hi * std::cbrt(static_cast<float>(n));
-  std::uniform_real_distribution<float> pos(-0.5f * side, 0.5f * side);
-  std::uniform_real_distribution<float> half(half_lo, half_hi);
-  Boxes b;
-  for (uint32_t i = 0; i < n; ++i)
-    b.add(offset + scale * pos(rng), offset + scale * pos(rng), offset + scale * pos(rng),
-          scale * half(rng), scale * half(rng), scale * half(rng));
-  return b;
-}
 
-Boxes clustered_boxes(uint32_t n, uint32_t seed) {
-  std::mt19937 rng(seed);
-  std::uniform_real_distribution<float> centre(-50.0f, 50.0f);
-  std::vector<std::array<float, 3>> blobs(6);
-  for (auto& c : blobs) c = {centre(rng), centre(rng), centre(rng)};
-  std::normal_distribution<float> g(0.0f, 1.5f);
-  std::uniform_real_distribution<float> half(0.05f, 0.4f);
-  std::uniform_int_distribution<size_t> pick(0, blobs.size() - 1);
-  Boxes b;
-  for (uint32_t i = 0; i < n; ++i) {
-    const auto& c = blobs[pick(rng)];
-    b.add(c[0] + g(rng), c[1] + g(rng), c[2] + g(rng), half(rng), half(rng), half(rng));
-  }
-  return b;
-}
 
 // Half sizes log-uniform over [0.01, 10]: 1000x.
 Boxes mixed_size_boxes(uint32_t n, uint32_t seed) {
