@@ -25,9 +25,6 @@ struct PlaneHandle {
   friend bool operator==(const PlaneHandle&, const PlaneHandle&) = default;
 };
 
-/// One invalid index value used throughout.
-inline constexpr uint32_t kInvalidIndex = 0xffffffffu;
-
 /// A sphere body. Units: m, m/s, 1/kg.
 struct BodyDesc {
   Eigen::Vector3f position = Eigen::Vector3f::Zero();  ///< centre, m
