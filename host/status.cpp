@@ -21,6 +21,16 @@ const char* to_string(BroadPhaseKind kind) {
     case BroadPhaseKind::kBruteForce: return "brute-force";
     case BroadPhaseKind::kLbvh: return "lbvh";
     case BroadPhaseKind::kSweepAndPrune: return "sweep-and-prune";
+    case BroadPhaseKind::kAuto: return "auto";
+  }
+  return "?";
+}
+
+const char* to_string(LbvhUpdate update) {
+  switch (update) {
+    case LbvhUpdate::kRebuild: return "rebuild";
+    case LbvhUpdate::kRefit: return "refit";
+    case LbvhUpdate::kAuto: return "auto";
   }
   return "?";
 }

@@ -82,8 +82,15 @@ Status check_desc(const WorldDesc& d) {
   if (!(s.warm_start >= 0.0f && s.warm_start <= 1.0f))
     return invalid(w, "solver.warm_start must be in [0, 1], got " + fmt_float(s.warm_start));
   if (d.broad_phase != BroadPhaseKind::kGrid && d.broad_phase != BroadPhaseKind::kBruteForce &&
-      d.broad_phase != BroadPhaseKind::kLbvh && d.broad_phase != BroadPhaseKind::kSweepAndPrune)
+      d.broad_phase != BroadPhaseKind::kLbvh && d.broad_phase != BroadPhaseKind::kSweepAndPrune &&
+      d.broad_phase != BroadPhaseKind::kAuto)
     return invalid(w, "broad_phase is not a known BroadPhaseKind");
+  if (d.lbvh_update != LbvhUpdate::kRebuild && d.lbvh_update != LbvhUpdate::kRefit &&
+      d.lbvh_update != LbvhUpdate::kAuto)
+    return invalid(w, "lbvh_update is not a known LbvhUpdate");
+  if (!(std::isfinite(d.lbvh_refit_sah_limit) && d.lbvh_refit_sah_limit >= 1.0))
+    return invalid(w, "lbvh_refit_sah_limit must be finite and >= 1, got " +
+                          std::to_string(d.lbvh_refit_sah_limit));
   Backend b;
   if (!host::resolve_backend(d.backend, &b))
     return Status(StatusCode::kUnsupported,
@@ -98,9 +105,18 @@ void push(host::Buffer<T>& v, T x) {
 
 }  // namespace
 
-WorldImpl::WorldImpl(const WorldDesc& d) : desc(d), exec(d.backend, d.threads) {}
+WorldImpl::WorldImpl(const WorldDesc& d) : desc(d), exec(d.backend, d.threads) { configure_broad_phase(); }
+
+void WorldImpl::configure_broad_phase() {
+  broad_phase.set_kind(desc.broad_phase);
+  host::LbvhOptions o = broad_phase.lbvh.options();
+  o.update = desc.lbvh_update;
+  o.refit_sah_limit = desc.lbvh_refit_sah_limit;
+  broad_phase.set_lbvh_options(o);
+}
 
 void WorldImpl::swap_remove_body(uint32_t slot) {
+  broad_phase.invalidate();  // slots change meaning
   BodyStore& s = bodies;
   const uint32_t last_slot = static_cast<uint32_t>(s.size() - 1);
   auto move = [&](auto& v) {
@@ -164,6 +180,7 @@ BodyHandle append_body(WorldImpl& w, const Eigen::Vector3f& p, const Eigen::Vect
   BodyHandle h;
   w.body_handles.acquire(slot, &h.index, &h.generation);
   s.handle.push_back(h);
+  w.broad_phase.invalidate();
   return h;
 }
 
@@ -542,6 +559,7 @@ Status World::set_broad_phase(BroadPhaseKind kind) {
   d.broad_phase = kind;
   if (Status s = check_desc(d); !s.ok()) return s;
   impl_->desc = d;
+  impl_->configure_broad_phase();
   return Status();
 }
 

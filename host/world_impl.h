@@ -5,8 +5,7 @@
 #include <vector>
 
 #include "host/broadphase/broadphase.h"
-#include "host/broadphase/lbvh.h"
-#include "host/broadphase/sap.h"
+#include "host/broadphase/stage.h"
 #include "host/buffer.h"
 #include "host/handle_table.h"
 #include "host/parallel.h"
@@ -50,8 +49,10 @@ class WorldImpl {
   explicit WorldImpl(const WorldDesc& desc);
 
   Status step();
-  /// Permutes body storage into the grid's spatial order of the last step.
+  /// Permutes body storage into the broad phase's spatial order of the last step.
   void reorder_bodies();
+  /// Applies desc's broad-phase settings to the stage (next step builds afresh).
+  void configure_broad_phase();
   void swap_remove_body(uint32_t slot);
 
   WorldDesc desc;
@@ -90,10 +91,7 @@ class WorldImpl {
   host::Buffer<uint32_t> body_start;
   host::Buffer<uint64_t> pair_offsets, plane_offsets;
   host::RadixSorter sorter;
-  host::GridBroadPhase grid;
-  host::BruteForceBroadPhase brute_force;
-  host::LbvhBroadPhase lbvh;
-  host::SapBroadPhase sap;
+  host::BroadPhaseStage broad_phase;
 };
 
 }  // namespace impact

@@ -110,8 +110,9 @@ GridBroadPhase::~GridBroadPhase() = default;
 GridBroadPhase::GridBroadPhase(GridBroadPhase&&) noexcept = default;
 GridBroadPhase& GridBroadPhase::operator=(GridBroadPhase&&) noexcept = default;
 
-void GridBroadPhase::build(const Executor& exec, kernels::AabbSoA boxes, kernels::PairFilter filter,
-                           const uint32_t* original_index, uint32_t n, const kernels::BoundsSummary& sum) {
+void GridBroadPhase::build_grid(const Executor& exec, kernels::AabbSoA boxes, kernels::PairFilter filter,
+                                const uint32_t* original_index, uint32_t n,
+                                const kernels::BoundsSummary& sum) {
   built_n_ = n;
   const kernels::GridParams g = choose_grid(sum, n, &info_);
 
@@ -151,13 +152,13 @@ Status GridBroadPhase::self_pairs(const Executor& exec, Buffer<kernels::Pair>* o
       out);
 }
 
-Status GridBroadPhase::find_pairs(const Executor& exec, kernels::AabbSoA boxes,
-                                  kernels::PairFilter filter, uint32_t n,
-                                  Buffer<kernels::Pair>* out, const kernels::BoundsSummary* summary) {
-  out->clear();
+void GridBroadPhase::build(const Executor& exec, kernels::AabbSoA boxes, kernels::PairFilter filter,
+                           uint32_t n, const kernels::BoundsSummary* summary) {
   last_n_ = n;
   levels_used_ = 1;
-  if (n < 2) return Status();
+  hierarchical_ = false;
+  built_n_ = 0;
+  if (n < 2) return;
   const kernels::BoundsSummary sum = summary ? *summary : summarize_bounds(exec, boxes, n, partial_bounds_);
 
   if (level_fraction_ > 0 && sum.max_edge > 0.0f) {
@@ -174,15 +175,43 @@ Status GridBroadPhase::find_pairs(const Executor& exec, kernels::AabbSoA boxes,
     uint64_t fine = 0;
     for (uint32_t c = 0; c < chunks; ++c)
       for (uint32_t l = 2; l < L; ++l) fine += counts[static_cast<size_t>(c) * L + l];
-    if (fine * level_fraction_ >= n) return find_pairs_levels(exec, boxes, filter, n, out);
+    if (fine * level_fraction_ >= n) {
+      hierarchical_ = true;
+      build_levels(exec, boxes, filter, n);
+      return;
+    }
   }
-  build(exec, boxes, filter, nullptr, n, sum);
-  return self_pairs(exec, out);
+  build_grid(exec, boxes, filter, nullptr, n, sum);
 }
 
-Status GridBroadPhase::find_pairs_levels(const Executor& exec, kernels::AabbSoA boxes,
-                                         kernels::PairFilter filter, uint32_t n,
-                                         Buffer<kernels::Pair>* out) {
+Status GridBroadPhase::pairs(const Executor& exec, Buffer<kernels::Pair>* out) {
+  out->clear();
+  if (last_n_ < 2) return Status();
+  return hierarchical_ ? levels_pairs(exec, out) : self_pairs(exec, out);
+}
+
+Status GridBroadPhase::find_pairs(const Executor& exec, kernels::AabbSoA boxes,
+                                  kernels::PairFilter filter, uint32_t n,
+                                  Buffer<kernels::Pair>* out, const kernels::BoundsSummary* summary) {
+  build(exec, boxes, filter, n, summary);
+  return pairs(exec, out);
+}
+
+const kernels::GridView* GridBroadPhase::level_view(uint32_t level) const {
+  if (last_n_ < 2 || level >= kernels::kGridMaxLevels) return nullptr;
+  if (!hierarchical_) return level == 0 ? &view_ : nullptr;
+  const Levels& lv = *levels_;
+  return lv.start[level + 1] > lv.start[level] ? &lv.grid[level].view_ : nullptr;
+}
+
+uint32_t GridBroadPhase::level_size(uint32_t level) const {
+  if (last_n_ < 2 || level >= kernels::kGridMaxLevels) return 0;
+  if (!hierarchical_) return level == 0 ? last_n_ : 0;
+  return levels_->start[level + 1] - levels_->start[level];
+}
+
+void GridBroadPhase::build_levels(const Executor& exec, kernels::AabbSoA boxes, kernels::PairFilter filter,
+                                  uint32_t n) {
   Levels& lv = *levels_;
   constexpr uint32_t L = Levels::L;
   const uint32_t chunks = chunk_count(n, kKeyGrain);
@@ -232,10 +261,27 @@ Status GridBroadPhase::find_pairs_levels(const Executor& exec, kernels::AabbSoA 
     const kernels::AabbSoA lb{bx[0], bx[1], bx[2], bx[3], bx[4], bx[5]};
     GridBroadPhase& grid = lv.grid[l];
     grid.level_fraction_ = 0;
-    grid.build(exec, lb, lf, idx, nl, summarize_bounds(exec, lb, nl, partial_bounds_));
-    if (Status st = grid.self_pairs(exec, &lv.pairs[l]); !st.ok()) return st;
+    grid.build_grid(exec, lb, lf, idx, nl, summarize_bounds(exec, lb, nl, partial_bounds_));
+    grid.last_n_ = nl;
   }
   levels_used_ = used;
+
+  // The spatial order for World's re-sort: each level's sorted boxes in turn.
+  kernels::SortedBox* all = scratch(sorted_box_, n);
+  for (uint32_t l = 0; l < L; ++l) {
+    const uint32_t nl = lv.start[l + 1] - lv.start[l];
+    if (nl > 0) std::memcpy(all + lv.start[l], lv.grid[l].view_.box, sizeof(kernels::SortedBox) * nl);
+  }
+}
+
+Status GridBroadPhase::levels_pairs(const Executor& exec, Buffer<kernels::Pair>* out) {
+  Levels& lv = *levels_;
+  constexpr uint32_t L = Levels::L;
+  for (uint32_t l = 0; l < L; ++l) {
+    lv.pairs[l].clear();
+    if (lv.start[l + 1] == lv.start[l]) continue;
+    if (Status st = lv.grid[l].self_pairs(exec, &lv.pairs[l]); !st.ok()) return st;
+  }
 
   // Across levels: every box of level l queries each coarser level m < l.
   for (uint32_t l = 0; l < L; ++l) {
@@ -273,13 +319,6 @@ Status GridBroadPhase::find_pairs_levels(const Executor& exec, kernels::AabbSoA 
     if (!p->empty()) std::memcpy(out->data() + at, p->data(), sizeof(kernels::Pair) * p->size());
     at += p->size();
   }
-
-  // The spatial order for World's re-sort: each level's sorted boxes in turn.
-  kernels::SortedBox* all = scratch(sorted_box_, n);
-  for (uint32_t l = 0; l < L; ++l) {
-    const uint32_t nl = lv.start[l + 1] - lv.start[l];
-    if (nl > 0) std::memcpy(all + lv.start[l], lv.grid[l].view_.box, sizeof(kernels::SortedBox) * nl);
-  }
   return Status();
 }
 
@@ -301,11 +340,49 @@ void brute_force_row(kernels::AabbSoA x, kernels::PairFilter f, uint32_t n, uint
 
 }  // namespace
 
+void BruteForceBroadPhase::build(const Executor& exec, kernels::AabbSoA boxes, kernels::PairFilter filter,
+                                 uint32_t n) {
+  n_ = n;
+  filtered_ = filter.layer != nullptr;
+  const float* src[6] = {boxes.min_x, boxes.min_y, boxes.min_z, boxes.max_x, boxes.max_y, boxes.max_z};
+  float* dst[6];
+  for (int k = 0; k < 6; ++k) dst[k] = scratch(box_[k], n);
+  uint32_t* layer = filtered_ ? scratch(layer_, n) : nullptr;
+  uint32_t* mask = filtered_ ? scratch(mask_, n) : nullptr;
+  uint8_t* is_static = filtered_ ? scratch(static_, n) : nullptr;
+  exec.for_each_chunk(n, GridBroadPhase::kKeyGrain, [&](uint32_t b, uint32_t e, uint32_t) {
+    for (int k = 0; k < 6; ++k) std::memcpy(dst[k] + b, src[k] + b, sizeof(float) * (e - b));
+    if (filtered_) {
+      std::memcpy(layer + b, filter.layer + b, sizeof(uint32_t) * (e - b));
+      std::memcpy(mask + b, filter.mask + b, sizeof(uint32_t) * (e - b));
+      std::memcpy(is_static + b, filter.is_static + b, e - b);
+    }
+  });
+}
+
+kernels::AabbSoA BruteForceBroadPhase::boxes() const {
+  return kernels::AabbSoA{box_[0].data(), box_[1].data(), box_[2].data(),
+                          box_[3].data(), box_[4].data(), box_[5].data()};
+}
+
+kernels::PairFilter BruteForceBroadPhase::filter() const {
+  return filtered_ ? kernels::PairFilter{layer_.data(), mask_.data(), static_.data()}
+                   : kernels::PairFilter{nullptr, nullptr, nullptr};
+}
+
 Status BruteForceBroadPhase::find_pairs(const Executor& exec, kernels::AabbSoA boxes,
                                         kernels::PairFilter filter, uint32_t n,
                                         Buffer<kernels::Pair>* out) {
+  build(exec, boxes, filter, n);
+  return pairs(exec, out);
+}
+
+Status BruteForceBroadPhase::pairs(const Executor& exec, Buffer<kernels::Pair>* out) {
   out->clear();
+  const uint32_t n = n_;
   if (n < 2) return Status();
+  const kernels::AabbSoA boxes = this->boxes();
+  const kernels::PairFilter filter = this->filter();
   constexpr uint32_t kGrain = 64;
   auto rows = [&](uint32_t b, uint32_t e, auto&& emit) {
     for (uint32_t i = b; i < e; ++i) {

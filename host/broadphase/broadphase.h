@@ -33,17 +33,32 @@ class GridBroadPhase {
   GridBroadPhase(GridBroadPhase&&) noexcept;
   GridBroadPhase& operator=(GridBroadPhase&&) noexcept;
 
-  /// `summary`, when given, is the boxes' union and largest edge (the caller
-  /// computed it already); otherwise it is computed here. Boxes whose sizes span
-  /// orders of magnitude switch to hierarchical levels (kernels/broadphase/grid.h).
+  /// Builds the grid over boxes[0, n) (copies them into sorted order; the spans need
+  /// not outlive the call). `summary`, when given, is the boxes' union and largest
+  /// edge (the caller computed it already); otherwise it is computed here. Boxes
+  /// whose sizes span orders of magnitude switch to hierarchical levels
+  /// (kernels/broadphase/grid.h).
+  void build(const Executor& exec, kernels::AabbSoA boxes, kernels::PairFilter filter, uint32_t n,
+             const kernels::BoundsSummary* summary = nullptr);
+  /// Every overlapping pair of the last build, in the documented order.
+  Status pairs(const Executor& exec, Buffer<kernels::Pair>* out);
+  /// build + pairs.
   Status find_pairs(const Executor& exec, kernels::AabbSoA boxes, kernels::PairFilter filter,
                     uint32_t n, Buffer<kernels::Pair>* out,
                     const kernels::BoundsSummary* summary = nullptr);
   const GridInfo& info() const { return info_; }
-  /// Levels the last call used (1 = a single grid).
+  /// Boxes of the last build.
+  uint32_t size() const { return last_n_; }
+  /// Levels the last build used (1 = a single grid).
   uint32_t levels_used() const { return levels_used_; }
-  /// The boxes of the last call in sorted (spatial) order, level by level when
-  /// hierarchical; empty if it had < 2 boxes.
+  /// The grids of the last build (n >= 2): one for a single grid, else one per
+  /// level, coarse to fine (kernels::kGridMaxLevels slots); null for an empty
+  /// level. Their SortedBox::index fields are the caller's box indices.
+  bool hierarchical() const { return hierarchical_; }
+  const kernels::GridView* level_view(uint32_t level) const;
+  uint32_t level_size(uint32_t level) const;
+  /// The boxes of the last build in sorted (spatial) order, level by level when
+  /// hierarchical; null if it had < 2 boxes.
   const kernels::SortedBox* sorted() const { return last_n_ >= 2 ? sorted_box_.data() : nullptr; }
   uint32_t sorted_count() const { return last_n_ >= 2 ? last_n_ : 0; }
   /// Hierarchical levels when at least 1/kLevelFraction of the boxes are 16x or
@@ -56,12 +71,12 @@ class GridBroadPhase {
 
  private:
   struct Levels;
-  // Builds the sorted grid over boxes (pairs reported with original_index[i] when given).
-  void build(const Executor& exec, kernels::AabbSoA boxes, kernels::PairFilter filter,
-             const uint32_t* original_index, uint32_t n, const kernels::BoundsSummary& sum);
+  // Builds one sorted grid over boxes (reported as original_index[i] when given).
+  void build_grid(const Executor& exec, kernels::AabbSoA boxes, kernels::PairFilter filter,
+                  const uint32_t* original_index, uint32_t n, const kernels::BoundsSummary& sum);
   Status self_pairs(const Executor& exec, Buffer<kernels::Pair>* out);
-  Status find_pairs_levels(const Executor& exec, kernels::AabbSoA boxes, kernels::PairFilter filter,
-                           uint32_t n, Buffer<kernels::Pair>* out);
+  void build_levels(const Executor& exec, kernels::AabbSoA boxes, kernels::PairFilter filter, uint32_t n);
+  Status levels_pairs(const Executor& exec, Buffer<kernels::Pair>* out);
 
   RadixSorter sorter_;
   Buffer<uint64_t> keys_;
@@ -78,16 +93,29 @@ class GridBroadPhase {
   kernels::GridView view_{};
   GridInfo info_;
   uint32_t levels_used_ = 1;
+  bool hierarchical_ = false;
   uint32_t level_fraction_ = kLevelFraction;
   std::unique_ptr<Levels> levels_;
 };
 
+/// All pairs, O(n^2): the reference oracle. build() copies the boxes.
 class BruteForceBroadPhase {
  public:
+  void build(const Executor& exec, kernels::AabbSoA boxes, kernels::PairFilter filter, uint32_t n);
+  Status pairs(const Executor& exec, Buffer<kernels::Pair>* out);
   Status find_pairs(const Executor& exec, kernels::AabbSoA boxes, kernels::PairFilter filter,
                     uint32_t n, Buffer<kernels::Pair>* out);
+  uint32_t size() const { return n_; }
+  /// The copies of the last build (filter all null when built unfiltered).
+  kernels::AabbSoA boxes() const;
+  kernels::PairFilter filter() const;
 
  private:
+  uint32_t n_ = 0;
+  bool filtered_ = false;
+  Buffer<float> box_[6];
+  Buffer<uint32_t> layer_, mask_;
+  Buffer<uint8_t> static_;
   Buffer<uint64_t> chunk_offsets_;
   std::vector<Buffer<kernels::Pair>> chunk_pairs_;
 };

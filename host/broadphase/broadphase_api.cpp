@@ -2,34 +2,45 @@
 #include <cmath>
 #include <string>
 
-#include "host/broadphase/broadphase.h"
-#include "host/broadphase/lbvh.h"
-#include "host/broadphase/sap.h"
+#include "host/broadphase/stage.h"
 #include "impact/broadphase.h"
 
 namespace impact {
 
 class BroadPhaseImpl {
  public:
-  explicit BroadPhaseImpl(BroadPhaseKind k) : kind(k) {}
-  BroadPhaseKind kind;
-  host::GridBroadPhase grid;
-  host::BruteForceBroadPhase brute_force;
-  host::LbvhBroadPhase lbvh;
-  host::SapBroadPhase sap;
+  explicit BroadPhaseImpl(const BroadPhaseOptions& o) : options(o), stage(o.kind) {
+    host::LbvhOptions lo = stage.lbvh.options();
+    lo.update = o.lbvh_update;
+    lo.refit_sah_limit = o.lbvh_refit_sah_limit;
+    lo.max_refits = o.lbvh_max_refits;
+    stage.set_lbvh_options(lo);
+  }
+  BroadPhaseOptions options;
+  host::BroadPhaseStage stage;
   host::Buffer<kernels::Pair> pairs;
+  host::Buffer<float> swept[6];
   host::Executor exec;
   Backend exec_backend = Backend::kDefault;
   uint32_t exec_threads = 0;
   bool exec_ready = false;
+
+  Status check_options() const;
+  Status ready(const ExecConfig& e);
+  // Validates boxes and runs build (from_scratch) or update.
+  Status ingest(const AabbInput& boxes, const ExecConfig& e, bool from_scratch);
 };
 
-BroadPhase::BroadPhase(BroadPhaseKind kind) : impl_(std::make_unique<BroadPhaseImpl>(kind)) {}
+BroadPhase::BroadPhase(BroadPhaseKind kind) : BroadPhase(BroadPhaseOptions{.kind = kind}) {}
+BroadPhase::BroadPhase(const BroadPhaseOptions& options) : impl_(std::make_unique<BroadPhaseImpl>(options)) {}
 BroadPhase::~BroadPhase() = default;
 BroadPhase::BroadPhase(BroadPhase&&) noexcept = default;
 BroadPhase& BroadPhase::operator=(BroadPhase&&) noexcept = default;
 
-BroadPhaseKind BroadPhase::kind() const { return impl_->kind; }
+BroadPhaseKind BroadPhase::kind() const { return impl_->options.kind; }
+BroadPhaseKind BroadPhase::active_kind() const { return impl_->stage.active(); }
+const BroadPhaseOptions& BroadPhase::options() const { return impl_->options; }
+size_t BroadPhase::size() const { return impl_->stage.built() ? impl_->stage.size() : 0; }
 
 namespace {
 
@@ -39,65 +50,134 @@ Status check_boxes(const AabbInput& in) {
   const char* names[6] = {"min_x", "min_y", "min_z", "max_x", "max_y", "max_z"};
   for (int k = 0; k < 6; ++k)
     if (f[k]->size() != n)
-      return Status(StatusCode::kSizeMismatch, std::string("find_pairs: ") + names[k] + " has " +
+      return Status(StatusCode::kSizeMismatch, std::string("broad phase: ") + names[k] + " has " +
                                                    std::to_string(f[k]->size()) + " entries, min_x has " +
                                                    std::to_string(n));
   const bool any_filter = !in.layer.empty() || !in.mask.empty() || !in.is_static.empty();
   if (any_filter && (in.layer.size() != n || in.mask.size() != n || in.is_static.size() != n))
     return Status(StatusCode::kSizeMismatch,
-                  "find_pairs: layer, mask and is_static must all be empty or all have one entry per box");
+                  "broad phase: layer, mask and is_static must all be empty or all have one entry per box");
+  const bool swept = !in.dx.empty() || !in.dy.empty() || !in.dz.empty();
+  if (swept && (in.dx.size() != n || in.dy.size() != n || in.dz.size() != n))
+    return Status(StatusCode::kSizeMismatch,
+                  "broad phase: dx, dy and dz must all be empty or all have one entry per box");
   if (n > 0xfffffff0ull)
-    return Status(StatusCode::kCapacityExceeded, "find_pairs: more than 2^32 - 16 boxes");
+    return Status(StatusCode::kCapacityExceeded, "broad phase: more than 2^32 - 16 boxes");
   for (size_t i = 0; i < n; ++i) {
     for (int k = 0; k < 6; ++k) {
       const float v = (*f[k])[i];
       if (!std::isfinite(v) || std::fabs(v) > 1e18f)
-        return Status(StatusCode::kInvalidArgument, "find_pairs: box " + std::to_string(i) + " " + names[k] +
+        return Status(StatusCode::kInvalidArgument, "broad phase: box " + std::to_string(i) + " " + names[k] +
                                                         " must be finite with magnitude <= 1e18, got " +
                                                         std::to_string(v));
     }
     for (int k = 0; k < 3; ++k)
       if ((*f[k])[i] > (*f[k + 3])[i])
-        return Status(StatusCode::kInvalidArgument, "find_pairs: box " + std::to_string(i) + " " + names[k] +
+        return Status(StatusCode::kInvalidArgument, "broad phase: box " + std::to_string(i) + " " + names[k] +
                                                         " exceeds " + names[k + 3]);
+    if (swept) {
+      const std::span<const float>* d[3] = {&in.dx, &in.dy, &in.dz};
+      const char* dn[3] = {"dx", "dy", "dz"};
+      for (int k = 0; k < 3; ++k) {
+        const float v = (*d[k])[i];
+        // The moved box must stay in range too.
+        const float lo = (*f[k])[i] + v, hi = (*f[k + 3])[i] + v;
+        if (!std::isfinite(v) || !(std::fabs(lo) <= 1e18f) || !(std::fabs(hi) <= 1e18f))
+          return Status(StatusCode::kInvalidArgument,
+                        "broad phase: box " + std::to_string(i) + " " + dn[k] +
+                            " must be finite and keep the moved box within magnitude 1e18, got " +
+                            std::to_string(v));
+      }
+    }
   }
   return Status();
 }
 
 }  // namespace
 
-Status BroadPhase::find_pairs(const AabbInput& boxes, std::vector<BodyPair>* out, const ExecConfig& exec) {
-  if (out == nullptr) return Status(StatusCode::kInvalidArgument, "find_pairs: out must not be null");
-  if (Status s = check_boxes(boxes); !s.ok()) return s;
-  BroadPhaseImpl& b = *impl_;
-  if (!b.exec_ready || b.exec_backend != exec.backend || b.exec_threads != exec.threads) {
+Status BroadPhaseImpl::check_options() const {
+  const BroadPhaseOptions& o = options;
+  if (o.kind != BroadPhaseKind::kGrid && o.kind != BroadPhaseKind::kBruteForce && o.kind != BroadPhaseKind::kLbvh &&
+      o.kind != BroadPhaseKind::kSweepAndPrune && o.kind != BroadPhaseKind::kAuto)
+    return Status(StatusCode::kInvalidArgument, "BroadPhaseOptions: kind is not a known BroadPhaseKind");
+  if (o.lbvh_update != LbvhUpdate::kRebuild && o.lbvh_update != LbvhUpdate::kRefit &&
+      o.lbvh_update != LbvhUpdate::kAuto)
+    return Status(StatusCode::kInvalidArgument, "BroadPhaseOptions: lbvh_update is not a known LbvhUpdate");
+  if (!(std::isfinite(o.lbvh_refit_sah_limit) && o.lbvh_refit_sah_limit >= 1.0))
+    return Status(StatusCode::kInvalidArgument, "BroadPhaseOptions: lbvh_refit_sah_limit must be finite and >= 1, got " +
+                                                    std::to_string(o.lbvh_refit_sah_limit));
+  if (o.lbvh_max_refits == 0)
+    return Status(StatusCode::kInvalidArgument, "BroadPhaseOptions: lbvh_max_refits must be >= 1");
+  return Status();
+}
+
+Status BroadPhaseImpl::ready(const ExecConfig& e) {
+  if (Status s = check_options(); !s.ok()) return s;
+  if (!exec_ready || exec_backend != e.backend || exec_threads != e.threads) {
     Backend resolved;
-    if (!host::resolve_backend(exec.backend, &resolved))
+    if (!host::resolve_backend(e.backend, &resolved))
       return Status(StatusCode::kUnsupported,
-                    std::string("find_pairs: backend '") + to_string(exec.backend) + "' is not built in");
-    b.exec = host::Executor(exec.backend, exec.threads);
-    b.exec_backend = exec.backend;
-    b.exec_threads = exec.threads;
-    b.exec_ready = true;
+                    std::string("broad phase: backend '") + to_string(e.backend) + "' is not built in");
+    exec = host::Executor(e.backend, e.threads);
+    exec_backend = e.backend;
+    exec_threads = e.threads;
+    exec_ready = true;
   }
-  const kernels::AabbSoA soa{boxes.min_x.data(), boxes.min_y.data(), boxes.min_z.data(),
-                             boxes.max_x.data(), boxes.max_y.data(), boxes.max_z.data()};
+  return Status();
+}
+
+Status BroadPhaseImpl::ingest(const AabbInput& boxes, const ExecConfig& e, bool from_scratch) {
+  if (Status s = ready(e); !s.ok()) return s;
+  if (Status s = check_boxes(boxes); !s.ok()) {
+    stage.invalidate();
+    return s;
+  }
+  kernels::AabbSoA soa{boxes.min_x.data(), boxes.min_y.data(), boxes.min_z.data(),
+                       boxes.max_x.data(), boxes.max_y.data(), boxes.max_z.data()};
+  const uint32_t n = static_cast<uint32_t>(boxes.size());
+  if (!boxes.dx.empty()) {
+    const kernels::AabbSoAOut out{host::scratch(swept[0], n), host::scratch(swept[1], n),
+                                  host::scratch(swept[2], n), host::scratch(swept[3], n),
+                                  host::scratch(swept[4], n), host::scratch(swept[5], n)};
+    exec.for_each_chunk(n, host::GridBroadPhase::kKeyGrain, [&](uint32_t b, uint32_t en, uint32_t) {
+      kernels::sweep_boxes(soa, boxes.dx.data(), boxes.dy.data(), boxes.dz.data(), out, {b, en});
+    });
+    soa = kernels::AabbSoA{out.min_x, out.min_y, out.min_z, out.max_x, out.max_y, out.max_z};
+  }
   const kernels::PairFilter filter{boxes.layer.empty() ? nullptr : boxes.layer.data(),
                                    boxes.mask.empty() ? nullptr : boxes.mask.data(),
                                    boxes.is_static.empty() ? nullptr : boxes.is_static.data()};
-  const uint32_t n = static_cast<uint32_t>(boxes.size());
-  Status s;
-  switch (b.kind) {
-    case BroadPhaseKind::kBruteForce: s = b.brute_force.find_pairs(b.exec, soa, filter, n, &b.pairs); break;
-    case BroadPhaseKind::kLbvh: s = b.lbvh.find_pairs(b.exec, soa, filter, n, &b.pairs); break;
-    case BroadPhaseKind::kSweepAndPrune: s = b.sap.find_pairs(b.exec, soa, filter, n, &b.pairs); break;
-    case BroadPhaseKind::kGrid: s = b.grid.find_pairs(b.exec, soa, filter, n, &b.pairs); break;
-    default: return Status(StatusCode::kInvalidArgument, "find_pairs: unknown BroadPhaseKind");
-  }
-  if (!s.ok()) return s;
+  const Status s = from_scratch ? stage.build(exec, soa, filter, n) : stage.update(exec, soa, filter, n);
+  if (!s.ok()) stage.invalidate();
+  return s;
+}
+
+Status BroadPhase::build(const AabbInput& boxes, const ExecConfig& exec) {
+  return impl_->ingest(boxes, exec, /*from_scratch=*/true);
+}
+
+Status BroadPhase::update(const AabbInput& boxes, const ExecConfig& exec) {
+  return impl_->ingest(boxes, exec, /*from_scratch=*/false);
+}
+
+Status BroadPhase::pairs(std::vector<BodyPair>* out, const ExecConfig& exec) {
+  if (out == nullptr) return Status(StatusCode::kInvalidArgument, "pairs: out must not be null");
+  BroadPhaseImpl& b = *impl_;
+  out->clear();
+  if (Status s = b.ready(exec); !s.ok()) return s;
+  if (Status s = b.stage.pairs(b.exec, &b.pairs); !s.ok()) return s;
   out->resize(b.pairs.size());
   for (size_t i = 0; i < b.pairs.size(); ++i) (*out)[i] = BodyPair{b.pairs[i].a, b.pairs[i].b};
   return Status();
+}
+
+Status BroadPhase::find_pairs(const AabbInput& boxes, std::vector<BodyPair>* out, const ExecConfig& exec) {
+  if (out == nullptr) return Status(StatusCode::kInvalidArgument, "find_pairs: out must not be null");
+  if (Status s = update(boxes, exec); !s.ok()) {
+    out->clear();
+    return s;
+  }
+  return pairs(out, exec);
 }
 
 }  // namespace impact

@@ -144,27 +144,50 @@ double LbvhBroadPhase::sah_cost(const Executor& exec) {
   return root > 0.0 ? total / root : static_cast<double>(n);
 }
 
+Status LbvhBroadPhase::build(const Executor& exec, kernels::AabbSoA boxes, kernels::PairFilter filter,
+                             uint32_t n, const kernels::BoundsSummary* summary) {
+  const Status s = rebuild(exec, boxes, filter, n, summary);
+  if (!s.ok()) return s;
+  if (options_.update == LbvhUpdate::kAuto) info_.built_sah = info_.last_sah = sah_cost(exec);
+  return Status();
+}
+
+Status LbvhBroadPhase::update(const Executor& exec, kernels::AabbSoA boxes, kernels::PairFilter filter,
+                              uint32_t n, const kernels::BoundsSummary* summary) {
+  const bool can_refit = options_.update != LbvhUpdate::kRebuild && built_ && info_.leaves == n &&
+                         n >= 2 && info_.refits_since_build < options_.max_refits;
+  if (can_refit) {
+    refit_bounds(exec, boxes, filter);
+    bool keep = true;
+    if (options_.update == LbvhUpdate::kAuto) {
+      info_.last_sah = sah_cost(exec);
+      keep = info_.last_sah <= options_.refit_sah_limit * info_.built_sah;
+    }
+    if (keep) {
+      info_.rebuilt = false;
+      ++info_.refits_since_build;
+      return Status();
+    }
+  }
+  return build(exec, boxes, filter, n, summary);
+}
+
+Status LbvhBroadPhase::pairs(const Executor& exec, Buffer<kernels::Pair>* out) {
+  if (!built_) {
+    out->clear();
+    return Status();
+  }
+  return traverse(exec, out);
+}
+
 Status LbvhBroadPhase::find_pairs(const Executor& exec, kernels::AabbSoA boxes,
                                   kernels::PairFilter filter, uint32_t n, Buffer<kernels::Pair>* out,
                                   const kernels::BoundsSummary* summary) {
-  const bool can_refit = options_.refit_sah_limit > 0.0 && info_.leaves == n && n >= 2 &&
-                         info_.refits_since_build < options_.max_refits;
-  if (can_refit) {
-    refit_bounds(exec, boxes, filter);
-    info_.last_sah = sah_cost(exec);
-    if (info_.last_sah <= options_.refit_sah_limit * info_.built_sah) {
-      info_.rebuilt = false;
-      ++info_.refits_since_build;
-      return traverse(exec, out);
-    }
-  }
-  const Status s = rebuild(exec, boxes, filter, n, summary);
-  if (!s.ok()) {
+  if (Status s = update(exec, boxes, filter, n, summary); !s.ok()) {
     out->clear();
     return s;
   }
-  if (options_.refit_sah_limit > 0.0) info_.built_sah = info_.last_sah = sah_cost(exec);
-  return traverse(exec, out);
+  return pairs(exec, out);
 }
 
 Status LbvhBroadPhase::refit(const Executor& exec, kernels::AabbSoA boxes, kernels::PairFilter filter,

@@ -19,6 +19,7 @@
 #include "host/parallel.h"
 #include "host/radix_sort.h"
 #include "impact/status.h"
+#include "impact/types.h"
 #include "kernels/broadphase/bounds.h"
 #include "kernels/broadphase/grid.h"
 #include "kernels/bvh/lbvh_build.h"
@@ -30,12 +31,13 @@ namespace impact::host {
 struct LbvhOptions {
   /// Morton code width: 0 = automatic (see choose_morton_bits), 30 or 63.
   uint32_t morton_bits = 0;
-  /// Rebuild-vs-refit knob of find_pairs. 0: every call rebuilds. > 0: a call with the
-  /// same n as the current tree refits it instead, and rebuilds only when the refitted
-  /// tree's SAH cost exceeds refit_sah_limit times the SAH right after the last build
-  /// (e.g. 1.5), or after max_refits refits in a row. Checking costs one pass over the
-  /// 2n - 1 nodes per refit. refit() always refits.
-  double refit_sah_limit = 0.0;
+  /// What update() (and find_pairs()) does when n equals the tree's n: rebuild,
+  /// refit, or refit until the refitted tree's SAH cost exceeds refit_sah_limit
+  /// times the SAH right after the last build (kAuto: one extra pass over the
+  /// 2n - 1 nodes per update). Either refit policy rebuilds after max_refits refits
+  /// in a row. refit() always refits.
+  LbvhUpdate update = LbvhUpdate::kRebuild;
+  double refit_sah_limit = 1.5;
   uint32_t max_refits = 1000;
 };
 
@@ -45,8 +47,8 @@ struct LbvhInfo {
   uint32_t morton_bits = 0;      ///< 30 or 63
   bool rebuilt = false;          ///< the last call rebuilt (false: refitted)
   uint32_t refits_since_build = 0;
-  double built_sah = 0.0;        ///< SAH right after the last build (computed only when needed)
-  double last_sah = 0.0;         ///< SAH of the last refit (when refit_sah_limit > 0)
+  double built_sah = 0.0;        ///< SAH right after the last build (update kAuto only)
+  double last_sah = 0.0;         ///< SAH of the last refit (update kAuto only)
 };
 
 /// The 30/63-bit rule: 63-bit codes when n > 2^24, or when a 30-bit cell (largest
@@ -59,10 +61,18 @@ class LbvhBroadPhase {
  public:
   explicit LbvhBroadPhase(LbvhOptions options = {}) : options_(options) {}
 
-  /// Rebuilds the tree over boxes[0, n) (or refits it, per options().refit_sah_limit)
-  /// and writes the pairs. `summary`, when given, is the boxes' union and largest edge.
-  /// Fails (kInvalidArgument) when n > kernels::kLbvhMaxLeaves, (kCapacityExceeded)
-  /// when the pairs exceed 2^32 - 1.
+  /// Builds the tree over boxes[0, n) from scratch. `summary`, when given, is the
+  /// boxes' union and largest edge. Fails (kInvalidArgument) when n >
+  /// kernels::kLbvhMaxLeaves.
+  Status build(const Executor& exec, kernels::AabbSoA boxes, kernels::PairFilter filter, uint32_t n,
+               const kernels::BoundsSummary* summary = nullptr);
+  /// Same n as the tree: rebuild or refit per options().update; otherwise build.
+  Status update(const Executor& exec, kernels::AabbSoA boxes, kernels::PairFilter filter, uint32_t n,
+                const kernels::BoundsSummary* summary = nullptr);
+  /// Every overlapping pair of the current tree. Fails (kCapacityExceeded) when
+  /// the pairs exceed 2^32 - 1.
+  Status pairs(const Executor& exec, Buffer<kernels::Pair>* out);
+  /// update + pairs.
   Status find_pairs(const Executor& exec, kernels::AabbSoA boxes, kernels::PairFilter filter,
                     uint32_t n, Buffer<kernels::Pair>* out,
                     const kernels::BoundsSummary* summary = nullptr);
@@ -83,6 +93,8 @@ class LbvhBroadPhase {
   void set_options(const LbvhOptions& o) { options_ = o; }
   const LbvhInfo& info() const { return info_; }
 
+  /// Boxes of the current tree (0 when none).
+  uint32_t size() const { return built_ ? info_.leaves : 0; }
   /// The current tree (valid when info().leaves >= 2; nodes only then).
   kernels::LbvhView view() const;
   const uint32_t* leaf_index() const { return leaf_index_.data(); }
@@ -96,8 +108,8 @@ class LbvhBroadPhase {
  private:
   Status rebuild(const Executor& exec, kernels::AabbSoA boxes, kernels::PairFilter filter, uint32_t n,
                  const kernels::BoundsSummary* summary);
-  void refit_bounds(const Executor& exec, kernels::AabbSoA boxes, kernels::PairFilter filter);
   Status traverse(const Executor& exec, Buffer<kernels::Pair>* out);
+  void refit_bounds(const Executor& exec, kernels::AabbSoA boxes, kernels::PairFilter filter);
 
   LbvhOptions options_;
   LbvhInfo info_;

@@ -39,12 +39,29 @@ void centre_variance(const Executor& exec, kernels::AabbSoA boxes, uint32_t n,
 Status SapBroadPhase::find_pairs(const Executor& exec, kernels::AabbSoA boxes,
                                  kernels::PairFilter filter, uint32_t n, Buffer<kernels::Pair>* out,
                                  const kernels::BoundsSummary* /*summary*/) {
-  out->clear();
+  update(exec, boxes, filter, n);
+  return pairs(exec, out);
+}
+
+void SapBroadPhase::build(const Executor& exec, kernels::AabbSoA boxes, kernels::PairFilter filter,
+                          uint32_t n) {
+  have_order_ = false;
+  sort(exec, boxes, filter, n);
+}
+
+void SapBroadPhase::update(const Executor& exec, kernels::AabbSoA boxes, kernels::PairFilter filter,
+                           uint32_t n) {
+  sort(exec, boxes, filter, n);
+}
+
+void SapBroadPhase::sort(const Executor& exec, kernels::AabbSoA boxes, kernels::PairFilter filter,
+                         uint32_t n) {
   info_ = SapInfo{};
+  filtered_ = filter.layer != nullptr;
   if (n < 2) {
     have_order_ = false;
     last_n_ = n;
-    return Status();
+    return;
   }
 
   // 1. Sweep axis: greatest centre variance (ties: lowest axis). While the last
@@ -97,15 +114,24 @@ Status SapBroadPhase::find_pairs(const Executor& exec, kernels::AabbSoA boxes,
     kernels::sap_gather(keys, boxes, axis, filter, s, {b, e});
   });
   kernels::sap_pad(s, n);
+}
 
-  // 4. Sweep: per chunk of query slots into its own buffer, concatenated in order.
-  const kernels::SapView view{{s.min[0], s.min[1], s.min[2]},
-                              {s.max[0], s.max[1], s.max[2]},
-                              s.index,
-                              s.layer,
-                              s.mask,
-                              s.is_static,
-                              n};
+kernels::SapView SapBroadPhase::view() const {
+  return kernels::SapView{{min_[0].data(), min_[1].data(), min_[2].data()},
+                          {max_[0].data(), max_[1].data(), max_[2].data()},
+                          index_.data(),
+                          filtered_ ? layer_.data() : nullptr,
+                          filtered_ ? mask_.data() : nullptr,
+                          filtered_ ? static_.data() : nullptr,
+                          have_order_ ? last_n_ : 0};
+}
+
+Status SapBroadPhase::pairs(const Executor& exec, Buffer<kernels::Pair>* out) {
+  out->clear();
+  if (!have_order_ || last_n_ < 2) return Status();
+  const uint32_t n = last_n_;
+  // Sweep: per chunk of query slots into its own buffer, concatenated in order.
+  const kernels::SapView view = this->view();
   return chunked_output<kernels::Pair>(
       exec, n, kPairGrain, chunk_pairs_, chunk_offsets_, kMaxPairs, "sweep-and-prune pairs",
       [&](uint32_t b, uint32_t e, kernels::Pair* dst, uint64_t capacity) {

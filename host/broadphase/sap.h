@@ -44,8 +44,16 @@ class SapBroadPhase {
   SapBroadPhase() = default;
   explicit SapBroadPhase(const SapOptions& options) : options_(options) {}
 
-  /// `summary` is accepted for interface parity with GridBroadPhase and unused:
-  /// the sweep needs no grid, and the axis comes from centre variances.
+  /// Sorts boxes[0, n) along the sweep axis from scratch (copies them into sorted
+  /// order; the spans need not outlive the call).
+  void build(const Executor& exec, kernels::AabbSoA boxes, kernels::PairFilter filter, uint32_t n);
+  /// Like build, but reuses the last sorted order when n is unchanged and
+  /// options().incremental (insertion sort, with the full sort as fallback).
+  void update(const Executor& exec, kernels::AabbSoA boxes, kernels::PairFilter filter, uint32_t n);
+  /// Every overlapping pair of the last build/update (the sweep).
+  Status pairs(const Executor& exec, Buffer<kernels::Pair>* out);
+  /// update + pairs. `summary` is accepted for interface parity with
+  /// GridBroadPhase and unused: the axis comes from centre variances.
   Status find_pairs(const Executor& exec, kernels::AabbSoA boxes, kernels::PairFilter filter,
                     uint32_t n, Buffer<kernels::Pair>* out,
                     const kernels::BoundsSummary* summary = nullptr);
@@ -55,6 +63,10 @@ class SapBroadPhase {
   void set_options(const SapOptions& options) { options_ = options; }
   /// Forgets the sorted order: the next call sorts from scratch.
   void reset() { have_order_ = false; }
+  /// Boxes of the last build/update.
+  uint32_t size() const { return last_n_; }
+  /// The sorted boxes of the last build/update (n = 0 when fewer than 2 boxes).
+  kernels::SapView view() const;
 
   /// Original box indices in sorted (sweep-axis min, index) order of the last call
   /// with n >= 2; null otherwise.
@@ -64,8 +76,11 @@ class SapBroadPhase {
   static constexpr uint32_t kPairGrain = 1u << 11;  // query slots per chunk in the sweep
 
  private:
+  void sort(const Executor& exec, kernels::AabbSoA boxes, kernels::PairFilter filter, uint32_t n);
+
   SapOptions options_;
   SapInfo info_;
+  bool filtered_ = false;
   RadixSorter sorter_;
   Buffer<uint64_t> keys_;  // sorted keys of the last call: mapped min << 32 | index
   bool have_order_ = false;

@@ -59,13 +59,10 @@ void ContactStore::resize(size_t n) {
 
 void WorldImpl::reorder_bodies() {
   const uint32_t n = static_cast<uint32_t>(bodies.size());
-  if (grid.sorted_count() != n || n < 2) return;
-  const kernels::SortedBox* order = grid.sorted();
+  if (broad_phase.size() != n || n < 2) return;
   uint32_t* p = host::scratch(perm, n);
+  if (!broad_phase.spatial_order(exec, p)) return;
   uint32_t* inv = host::scratch(inv_perm, n);
-  exec.for_each_chunk(n, kBodyGrain, [&](uint32_t b, uint32_t e, uint32_t) {
-    for (uint32_t i = b; i < e; ++i) p[i] = order[i].index;
-  });
   exec.for_each_chunk(n, kBodyGrain, [&](uint32_t b, uint32_t e, uint32_t) {
     kernels::invert_permutation(p, inv, {b, e});
   });
@@ -104,7 +101,8 @@ void WorldImpl::reorder_bodies() {
       kernels::segment_starts(prev_keys.data(), prev_contacts, 32, n, ps, {b, e});
     });
   }
-  // Results of the last step name old slots.
+  // Results of the last step name old slots; so does a coherent structure's state.
+  broad_phase.invalidate();
   pairs.clear();
   contacts.resize(0);
   impulse_out.clear();
@@ -115,8 +113,7 @@ Status WorldImpl::step() {
   st = StepStats{};
   const auto t_start = Clock::now();
   auto t = t_start;
-  if (desc.reorder_interval > 0 && desc.broad_phase == BroadPhaseKind::kGrid &&
-      ++steps_since_reorder >= desc.reorder_interval) {
+  if (desc.reorder_interval > 0 && ++steps_since_reorder >= desc.reorder_interval) {
     steps_since_reorder = 0;
     reorder_bodies();
   }
@@ -144,10 +141,17 @@ Status WorldImpl::step() {
   kernels::AabbSoAOut boxes_out{host::scratch(box[0], n), host::scratch(box[1], n),
                                 host::scratch(box[2], n), host::scratch(box[3], n),
                                 host::scratch(box[4], n), host::scratch(box[5], n)};
-  exec.for_each_chunk(n, kBodyGrain, [&](uint32_t b, uint32_t e, uint32_t) {
-    kernels::sphere_bounds(s.pos_x.data(), s.pos_y.data(), s.pos_z.data(), s.radius.data(),
-                           boxes_out, {b, e});
-  });
+  if (desc.swept_bounds) {
+    exec.for_each_chunk(n, kBodyGrain, [&](uint32_t b, uint32_t e, uint32_t) {
+      kernels::swept_sphere_bounds(s.pos_x.data(), s.pos_y.data(), s.pos_z.data(), s.vel_x.data(),
+                                   s.vel_y.data(), s.vel_z.data(), s.radius.data(), dt, boxes_out, {b, e});
+    });
+  } else {
+    exec.for_each_chunk(n, kBodyGrain, [&](uint32_t b, uint32_t e, uint32_t) {
+      kernels::sphere_bounds(s.pos_x.data(), s.pos_y.data(), s.pos_z.data(), s.radius.data(),
+                             boxes_out, {b, e});
+    });
+  }
   const kernels::AabbSoA boxes{boxes_out.min_x, boxes_out.min_y, boxes_out.min_z,
                                boxes_out.max_x, boxes_out.max_y, boxes_out.max_z};
   // Finite inputs can still integrate out of range (a huge speed for long enough):
@@ -177,13 +181,7 @@ Status WorldImpl::step() {
 
   // --- broad phase -------------------------------------------------------------------------
   const kernels::PairFilter filter{s.layer.data(), s.mask.data(), s.is_static.data()};
-  Status bp;
-  switch (desc.broad_phase) {
-    case BroadPhaseKind::kBruteForce: bp = brute_force.find_pairs(exec, boxes, filter, n, &pairs); break;
-    case BroadPhaseKind::kLbvh: bp = lbvh.find_pairs(exec, boxes, filter, n, &pairs, &summary); break;
-    case BroadPhaseKind::kSweepAndPrune: bp = sap.find_pairs(exec, boxes, filter, n, &pairs, &summary); break;
-    case BroadPhaseKind::kGrid: bp = grid.find_pairs(exec, boxes, filter, n, &pairs, &summary); break;
-  }
+  const Status bp = broad_phase.find_pairs(exec, boxes, filter, n, &pairs, &summary);
   if (!bp.ok()) {  // more pairs than 32-bit indices can hold: never drop them silently
     contacts.resize(0);
     return bp;

@@ -18,10 +18,16 @@ namespace impact {
 /// empty: then every box collides with every box. Two boxes pair when they
 /// overlap or touch (min <= max on all axes), (layer_a & mask_b) && (layer_b & mask_a),
 /// and not both are static.
+///
+/// Swept input mode: when dx/dy/dz are given (all three, one entry per box), box i
+/// stands for its motion over the step: the union of the box and the box moved by
+/// (dx, dy, dz)[i], so fast bodies that meet within the step pair up (the input of
+/// continuous collision).
 struct AabbInput {
   std::span<const float> min_x, min_y, min_z, max_x, max_y, max_z;
-  std::span<const uint32_t> layer, mask;
-  std::span<const uint8_t> is_static;
+  std::span<const uint32_t> layer = {}, mask = {};
+  std::span<const uint8_t> is_static = {};
+  std::span<const float> dx = {}, dy = {}, dz = {};
   size_t size() const { return min_x.size(); }
 };
 
@@ -31,13 +37,37 @@ struct ExecConfig {
   uint32_t threads = 0;  ///< 0 = all hardware threads
 };
 
+/// Structure and update policy of a BroadPhase.
+struct BroadPhaseOptions {
+  BroadPhaseKind kind = BroadPhaseKind::kGrid;
+  /// LBVH only: what update() does when the box count is unchanged
+  /// (docs/lbvh.md has the measured cost of each policy).
+  LbvhUpdate lbvh_update = LbvhUpdate::kRebuild;
+  /// LbvhUpdate::kAuto: rebuild once the refitted tree's SAH cost exceeds this
+  /// multiple (>= 1) of its cost right after the last build.
+  double lbvh_refit_sah_limit = 1.5;
+  /// Either refit policy rebuilds after this many refits in a row (>= 1).
+  uint32_t lbvh_max_refits = 1000;
+};
+
 class BroadPhaseImpl;
 
-/// Reusable broad phase: keeps its scratch buffers between calls, so steady-state
-/// frames do not allocate.
+/// Reusable broad phase: keeps its structure and scratch buffers between calls, so
+/// steady-state frames do not allocate.
+///
+///   build(boxes)      the structure from scratch (kAuto chooses grid or LBVH here)
+///   update(boxes)     next frame: same box count -> LBVH refit (per lbvh_update),
+///                     sweep-and-prune insertion sort, grid rebuild; else build
+///   pairs(out)        every overlapping pair of the structure as last built
+///   find_pairs(b,out) update + pairs
+///
+/// The boxes are copied into the structure: the spans need not outlive a call.
 class BroadPhase {
  public:
   explicit BroadPhase(BroadPhaseKind kind = BroadPhaseKind::kGrid);
+  /// Invalid options (unknown enum, limit < 1, max_refits 0) make every call fail
+  /// with kInvalidArgument naming the field.
+  explicit BroadPhase(const BroadPhaseOptions& options);
   ~BroadPhase();
   BroadPhase(BroadPhase&&) noexcept;
   BroadPhase& operator=(BroadPhase&&) noexcept;
@@ -48,7 +78,20 @@ class BroadPhase {
   /// and independent of the thread count.
   Status find_pairs(const AabbInput& boxes, std::vector<BodyPair>* out, const ExecConfig& exec = {});
 
+  /// Builds the structure from scratch over boxes (validated as find_pairs does;
+  /// on error the previous structure is discarded).
+  Status build(const AabbInput& boxes, const ExecConfig& exec = {});
+  /// The coherent path for the next frame of the same boxes (see above).
+  Status update(const AabbInput& boxes, const ExecConfig& exec = {});
+  /// The pairs of the structure as last built or updated (none before a build).
+  Status pairs(std::vector<BodyPair>* out, const ExecConfig& exec = {});
+
   BroadPhaseKind kind() const;
+  /// The structure in use: kind(), or for kAuto the last build's choice.
+  BroadPhaseKind active_kind() const;
+  const BroadPhaseOptions& options() const;
+  /// Boxes in the structure (0 before the first build).
+  size_t size() const;
 
  private:
   std::unique_ptr<BroadPhaseImpl> impl_;

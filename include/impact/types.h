@@ -55,17 +55,30 @@ enum class Backend : int {
   kOpenMP,       ///< OpenMP parallel for
 };
 
-/// Broad-phase structure. Issue-tracked additions (LBVH, sweep-and-prune) slot in here.
+/// Broad-phase structure (docs/broadphase.md has the measured trade-offs).
 enum class BroadPhaseKind : int {
-  kGrid = 0,        ///< parallel radix-sorted uniform hash grid
+  kGrid = 0,        ///< parallel radix-sorted uniform grid, hierarchical levels for mixed sizes
   kBruteForce = 1,  ///< all pairs, O(n^2): the reference oracle
-  kLbvh = 2,        ///< linear BVH: Morton sort + Karras build, rebuilt each call (docs/lbvh.md)
+  kLbvh = 2,        ///< linear BVH: Morton sort + Karras build (docs/lbvh.md)
   /// Sweep-and-prune on the axis of greatest variance, incremental across calls
   /// (docs/sap.md). Suits scenes spread along one axis; slow for dense 3D crowds.
   kSweepAndPrune = 3,
+  /// Grid or LBVH, chosen from the boxes at every from-scratch build by the
+  /// measured rule in docs/broadphase.md ("Automatic choice").
+  kAuto = 4,
+};
+
+/// What an LBVH does on a coherent update (same box count as its tree).
+enum class LbvhUpdate : int {
+  kRebuild = 0,  ///< rebuild the tree from scratch every time
+  kRefit = 1,    ///< keep the tree's topology, recompute its bounds (until max_refits)
+  /// Refit, and rebuild once the refitted tree's SAH cost exceeds refit_sah_limit
+  /// times its cost right after the last build (one extra pass over the nodes).
+  kAuto = 2,
 };
 
 const char* to_string(Backend backend);
 const char* to_string(BroadPhaseKind kind);
+const char* to_string(LbvhUpdate update);
 
 }  // namespace impact

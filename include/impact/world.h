@@ -49,6 +49,15 @@ struct WorldDesc {
   /// Keep last step's positions so interpolated_positions() can blend (costs 12 B/body).
   bool interpolation = false;
   BroadPhaseKind broad_phase = BroadPhaseKind::kGrid;
+  /// What an LBVH broad phase does from step to step (docs/lbvh.md): rebuild,
+  /// refit, or refit until its SAH cost grows by lbvh_refit_sah_limit (> 1).
+  LbvhUpdate lbvh_update = LbvhUpdate::kRebuild;
+  double lbvh_refit_sah_limit = 1.5;
+  /// Broad-phase boxes cover each sphere's motion over the step (from p to
+  /// p + v dt, v after gravity) instead of its pose at the step's start, so bodies
+  /// that meet within the step become candidate pairs even when fast. More pairs
+  /// for slow scenes; the input continuous collision needs.
+  bool swept_bounds = false;
   Backend backend = Backend::kDefault;
   /// Worker threads; 0 = all hardware threads. Results do not depend on it.
   uint32_t threads = 0;

@@ -41,6 +41,51 @@ void sphere_bounds(const float* IMPACT_RESTRICT px, const float* IMPACT_RESTRICT
   }
 }
 
+void swept_sphere_bounds(const float* IMPACT_RESTRICT px, const float* IMPACT_RESTRICT py,
+                         const float* IMPACT_RESTRICT pz, const float* IMPACT_RESTRICT vx,
+                         const float* IMPACT_RESTRICT vy, const float* IMPACT_RESTRICT vz,
+                         const float* IMPACT_RESTRICT radius, float dt, AabbSoAOut out, Range r) {
+  float* IMPACT_RESTRICT min_x = out.min_x;
+  float* IMPACT_RESTRICT min_y = out.min_y;
+  float* IMPACT_RESTRICT min_z = out.min_z;
+  float* IMPACT_RESTRICT max_x = out.max_x;
+  float* IMPACT_RESTRICT max_y = out.max_y;
+  float* IMPACT_RESTRICT max_z = out.max_z;
+#pragma omp simd
+  for (uint32_t i = r.begin; i < r.end; ++i) {
+    const float rad = radius[i];
+    // The end pose as integrate_positions computes it (p + v dt).
+    const float ex = px[i] + vx[i] * dt;
+    const float ey = py[i] + vy[i] * dt;
+    const float ez = pz[i] + vz[i] * dt;
+    min_x[i] = std::min(px[i] - rad, ex - rad);
+    min_y[i] = std::min(py[i] - rad, ey - rad);
+    min_z[i] = std::min(pz[i] - rad, ez - rad);
+    max_x[i] = std::max(px[i] + rad, ex + rad);
+    max_y[i] = std::max(py[i] + rad, ey + rad);
+    max_z[i] = std::max(pz[i] + rad, ez + rad);
+  }
+}
+
+void sweep_boxes(AabbSoA boxes, const float* IMPACT_RESTRICT dx, const float* IMPACT_RESTRICT dy,
+                 const float* IMPACT_RESTRICT dz, AabbSoAOut out, Range r) {
+  float* IMPACT_RESTRICT min_x = out.min_x;
+  float* IMPACT_RESTRICT min_y = out.min_y;
+  float* IMPACT_RESTRICT min_z = out.min_z;
+  float* IMPACT_RESTRICT max_x = out.max_x;
+  float* IMPACT_RESTRICT max_y = out.max_y;
+  float* IMPACT_RESTRICT max_z = out.max_z;
+#pragma omp simd
+  for (uint32_t i = r.begin; i < r.end; ++i) {
+    min_x[i] = std::min(boxes.min_x[i], boxes.min_x[i] + dx[i]);
+    min_y[i] = std::min(boxes.min_y[i], boxes.min_y[i] + dy[i]);
+    min_z[i] = std::min(boxes.min_z[i], boxes.min_z[i] + dz[i]);
+    max_x[i] = std::max(boxes.max_x[i], boxes.max_x[i] + dx[i]);
+    max_y[i] = std::max(boxes.max_y[i], boxes.max_y[i] + dy[i]);
+    max_z[i] = std::max(boxes.max_z[i], boxes.max_z[i] + dz[i]);
+  }
+}
+
 BoundsSummary reduce_bounds(AabbSoA b, Range r) {
   constexpr float inf = std::numeric_limits<float>::infinity();
   float lx = inf, ly = inf, lz = inf, hx = -inf, hy = -inf, hz = -inf, edge = 0.0f;

@@ -5,6 +5,12 @@
 //   (max over boxes and axes of max - min). The host combines one partial per
 //   chunk in chunk order, so the result does not depend on thread count (min/max
 //   are exact anyway).
+// swept_sphere_bounds: per body, the AABB of the sphere at p and at p + v dt (the
+//   motion over the step, for fast bodies: pairs that meet within the step are
+//   candidates even when their start boxes are apart). Covers both end poses
+//   exactly as float computes them; the path between is a straight segment, so
+//   the box of the two end spheres bounds it.
+// sweep_boxes: per box, the union of the box and the box moved by (dx, dy, dz).
 // Inputs finite (validated at ingest).
 #pragma once
 
@@ -44,6 +50,14 @@ BoundsSummary combine(const BoundsSummary& a, const BoundsSummary& b);
 void sphere_bounds(const float* IMPACT_RESTRICT px, const float* IMPACT_RESTRICT py,
                    const float* IMPACT_RESTRICT pz, const float* IMPACT_RESTRICT radius,
                    AabbSoAOut out, Range r);
+
+void swept_sphere_bounds(const float* IMPACT_RESTRICT px, const float* IMPACT_RESTRICT py,
+                         const float* IMPACT_RESTRICT pz, const float* IMPACT_RESTRICT vx,
+                         const float* IMPACT_RESTRICT vy, const float* IMPACT_RESTRICT vz,
+                         const float* IMPACT_RESTRICT radius, float dt, AabbSoAOut out, Range r);
+
+void sweep_boxes(AabbSoA boxes, const float* IMPACT_RESTRICT dx, const float* IMPACT_RESTRICT dy,
+                 const float* IMPACT_RESTRICT dz, AabbSoAOut out, Range r);
 
 BoundsSummary reduce_bounds(AabbSoA boxes, Range r);
 

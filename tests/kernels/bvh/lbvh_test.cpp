@@ -372,6 +372,7 @@ TEST(Lbvh, RefitKnobRebuildsWhenTreeDegrades) {
   const float side = 2.2f * 0.6f * std::cbrt(static_cast<float>(n));
   std::mt19937 rng(72);
   LbvhOptions o;
+  o.update = impact::LbvhUpdate::kAuto;
   o.refit_sah_limit = 1.3;
   LbvhBroadPhase bp(o);
   Buffer<Pair> out;

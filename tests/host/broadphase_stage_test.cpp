@@ -1,0 +1,448 @@
+// The broad-phase stage behind impact::BroadPhase and World: build / update / pairs,
+// the LBVH update policies, the automatic choice, and the swept-bounds input mode,
+// each against the independent double-precision reference of
+// tests/support/aabb_reference.h (pairs compared as sets).
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "impact/impact.h"
+#include "support/aabb_reference.h"
+#include "support/test_support.h"
+
+namespace impact {
+namespace {
+
+using test::Boxes;
+using test::expect_same_set;
+using test::IsError;
+using test::PairVec;
+using test::reference_pairs;
+using test::scaled;
+
+// Boxes whose largest edges are log-uniform over [e_min, e_max], centres uniform in
+// a cube sized for a few overlaps per box.
+Boxes log_uniform_boxes(uint32_t n, uint32_t seed, float h_min, float h_max) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<float> lh(std::log(h_min), std::log(h_max));
+  // Volume-weighted mean of (2h)^3 for log-uniform h: sets the cube for ~2 pairs/box.
+  const double mean_vol = 8.0 * (std::pow(h_max, 3.0) - std::pow(h_min, 3.0)) /
+                          (3.0 * (std::log(h_max) - std::log(h_min)));
+  const float side = static_cast<float>(std::cbrt(n * mean_vol));
+  std::uniform_real_distribution<float> pos(-0.5f * side, 0.5f * side);
+  Boxes b;
+  for (uint32_t i = 0; i < n; ++i) {
+    const float h = std::exp(lh(rng));
+    b.add(pos(rng), pos(rng), pos(rng), h, h, h);
+  }
+  return b;
+}
+
+// Every box moves by up to `step` per axis, reflected into [-side/2, side/2].
+void jiggle(Boxes& b, std::mt19937& rng, float step) {
+  std::uniform_real_distribution<float> d(-step, step);
+  for (size_t i = 0; i < b.size(); ++i) {
+    float* lo[3] = {&b.min_x[i], &b.min_y[i], &b.min_z[i]};
+    float* hi[3] = {&b.max_x[i], &b.max_y[i], &b.max_z[i]};
+    for (int k = 0; k < 3; ++k) {
+      const float s = d(rng);
+      *lo[k] += s;
+      *hi[k] += s;
+    }
+  }
+}
+
+// Swept boxes in double, rounded the way the contract states: min(lo, lo + d), max(hi, hi + d)
+// with the sums in float (as the caller's moved box would be).
+Boxes swept_reference_boxes(const Boxes& b, const std::vector<float>& dx, const std::vector<float>& dy,
+                            const std::vector<float>& dz) {
+  Boxes s = b;
+  for (size_t i = 0; i < b.size(); ++i) {
+    s.min_x[i] = std::min(b.min_x[i], b.min_x[i] + dx[i]);
+    s.min_y[i] = std::min(b.min_y[i], b.min_y[i] + dy[i]);
+    s.min_z[i] = std::min(b.min_z[i], b.min_z[i] + dz[i]);
+    s.max_x[i] = std::max(b.max_x[i], b.max_x[i] + dx[i]);
+    s.max_y[i] = std::max(b.max_y[i], b.max_y[i] + dy[i]);
+    s.max_z[i] = std::max(b.max_z[i], b.max_z[i] + dz[i]);
+  }
+  return s;
+}
+
+const BroadPhaseKind kAllKinds[] = {BroadPhaseKind::kGrid, BroadPhaseKind::kLbvh, BroadPhaseKind::kSweepAndPrune,
+                                    BroadPhaseKind::kBruteForce, BroadPhaseKind::kAuto};
+
+TEST(BroadPhaseStage, BuildThenPairsEqualsFindPairsForEveryKind) {
+  Boxes b = test::uniform_boxes(scaled(3000), 3, 0.1f, 0.6f);
+  test::add_random_filter(b, 4, 0.2);
+  const PairVec ref = reference_pairs(b);
+  for (BroadPhaseKind kind : kAllKinds) {
+    SCOPED_TRACE(to_string(kind));
+    BroadPhase bp(kind);
+    std::vector<BodyPair> got{{1, 0}};
+    IMPACT_ASSERT_OK(bp.pairs(&got));
+    EXPECT_TRUE(got.empty()) << "pairs() before any build";
+    EXPECT_EQ(bp.size(), 0u);
+    IMPACT_ASSERT_OK(bp.build(b.input()));
+    EXPECT_EQ(bp.size(), b.size());
+    IMPACT_ASSERT_OK(bp.pairs(&got));
+    expect_same_set(got, ref, b.size(), "build + pairs");
+    // pairs() twice gives the same bytes; find_pairs on the same boxes too.
+    std::vector<BodyPair> again, found;
+    IMPACT_ASSERT_OK(bp.pairs(&again));
+    IMPACT_ASSERT_OK(bp.find_pairs(b.input(), &found));
+    ASSERT_EQ(again.size(), got.size());
+    ASSERT_EQ(found.size(), got.size());
+    EXPECT_TRUE(std::equal(got.begin(), got.end(), again.begin(),
+                           [](BodyPair x, BodyPair y) { return x.a == y.a && x.b == y.b; }));
+  }
+}
+
+// 100 frames of coherent motion through every update path (LBVH refit policies, SAP
+// insertion sort, grid and brute-force rebuilds): every frame equals the reference.
+TEST(BroadPhaseStage, HundredFramesOfMotionThroughEveryUpdatePolicy) {
+  struct Case {
+    BroadPhaseKind kind;
+    LbvhUpdate update;
+  };
+  const Case cases[] = {{BroadPhaseKind::kGrid, LbvhUpdate::kRebuild},
+                        {BroadPhaseKind::kLbvh, LbvhUpdate::kRebuild},
+                        {BroadPhaseKind::kLbvh, LbvhUpdate::kRefit},
+                        {BroadPhaseKind::kLbvh, LbvhUpdate::kAuto},
+                        {BroadPhaseKind::kSweepAndPrune, LbvhUpdate::kRebuild},
+                        {BroadPhaseKind::kAuto, LbvhUpdate::kRefit}};
+  const uint32_t n = scaled(1500, 300);
+  const int frames = test::kSanitized ? 30 : 100;
+  for (const Case& c : cases) {
+    const std::string what = std::string(to_string(c.kind)) + "/" + to_string(c.update);
+    SCOPED_TRACE(what);
+    Boxes b = test::uniform_boxes(n, 11, 0.2f, 0.5f);
+    test::add_random_filter(b, 12, 0.1);
+    std::mt19937 rng(13);
+    BroadPhaseOptions o;
+    o.kind = c.kind;
+    o.lbvh_update = c.update;
+    o.lbvh_refit_sah_limit = 1.2;
+    BroadPhase bp(o);
+    std::vector<BodyPair> got;
+    for (int f = 0; f < frames; ++f) {
+      IMPACT_ASSERT_OK(f == 0 ? bp.build(b.input()) : bp.update(b.input()));
+      IMPACT_ASSERT_OK(bp.pairs(&got));
+      expect_same_set(got, reference_pairs(b), b.size(), what + " frame " + std::to_string(f));
+      if (HasFailure()) return;
+      jiggle(b, rng, 0.15f);
+    }
+  }
+}
+
+// An update with a different box count rebuilds (no stale tree or order is reused).
+TEST(BroadPhaseStage, UpdateWithNewCountRebuilds) {
+  for (BroadPhaseKind kind : kAllKinds) {
+    SCOPED_TRACE(to_string(kind));
+    BroadPhase bp(BroadPhaseOptions{.kind = kind, .lbvh_update = LbvhUpdate::kRefit});
+    const Boxes a = test::uniform_boxes(500, 21, 0.2f, 0.5f);
+    const Boxes c = test::clustered_boxes(700, 22);
+    std::vector<BodyPair> got;
+    IMPACT_ASSERT_OK(bp.update(a.input()));
+    IMPACT_ASSERT_OK(bp.pairs(&got));
+    expect_same_set(got, reference_pairs(a), a.size(), "first");
+    IMPACT_ASSERT_OK(bp.update(c.input()));
+    IMPACT_ASSERT_OK(bp.pairs(&got));
+    expect_same_set(got, reference_pairs(c), c.size(), "second");
+    IMPACT_ASSERT_OK(bp.update(Boxes{}.input()));
+    IMPACT_ASSERT_OK(bp.pairs(&got));
+    EXPECT_TRUE(got.empty());
+  }
+}
+
+// The automatic choice: the grid for one size class, the LBVH when sizes spread over
+// many of the grid's levels (docs/broadphase.md); pairs equal the reference either way.
+TEST(BroadPhaseStage, AutoChoosesByTheSizeSpread) {
+  struct Case {
+    Boxes boxes;
+    BroadPhaseKind expect;
+    const char* what;
+  };
+  std::vector<Case> cases;
+  cases.push_back({test::uniform_boxes(scaled(4000), 31, 0.3f, 0.6f), BroadPhaseKind::kGrid, "uniform"});
+  cases.push_back({test::clustered_boxes(scaled(4000), 32), BroadPhaseKind::kGrid, "clustered"});
+  cases.push_back({log_uniform_boxes(scaled(4000), 33, 0.01f, 10.0f), BroadPhaseKind::kLbvh, "1000x log-uniform"});
+  {
+    // A few huge boxes among small ones: the grid's levels handle it (2 levels).
+    Boxes b = test::uniform_boxes(scaled(4000), 34, 0.2f, 0.4f);
+    for (int i = 0; i < 3; ++i) b.add(10.0f * static_cast<float>(i), 0.0f, 0.0f, 30.0f, 30.0f, 30.0f);
+    cases.push_back({std::move(b), BroadPhaseKind::kGrid, "few huge"});
+  }
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.what);
+    BroadPhase bp(BroadPhaseKind::kAuto);
+    EXPECT_EQ(bp.kind(), BroadPhaseKind::kAuto);
+    std::vector<BodyPair> got;
+    IMPACT_ASSERT_OK(bp.find_pairs(c.boxes.input(), &got));
+    EXPECT_EQ(bp.active_kind(), c.expect) << to_string(bp.active_kind());
+    expect_same_set(got, reference_pairs(c.boxes), c.boxes.size(), c.what);
+  }
+}
+
+TEST(BroadPhaseStage, SweptInputEqualsReferenceOfSweptBoxes) {
+  Boxes b = test::uniform_boxes(scaled(3000), 41, 0.1f, 0.4f);
+  test::add_random_filter(b, 42, 0.1);
+  std::mt19937 rng(43);
+  std::uniform_real_distribution<float> d(-3.0f, 3.0f);
+  std::bernoulli_distribution fast(0.1);
+  std::vector<float> dx(b.size()), dy(b.size()), dz(b.size());
+  for (size_t i = 0; i < b.size(); ++i)
+    if (fast(rng)) dx[i] = d(rng), dy[i] = d(rng), dz[i] = d(rng);
+  const PairVec ref = reference_pairs(swept_reference_boxes(b, dx, dy, dz));
+  const PairVec still = reference_pairs(b);
+  EXPECT_GT(ref.size(), still.size()) << "the motion must add candidate pairs";
+  for (BroadPhaseKind kind : kAllKinds) {
+    SCOPED_TRACE(to_string(kind));
+    BroadPhase bp(kind);
+    AabbInput in = b.input();
+    in.dx = dx;
+    in.dy = dy;
+    in.dz = dz;
+    std::vector<BodyPair> got;
+    IMPACT_ASSERT_OK(bp.find_pairs(in, &got));
+    expect_same_set(got, ref, b.size(), "swept");
+  }
+}
+
+// Two boxes that pass through each other within the step: only the swept input pairs them.
+TEST(BroadPhaseStage, SweptInputCatchesTunnelingPair) {
+  Boxes b;
+  b.add(-5.0f, 0.0f, 0.0f, 0.5f, 0.5f, 0.5f);
+  b.add(5.0f, 0.0f, 0.0f, 0.5f, 0.5f, 0.5f);
+  const std::vector<float> dx{10.0f, -10.0f}, zero{0.0f, 0.0f};
+  for (BroadPhaseKind kind : kAllKinds) {
+    SCOPED_TRACE(to_string(kind));
+    BroadPhase bp(kind);
+    std::vector<BodyPair> got;
+    IMPACT_ASSERT_OK(bp.find_pairs(b.input(), &got));
+    EXPECT_TRUE(got.empty());
+    AabbInput in = b.input();
+    in.dx = dx;
+    in.dy = zero;
+    in.dz = zero;
+    IMPACT_ASSERT_OK(bp.find_pairs(in, &got));
+    ASSERT_EQ(got.size(), 1u);
+    EXPECT_EQ(got[0].a, 0u);
+    EXPECT_EQ(got[0].b, 1u);
+  }
+}
+
+TEST(BroadPhaseStage, RejectsBadOptionsAndSweptInput) {
+  const Boxes b = test::uniform_boxes(10, 51, 0.2f, 0.5f);
+  std::vector<BodyPair> got;
+  {
+    BroadPhase bp(BroadPhaseOptions{.kind = static_cast<BroadPhaseKind>(99)});
+    EXPECT_TRUE(IsError(bp.build(b.input()), StatusCode::kInvalidArgument, {"kind"}));
+  }
+  {
+    BroadPhase bp(BroadPhaseOptions{.kind = BroadPhaseKind::kLbvh, .lbvh_refit_sah_limit = 0.5});
+    EXPECT_TRUE(IsError(bp.find_pairs(b.input(), &got), StatusCode::kInvalidArgument, {"lbvh_refit_sah_limit"}));
+  }
+  {
+    BroadPhase bp(BroadPhaseOptions{.kind = BroadPhaseKind::kLbvh, .lbvh_max_refits = 0});
+    EXPECT_TRUE(IsError(bp.update(b.input()), StatusCode::kInvalidArgument, {"lbvh_max_refits"}));
+  }
+  {
+    BroadPhase bp(BroadPhaseOptions{.lbvh_update = static_cast<LbvhUpdate>(7)});
+    EXPECT_TRUE(IsError(bp.pairs(&got), StatusCode::kInvalidArgument, {"lbvh_update"}));
+  }
+  BroadPhase bp;
+  IMPACT_ASSERT_OK(bp.build(b.input()));
+  std::vector<float> dx(b.size(), 0.0f), dy(b.size(), 0.0f), dz(b.size() - 1, 0.0f);
+  AabbInput in = b.input();
+  in.dx = dx;
+  in.dy = dy;
+  in.dz = dz;
+  EXPECT_TRUE(IsError(bp.update(in), StatusCode::kSizeMismatch, {"dx, dy and dz"}));
+  // A failed call discards the structure: pairs() is empty until the next build.
+  IMPACT_ASSERT_OK(bp.pairs(&got));
+  EXPECT_TRUE(got.empty());
+  dz.push_back(0.0f);
+  dy[7] = std::nanf("");
+  in.dz = dz;
+  EXPECT_TRUE(IsError(bp.update(in), StatusCode::kInvalidArgument, {"box 7", "dy"}));
+  dy[7] = 2e18f;
+  EXPECT_TRUE(IsError(bp.update(in), StatusCode::kInvalidArgument, {"box 7", "dy"}));
+  dy[7] = 1.0f;
+  IMPACT_ASSERT_OK(bp.find_pairs(in, &got));
+}
+
+// Same bytes for every backend and thread count through build/update/pairs, for the
+// refitting LBVH and the incremental sweep.
+TEST(BroadPhaseStage, CoherentPathsIndependentOfThreads) {
+  const uint32_t n = scaled(20000, 2000);
+  for (BroadPhaseKind kind : {BroadPhaseKind::kLbvh, BroadPhaseKind::kSweepAndPrune, BroadPhaseKind::kAuto}) {
+    SCOPED_TRACE(to_string(kind));
+    std::vector<BodyPair> first;
+    bool have_first = false;
+    for (const test::ExecCase& c : test::exec_cases()) {
+      SCOPED_TRACE(test::to_string(c));
+      const ExecConfig exec{c.backend, c.threads};
+      Boxes b = test::uniform_boxes(n, 61, 0.2f, 0.5f);
+      std::mt19937 rng(62);
+      BroadPhase bp(BroadPhaseOptions{.kind = kind, .lbvh_update = LbvhUpdate::kRefit});
+      std::vector<BodyPair> got;
+      for (int f = 0; f < 4; ++f) {
+        IMPACT_ASSERT_OK(bp.update(b.input(), exec));
+        jiggle(b, rng, 0.1f);
+      }
+      IMPACT_ASSERT_OK(bp.pairs(&got, exec));
+      if (!have_first) {
+        first = got;
+        have_first = true;
+        continue;
+      }
+      ASSERT_EQ(got.size(), first.size());
+      for (size_t i = 0; i < got.size(); ++i)
+        ASSERT_TRUE(got[i].a == first[i].a && got[i].b == first[i].b) << "pair " << i;
+    }
+  }
+}
+
+// --- World ----------------------------------------------------------------------------
+
+// Two spheres 10 m apart closing at 600 m/s each pass through each other within one
+// 1/60 s step: with swept bounds they are a candidate pair that step, without not.
+TEST(WorldSweptBounds, FastCrossingSpheresBecomeCandidates) {
+  for (bool swept : {false, true}) {
+    SCOPED_TRACE(swept ? "swept" : "static bounds");
+    WorldDesc d = test::zero_gravity_desc();
+    d.swept_bounds = swept;
+    auto w = test::make_world(d);
+    BodyDesc a, b;
+    a.position = {-5.0f, 0.0f, 0.0f};
+    a.velocity = {600.0f, 0.0f, 0.0f};
+    b.position = {5.0f, 0.0f, 0.0f};
+    b.velocity = {-600.0f, 0.0f, 0.0f};
+    std::vector<BodyHandle> h(2);
+    const BodyDesc descs[] = {a, b};
+    IMPACT_ASSERT_OK(w->create_bodies(descs, h));
+    IMPACT_ASSERT_OK(w->step());
+    EXPECT_EQ(w->pairs().size(), swept ? 1u : 0u);
+    EXPECT_EQ(w->last_step().pairs, swept ? 1u : 0u);
+  }
+}
+
+// Swept world pairs equal the reference over the swept boxes the contract describes.
+TEST(WorldSweptBounds, PairsMatchReferenceOfSweptSpheres) {
+  WorldDesc d = test::zero_gravity_desc();
+  d.swept_bounds = true;
+  auto w = test::make_world(d);
+  const uint32_t n = scaled(3000);
+  std::mt19937 rng(71);
+  const float side = 1.6f * std::cbrt(static_cast<float>(n));
+  std::uniform_real_distribution<float> pos(-0.5f * side, 0.5f * side), vel(-120.0f, 120.0f), rad(0.1f, 0.5f);
+  std::vector<BodyDesc> descs(n);
+  for (BodyDesc& b : descs) {
+    b.position = {pos(rng), pos(rng), pos(rng)};
+    b.velocity = {vel(rng), vel(rng), vel(rng)};
+    b.radius = rad(rng);
+  }
+  std::vector<BodyHandle> h(n);
+  IMPACT_ASSERT_OK(w->create_bodies(descs, h));
+  const BodyArrays a = w->bodies();
+  Boxes boxes;
+  std::vector<float> dx(n), dy(n), dz(n);
+  const float dt = d.fixed_dt;
+  for (size_t i = 0; i < n; ++i) {
+    const float r = a.radius[i];
+    boxes.add_box(a.pos_x[i] - r, a.pos_y[i] - r, a.pos_z[i] - r, a.pos_x[i] + r, a.pos_y[i] + r, a.pos_z[i] + r);
+    // End pose as the integrator computes it; the swept box spans both sphere boxes.
+    dx[i] = (a.pos_x[i] + a.vel_x[i] * dt) - a.pos_x[i];
+    dy[i] = (a.pos_y[i] + a.vel_y[i] * dt) - a.pos_y[i];
+    dz[i] = (a.pos_z[i] + a.vel_z[i] * dt) - a.pos_z[i];
+  }
+  Boxes swept = boxes;
+  for (size_t i = 0; i < n; ++i) {
+    const float r = a.radius[i];
+    const float e[3] = {a.pos_x[i] + a.vel_x[i] * dt, a.pos_y[i] + a.vel_y[i] * dt, a.pos_z[i] + a.vel_z[i] * dt};
+    swept.min_x[i] = std::min(swept.min_x[i], e[0] - r);
+    swept.min_y[i] = std::min(swept.min_y[i], e[1] - r);
+    swept.min_z[i] = std::min(swept.min_z[i], e[2] - r);
+    swept.max_x[i] = std::max(swept.max_x[i], e[0] + r);
+    swept.max_y[i] = std::max(swept.max_y[i], e[1] + r);
+    swept.max_z[i] = std::max(swept.max_z[i], e[2] + r);
+  }
+  const PairVec ref = reference_pairs(swept);
+  IMPACT_ASSERT_OK(w->step());
+  const auto p = w->pairs();
+  expect_same_set(std::vector<BodyPair>(p.begin(), p.end()), ref, n, "world swept pairs");
+  EXPECT_GT(ref.size(), reference_pairs(boxes).size());
+}
+
+// World with the automatic choice and a refitting LBVH: same state hash for every
+// backend and thread count, and bodies re-sorted into Morton order stay reachable by
+// handle (a contact-free scene gives bit-identical positions with and without re-sorts).
+TEST(WorldBroadPhaseStage, AutoAndRefitWorldsAreDeterministic) {
+  for (BroadPhaseKind kind : {BroadPhaseKind::kAuto, BroadPhaseKind::kLbvh}) {
+    SCOPED_TRACE(to_string(kind));
+    uint64_t first = 0;
+    for (const test::ExecCase& c : test::exec_cases()) {
+      WorldDesc d;
+      d.broad_phase = kind;
+      d.lbvh_update = LbvhUpdate::kAuto;
+      d.reorder_interval = 5;
+      d.backend = c.backend;
+      d.threads = c.threads;
+      auto w = test::make_world(d);
+      std::mt19937 rng(81);
+      const uint32_t n = scaled(3000, 500);
+      const float side = 1.4f * std::cbrt(static_cast<float>(n));
+      std::uniform_real_distribution<float> pos(-0.5f * side, 0.5f * side), lr(std::log(0.02f), std::log(2.0f));
+      std::vector<BodyDesc> descs(n);
+      for (BodyDesc& b : descs) {
+        b.position = {pos(rng), pos(rng) + side, pos(rng)};
+        b.radius = std::exp(lr(rng));
+      }
+      std::vector<BodyHandle> h(n);
+      IMPACT_ASSERT_OK(w->create_bodies(descs, h));
+      PlaneDesc floor;
+      PlaneHandle ph;
+      IMPACT_ASSERT_OK(w->create_planes(std::span<const PlaneDesc>(&floor, 1), std::span<PlaneHandle>(&ph, 1)));
+      for (int s = 0; s < 40; ++s) IMPACT_ASSERT_OK(w->step());
+      if (first == 0) first = w->state_hash();
+      EXPECT_EQ(w->state_hash(), first) << test::to_string(c);
+    }
+  }
+}
+
+TEST(WorldBroadPhaseStage, MortonReorderIsInvisibleThroughHandles) {
+  auto run = [](uint32_t reorder, std::vector<Eigen::Vector3f>* out) {
+    WorldDesc d;
+    d.broad_phase = BroadPhaseKind::kLbvh;
+    d.reorder_interval = reorder;
+    auto w = test::make_world(d);
+    std::mt19937 rng(91);
+    std::uniform_real_distribution<float> pos(-100.0f, 100.0f), vel(-3.0f, 3.0f);
+    std::vector<BodyDesc> descs(2000);
+    for (size_t i = 0; i < descs.size(); ++i) {
+      // Far apart (a 10 m lattice), so no contact ever forms: positions depend only
+      // on each body's own integration, not on slot order.
+      descs[i].position = {10.0f * static_cast<float>(i % 20), 10.0f * static_cast<float>((i / 20) % 10),
+                           10.0f * static_cast<float>(i / 200)};
+      descs[i].velocity = {vel(rng), vel(rng), vel(rng)};
+      descs[i].radius = 0.5f;
+    }
+    std::vector<BodyHandle> h(descs.size());
+    ASSERT_TRUE(test::IsOk(w->create_bodies(descs, h)));
+    for (int s = 0; s < 30; ++s) ASSERT_TRUE(test::IsOk(w->step()));
+    out->resize(h.size());
+    ASSERT_TRUE(test::IsOk(w->get_positions(h, *out)));
+  };
+  std::vector<Eigen::Vector3f> with, without;
+  run(1, &with);
+  run(0, &without);
+  ASSERT_EQ(with.size(), without.size());
+  for (size_t i = 0; i < with.size(); ++i) ASSERT_EQ(with[i], without[i]) << "body " << i;
+}
+
+}  // namespace
+}  // namespace impact
