@@ -116,22 +116,24 @@ void GridBroadPhase::build_grid(const Executor& exec, kernels::AabbSoA boxes, ke
   built_n_ = n;
   const kernels::GridParams g = choose_grid(sum, n, &info_);
 
-  // Keys, sorted on the bucket bits.
+  // Keys plus packed boxes in input order, then the keys sorted on the bucket bits.
+  const bool filtered = filter.layer != nullptr;
   uint64_t* keys = scratch(keys_, n);
+  kernels::SortedBox* packed = scratch(packed_box_, n);
+  kernels::FilterRecord* packed_filter = filtered ? scratch(packed_filter_, n) : nullptr;
   exec.for_each_chunk(n, kKeyGrain, [&](uint32_t b, uint32_t e, uint32_t) {
-    kernels::grid_keys(g, boxes, keys, {b, e});
+    kernels::grid_keys_pack(g, boxes, filter, original_index, keys, packed, packed_filter, {b, e});
   });
   sorter_.sort(exec, keys, n, 32, 32 + bits_for(g.bucket_count - 1));
 
   // Gather into sorted order.
-  const bool filtered = filter.layer != nullptr;
   kernels::GridSorted sorted{scratch(sorted_box_, n),
                              scratch(cell_, n),
                              filtered ? scratch(layer_, n) : nullptr,
                              filtered ? scratch(mask_, n) : nullptr,
                              filtered ? scratch(static_, n) : nullptr};
   exec.for_each_chunk(n, kKeyGrain, [&](uint32_t b, uint32_t e, uint32_t) {
-    kernels::grid_gather(g, keys, boxes, filter, original_index, sorted, {b, e});
+    kernels::grid_gather_packed(g, keys, packed, packed_filter, sorted, {b, e});
   });
 
   // Bucket ranges.

@@ -81,6 +81,8 @@ class GridBroadPhase {
   RadixSorter sorter_;
   Buffer<uint64_t> keys_;
   Buffer<kernels::SortedBox> sorted_box_;
+  Buffer<kernels::SortedBox> packed_box_;
+  Buffer<kernels::FilterRecord> packed_filter_;
   uint32_t last_n_ = 0;
   uint32_t built_n_ = 0;
   Buffer<uint64_t> cell_;

@@ -2,6 +2,7 @@
 #include <cmath>
 #include <string>
 
+#include "host/broadphase/query.h"
 #include "host/broadphase/stage.h"
 #include "impact/broadphase.h"
 
@@ -29,6 +30,9 @@ class BroadPhaseImpl {
   Status ready(const ExecConfig& e);
   // Validates boxes and runs build (from_scratch) or update.
   Status ingest(const AabbInput& boxes, const ExecConfig& e, bool from_scratch);
+  // Validates a query batch and answers it from the stage (host/broadphase/query.h).
+  template <class Queries>
+  Status query(const Queries& q, const char* what, QueryHits* out, const ExecConfig& e);
 };
 
 BroadPhase::BroadPhase(BroadPhaseKind kind) : BroadPhase(BroadPhaseOptions{.kind = kind}) {}
@@ -43,6 +47,41 @@ const BroadPhaseOptions& BroadPhase::options() const { return impl_->options; }
 size_t BroadPhase::size() const { return impl_->stage.built() ? impl_->stage.size() : 0; }
 
 namespace {
+
+// Branch-free validity of all boxes (vectorised; the common case), the same rules
+// as the per-box messages below: finite, |v| <= 1e18, min <= max, moved box in range.
+bool boxes_valid(const AabbInput& in, bool swept) {
+  const size_t n = in.size();
+  const float* lo[3] = {in.min_x.data(), in.min_y.data(), in.min_z.data()};
+  const float* hi[3] = {in.max_x.data(), in.max_y.data(), in.max_z.data()};
+  const float* d[3] = {in.dx.data(), in.dy.data(), in.dz.data()};
+  constexpr float kMax = 1e18f;
+  bool ok = true;
+  for (int k = 0; k < 3; ++k) {
+    const float* a = lo[k];
+    const float* b = hi[k];
+    int bad = 0;
+#pragma omp simd reduction(| : bad)
+    for (size_t i = 0; i < n; ++i) {
+      // NaN fails every comparison, so !(x <= y) catches it; -1e18 <= a <= b <= 1e18.
+      bad |= static_cast<int>(!(a[i] >= -kMax)) | static_cast<int>(!(a[i] <= b[i])) |
+             static_cast<int>(!(b[i] <= kMax));
+    }
+    ok = ok && bad == 0;
+    if (swept) {
+      const float* m = d[k];
+      int bad_d = 0;
+#pragma omp simd reduction(| : bad_d)
+      for (size_t i = 0; i < n; ++i) {
+        const float l = a[i] + m[i], h = b[i] + m[i];
+        bad_d |= static_cast<int>(!(l >= -kMax)) | static_cast<int>(!(h <= kMax)) |
+                 static_cast<int>(!(m[i] - m[i] == 0.0f));
+      }
+      ok = ok && bad_d == 0;
+    }
+  }
+  return ok;
+}
 
 Status check_boxes(const AabbInput& in) {
   const size_t n = in.size();
@@ -63,6 +102,8 @@ Status check_boxes(const AabbInput& in) {
                   "broad phase: dx, dy and dz must all be empty or all have one entry per box");
   if (n > 0xfffffff0ull)
     return Status(StatusCode::kCapacityExceeded, "broad phase: more than 2^32 - 16 boxes");
+  if (boxes_valid(in, swept)) return Status();
+  // Something is wrong: find the first offending box for the message.
   for (size_t i = 0; i < n; ++i) {
     for (int k = 0; k < 6; ++k) {
       const float v = (*f[k])[i];
@@ -178,6 +219,29 @@ Status BroadPhase::find_pairs(const AabbInput& boxes, std::vector<BodyPair>* out
     return s;
   }
   return pairs(out, exec);
+}
+
+template <class Queries>
+Status BroadPhaseImpl::query(const Queries& q, const char* what, QueryHits* out, const ExecConfig& e) {
+  if (out == nullptr) return Status(StatusCode::kInvalidArgument, std::string(what) + ": out must not be null");
+  if (Status s = ready(e); !s.ok()) return s;
+  host::QueryBatch batch{};
+  if (Status s = host::make_batch(q, what, &batch); !s.ok()) return s;
+  if (Status s = stage.query(exec, batch, &out->offsets, &out->hits); !s.ok())
+    return Status(s.code(), std::string(what) + ": " + s.message());
+  return Status();
+}
+
+Status BroadPhase::query_aabbs(const AabbQueries& queries, QueryHits* out, const ExecConfig& exec) {
+  return impl_->query(queries, "query_aabbs", out, exec);
+}
+
+Status BroadPhase::query_spheres(const SphereQueries& queries, QueryHits* out, const ExecConfig& exec) {
+  return impl_->query(queries, "query_spheres", out, exec);
+}
+
+Status BroadPhase::query_points(const PointQueries& queries, QueryHits* out, const ExecConfig& exec) {
+  return impl_->query(queries, "query_points", out, exec);
 }
 
 }  // namespace impact

@@ -98,7 +98,7 @@ IMPACT_INLINE void visit_slot(const GridView& g, uint32_t s, Emit&& emit) {
 
   auto test = [&](uint32_t t) {
     const SortedBox& B = g.box[t];
-    if (!boxes_overlap(A, B)) return;
+    if (!sorted_boxes_overlap(A, B)) return;
     if constexpr (kFiltered) {
       if (!pair_allowed(la, ma, sa, g.layer[t], g.mask[t], g.is_static[t])) return;
     }
@@ -146,18 +146,40 @@ void grid_keys(const GridParams& g, AabbSoA boxes, uint64_t* IMPACT_RESTRICT out
   }
 }
 
-void grid_gather(const GridParams& g, const uint64_t* IMPACT_RESTRICT sorted_keys, AabbSoA boxes,
-                 PairFilter filter, const uint32_t* original_index, GridSorted out, Range r) {
-  for (uint32_t s = r.begin; s < r.end; ++s) {
-    const uint32_t i = static_cast<uint32_t>(sorted_keys[s]);
+void grid_keys_pack(const GridParams& g, AabbSoA boxes, PairFilter filter, const uint32_t* original_index,
+                    uint64_t* IMPACT_RESTRICT out_keys, SortedBox* IMPACT_RESTRICT out_packed,
+                    FilterRecord* IMPACT_RESTRICT out_filter, Range r) {
+  for (uint32_t i = r.begin; i < r.end; ++i) {
     const float x0 = boxes.min_x[i], y0 = boxes.min_y[i], z0 = boxes.min_z[i];
-    out.cell[s] = box_cell(g, x0, y0, z0);
+    const uint64_t cell = box_cell(g, x0, y0, z0);
+    out_keys[i] = (static_cast<uint64_t>(bucket_of(g, cell)) << 32) | i;
     const uint32_t id = original_index ? original_index[i] : i;
-    out.box[s] = SortedBox{x0, y0, z0, id, boxes.max_x[i], boxes.max_y[i], boxes.max_z[i], 0u};
-    if (filter.layer) {
-      out.layer[s] = filter.layer[i];
-      out.mask[s] = filter.mask[i];
-      out.is_static[s] = filter.is_static[i];
+    out_packed[i] = SortedBox{x0, y0, z0, id, boxes.max_x[i], boxes.max_y[i], boxes.max_z[i], 0u};
+  }
+  if (out_filter) {
+    for (uint32_t i = r.begin; i < r.end; ++i)
+      out_filter[i] = FilterRecord{filter.layer[i], filter.mask[i], filter.is_static[i], 0u};
+  }
+}
+
+void grid_gather_packed(const GridParams& g, const uint64_t* IMPACT_RESTRICT sorted_keys,
+                        const SortedBox* IMPACT_RESTRICT packed, const FilterRecord* IMPACT_RESTRICT packed_filter,
+                        GridSorted out, Range r) {
+  // The reads are random for an unordered input: prefetch a few slots ahead so
+  // several misses are in flight (the loop body alone keeps too few).
+  constexpr uint32_t kAhead = 16;
+  for (uint32_t s = r.begin; s < r.end; ++s) {
+    if (s + kAhead < r.end) __builtin_prefetch(&packed[static_cast<uint32_t>(sorted_keys[s + kAhead])]);
+    const SortedBox b = packed[static_cast<uint32_t>(sorted_keys[s])];
+    out.box[s] = b;
+    out.cell[s] = box_cell(g, b.min_x, b.min_y, b.min_z);
+  }
+  if (packed_filter) {
+    for (uint32_t s = r.begin; s < r.end; ++s) {
+      const FilterRecord f = packed_filter[static_cast<uint32_t>(sorted_keys[s])];
+      out.layer[s] = f.layer;
+      out.mask[s] = f.mask;
+      out.is_static[s] = static_cast<uint8_t>(f.is_static);
     }
   }
 }
@@ -198,7 +220,7 @@ uint64_t grid_query_pairs(const GridView& g, const SortedBox* IMPACT_RESTRICT qu
         continue;
       auto test = [&](uint32_t t) {
         const SortedBox& B = g.box[t];
-        if (!boxes_overlap(A, B)) return;
+        if (!sorted_boxes_overlap(A, B)) return;
         if (filtered && !pair_allowed(query_filter.layer[s], query_filter.mask[s], query_filter.is_static[s],
                                       g.layer[t], g.mask[t], g.is_static[t]))
           return;
