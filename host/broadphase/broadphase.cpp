@@ -42,7 +42,7 @@ kernels::GridParams choose_grid(const kernels::BoundsSummary& s, uint32_t n, Gri
   // a small multiple of n. A moderately sparse scene may coarsen its cells up to
   // 2x to stay dense (more candidates per cell, far fewer cache misses); sparser
   // scenes hash.
-  const double dense_limit = std::max(4.0 * n, 4096.0);
+  const double dense_limit = grid_dense_limit(n);
   double cells = count_cells(cell);
   if (cells > dense_limit && count_cells(2.0 * cell) <= dense_limit) {
     // Smallest growth (in 1% steps) that fits; the "+1" per axis makes it inexact.

@@ -3,6 +3,7 @@
 // overlapping boxes (a < b) that passes the filter, in a deterministic order.
 #pragma once
 
+#include <algorithm>
 #include <cstdint>
 #include <cstring>
 #include <memory>
@@ -25,6 +26,10 @@ struct GridInfo {
   bool dense = false;
   uint32_t buckets = 0;
 };
+
+/// Most cells a grid over n boxes may have and still use dense (row-major, unhashed)
+/// buckets; a scene needing more, even with cells coarsened 2x, is hashed.
+inline double grid_dense_limit(uint64_t n) { return std::max(4.0 * static_cast<double>(n), 4096.0); }
 
 class GridBroadPhase {
  public:

@@ -1,12 +1,26 @@
 #include "host/broadphase/stage.h"
 
+#include <algorithm>
+#include <cmath>
+
 namespace impact::host {
 
-BroadPhaseKind choose_broad_phase(const uint64_t* level_counts, uint64_t n) {
+BroadPhaseKind choose_broad_phase(const uint64_t* level_counts, uint64_t n, const double extent[3],
+                                  double top_edge) {
+  uint64_t hashed = 0;
   uint32_t crowded = 0;
-  for (uint32_t l = 0; l < kernels::kGridMaxLevels; ++l)
-    if (level_counts[l] * kAutoLevelShare >= n && level_counts[l] > 0) ++crowded;
-  return crowded >= kAutoLbvhLevels ? BroadPhaseKind::kLbvh : BroadPhaseKind::kGrid;
+  double edge = top_edge;
+  for (uint32_t l = 0; l < kernels::kGridMaxLevels; ++l, edge *= 0.25) {
+    if (level_counts[l] == 0) continue;
+    if (level_counts[l] * kAutoLevelShare >= n) ++crowded;
+    // Cells of the level's grid with its cell coarsened 2x (what the grid tries
+    // before it hashes); a zero edge (last level) behaves like a point set.
+    const double cell = 2.0 * std::max(edge, 1e-30);
+    double cells = 1.0;
+    for (int k = 0; k < 3; ++k) cells *= std::min(std::floor(extent[k] / cell) + 1.0, static_cast<double>(kernels::kGridMaxDim));
+    if (cells > grid_dense_limit(level_counts[l])) hashed += level_counts[l];
+  }
+  return crowded >= kAutoLevels && 2 * hashed >= n ? BroadPhaseKind::kLbvh : BroadPhaseKind::kGrid;
 }
 
 void BroadPhaseStage::set_kind(BroadPhaseKind kind) {
@@ -29,13 +43,16 @@ BroadPhaseKind BroadPhaseStage::choose(const Executor& exec, kernels::AabbSoA bo
   uint64_t total[L] = {};
   for (uint32_t c = 0; c < chunks; ++c)
     for (uint32_t l = 0; l < L; ++l) total[l] += counts[static_cast<size_t>(c) * L + l];
-  return choose_broad_phase(total, n);
+  double extent[3];
+  for (int k = 0; k < 3; ++k) extent[k] = static_cast<double>(sum.hi[k]) - static_cast<double>(sum.lo[k]);
+  return choose_broad_phase(total, n, extent, sum.max_edge);
 }
 
 Status BroadPhaseStage::build(const Executor& exec, kernels::AabbSoA boxes, kernels::PairFilter filter,
                               uint32_t n, const kernels::BoundsSummary* summary) {
   built_ = false;
   n_ = n;
+  keep_single(boxes, filter, n);
   kernels::BoundsSummary sum{};
   const bool need_summary = kind_ == BroadPhaseKind::kAuto || kind_ == BroadPhaseKind::kGrid ||
                             kind_ == BroadPhaseKind::kLbvh;
@@ -60,6 +77,7 @@ Status BroadPhaseStage::build(const Executor& exec, kernels::AabbSoA boxes, kern
 Status BroadPhaseStage::update(const Executor& exec, kernels::AabbSoA boxes, kernels::PairFilter filter,
                                uint32_t n, const kernels::BoundsSummary* summary) {
   if (!built_ || n != n_) return build(exec, boxes, filter, n, summary);
+  keep_single(boxes, filter, n);
   switch (active_) {
     case BroadPhaseKind::kLbvh: {
       if (lbvh.options().update == LbvhUpdate::kRebuild) return build(exec, boxes, filter, n, summary);
@@ -117,6 +135,35 @@ bool BroadPhaseStage::spatial_order(const Executor& exec, uint32_t* order) const
     return true;
   }
   return false;
+}
+
+void BroadPhaseStage::keep_single(kernels::AabbSoA boxes, kernels::PairFilter filter, uint32_t n) {
+  if (n != 1) return;
+  const float v[6] = {boxes.min_x[0], boxes.min_y[0], boxes.min_z[0], boxes.max_x[0], boxes.max_y[0], boxes.max_z[0]};
+  for (int k = 0; k < 6; ++k) single_box_[k] = v[k];
+  single_filtered_ = filter.layer != nullptr;
+  single_layer_ = single_filtered_ ? filter.layer[0] : 0u;
+}
+
+Status BroadPhaseStage::query(const Executor& exec, const QueryBatch& q, std::vector<uint32_t>* offsets,
+                              std::vector<uint32_t>* hits) {
+  if (!built_)
+    return Status(StatusCode::kInvalidArgument,
+                  "no broad-phase structure built yet (call build, update or find_pairs first)");
+  const bool single = n_ == 1 && (active_ == BroadPhaseKind::kGrid || active_ == BroadPhaseKind::kSweepAndPrune);
+  if (single) {
+    const float* b = single_box_;
+    return query_.query(exec, kernels::AabbSoA{b, b + 1, b + 2, b + 3, b + 4, b + 5},
+                        single_filtered_ ? &single_layer_ : nullptr, 1, q, offsets, hits);
+  }
+  switch (active_) {
+    case BroadPhaseKind::kGrid: return query_.query(exec, grid, q, offsets, hits);
+    case BroadPhaseKind::kLbvh: return query_.query(exec, lbvh, q, offsets, hits);
+    case BroadPhaseKind::kSweepAndPrune: return query_.query(exec, sap, q, offsets, hits);
+    case BroadPhaseKind::kBruteForce: return query_.query(exec, brute_force, q, offsets, hits);
+    default: break;
+  }
+  return Status(StatusCode::kInvalidArgument, "broad-phase query: unknown BroadPhaseKind");
 }
 
 }  // namespace impact::host

@@ -16,6 +16,7 @@
 
 #include "host/broadphase/broadphase.h"
 #include "host/broadphase/lbvh.h"
+#include "host/broadphase/query.h"
 #include "host/broadphase/sap.h"
 #include "host/buffer.h"
 #include "host/parallel.h"
@@ -26,12 +27,17 @@
 
 namespace impact::host {
 
-/// The automatic choice (docs/broadphase.md, "Automatic choice"): the LBVH when the
-/// boxes' largest edges spread over at least kAutoLbvhLevels of the grid's size
-/// levels (4x apart) with at least 1/kAutoLevelShare of the boxes in each; else the
-/// grid. level_counts has kernels::kGridMaxLevels entries.
-BroadPhaseKind choose_broad_phase(const uint64_t* level_counts, uint64_t n);
-inline constexpr uint32_t kAutoLbvhLevels = 3;
+/// The automatic choice (docs/broadphase.md, "Automatic choice"): the LBVH when
+/// the boxes' sizes spread over at least kAutoLevels of the grid's size levels
+/// (4x apart) with at least 1/kAutoLevelShare of the boxes in each, AND the grid
+/// would have to hash the cells of at least half of the boxes (a sparse world: more
+/// cells than grid_dense_limit even with 2x coarser cells); else the grid. Both
+/// are estimated per level l (kernels::grid_levels; level_counts has
+/// kernels::kGridMaxLevels entries) from the scene extent and the level's largest
+/// possible edge, top_edge / 4^l. Measured basis: docs/broadphase.md.
+BroadPhaseKind choose_broad_phase(const uint64_t* level_counts, uint64_t n, const double extent[3],
+                                  double top_edge);
+inline constexpr uint32_t kAutoLevels = 3;
 inline constexpr uint32_t kAutoLevelShare = 10;
 
 class BroadPhaseStage {
@@ -69,6 +75,11 @@ class BroadPhaseStage {
   /// none (sweep-and-prune, brute force, fewer than 2 boxes).
   bool spatial_order(const Executor& exec, uint32_t* order) const;
 
+  /// Queries (host/broadphase/query.h) of the structure as last built/updated, by
+  /// the active structure. kInvalidArgument when nothing is built.
+  Status query(const Executor& exec, const QueryBatch& q, std::vector<uint32_t>* offsets,
+               std::vector<uint32_t>* hits);
+
   GridBroadPhase grid;
   LbvhBroadPhase lbvh;
   SapBroadPhase sap;
@@ -82,6 +93,13 @@ class BroadPhaseStage {
   BroadPhaseKind active_ = BroadPhaseKind::kGrid;
   bool built_ = false;
   uint32_t n_ = 0;
+  // The grid and sweep-and-prune keep no copy of a single box: queries need it.
+  void keep_single(kernels::AabbSoA boxes, kernels::PairFilter filter, uint32_t n);
+  BroadPhaseQuery query_;
+  float single_box_[6] = {};
+  uint32_t single_layer_ = 0;
+  bool single_filtered_ = false;
+
   Buffer<kernels::BoundsSummary> partial_bounds_;
   Buffer<uint8_t> level_;
   Buffer<uint32_t> level_counts_;
