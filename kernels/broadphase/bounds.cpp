@@ -75,14 +75,22 @@ void sweep_boxes(AabbSoA boxes, const float* IMPACT_RESTRICT dx, const float* IM
   float* IMPACT_RESTRICT max_x = out.max_x;
   float* IMPACT_RESTRICT max_y = out.max_y;
   float* IMPACT_RESTRICT max_z = out.max_z;
+  const float* IMPACT_RESTRICT in_min_x = boxes.min_x;
+  const float* IMPACT_RESTRICT in_min_y = boxes.min_y;
+  const float* IMPACT_RESTRICT in_min_z = boxes.min_z;
+  const float* IMPACT_RESTRICT in_max_x = boxes.max_x;
+  const float* IMPACT_RESTRICT in_max_y = boxes.max_y;
+  const float* IMPACT_RESTRICT in_max_z = boxes.max_z;
 #pragma omp simd
   for (uint32_t i = r.begin; i < r.end; ++i) {
-    min_x[i] = std::min(boxes.min_x[i], boxes.min_x[i] + dx[i]);
-    min_y[i] = std::min(boxes.min_y[i], boxes.min_y[i] + dy[i]);
-    min_z[i] = std::min(boxes.min_z[i], boxes.min_z[i] + dz[i]);
-    max_x[i] = std::max(boxes.max_x[i], boxes.max_x[i] + dx[i]);
-    max_y[i] = std::max(boxes.max_y[i], boxes.max_y[i] + dy[i]);
-    max_z[i] = std::max(boxes.max_z[i], boxes.max_z[i] + dz[i]);
+    const float x0 = in_min_x[i], y0 = in_min_y[i], z0 = in_min_z[i];
+    const float x1 = in_max_x[i], y1 = in_max_y[i], z1 = in_max_z[i];
+    min_x[i] = std::min(x0, x0 + dx[i]);
+    min_y[i] = std::min(y0, y0 + dy[i]);
+    min_z[i] = std::min(z0, z0 + dz[i]);
+    max_x[i] = std::max(x1, x1 + dx[i]);
+    max_y[i] = std::max(y1, y1 + dy[i]);
+    max_z[i] = std::max(z1, z1 + dz[i]);
   }
 }
 
