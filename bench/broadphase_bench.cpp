@@ -1,96 +1,284 @@
 // Micro-benchmarks of the broad phase through the public impact::BroadPhase API,
-// plus one whole World::step for context.
+// plus one whole World::step for context. The peer libraries (Bullet, FCL) run on
+// the same boxes in bench/peers_bench.cpp, in the same executable.
 //
-// Input: n unit-radius spheres' boxes at uniformly random centres in a cube sized
-// for about one overlapping pair per body (bench/scenes/scenes.h). One BroadPhase
-// object is reused across iterations, so the timings are the steady state (scratch
-// buffers already grown), which is what a game sees from its second frame on.
+// Scenes (bench/scenes/micro_common.h): unit-radius spheres' boxes at uniformly
+// random centres in a cube sized for about one overlapping pair per body
+// ("uniform", the README's scene); the same bodies in 8 gaussian blobs ("clustered",
+// ~2 pairs per body); 100x mixed sizes ("mixed sizes").
+//
+// What is timed:
+//   BM_<Grid|Lbvh>BroadPhase, ...Clustered, ...MixedSizes   from scratch, steady state:
+//       one BroadPhase reused, find_pairs each call (the LBVH rebuilds every call; its
+//       scratch buffers are already grown, as from a game's second frame on)
+//   BM_<Grid|Lbvh>ColdStart   from scratch with a new BroadPhase per call (allocation
+//       and first touch included, as the peers' from-scratch runs)
+//   BM_LbvhBuild / BM_LbvhRefit / BM_LbvhTraverse   the LBVH's phases apart:
+//       build() from scratch; update() as a refit after one frame of motion; pairs()
+//       on a fresh tree
+//   BM_<Grid|Lbvh>Coherent[Clustered|MixedSizes]   frame to frame: every box moves up
+//       to 0.05 m per axis, then update() + pairs() (LBVH: refit policy; grid: rebuild);
+//       64-frame episodes, the first move after each build untimed (micro_common.h)
+//   BM_LbvhSahVsBinned[Clustered|MixedSizes]   the LBVH tree's SAH cost against an
+//       independent binned-SAH build of the same boxes (tests/support/binned_sah.h):
+//       counters lbvh_sah, binned_sah, sah_ratio; the time is one sah_cost() pass
 //
 // Benchmark names are BM_<what>/<bodies>/<threads>; run one size with e.g.
 //   impact_microbench --benchmark_filter=/10000/
-// Counters: items_per_second = bodies per second; ns_per_body = wall ns per body per
-// call; pairs = pairs found (per call, or per step for the world benchmark).
+// and the 1M one-thread comparison with the peers with e.g. (a filter matches the whole
+// name, suffixes such as /real_time included, hence the trailing "/")
+//   impact_microbench --benchmark_filter='/1000000/1/' --benchmark_repetitions=3
+//       --benchmark_report_aggregates_only=true
+// Counters: ms_per_frame, ns_per_body, pairs, pairs_per_second, items_per_second
+// (bodies per second); see bench/scenes/micro_common.h.
+//
+// 10M bodies: set IMPACT_BENCH_LARGE=1 to also register the grid and LBVH cases at
+// 10,000,000 bodies (scratch, phases, coherent; 1 and 2 threads). They need several
+// GB of memory and seconds per iteration, so they are off by default and CI never
+// runs them.
 #include <benchmark/benchmark.h>
 
 #include <chrono>
 #include <cstdint>
+#include <cstdlib>
+#include <cstring>
+#include <limits>
 #include <map>
 #include <memory>
+#include <string>
 #include <vector>
 
+#include "bench/scenes/micro_common.h"
 #include "bench/scenes/scenes.h"
+#include "host/broadphase/lbvh.h"
+#include "host/parallel.h"
 #include "impact/impact.h"
+#include "tests/support/binned_sah.h"
 
 namespace {
 
+using impact::bench::BoxScene;
+using impact::bench::FrameTimer;
+using impact::bench::report_frames;
+using impact::bench::scene_boxes;
 using Clock = std::chrono::steady_clock;
 
-// One box set per size, shared by every benchmark of that size.
-const impact::bench::UniformBoxes& boxes_for(uint32_t n) {
-  static std::map<uint32_t, impact::bench::UniformBoxes> cache;
-  auto it = cache.find(n);
-  if (it == cache.end())
-    it = cache
-             .emplace(n, impact::bench::make_uniform_boxes(n, /*radius=*/1.0f, /*pairs_per_body=*/1.0,
-                                                           impact::bench::kDefaultSeed))
-             .first;
-  return it->second;
+impact::ExecConfig exec_of(const benchmark::State& state) {
+  return impact::ExecConfig{impact::Backend::kDefault, static_cast<uint32_t>(state.range(1))};
 }
 
-const impact::bench::UniformBoxes& mixed_boxes_for(uint32_t n) {
-  static std::map<uint32_t, impact::bench::UniformBoxes> cache;
-  auto it = cache.find(n);
-  if (it == cache.end()) it = cache.emplace(n, impact::bench::make_mixed_boxes(n, impact::bench::kDefaultSeed)).first;
-  return it->second;
+bool check(benchmark::State& state, const impact::Status& s) {
+  if (!s.ok()) state.SkipWithError(s.message().c_str());
+  return s.ok();
 }
 
-void run_broad_phase(benchmark::State& state, impact::BroadPhaseKind kind, bool mixed = false) {
+// --- from scratch ---------------------------------------------------------------------------
+
+void run_broad_phase(benchmark::State& state, impact::BroadPhaseKind kind, BoxScene scene) {
   const uint32_t n = static_cast<uint32_t>(state.range(0));
-  const impact::ExecConfig exec{impact::Backend::kDefault, static_cast<uint32_t>(state.range(1))};
-  const impact::AabbInput input = mixed ? mixed_boxes_for(n).view() : boxes_for(n).view();
+  const impact::ExecConfig exec = exec_of(state);
+  const impact::AabbInput input = scene_boxes(scene, n).view();
   impact::BroadPhase bp(kind);
   std::vector<impact::BodyPair> pairs;
   // One untimed call grows the scratch buffers and the output.
-  if (impact::Status s = bp.find_pairs(input, &pairs, exec); !s.ok()) {
-    state.SkipWithError(s.message().c_str());
-    return;
-  }
-  const Clock::time_point t0 = Clock::now();
+  if (!check(state, bp.find_pairs(input, &pairs, exec))) return;
+  FrameTimer timer;
+  timer.start();
   for (auto _ : state) {
-    const impact::Status s = bp.find_pairs(input, &pairs, exec);
-    if (!s.ok()) {
-      state.SkipWithError(s.message().c_str());
-      break;
-    }
+    if (!check(state, bp.find_pairs(input, &pairs, exec))) break;
     benchmark::DoNotOptimize(pairs.data());
     benchmark::ClobberMemory();
   }
-  const double ns = std::chrono::duration<double, std::nano>(Clock::now() - t0).count();
-  const double body_calls = static_cast<double>(state.iterations()) * n;
-  state.SetItemsProcessed(static_cast<int64_t>(body_calls));
-  state.counters["ns_per_body"] = body_calls > 0 ? ns / body_calls : 0.0;
-  state.counters["pairs"] = static_cast<double>(pairs.size());
+  timer.stop();
+  report_frames(state, n, timer, pairs.size());
+}
+
+// A new BroadPhase per call: the first frame's cost, allocations included.
+void run_cold_start(benchmark::State& state, impact::BroadPhaseKind kind) {
+  const uint32_t n = static_cast<uint32_t>(state.range(0));
+  const impact::ExecConfig exec = exec_of(state);
+  const impact::AabbInput input = scene_boxes(BoxScene::kUniform, n).view();
+  FrameTimer timer;
+  size_t found = 0;
+  for (auto _ : state) {
+    auto bp = std::make_unique<impact::BroadPhase>(kind);
+    std::vector<impact::BodyPair> pairs;
+    timer.start();
+    const bool ok = check(state, bp->find_pairs(input, &pairs, exec));
+    state.SetIterationTime(timer.stop());
+    if (!ok) break;
+    found = pairs.size();
+    benchmark::DoNotOptimize(pairs.data());
+  }
+  report_frames(state, n, timer, found);
 }
 
 void BM_GridBroadPhase(benchmark::State& state) {
-  run_broad_phase(state, impact::BroadPhaseKind::kGrid);
+  run_broad_phase(state, impact::BroadPhaseKind::kGrid, BoxScene::kUniform);
 }
 void BM_LbvhBroadPhase(benchmark::State& state) {
-  run_broad_phase(state, impact::BroadPhaseKind::kLbvh);
+  run_broad_phase(state, impact::BroadPhaseKind::kLbvh, BoxScene::kUniform);
 }
 void BM_SweepAndPruneBroadPhase(benchmark::State& state) {
-  run_broad_phase(state, impact::BroadPhaseKind::kSweepAndPrune);
+  run_broad_phase(state, impact::BroadPhaseKind::kSweepAndPrune, BoxScene::kUniform);
+}
+void BM_GridClustered(benchmark::State& state) {
+  run_broad_phase(state, impact::BroadPhaseKind::kGrid, BoxScene::kClustered);
+}
+void BM_LbvhClustered(benchmark::State& state) {
+  run_broad_phase(state, impact::BroadPhaseKind::kLbvh, BoxScene::kClustered);
 }
 // Mixed sizes (100x): the grid switches to hierarchical levels.
 void BM_GridMixedSizes(benchmark::State& state) {
-  run_broad_phase(state, impact::BroadPhaseKind::kGrid, true);
+  run_broad_phase(state, impact::BroadPhaseKind::kGrid, BoxScene::kMixed);
 }
 void BM_LbvhMixedSizes(benchmark::State& state) {
-  run_broad_phase(state, impact::BroadPhaseKind::kLbvh, true);
+  run_broad_phase(state, impact::BroadPhaseKind::kLbvh, BoxScene::kMixed);
 }
 void BM_BruteForceBroadPhase(benchmark::State& state) {
-  run_broad_phase(state, impact::BroadPhaseKind::kBruteForce);
+  run_broad_phase(state, impact::BroadPhaseKind::kBruteForce, BoxScene::kUniform);
 }
+void BM_GridColdStart(benchmark::State& state) {
+  run_cold_start(state, impact::BroadPhaseKind::kGrid);
+}
+void BM_LbvhColdStart(benchmark::State& state) {
+  run_cold_start(state, impact::BroadPhaseKind::kLbvh);
+}
+
+// --- LBVH phases ----------------------------------------------------------------------------
+
+impact::BroadPhaseOptions lbvh_refit_options() {
+  impact::BroadPhaseOptions o;
+  o.kind = impact::BroadPhaseKind::kLbvh;
+  o.lbvh_update = impact::LbvhUpdate::kRefit;
+  // Episodes restart with a build every kCoherentFrames frames; never rebuild inside one.
+  o.lbvh_max_refits = std::numeric_limits<uint32_t>::max();
+  return o;
+}
+
+// Pairs of bp's current structure (untimed; for the pairs counter of phase benchmarks).
+size_t pair_count(benchmark::State& state, impact::BroadPhase& bp, const impact::ExecConfig& exec) {
+  std::vector<impact::BodyPair> pairs;
+  return check(state, bp.pairs(&pairs, exec)) ? pairs.size() : 0;
+}
+
+void BM_LbvhBuild(benchmark::State& state) {
+  const uint32_t n = static_cast<uint32_t>(state.range(0));
+  const impact::ExecConfig exec = exec_of(state);
+  const impact::AabbInput input = scene_boxes(BoxScene::kUniform, n).view();
+  impact::BroadPhase bp(impact::BroadPhaseKind::kLbvh);
+  if (!check(state, bp.build(input, exec))) return;
+  FrameTimer timer;
+  timer.start();
+  for (auto _ : state) {
+    if (!check(state, bp.build(input, exec))) break;
+    benchmark::ClobberMemory();
+  }
+  timer.stop();
+  report_frames(state, n, timer, pair_count(state, bp, exec), /*pair_rate=*/false);
+}
+
+void BM_LbvhTraverse(benchmark::State& state) {
+  const uint32_t n = static_cast<uint32_t>(state.range(0));
+  const impact::ExecConfig exec = exec_of(state);
+  impact::BroadPhase bp(impact::BroadPhaseKind::kLbvh);
+  if (!check(state, bp.build(scene_boxes(BoxScene::kUniform, n).view(), exec))) return;
+  std::vector<impact::BodyPair> pairs;
+  if (!check(state, bp.pairs(&pairs, exec))) return;
+  FrameTimer timer;
+  timer.start();
+  for (auto _ : state) {
+    if (!check(state, bp.pairs(&pairs, exec))) break;
+    benchmark::DoNotOptimize(pairs.data());
+    benchmark::ClobberMemory();
+  }
+  timer.stop();
+  report_frames(state, n, timer, pairs.size());
+}
+
+// --- frame to frame -------------------------------------------------------------------------
+
+// update() (+ pairs() when with_pairs) per frame on bp, built at each episode's frame 0.
+void run_coherent_api(benchmark::State& state, impact::BroadPhase& bp, BoxScene scene, bool with_pairs) {
+  const uint32_t n = static_cast<uint32_t>(state.range(0));
+  const impact::ExecConfig exec = exec_of(state);
+  std::vector<impact::BodyPair> pairs;
+  const bool ok = impact::bench::run_coherent(
+      state, scene_boxes(scene, n),
+      [&](const impact::bench::UniformBoxes& b) {
+        return check(state, bp.build(b.view(), exec)) && check(state, bp.pairs(&pairs, exec));
+      },
+      [&](const impact::bench::UniformBoxes& b) -> int64_t {
+        if (!check(state, bp.update(b.view(), exec))) return -1;
+        if (!with_pairs) return 0;
+        if (!check(state, bp.pairs(&pairs, exec))) return -1;
+        benchmark::DoNotOptimize(pairs.data());
+        return static_cast<int64_t>(pairs.size());
+      },
+      with_pairs);
+  // Refit alone finds no pairs: report those of the last refitted tree.
+  if (ok && !with_pairs) state.counters["pairs"] = static_cast<double>(pair_count(state, bp, exec));
+}
+
+void BM_LbvhRefit(benchmark::State& state) {
+  impact::BroadPhase bp(lbvh_refit_options());
+  run_coherent_api(state, bp, BoxScene::kUniform, /*with_pairs=*/false);
+}
+
+void coherent_grid(benchmark::State& state, BoxScene scene) {
+  impact::BroadPhase bp(impact::BroadPhaseKind::kGrid);
+  run_coherent_api(state, bp, scene, /*with_pairs=*/true);
+}
+void coherent_lbvh(benchmark::State& state, BoxScene scene) {
+  impact::BroadPhase bp(lbvh_refit_options());
+  run_coherent_api(state, bp, scene, /*with_pairs=*/true);
+}
+void BM_GridCoherent(benchmark::State& state) { coherent_grid(state, BoxScene::kUniform); }
+void BM_LbvhCoherent(benchmark::State& state) { coherent_lbvh(state, BoxScene::kUniform); }
+void BM_GridCoherentClustered(benchmark::State& state) { coherent_grid(state, BoxScene::kClustered); }
+void BM_LbvhCoherentClustered(benchmark::State& state) { coherent_lbvh(state, BoxScene::kClustered); }
+void BM_GridCoherentMixedSizes(benchmark::State& state) { coherent_grid(state, BoxScene::kMixed); }
+void BM_LbvhCoherentMixedSizes(benchmark::State& state) { coherent_lbvh(state, BoxScene::kMixed); }
+
+// --- tree quality ---------------------------------------------------------------------------
+
+// The binned-SAH reference cost of one scene and size (the build takes ~1-2 s at 1M, so
+// it is done once per run and kept).
+double binned_sah_of(BoxScene scene, uint32_t n) {
+  static std::map<std::pair<int, uint32_t>, double> cache;
+  const std::pair<int, uint32_t> key{static_cast<int>(scene), n};
+  if (auto it = cache.find(key); it != cache.end()) return it->second;
+  const impact::bench::UniformBoxes& b = scene_boxes(scene, n);
+  const impact::test::BinnedBvh bvh =
+      impact::test::build_binned_sah<32>({b.min_x, b.min_y, b.min_z, b.max_x, b.max_y, b.max_z});
+  return cache.emplace(key, impact::test::sah_cost(bvh)).first->second;
+}
+
+void run_sah_vs_binned(benchmark::State& state, BoxScene scene) {
+  const uint32_t n = static_cast<uint32_t>(state.range(0));
+  const impact::bench::UniformBoxes& b = scene_boxes(scene, n);
+  const impact::host::Executor exec(impact::Backend::kDefault, static_cast<uint32_t>(state.range(1)));
+  impact::host::LbvhBroadPhase lbvh;
+  impact::host::Buffer<impact::kernels::Pair> pairs;
+  const impact::kernels::AabbSoA soa{b.min_x.data(), b.min_y.data(), b.min_z.data(),
+                                     b.max_x.data(), b.max_y.data(), b.max_z.data()};
+  if (!check(state, lbvh.find_pairs(exec, soa, {nullptr, nullptr, nullptr}, n, &pairs))) return;
+  const double binned = binned_sah_of(scene, n);
+  double sah = 0.0;
+  for (auto _ : state) {
+    sah = lbvh.sah_cost(exec);
+    benchmark::DoNotOptimize(sah);
+  }
+  state.counters["lbvh_sah"] = sah;
+  state.counters["binned_sah"] = binned;
+  state.counters["sah_ratio"] = binned > 0.0 ? sah / binned : 0.0;
+  state.counters["morton_bits"] = lbvh.info().morton_bits;
+}
+void BM_LbvhSahVsBinned(benchmark::State& state) { run_sah_vs_binned(state, BoxScene::kUniform); }
+void BM_LbvhSahVsBinnedClustered(benchmark::State& state) { run_sah_vs_binned(state, BoxScene::kClustered); }
+void BM_LbvhSahVsBinnedMixedSizes(benchmark::State& state) { run_sah_vs_binned(state, BoxScene::kMixed); }
+
+// --- whole step -----------------------------------------------------------------------------
 
 // Steps before timing starts: by 2 s of simulated time the top of the grid has
 // landed, so timed steps see the full contact load rather than free fall.
@@ -101,31 +289,17 @@ constexpr int kWorldTimedSteps = 30;
 void BM_WorldStepBox(benchmark::State& state) {
   const uint32_t n = static_cast<uint32_t>(state.range(0));
   impact::bench::Scene scene;
-  if (impact::Status s = impact::bench::make_scene("box", n, impact::bench::kDefaultSeed, &scene); !s.ok()) {
-    state.SkipWithError(s.message().c_str());
-    return;
-  }
+  if (!check(state, impact::bench::make_scene("box", n, impact::bench::kDefaultSeed, &scene))) return;
   impact::WorldDesc desc;
   desc.threads = static_cast<uint32_t>(state.range(1));
   std::unique_ptr<impact::World> world;
-  if (impact::Status s = impact::bench::load_scene(scene, desc, &world); !s.ok()) {
-    state.SkipWithError(s.message().c_str());
-    return;
-  }
-  for (uint32_t i = 0; i < kWorldWarmupSteps; ++i) {
-    if (impact::Status s = world->step(); !s.ok()) {
-      state.SkipWithError(s.message().c_str());
-      return;
-    }
-  }
+  if (!check(state, impact::bench::load_scene(scene, desc, &world))) return;
+  for (uint32_t i = 0; i < kWorldWarmupSteps; ++i)
+    if (!check(state, world->step())) return;
   double pairs = 0.0, contacts = 0.0;
   const Clock::time_point t0 = Clock::now();
   for (auto _ : state) {
-    const impact::Status s = world->step();
-    if (!s.ok()) {
-      state.SkipWithError(s.message().c_str());
-      break;
-    }
+    if (!check(state, world->step())) break;
     pairs += static_cast<double>(world->last_step().pairs);
     contacts += static_cast<double>(world->last_step().contacts);
   }
@@ -137,31 +311,54 @@ void BM_WorldStepBox(benchmark::State& state) {
   state.counters["contacts"] = steps > 0 ? contacts / steps : 0.0;
 }
 
-BENCHMARK(BM_GridBroadPhase)
-    ->ArgsProduct({{10000, 100000, 1000000}, {1, 2}})
-    ->UseRealTime()
-    ->Unit(benchmark::kMillisecond);
-BENCHMARK(BM_LbvhBroadPhase)
-    ->ArgsProduct({{10000, 100000, 1000000}, {1, 2}})
-    ->UseRealTime()
-    ->Unit(benchmark::kMillisecond);
+// --- registration ---------------------------------------------------------------------------
+
+constexpr int64_t k10k = 10000, k100k = 100000, k1M = 1000000, k10M = 10000000;
+
+BENCHMARK(BM_GridBroadPhase)->ArgsProduct({{k10k, k100k, k1M}, {1, 2}})->UseRealTime()->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_LbvhBroadPhase)->ArgsProduct({{k10k, k100k, k1M}, {1, 2}})->UseRealTime()->Unit(benchmark::kMillisecond);
 // 1M would take ~10 s per call: a one-axis sweep meets ~n^(2/3) boxes per box in 3D.
 BENCHMARK(BM_SweepAndPruneBroadPhase)
-    ->ArgsProduct({{10000, 100000}, {1, 2}})
+    ->ArgsProduct({{k10k, k100k}, {1, 2}})
     ->UseRealTime()
     ->Unit(benchmark::kMillisecond);
-BENCHMARK(BM_GridMixedSizes)
-    ->ArgsProduct({{100000, 1000000}, {1, 2}})
-    ->UseRealTime()
+BENCHMARK(BM_GridClustered)->ArgsProduct({{k10k, k100k, k1M}, {1, 2}})->UseRealTime()->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_LbvhClustered)->ArgsProduct({{k10k, k100k, k1M}, {1, 2}})->UseRealTime()->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_GridMixedSizes)->ArgsProduct({{k100k, k1M}, {1, 2}})->UseRealTime()->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_LbvhMixedSizes)->ArgsProduct({{k100k, k1M}, {1, 2}})->UseRealTime()->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_BruteForceBroadPhase)->ArgsProduct({{k10k}, {1, 2}})->UseRealTime()->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_GridColdStart)->ArgsProduct({{k10k, k100k, k1M}, {1, 2}})->UseManualTime()->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_LbvhColdStart)->ArgsProduct({{k10k, k100k, k1M}, {1, 2}})->UseManualTime()->Unit(benchmark::kMillisecond);
+
+BENCHMARK(BM_LbvhBuild)->ArgsProduct({{k10k, k100k, k1M}, {1, 2}})->UseRealTime()->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_LbvhRefit)->ArgsProduct({{k10k, k100k, k1M}, {1, 2}})->UseManualTime()->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_LbvhTraverse)->ArgsProduct({{k10k, k100k, k1M}, {1, 2}})->UseRealTime()->Unit(benchmark::kMillisecond);
+
+BENCHMARK(BM_GridCoherent)->ArgsProduct({{k10k, k100k, k1M}, {1, 2}})->UseManualTime()->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_LbvhCoherent)->ArgsProduct({{k10k, k100k, k1M}, {1, 2}})->UseManualTime()->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_GridCoherentClustered)
+    ->ArgsProduct({{k10k, k100k, k1M}, {1, 2}})
+    ->UseManualTime()
     ->Unit(benchmark::kMillisecond);
-BENCHMARK(BM_LbvhMixedSizes)
-    ->ArgsProduct({{100000, 1000000}, {1, 2}})
-    ->UseRealTime()
+BENCHMARK(BM_LbvhCoherentClustered)
+    ->ArgsProduct({{k10k, k100k, k1M}, {1, 2}})
+    ->UseManualTime()
     ->Unit(benchmark::kMillisecond);
-BENCHMARK(BM_BruteForceBroadPhase)
-    ->ArgsProduct({{10000}, {1, 2}})
-    ->UseRealTime()
+BENCHMARK(BM_GridCoherentMixedSizes)
+    ->ArgsProduct({{k100k, k1M}, {1, 2}})
+    ->UseManualTime()
     ->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_LbvhCoherentMixedSizes)
+    ->ArgsProduct({{k100k, k1M}, {1, 2}})
+    ->UseManualTime()
+    ->Unit(benchmark::kMillisecond);
+
+// Tree quality: one thread (the cost does not depend on it); the reference build runs
+// once per scene and size, outside the timing.
+BENCHMARK(BM_LbvhSahVsBinned)->ArgsProduct({{k100k, k1M}, {1}})->Iterations(3)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_LbvhSahVsBinnedClustered)->ArgsProduct({{k100k, k1M}, {1}})->Iterations(3)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_LbvhSahVsBinnedMixedSizes)->ArgsProduct({{k100k, k1M}, {1}})->Iterations(3)->Unit(benchmark::kMillisecond);
+
 // A fixed step count, so every thread count times the same stretch of the same simulation.
 BENCHMARK(BM_WorldStepBox)
     ->ArgsProduct({{100000}, {1, 2}})
@@ -169,6 +366,41 @@ BENCHMARK(BM_WorldStepBox)
     ->UseRealTime()
     ->Unit(benchmark::kMillisecond);
 
+// 10M bodies, grid and LBVH, only with IMPACT_BENCH_LARGE=1 (see the top of this file).
+// A handful of iterations: each takes seconds.
+void register_large() {
+  const char* v = std::getenv("IMPACT_BENCH_LARGE");
+  if (v == nullptr || std::strcmp(v, "1") != 0) return;
+  struct Family {
+    const char* name;
+    void (*fn)(benchmark::State&);
+    bool manual_time;
+  };
+  const Family families[] = {
+      {"BM_GridBroadPhase", BM_GridBroadPhase, false}, {"BM_LbvhBroadPhase", BM_LbvhBroadPhase, false},
+      {"BM_GridClustered", BM_GridClustered, false},   {"BM_LbvhClustered", BM_LbvhClustered, false},
+      {"BM_GridMixedSizes", BM_GridMixedSizes, false}, {"BM_LbvhMixedSizes", BM_LbvhMixedSizes, false},
+      {"BM_LbvhBuild", BM_LbvhBuild, false},           {"BM_LbvhRefit", BM_LbvhRefit, true},
+      {"BM_LbvhTraverse", BM_LbvhTraverse, false},     {"BM_GridCoherent", BM_GridCoherent, true},
+      {"BM_LbvhCoherent", BM_LbvhCoherent, true},
+  };
+  for (const Family& f : families) {
+    benchmark::internal::Benchmark* b = benchmark::RegisterBenchmark(f.name, f.fn);
+    b->ArgsProduct({{k10M}, {1, 2}})->Iterations(3)->Unit(benchmark::kMillisecond);
+    if (f.manual_time)
+      b->UseManualTime();
+    else
+      b->UseRealTime();
+  }
+}
+
 }  // namespace
 
-BENCHMARK_MAIN();
+int main(int argc, char** argv) {
+  register_large();
+  benchmark::Initialize(&argc, argv);
+  if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
+  benchmark::RunSpecifiedBenchmarks();
+  benchmark::Shutdown();
+  return 0;
+}

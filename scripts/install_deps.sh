@@ -1,8 +1,17 @@
 #!/usr/bin/env bash
 # Installs the Debian packages impact needs, only those that are missing.
 # Non-interactive and idempotent; prints nothing when everything is present.
+#   --peers   also the peer libraries the micro-benchmarks compare against when found
+#             (bench/peers_bench.cpp): Bullet (libbullet-dev), FCL (libfcl-dev, libccd-dev)
 set -euo pipefail
 packages=(cmake g++ make libtbb-dev libeigen3-dev libembree-dev libgtest-dev libbenchmark-dev)
+for arg in "$@"; do
+  case "$arg" in
+    --peers) packages+=(pkg-config libbullet-dev libfcl-dev libccd-dev) ;;
+    -h|--help) sed -n '2,5s/^# \{0,1\}//p' "$0"; exit 0 ;;
+    *) echo "install_deps: unknown option '$arg' (known: --peers)" >&2; exit 2 ;;
+  esac
+done
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

@@ -207,4 +207,80 @@ UniformBoxes make_uniform_boxes(uint32_t n, float radius, double pairs_per_body,
   return b;
 }
 
+UniformBoxes make_clustered_boxes(uint32_t n, double pairs_per_body, uint64_t seed) {
+  // Two unit boxes overlap when their centres are within a 4 x 4 x 4 window; for m
+  // bodies in one isotropic gaussian of width sigma, E[pairs] = m^2 / 2 * 64 * integral
+  // of p^2 = m^2 / 2 * 64 / (8 pi^1.5 sigma^3), so pairs per body = 4 m / (pi^1.5 sigma^3).
+  constexpr float kRadius = 1.0f;
+  const double m = std::max(1.0, static_cast<double>(n) / kClusterBlobs);
+  const double sigma =
+      std::max(1.0, std::cbrt(4.0 * m / (std::pow(std::numbers::pi, 1.5) * std::max(pairs_per_body, 1e-3))));
+  UniformBoxes b;
+  b.side = static_cast<float>(16.0 * sigma);
+  for (auto* v : {&b.min_x, &b.min_y, &b.min_z, &b.max_x, &b.max_y, &b.max_z}) v->resize(n);
+  Rng rng(seed);
+  float centre[kClusterBlobs][3];
+  for (auto& c : centre)
+    for (float& x : c) x = rng.uniform() * b.side;
+  // Sum of 12 uniforms minus 6: mean 0, variance 1, within +-6 (Irwin-Hall).
+  auto gauss = [&rng] {
+    float s = 0.0f;
+    for (int k = 0; k < 12; ++k) s += rng.uniform();
+    return s - 6.0f;
+  };
+  const float sig = static_cast<float>(sigma);
+  for (uint32_t i = 0; i < n; ++i) {
+    const float* c = centre[rng.next_u64() % kClusterBlobs];
+    const float x = c[0] + sig * gauss(), y = c[1] + sig * gauss(), z = c[2] + sig * gauss();
+    b.min_x[i] = x - kRadius;
+    b.min_y[i] = y - kRadius;
+    b.min_z[i] = z - kRadius;
+    b.max_x[i] = x + kRadius;
+    b.max_y[i] = y + kRadius;
+    b.max_z[i] = z + kRadius;
+  }
+  return b;
+}
+
+BoxWalk::BoxWalk(const UniformBoxes& start, float step, uint64_t seed)
+    : boxes_(start), step_(step), rng_(seed) {
+  const size_t n = start.min_x.size();
+  for (auto* v : {&cx_, &cy_, &cz_, &hx_, &hy_, &hz_}) v->resize(n);
+  for (int k = 0; k < 3; ++k) lo_[k] = INFINITY, hi_[k] = -INFINITY;
+  const std::vector<float>* mins[3] = {&start.min_x, &start.min_y, &start.min_z};
+  const std::vector<float>* maxs[3] = {&start.max_x, &start.max_y, &start.max_z};
+  std::vector<float>* centres[3] = {&cx_, &cy_, &cz_};
+  std::vector<float>* halves[3] = {&hx_, &hy_, &hz_};
+  for (int k = 0; k < 3; ++k) {
+    for (size_t i = 0; i < n; ++i) {
+      const float lo = (*mins[k])[i], hi = (*maxs[k])[i];
+      (*centres[k])[i] = 0.5f * (lo + hi);
+      (*halves[k])[i] = 0.5f * (hi - lo);
+      lo_[k] = std::min(lo_[k], (*centres[k])[i]);
+      hi_[k] = std::max(hi_[k], (*centres[k])[i]);
+    }
+  }
+}
+
+void BoxWalk::advance() {
+  std::vector<float>* centres[3] = {&cx_, &cy_, &cz_};
+  const std::vector<float>* halves[3] = {&hx_, &hy_, &hz_};
+  std::vector<float>* mins[3] = {&boxes_.min_x, &boxes_.min_y, &boxes_.min_z};
+  std::vector<float>* maxs[3] = {&boxes_.max_x, &boxes_.max_y, &boxes_.max_z};
+  const size_t n = cx_.size();
+  for (size_t i = 0; i < n; ++i) {
+    for (int k = 0; k < 3; ++k) {
+      float c = (*centres[k])[i] + rng_.uniform(-step_, step_);
+      // Reflect at the walls (a step is far smaller than the box, so once is enough).
+      if (c < lo_[k]) c = std::min(2.0f * lo_[k] - c, hi_[k]);
+      if (c > hi_[k]) c = std::max(2.0f * hi_[k] - c, lo_[k]);
+      (*centres[k])[i] = c;
+      const float h = (*halves[k])[i];
+      (*mins[k])[i] = c - h;
+      (*maxs[k])[i] = c + h;
+    }
+  }
+  ++frame_;
+}
+
 }  // namespace impact::bench
