@@ -50,6 +50,55 @@ struct BroadPhaseOptions {
   uint32_t lbvh_max_refits = 1000;
 };
 
+// --- queries ("what is near me") ----------------------------------------------------------
+// Batched queries of the structure as last built or updated: every stored box hit by
+// each query, as CSR (QueryHits). Rules (docs/broadphase.md, "Queries"):
+//   AABB    [min, max] hits box b  <=>  min <= b.max and b.min <= max on every axis
+//                                       (touching counts, as for pairs)
+//   sphere  (centre, radius)       <=>  squared distance from the centre to the box
+//                                       <= radius^2, computed in double from the float
+//                                       inputs by one documented formula, so every
+//                                       structure returns the same boxes
+//   point   p                      <=>  b.min <= p <= b.max on every axis
+// plus, when the boxes were given a filter (layer/mask/is_static), (b.layer & mask) != 0
+// with the query's mask (all ones when `mask` is empty); without a filter masks are
+// ignored. Static flags play no part. In swept mode (AabbInput dx/dy/dz) the stored
+// boxes are the swept boxes.
+
+/// n box queries: SoA spans of equal length; mask empty or one per query.
+struct AabbQueries {
+  std::span<const float> min_x, min_y, min_z, max_x, max_y, max_z;
+  std::span<const uint32_t> mask = {};
+  size_t size() const { return min_x.size(); }
+};
+
+/// n sphere queries: centres (x, y, z) and radii (>= 0), m.
+struct SphereQueries {
+  std::span<const float> x, y, z, radius;
+  std::span<const uint32_t> mask = {};
+  size_t size() const { return x.size(); }
+};
+
+/// n point queries.
+struct PointQueries {
+  std::span<const float> x, y, z;
+  std::span<const uint32_t> mask = {};
+  size_t size() const { return x.size(); }
+};
+
+/// Answers of n queries: query i hit boxes hits[offsets[i], offsets[i + 1]) (box
+/// indices of the last build/update, ascending). offsets has n + 1 entries. The bytes
+/// are the same for every structure, backend and thread count.
+struct QueryHits {
+  std::vector<uint32_t> offsets;
+  std::vector<uint32_t> hits;
+  size_t size() const { return offsets.empty() ? 0 : offsets.size() - 1; }
+  /// The hits of query i (i < size()).
+  std::span<const uint32_t> of(size_t i) const {
+    return std::span<const uint32_t>(hits).subspan(offsets[i], offsets[i + 1] - offsets[i]);
+  }
+};
+
 class BroadPhaseImpl;
 
 /// Reusable broad phase: keeps its structure and scratch buffers between calls, so
@@ -92,6 +141,17 @@ class BroadPhase {
   const BroadPhaseOptions& options() const;
   /// Boxes in the structure (0 before the first build).
   size_t size() const;
+
+  /// Queries of the structure as of the last build / update / find_pairs, replacing
+  /// *out (see "queries" above). Fails with kInvalidArgument before any successful
+  /// build (or after a failed one), on a non-finite value or one beyond 1e18 in
+  /// magnitude, min > max, or a negative radius; kSizeMismatch on spans of unequal
+  /// length; the message names the query index and field. More than 2^32 - 1 hits in
+  /// one batch is kCapacityExceeded (split the batch). On error *out is unchanged.
+  /// Cost per structure: docs/broadphase.md.
+  Status query_aabbs(const AabbQueries& queries, QueryHits* out, const ExecConfig& exec = {});
+  Status query_spheres(const SphereQueries& queries, QueryHits* out, const ExecConfig& exec = {});
+  Status query_points(const PointQueries& queries, QueryHits* out, const ExecConfig& exec = {});
 
  private:
   std::unique_ptr<BroadPhaseImpl> impl_;

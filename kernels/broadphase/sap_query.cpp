@@ -1,0 +1,89 @@
+#include "kernels/broadphase/sap_query.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace impact::kernels {
+namespace {
+
+template <QueryShape S, bool kFiltered>
+void run(const SapView& v, uint32_t axis, double max_extent, const QueryView& qv, uint32_t* out_count,
+         HitSink& sink, Range r) {
+  const float* IMPACT_RESTRICT min0 = v.min[0];
+  const float* IMPACT_RESTRICT max0 = v.max[0];
+  const float* IMPACT_RESTRICT min1 = v.min[1];
+  const float* IMPACT_RESTRICT max1 = v.max[1];
+  const float* IMPACT_RESTRICT min2 = v.min[2];
+  const float* IMPACT_RESTRICT max2 = v.max[2];
+  const uint32_t* IMPACT_RESTRICT layer = v.layer;
+  // Original axis k is stored in array slot[k]; arrays 1 and 2 hold axis + 1, axis + 2.
+  const uint32_t a1 = axis == 2 ? 0 : axis + 1;
+  const uint32_t a2 = a1 == 2 ? 0 : a1 + 1;
+  uint32_t slot[3];
+  slot[axis] = 0, slot[a1] = 1, slot[a2] = 2;
+  for (uint32_t i = r.begin; i < r.end; ++i) {
+    const QueryItem q = make_query_item<S>(qv, i);
+    const float lo[3] = {q.min_x, q.min_y, q.min_z};
+    const float hi[3] = {q.max_x, q.max_y, q.max_z};
+    const float lo0 = lo[axis], hi0 = hi[axis], lo1 = lo[a1], hi1 = hi[a1], lo2 = lo[a2], hi2 = hi[a2];
+    const uint32_t mask = q.mask;
+    const uint64_t k0 = sink.k;
+    // Slab [lo0 - E, hi0]: the margin covers the rounding of lo0 - E and of E itself.
+    const double e = max_extent + (std::fabs(static_cast<double>(lo0)) + max_extent) * 0x1p-50;
+    const float start = float_down(static_cast<double>(lo0) - e);
+    const uint32_t first = static_cast<uint32_t>(std::lower_bound(min0, min0 + v.n, start) - min0);
+    const uint32_t last = static_cast<uint32_t>(std::upper_bound(min0 + first, min0 + v.n, hi0) - min0);
+    // Blocks of kSapPad slots; lanes at or past `last` fail min0 <= hi0 (sorted), and
+    // the sentinels after slot n fail every test, so no tail loop is needed.
+    for (uint32_t t = first; t < last; t += kSapPad) {
+      uint32_t hit[kSapPad];
+      for (uint32_t j = 0; j < kSapPad; ++j) {
+        const uint32_t u = t + j;
+        uint32_t h = static_cast<uint32_t>((min0[u] <= hi0) & (lo0 <= max0[u]) & (min1[u] <= hi1) &
+                                           (lo1 <= max1[u]) & (min2[u] <= hi2) & (lo2 <= max2[u]));
+        if constexpr (kFiltered) h &= static_cast<uint32_t>((layer[u] & mask) != 0);
+        hit[j] = h;
+      }
+      uint32_t any = 0;
+      for (uint32_t j = 0; j < kSapPad; ++j) any |= hit[j];
+      if (any == 0) continue;
+      for (uint32_t j = 0; j < kSapPad; ++j) {
+        if (!hit[j]) continue;
+        const uint32_t u = t + j;
+        if constexpr (S == QueryShape::kSphere) {
+          const struct {
+            float min_x, min_y, min_z, max_x, max_y, max_z;
+          } box{v.min[slot[0]][u], v.min[slot[1]][u], v.min[slot[2]][u],
+                v.max[slot[0]][u], v.max[slot[1]][u], v.max[slot[2]][u]};
+          if (!(sphere_box_dist2(q.cx, q.cy, q.cz, box) <= q.r2)) continue;
+        }
+        sink.push(v.index[u]);
+      }
+    }
+    out_count[i] = finish_query(sink, k0);
+  }
+}
+
+}  // namespace
+
+double sap_max_extent(const SapView& v, Range r) {
+  const float* IMPACT_RESTRICT min0 = v.min[0];
+  const float* IMPACT_RESTRICT max0 = v.max[0];
+  double e = 0.0;
+#pragma omp simd reduction(max : e)
+  for (uint32_t s = r.begin; s < r.end; ++s)
+    e = std::max(e, static_cast<double>(max0[s]) - static_cast<double>(min0[s]));
+  return e;
+}
+
+uint64_t sap_query(const SapView& v, uint32_t axis, double max_extent, const QueryView& q,
+                   uint32_t* IMPACT_RESTRICT out_count, uint32_t* IMPACT_RESTRICT out_hits, uint64_t capacity,
+                   Range r) {
+  HitSink sink{out_hits, capacity, 0};
+  dispatch_query(q.shape, v.layer != nullptr, [&]<QueryShape S, bool kF>() {
+    run<S, kF>(v, axis, max_extent, q, out_count, sink, r);
+  });
+  return sink.k;
+}
+
+}  // namespace impact::kernels
