@@ -95,11 +95,14 @@ struct alignas(32) SortedBox {
 };
 static_assert(sizeof(SortedBox) == 32);
 
-/// boxes_overlap for two SortedBox records: one 4-lane compare per half record
-/// (min_x..min_z + index, max_x..max_z + pad; the 4th lane is ignored), so the
-/// test costs two compares and one branch instead of six compare-and-branches.
-/// Same result as boxes_overlap (NaN-free inputs).
-IMPACT_INLINE bool sorted_boxes_overlap(const SortedBox& a, const SortedBox& b) {
+/// boxes_overlap for two 32-byte box records laid out as SortedBox (min_x..min_z +
+/// a 32-bit word, max_x..max_z + a 32-bit word, 16-byte aligned halves: SortedBox,
+/// LbvhNode): one 4-lane compare per half (the 4th lane is ignored), so the test
+/// costs two compares and one branch instead of six compare-and-branches. Same
+/// result as boxes_overlap (NaN-free inputs).
+template <class A, class B>
+IMPACT_INLINE bool records_overlap(const A& a, const B& b) {
+  static_assert(sizeof(A) == 32 && sizeof(B) == 32 && alignof(A) >= 16 && alignof(B) >= 16);
 #if defined(__SSE2__)
   const __m128 a_lo = _mm_load_ps(&a.min_x), a_hi = _mm_load_ps(&a.max_x);
   const __m128 b_lo = _mm_load_ps(&b.min_x), b_hi = _mm_load_ps(&b.max_x);
@@ -109,6 +112,8 @@ IMPACT_INLINE bool sorted_boxes_overlap(const SortedBox& a, const SortedBox& b) 
   return boxes_overlap(a, b);
 #endif
 }
+
+IMPACT_INLINE bool sorted_boxes_overlap(const SortedBox& a, const SortedBox& b) { return records_overlap(a, b); }
 
 /// Arrays in sorted-slot order, produced by grid_gather_packed.
 struct GridSorted {

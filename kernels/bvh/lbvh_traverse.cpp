@@ -5,7 +5,7 @@ namespace {
 
 template <class B>
 IMPACT_INLINE bool overlaps(const SortedBox& q, const B& b) {
-  return boxes_overlap(q, b);
+  return records_overlap(q, b);
 }
 
 template <class B>
