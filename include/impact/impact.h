@@ -5,4 +5,6 @@
 #include "impact/types.h"
 #include "impact/world.h"
 #include "impact/broadphase.h"
+#include "impact/firing.h"
+#include "impact/raycast.h"
 #include "impact/version.h"

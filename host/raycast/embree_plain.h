@@ -1,0 +1,30 @@
+// Reference loops over a RayScene's Embree scene for the benchmarks: what a user who
+// calls Embree directly would write (one rtcIntersect1 / rtcOccluded1 per ray, on the
+// calling thread), so bench/raycast_bench.cpp can measure the overhead of the batched
+// API against it. Embree stays inside host/raycast/.
+#pragma once
+
+#include <cstdint>
+#include <span>
+
+#include "impact/raycast.h"
+
+namespace impact::host {
+
+class TraceBackend;
+
+/// The top-level RTCScene of an Embree backend (as void*), or null for other backends.
+void* embree_top_scene(const TraceBackend* backend);
+
+/// The loops on a raw RTCScene (passed as void*).
+uint64_t embree_plain_closest_raw(void* rtc_scene, std::span<const Ray> rays);
+uint64_t embree_plain_any_raw(void* rtc_scene, std::span<const Segment> segments);
+
+/// rtcIntersect1 over rays (unit directions expected) on scene's Embree top-level scene;
+/// returns the number of rays that hit something (planes are not in Embree). Returns
+/// UINT64_MAX when the scene does not use Embree or is not committed.
+uint64_t embree_plain_closest(const RayScene& scene, std::span<const Ray> rays);
+/// rtcOccluded1 over segments; returns the number occluded.
+uint64_t embree_plain_any(const RayScene& scene, std::span<const Segment> segments);
+
+}  // namespace impact::host

@@ -1,0 +1,575 @@
+// RayScene (include/impact/raycast.h): validation at the API, host-owned SoA copies
+// of the geometry (host/raycast/scene_data.h), and the batched query driver shared by
+// both backends: per chunk of kRayGrain rays, validate and normalise -> backend trace
+// -> half-spaces (kernels/raycast/ray_bvh.h) -> hit record (point and normal from the
+// stored primitives, in double). Chunks depend only on the ray count, and each ray is
+// traced by exactly one call, so the output does not depend on the thread count.
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <string>
+
+#include <Eigen/Geometry>
+
+#include "host/raycast/embree_plain.h"
+#include "host/raycast/scene_data.h"
+#include "impact/world.h"
+
+namespace impact {
+
+namespace {
+
+constexpr uint32_t kRayGrain = 128;
+constexpr float kFloatMax = std::numeric_limits<float>::max();
+
+std::string fmt(float v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%g", static_cast<double>(v));
+  return buf;
+}
+std::string fmt3(const Eigen::Vector3f& v) { return "(" + fmt(v.x()) + ", " + fmt(v.y()) + ", " + fmt(v.z()) + ")"; }
+
+bool finite3(const Eigen::Vector3f& v) { return std::isfinite(v.x()) && std::isfinite(v.y()) && std::isfinite(v.z()); }
+
+// Unit direction, in double: squares of finite floats neither overflow nor underflow
+// to zero in double, so any finite non-zero float vector normalises. False for zero or
+// non-finite input.
+bool unit_direction(const Eigen::Vector3f& d, float out[3], double* length) {
+  const double x = d.x(), y = d.y(), z = d.z();
+  const double l2 = x * x + y * y + z * z;
+  if (!(l2 > 0.0) || !(l2 < std::numeric_limits<double>::infinity())) return false;
+  const double l = std::sqrt(l2);
+  const double inv = 1.0 / l;
+  out[0] = static_cast<float>(x * inv);
+  out[1] = static_cast<float>(y * inv);
+  out[2] = static_cast<float>(z * inv);
+  *length = l;
+  return true;
+}
+
+// Validates one ray and converts it; empty string on success, else the message tail.
+std::string to_query(const Ray& r, kernels::RayQuery* q) {
+  if (!finite3(r.origin)) return "origin must be finite, got " + fmt3(r.origin);
+  double len = 0.0;
+  if (!unit_direction(r.direction, q->d, &len))
+    return "direction must be finite and non-zero, got " + fmt3(r.direction);
+  if (std::isnan(r.tmax) || r.tmax < 0.0f) return "tmax must be >= 0 (or +inf), got " + fmt(r.tmax);
+  q->o[0] = r.origin.x();
+  q->o[1] = r.origin.y();
+  q->o[2] = r.origin.z();
+  q->tmax = std::min(r.tmax, kFloatMax);
+  q->mask = r.mask;
+  return {};
+}
+
+std::string to_query(const Segment& s, kernels::RayQuery* q) {
+  if (!finite3(s.from)) return "from must be finite, got " + fmt3(s.from);
+  if (!finite3(s.to)) return "to must be finite, got " + fmt3(s.to);
+  q->o[0] = s.from.x();
+  q->o[1] = s.from.y();
+  q->o[2] = s.from.z();
+  q->mask = s.mask;
+  const Eigen::Vector3f d = s.to - s.from;
+  double len = 0.0;
+  if (!finite3(d)) return "to - from overflows, got " + fmt3(s.to) + " - " + fmt3(s.from);
+  if (!unit_direction(d, q->d, &len)) {
+    q->d[0] = 0.0f;
+    q->d[1] = 0.0f;
+    q->d[2] = 1.0f;
+    q->tmax = 0.0f;  // from == to: never occluded
+    return {};
+  }
+  q->tmax = static_cast<float>(std::min(len, static_cast<double>(kFloatMax)));
+  return {};
+}
+
+// The hot-path forms: true when valid (the message comes from to_query, once).
+bool convert(const Ray& r, kernels::RayQuery* q) {
+  if (!finite3(r.origin) || std::isnan(r.tmax) || r.tmax < 0.0f) return false;
+  double len = 0.0;
+  if (!unit_direction(r.direction, q->d, &len)) return false;
+  q->o[0] = r.origin.x();
+  q->o[1] = r.origin.y();
+  q->o[2] = r.origin.z();
+  q->tmax = std::min(r.tmax, kFloatMax);
+  q->mask = r.mask;
+  return true;
+}
+
+bool convert(const Segment& s, kernels::RayQuery* q) {
+  if (!finite3(s.from) || !finite3(s.to) || !finite3(s.to - s.from)) return false;
+  return to_query(s, q).empty();  // never fails from here on; no allocation (empty string)
+}
+
+// Camera basis; empty string on success.
+struct CameraBasis {
+  Eigen::Vector3d pos, f, r, u;
+  double h, aspect;
+};
+
+std::string camera_basis(const Camera& c, CameraBasis* b) {
+  if (!finite3(c.position)) return "camera position must be finite, got " + fmt3(c.position);
+  if (!finite3(c.forward) || c.forward.squaredNorm() == 0.0f)
+    return "camera forward must be finite and non-zero, got " + fmt3(c.forward);
+  if (!finite3(c.up)) return "camera up must be finite, got " + fmt3(c.up);
+  if (!(c.vertical_fov > 0.0f && c.vertical_fov < 3.14159265f))
+    return "camera vertical_fov must be in (0, pi) radians, got " + fmt(c.vertical_fov);
+  if (!(c.aspect > 0.0f) || !std::isfinite(c.aspect)) return "camera aspect must be finite and > 0, got " + fmt(c.aspect);
+  b->pos = c.position.cast<double>();
+  b->f = c.forward.cast<double>().normalized();
+  const Eigen::Vector3d right = b->f.cross(c.up.cast<double>());
+  if (!(right.norm() > 1e-9 * c.up.cast<double>().norm()) || c.up.squaredNorm() == 0.0f)
+    return "camera up must be non-zero and not parallel to forward, got " + fmt3(c.up);
+  b->r = right.normalized();
+  b->u = b->r.cross(b->f);
+  b->h = std::tan(0.5 * static_cast<double>(c.vertical_fov));
+  b->aspect = c.aspect;
+  return {};
+}
+
+Ray camera_ray(const CameraBasis& b, const Eigen::Vector2f& s, uint32_t mask) {
+  const double x = (2.0 * s.x() - 1.0) * b.h * b.aspect;
+  const double y = (1.0 - 2.0 * s.y()) * b.h;
+  Ray r;
+  r.origin = b.pos.cast<float>();
+  r.direction = (b.f + x * b.r + y * b.u).normalized().cast<float>();
+  r.tmax = std::numeric_limits<float>::infinity();
+  r.mask = mask;
+  return r;
+}
+
+Status api_error(StatusCode code, const std::string& msg) { return Status(code, msg); }
+
+}  // namespace
+
+// ------------------------------------------------------------------------------------
+class RaySceneImpl {
+ public:
+  RaySceneDesc desc;
+  host::Executor exec;
+  host::SceneData data;
+  host::SceneChanges changes;
+  std::unique_ptr<host::TraceBackend> backend;
+  RaySceneInfo info;
+
+  explicit RaySceneImpl(const RaySceneDesc& d) : desc(d), exec(d.backend_threads, d.threads) {}
+
+  bool pending() const { return changes.any(); }
+  static const RaySceneImpl* of(const RayScene& s) { return s.impl_.get(); }
+
+  // Finalises best into a RayHit (point, normal from the stored primitives).
+  void finish(const kernels::RayQuery& q, const kernels::RayBest& b, RayHit* out) const {
+    RayHit h;
+    if (b.kind == kernels::kRayHitNone || q.tmax == 0.0f) {
+      *out = h;
+      return;
+    }
+    const Eigen::Vector3d o(q.o[0], q.o[1], q.o[2]);
+    const Eigen::Vector3d d(q.d[0], q.d[1], q.d[2]);
+    const Eigen::Vector3d p = o + static_cast<double>(b.t) * d;
+    Eigen::Vector3d n = Eigen::Vector3d::Zero();
+    const host::SceneData& s = data;
+    switch (b.kind) {
+      case kernels::kRayHitTriangle: {
+        h.kind = HitKind::kTriangle;
+        const auto it = std::upper_bound(s.mesh_first_tri.begin(), s.mesh_first_tri.end(), b.prim);
+        const uint32_t mesh = static_cast<uint32_t>(it - s.mesh_first_tri.begin()) - 1;
+        h.id = mesh;
+        h.prim = b.prim - s.mesh_first_tri[mesh];
+        auto vert = [&](int k) {
+          const float* v = s.vertices.data() + 3 * size_t{s.indices[3 * size_t{b.prim} + k]};
+          return Eigen::Vector3d(v[0], v[1], v[2]);
+        };
+        const Eigen::Vector3d v0 = vert(0);
+        n = (vert(1) - v0).cross(vert(2) - v0);
+        break;
+      }
+      case kernels::kRayHitSphere: {
+        h.kind = HitKind::kSphere;
+        h.id = b.prim;
+        if (b.prim < s.s_body.size()) h.body = s.s_body[b.prim];
+        if (b.t > 0.0f) n = p - Eigen::Vector3d(s.sx[b.prim], s.sy[b.prim], s.sz[b.prim]);
+        break;
+      }
+      case kernels::kRayHitCapsule: {
+        h.kind = HitKind::kCapsule;
+        h.id = b.prim;
+        if (b.t > 0.0f) {
+          const uint32_t i = b.prim;
+          const Eigen::Vector3d a(s.ax[i], s.ay[i], s.az[i]), e(s.bx[i], s.by[i], s.bz[i]);
+          const Eigen::Vector3d ab = e - a;
+          const double l2 = ab.squaredNorm();
+          const double u = l2 > 0.0 ? std::clamp((p - a).dot(ab) / l2, 0.0, 1.0) : 0.0;
+          n = p - (a + u * ab);
+        }
+        break;
+      }
+      case kernels::kRayHitPlane: {
+        h.kind = HitKind::kPlane;
+        h.id = b.prim;
+        const kernels::PlaneRecord& pl = s.planes[b.prim];
+        if (b.t > 0.0f) n = Eigen::Vector3d(pl.n[0], pl.n[1], pl.n[2]);
+        break;
+      }
+      default: break;
+    }
+    const double nl = n.norm();
+    if (nl > 0.0) {
+      n /= nl;
+      if (n.dot(d) > 0.0) n = -n;
+    } else {
+      n = -d;
+    }
+    h.t = b.t;
+    h.point = p.cast<float>();
+    h.normal = n.cast<float>();
+    *out = h;
+  }
+
+  // Chunked closest-hit over rays produced by source(i, &query) -> false when invalid;
+  // describe(i) then gives the message of the first invalid one (off the hot path).
+  template <class Source, class Describe>
+  Status closest(size_t n, const char* what, Source&& source, Describe&& describe, RayHit* out) const {
+    if (pending()) return api_error(StatusCode::kInvalidArgument, "RayScene: geometry changed since the last commit(); call commit() before querying");
+    if (n > 0xffffffffu) return api_error(StatusCode::kInvalidArgument, std::string("too many ") + what + "s in one call (at most 2^32 - 1)");
+    const uint32_t chunks = host::chunk_count(n, kRayGrain);
+    std::vector<uint32_t> bad(chunks, 0xffffffffu);
+    exec.for_each_chunk(n, kRayGrain, [&](uint32_t b, uint32_t e, uint32_t c) {
+      kernels::RayQuery q[kRayGrain] = {};
+      kernels::RayBest best[kRayGrain];
+      const uint32_t m = e - b;
+      for (uint32_t k = 0; k < m; ++k) {
+        if (!source(b + k, &q[k])) {
+          bad[c] = b + k;
+          return;
+        }
+        best[k] = {q[k].tmax, kernels::kRayHitNone, 0};
+      }
+      if (backend) backend->closest(q, best, m);
+      kernels::ray_closest_planes(data.planes.data(), static_cast<uint32_t>(data.planes.size()), q, best, {0, m});
+      for (uint32_t k = 0; k < m; ++k) finish(q[k], best[k], &out[b + k]);
+    });
+    for (uint32_t c = 0; c < chunks; ++c)
+      if (bad[c] != 0xffffffffu)
+        return api_error(StatusCode::kInvalidArgument, std::string(what) + " " + std::to_string(bad[c]) + ": " + describe(bad[c]));
+    return Status();
+  }
+};
+
+// ------------------------------------------------------------------------------------
+RayScene::RayScene(std::unique_ptr<RaySceneImpl> impl) : impl_(std::move(impl)) {}
+RayScene::~RayScene() = default;
+
+Status RayScene::create(const RaySceneDesc& desc, std::unique_ptr<RayScene>* out) {
+  if (out == nullptr) return Status(StatusCode::kInvalidArgument, "RayScene::create: out is null");
+  out->reset();
+  if (desc.packet_width != 1 && desc.packet_width != 4 && desc.packet_width != 8 && desc.packet_width != 16)
+    return Status(StatusCode::kInvalidArgument,
+                  "RaySceneDesc: packet_width must be 1, 4, 8 or 16, got " + std::to_string(desc.packet_width));
+  if (!backend_available(desc.backend_threads))
+    return Status(StatusCode::kUnsupported, std::string("RaySceneDesc: thread backend ") +
+                                                to_string(desc.backend_threads) + " is not built in");
+  auto impl = std::make_unique<RaySceneImpl>(desc);
+  if (desc.backend == RayBackend::kEmbree) {
+    Status s;
+    impl->backend = host::make_embree_backend(desc, impl->data, impl->exec.threads(), &s);
+    if (!s.ok()) return s;
+  } else if (desc.backend == RayBackend::kLbvh) {
+    impl->backend = host::make_lbvh_backend(desc);
+  } else {
+    return Status(StatusCode::kInvalidArgument, "RaySceneDesc: unknown backend");
+  }
+  out->reset(new RayScene(std::move(impl)));
+  return Status();
+}
+
+Status RayScene::add_mesh(const Eigen::Ref<const Eigen::Matrix3Xf>& vertices,
+                          const Eigen::Ref<const Eigen::Matrix<uint32_t, 3, Eigen::Dynamic>>& triangles,
+                          uint32_t layer, MeshHandle* out) {
+  host::SceneData& d = impl_->data;
+  const uint64_t nv = static_cast<uint64_t>(vertices.cols()), nt = static_cast<uint64_t>(triangles.cols());
+  if (d.vertices.size() / 3 + nv >= (1ull << 32) || d.triangle_count() + nt >= (1ull << 30))
+    return Status(StatusCode::kCapacityExceeded, "add_mesh: the scene holds at most 2^30 - 1 triangles and 2^32 - 1 vertices");
+  for (uint64_t i = 0; i < nv; ++i)
+    if (!vertices.col(static_cast<Eigen::Index>(i)).allFinite())
+      return Status(StatusCode::kInvalidArgument, "add_mesh: vertex " + std::to_string(i) + " must be finite, got " +
+                                                      fmt3(vertices.col(static_cast<Eigen::Index>(i))));
+  for (uint64_t t = 0; t < nt; ++t)
+    for (int k = 0; k < 3; ++k) {
+      const uint32_t v = triangles(k, static_cast<Eigen::Index>(t));
+      if (v >= nv)
+        return Status(StatusCode::kInvalidArgument, "add_mesh: triangle " + std::to_string(t) + " vertex " +
+                                                        std::to_string(k) + " index " + std::to_string(v) +
+                                                        " out of range (" + std::to_string(nv) + " vertices)");
+    }
+  const uint32_t v0 = static_cast<uint32_t>(d.vertices.size() / 3);
+  if (d.mesh_first_tri.empty()) {
+    d.mesh_first_tri.push_back(0);
+    d.mesh_first_vertex.push_back(0);
+  }
+  d.vertices.reserve(d.vertices.size() + 3 * nv);
+  for (uint64_t i = 0; i < nv; ++i)
+    for (int k = 0; k < 3; ++k) d.vertices.push_back(vertices(k, static_cast<Eigen::Index>(i)));
+  for (uint64_t t = 0; t < nt; ++t) {
+    for (int k = 0; k < 3; ++k) d.indices.push_back(v0 + triangles(k, static_cast<Eigen::Index>(t)));
+    d.tri_layer.push_back(layer);
+  }
+  d.mesh_first_tri.push_back(d.triangle_count());
+  d.mesh_first_vertex.push_back(static_cast<uint32_t>(d.vertices.size() / 3));
+  d.mesh_layer.push_back(layer);
+  ++impl_->changes.meshes_added;
+  if (out) out->id = d.mesh_count() - 1;
+  return Status();
+}
+
+namespace {
+
+template <class T>
+void assign(host::Buffer<T>& dst, std::span<const T> src) {
+  dst.assign(src.begin(), src.end());
+}
+
+}  // namespace
+
+Status RayScene::set_spheres(std::span<const float> x, std::span<const float> y, std::span<const float> z,
+                             std::span<const float> radius, std::span<const uint32_t> layer) {
+  const size_t n = x.size();
+  if (y.size() != n || z.size() != n || radius.size() != n || (!layer.empty() && layer.size() != n))
+    return Status(StatusCode::kSizeMismatch, "set_spheres: x, y, z, radius (and layer, when given) must have equal sizes, got " +
+                                                 std::to_string(n) + ", " + std::to_string(y.size()) + ", " +
+                                                 std::to_string(z.size()) + ", " + std::to_string(radius.size()) +
+                                                 ", " + std::to_string(layer.size()));
+  if (n + impl_->data.capsule_count() >= (1u << 30))
+    return Status(StatusCode::kCapacityExceeded, "set_spheres: spheres + capsules must be < 2^30");
+  for (size_t i = 0; i < n; ++i) {
+    if (!std::isfinite(x[i]) || !std::isfinite(y[i]) || !std::isfinite(z[i]))
+      return Status(StatusCode::kInvalidArgument, "sphere " + std::to_string(i) + ": centre must be finite, got (" +
+                                                      fmt(x[i]) + ", " + fmt(y[i]) + ", " + fmt(z[i]) + ")");
+    if (!(radius[i] > 0.0f) || !std::isfinite(radius[i]))
+      return Status(StatusCode::kInvalidArgument,
+                    "sphere " + std::to_string(i) + ": radius must be finite and > 0, got " + fmt(radius[i]));
+  }
+  host::SceneData& d = impl_->data;
+  impl_->changes.spheres = true;
+  impl_->changes.spheres_resized |= d.sphere_count() != n;
+  assign(d.sx, x);
+  assign(d.sy, y);
+  assign(d.sz, z);
+  assign(d.sr, radius);
+  if (layer.empty())
+    d.s_layer.assign(n, 1u);
+  else
+    assign(d.s_layer, layer);
+  d.s_body.clear();
+  return Status();
+}
+
+Status RayScene::sync_spheres(const World& world) {
+  const BodyArrays b = world.bodies();
+  Status s = set_spheres(b.pos_x, b.pos_y, b.pos_z, b.radius, b.layer);
+  if (!s.ok()) return s;
+  impl_->data.s_body.assign(b.handles.begin(), b.handles.end());
+  return Status();
+}
+
+Status RayScene::set_capsules(const Eigen::Ref<const Eigen::Matrix3Xf>& a, const Eigen::Ref<const Eigen::Matrix3Xf>& b,
+                              std::span<const float> radius, std::span<const uint32_t> layer) {
+  const size_t n = static_cast<size_t>(a.cols());
+  if (static_cast<size_t>(b.cols()) != n || radius.size() != n || (!layer.empty() && layer.size() != n))
+    return Status(StatusCode::kSizeMismatch, "set_capsules: a, b, radius (and layer, when given) must have equal sizes, got " +
+                                                 std::to_string(n) + ", " + std::to_string(b.cols()) + ", " +
+                                                 std::to_string(radius.size()) + ", " + std::to_string(layer.size()));
+  if (n + impl_->data.sphere_count() >= (1u << 30))
+    return Status(StatusCode::kCapacityExceeded, "set_capsules: spheres + capsules must be < 2^30");
+  for (size_t i = 0; i < n; ++i) {
+    const auto col = static_cast<Eigen::Index>(i);
+    if (!a.col(col).allFinite()) return Status(StatusCode::kInvalidArgument, "capsule " + std::to_string(i) + ": a must be finite, got " + fmt3(a.col(col)));
+    if (!b.col(col).allFinite()) return Status(StatusCode::kInvalidArgument, "capsule " + std::to_string(i) + ": b must be finite, got " + fmt3(b.col(col)));
+    if (!(radius[i] > 0.0f) || !std::isfinite(radius[i]))
+      return Status(StatusCode::kInvalidArgument,
+                    "capsule " + std::to_string(i) + ": radius must be finite and > 0, got " + fmt(radius[i]));
+  }
+  host::SceneData& d = impl_->data;
+  impl_->changes.capsules = true;
+  impl_->changes.capsules_resized |= d.capsule_count() != n;
+  for (host::Buffer<float>* v : {&d.ax, &d.ay, &d.az, &d.bx, &d.by, &d.bz}) v->resize(n);
+  for (size_t i = 0; i < n; ++i) {
+    const auto col = static_cast<Eigen::Index>(i);
+    d.ax[i] = a(0, col);
+    d.ay[i] = a(1, col);
+    d.az[i] = a(2, col);
+    d.bx[i] = b(0, col);
+    d.by[i] = b(1, col);
+    d.bz[i] = b(2, col);
+  }
+  assign(d.cr, radius);
+  if (layer.empty())
+    d.c_layer.assign(n, 1u);
+  else
+    assign(d.c_layer, layer);
+  return Status();
+}
+
+Status RayScene::set_planes(const Eigen::Ref<const Eigen::Matrix3Xf>& normals, std::span<const float> offsets,
+                            std::span<const uint32_t> layer) {
+  const size_t n = static_cast<size_t>(normals.cols());
+  if (offsets.size() != n || (!layer.empty() && layer.size() != n))
+    return Status(StatusCode::kSizeMismatch, "set_planes: normals, offsets (and layer, when given) must have equal sizes, got " +
+                                                 std::to_string(n) + ", " + std::to_string(offsets.size()) + ", " +
+                                                 std::to_string(layer.size()));
+  host::Buffer<kernels::PlaneRecord> planes(n);
+  for (size_t i = 0; i < n; ++i) {
+    const auto col = static_cast<Eigen::Index>(i);
+    float u[3];
+    double len = 0.0;
+    if (!unit_direction(normals.col(col), u, &len))
+      return Status(StatusCode::kInvalidArgument, "plane " + std::to_string(i) + ": normal must be finite and non-zero, got " +
+                                                      fmt3(normals.col(col)));
+    if (!std::isfinite(offsets[i]))
+      return Status(StatusCode::kInvalidArgument, "plane " + std::to_string(i) + ": offset must be finite, got " + fmt(offsets[i]));
+    // dot(n, x) <= offset with n scaled to unit: the offset scales by 1 / |n|.
+    planes[i] = {{u[0], u[1], u[2]}, static_cast<float>(offsets[i] / len), layer.empty() ? 1u : layer[i]};
+  }
+  impl_->data.planes = std::move(planes);
+  return Status();
+}
+
+Status RayScene::commit() {
+  const auto t0 = std::chrono::steady_clock::now();
+  bool rebuilt = false;
+  if (impl_->backend && impl_->changes.any()) {
+    Status s = impl_->backend->commit(impl_->exec, impl_->data, impl_->changes, &rebuilt);
+    if (!s.ok()) return s;
+  }
+  impl_->changes = {};
+  RaySceneInfo& in = impl_->info;
+  const host::SceneData& d = impl_->data;
+  in.meshes = d.mesh_count();
+  in.triangles = d.triangle_count();
+  in.spheres = d.sphere_count();
+  in.capsules = d.capsule_count();
+  in.planes = static_cast<uint32_t>(d.planes.size());
+  in.dynamic_rebuilt = rebuilt;
+  in.commit_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  return Status();
+}
+
+Status RayScene::closest_hit(std::span<const Ray> rays, std::span<RayHit> out) const {
+  if (out.size() != rays.size())
+    return Status(StatusCode::kSizeMismatch, "closest_hit: out has " + std::to_string(out.size()) + " entries for " +
+                                                 std::to_string(rays.size()) + " rays");
+  return impl_->closest(
+      rays.size(), "ray", [&](uint32_t i, kernels::RayQuery* q) { return convert(rays[i], q); },
+      [&](uint32_t i) {
+        kernels::RayQuery q;
+        return to_query(rays[i], &q);
+      },
+      out.data());
+}
+
+Status RayScene::any_hit(std::span<const Segment> segments, std::span<uint8_t> out) const {
+  if (out.size() != segments.size())
+    return Status(StatusCode::kSizeMismatch, "any_hit: out has " + std::to_string(out.size()) + " entries for " +
+                                                 std::to_string(segments.size()) + " segments");
+  if (impl_->pending())
+    return Status(StatusCode::kInvalidArgument, "RayScene: geometry changed since the last commit(); call commit() before querying");
+  const size_t n = segments.size();
+  if (n > 0xffffffffu) return Status(StatusCode::kInvalidArgument, "too many segments in one call (at most 2^32 - 1)");
+  const uint32_t chunks = host::chunk_count(n, kRayGrain);
+  std::vector<uint32_t> bad(chunks, 0xffffffffu);
+  const RaySceneImpl& im = *impl_;
+  im.exec.for_each_chunk(n, kRayGrain, [&](uint32_t b, uint32_t e, uint32_t c) {
+    kernels::RayQuery q[kRayGrain] = {};
+    uint8_t hit[kRayGrain];
+    const uint32_t m = e - b;
+    for (uint32_t k = 0; k < m; ++k) {
+      if (!convert(segments[b + k], &q[k])) {
+        bad[c] = b + k;
+        return;
+      }
+      hit[k] = q[k].tmax == 0.0f ? 2 : 0;  // 2: zero length, skipped by every pass
+    }
+    kernels::ray_any_planes(im.data.planes.data(), static_cast<uint32_t>(im.data.planes.size()), q, hit, {0, m});
+    if (im.backend) im.backend->any(q, hit, m);
+    for (uint32_t k = 0; k < m; ++k) out[b + k] = hit[k] == 1 ? 1 : 0;
+  });
+  for (uint32_t c = 0; c < chunks; ++c)
+    if (bad[c] != 0xffffffffu)
+      return Status(StatusCode::kInvalidArgument, "segment " + std::to_string(bad[c]) + ": " + [&] {
+        kernels::RayQuery q;
+        return to_query(segments[bad[c]], &q);
+      }());
+  return Status();
+}
+
+Status RayScene::pick(const Camera& camera, std::span<const Eigen::Vector2f> screen, uint32_t mask,
+                      std::span<RayHit> out) const {
+  if (out.size() != screen.size())
+    return Status(StatusCode::kSizeMismatch, "pick: out has " + std::to_string(out.size()) + " entries for " +
+                                                 std::to_string(screen.size()) + " screen points");
+  CameraBasis basis;
+  if (std::string e = camera_basis(camera, &basis); !e.empty()) return Status(StatusCode::kInvalidArgument, "pick: " + e);
+  auto ray_of = [&](uint32_t i) { return camera_ray(basis, screen[i], mask); };
+  return impl_->closest(
+      screen.size(), "screen point",
+      [&](uint32_t i, kernels::RayQuery* q) {
+        return std::isfinite(screen[i].x()) && std::isfinite(screen[i].y()) && convert(ray_of(i), q);
+      },
+      [&](uint32_t i) -> std::string {
+        const Eigen::Vector2f& s = screen[i];
+        if (!std::isfinite(s.x()) || !std::isfinite(s.y())) return "must be finite, got (" + fmt(s.x()) + ", " + fmt(s.y()) + ")";
+        kernels::RayQuery q;
+        return "camera ray: " + to_query(ray_of(i), &q);
+      },
+      out.data());
+}
+
+Status RayScene::set_threads(Backend backend, uint32_t threads) {
+  if (!backend_available(backend))
+    return Status(StatusCode::kUnsupported, std::string("set_threads: backend ") + to_string(backend) + " is not built in");
+  impl_->exec = host::Executor(backend, threads);
+  impl_->desc.backend_threads = backend;
+  impl_->desc.threads = threads;
+  if (impl_->backend) impl_->backend->set_threads(impl_->exec.threads());
+  return Status();
+}
+
+const RaySceneDesc& RayScene::desc() const { return impl_->desc; }
+const RaySceneInfo& RayScene::info() const { return impl_->info; }
+
+Status camera_rays(const Camera& camera, std::span<const Eigen::Vector2f> screen, uint32_t mask, std::span<Ray> out) {
+  if (out.size() != screen.size())
+    return Status(StatusCode::kSizeMismatch, "camera_rays: out has " + std::to_string(out.size()) + " entries for " +
+                                                 std::to_string(screen.size()) + " screen points");
+  CameraBasis basis;
+  if (std::string e = camera_basis(camera, &basis); !e.empty()) return Status(StatusCode::kInvalidArgument, "camera_rays: " + e);
+  for (size_t i = 0; i < screen.size(); ++i) {
+    if (!std::isfinite(screen[i].x()) || !std::isfinite(screen[i].y()))
+      return Status(StatusCode::kInvalidArgument, "camera_rays: screen point " + std::to_string(i) + " must be finite");
+    out[i] = camera_ray(basis, screen[i], mask);
+  }
+  return Status();
+}
+
+// ------------------------------------------------------------------------------------
+namespace host {
+
+uint64_t embree_plain_closest(const RayScene& scene, std::span<const Ray> rays) {
+  const RaySceneImpl* impl = RaySceneImpl::of(scene);
+  void* top = embree_top_scene(impl->backend.get());
+  if (top == nullptr || impl->pending()) return UINT64_MAX;
+  return embree_plain_closest_raw(top, rays);
+}
+
+uint64_t embree_plain_any(const RayScene& scene, std::span<const Segment> segments) {
+  const RaySceneImpl* impl = RaySceneImpl::of(scene);
+  void* top = embree_top_scene(impl->backend.get());
+  if (top == nullptr || impl->pending()) return UINT64_MAX;
+  return embree_plain_any_raw(top, segments);
+}
+
+}  // namespace host
+
+}  // namespace impact

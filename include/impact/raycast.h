@@ -1,0 +1,190 @@
+// RayScene: batched ray queries (closest hit for picking, any hit for line of sight)
+// against static triangle meshes, dynamic spheres and capsules, and static half-spaces,
+// through Embree 3 or through impact's own LBVH (docs/raycast.md).
+//
+// Rules (the same for both backends; tests/host/raycast_test.cpp checks them against a
+// double-precision brute force):
+//  - A ray's direction need not be unit; it is normalised, and every distance (tmax, t)
+//    is in metres along it. Hits have 0 <= t <= tmax; tmax == 0 never hits.
+//  - Spheres, capsules and half-spaces are solid: a ray that starts inside or on one
+//    hits it at t = 0, with point = origin and normal = -direction.
+//  - Triangles are two-sided; edges and vertices belong to every triangle sharing them
+//    (the LBVH path gives the tie to the lower triangle index, Embree to either one);
+//    a ray lying in a triangle's plane misses it.
+//  - The normal is unit and faces the ray (dot(normal, direction) <= 0).
+//  - Layers: a primitive is seen by a ray iff (primitive layer & ray mask) != 0.
+//  - Segments (any hit) are closed: a primitive touching either end point occludes.
+// Not yet: boxes, convex polyhedra and compounds (they arrive with the narrow-phase
+// proxies); instancing of meshes.
+//
+// Thread safety: queries are const and may run concurrently; the setters and commit()
+// must not overlap any other call on the same scene.
+#pragma once
+
+#include <cstdint>
+#include <limits>
+#include <memory>
+#include <span>
+
+#include <Eigen/Core>
+
+#include "impact/status.h"
+#include "impact/types.h"
+
+namespace impact {
+
+class World;
+
+/// Which engine traces the rays.
+enum class RayBackend : int {
+  kEmbree = 0,  ///< Embree 3 (two-level: static meshes in their own instanced scene)
+  kLbvh = 1,    ///< impact's LBVH (Karras build, ordered traversal); bit-identical across threads
+};
+
+/// How dynamic geometry (spheres, capsules) is brought up to date by commit() when only
+/// its positions changed (same counts). Embree: the geometry's build quality; LBVH:
+/// refit keeps the tree topology and recomputes bounds, rebuild re-sorts.
+enum class DynamicUpdate : int {
+  kRefit = 0,          ///< Embree RTC_BUILD_QUALITY_REFIT; LBVH refit
+  kRebuildLow = 1,     ///< Embree RTC_BUILD_QUALITY_LOW; LBVH rebuild
+  kRebuildMedium = 2,  ///< Embree RTC_BUILD_QUALITY_MEDIUM; LBVH rebuild
+};
+
+/// How Embree represents spheres.
+enum class EmbreeSpheres : int {
+  /// User geometry calling impact's ray-sphere kernel: exactly the rules above.
+  kUserGeometry = 0,
+  /// Embree's built-in sphere points (RTC_GEOMETRY_TYPE_SPHERE_POINT). Faster to
+  /// trace, but a ray starting inside a sphere hits its far side instead of t = 0.
+  kBuiltin = 1,
+};
+
+/// Settings of a RayScene.
+struct RaySceneDesc {
+  RayBackend backend = RayBackend::kEmbree;
+  DynamicUpdate dynamic_update = DynamicUpdate::kRefit;
+  EmbreeSpheres embree_spheres = EmbreeSpheres::kUserGeometry;
+  /// Embree: rays per rtcIntersectN/rtcOccludedN call: 1, 4, 8 or 16 (packets help
+  /// coherent rays such as a camera grid; measured in docs/raycast.md).
+  uint32_t packet_width = 1;
+  /// Embree RTC_SCENE_FLAG_ROBUST on the static meshes: watertight edges, a bit slower.
+  bool robust = true;
+  Backend backend_threads = Backend::kDefault;  ///< thread runtime of the batched queries
+  uint32_t threads = 0;                         ///< 0 = all hardware threads
+};
+
+/// Refers to a static triangle mesh of a RayScene.
+struct MeshHandle {
+  uint32_t id = 0xffffffffu;
+  bool is_null() const { return id == 0xffffffffu; }
+};
+
+/// One ray. direction must be finite and non-zero; origin finite; tmax >= 0 (may be +inf).
+struct Ray {
+  Eigen::Vector3f origin = Eigen::Vector3f::Zero();
+  Eigen::Vector3f direction = Eigen::Vector3f::UnitZ();
+  float tmax = std::numeric_limits<float>::infinity();  ///< m along the normalised direction
+  uint32_t mask = 0xffffffffu;                           ///< layers the ray sees
+};
+
+/// A closed segment for line-of-sight queries (any hit). from == to never hits.
+struct Segment {
+  Eigen::Vector3f from = Eigen::Vector3f::Zero();
+  Eigen::Vector3f to = Eigen::Vector3f::Zero();
+  uint32_t mask = 0xffffffffu;
+};
+
+/// What a ray hit.
+enum class HitKind : uint8_t { kNone = 0, kTriangle, kSphere, kCapsule, kPlane };
+
+/// The closest hit of one ray.
+struct RayHit {
+  HitKind kind = HitKind::kNone;
+  /// Mesh id (kTriangle), sphere index, capsule index or plane index.
+  uint32_t id = 0xffffffffu;
+  /// Triangle index within the mesh (kTriangle); 0 otherwise.
+  uint32_t prim = 0;
+  /// The body of a sphere filled by sync_spheres(World); null otherwise.
+  BodyHandle body;
+  float t = std::numeric_limits<float>::infinity();  ///< m along the normalised direction
+  Eigen::Vector3f point = Eigen::Vector3f::Zero();    ///< origin + t * unit direction
+  Eigen::Vector3f normal = Eigen::Vector3f::Zero();   ///< unit, facing the ray
+  bool hit() const { return kind != HitKind::kNone; }
+};
+
+/// A pinhole camera. forward and up need not be unit or orthogonal (up is
+/// re-orthogonalised against forward) but must not be parallel.
+struct Camera {
+  Eigen::Vector3f position = Eigen::Vector3f::Zero();
+  Eigen::Vector3f forward = -Eigen::Vector3f::UnitZ();
+  Eigen::Vector3f up = Eigen::Vector3f::UnitY();
+  float vertical_fov = 1.0471976f;  ///< radians, in (0, pi)
+  float aspect = 16.0f / 9.0f;      ///< width / height, > 0
+};
+
+/// Counters of the last commit() (for benchmarks).
+struct RaySceneInfo {
+  uint32_t meshes = 0, triangles = 0, spheres = 0, capsules = 0, planes = 0;
+  bool dynamic_rebuilt = false;  ///< the last commit rebuilt (not refitted) dynamic geometry
+  double commit_ms = 0.0;        ///< wall time of the last commit()
+};
+
+class RaySceneImpl;
+
+class RayScene {
+ public:
+  /// Validates desc and makes an empty scene. kUnsupported if the backend is not built in.
+  [[nodiscard]] static Status create(const RaySceneDesc& desc, std::unique_ptr<RayScene>* out);
+  ~RayScene();
+  RayScene(const RayScene&) = delete;
+  RayScene& operator=(const RayScene&) = delete;
+
+  // --- geometry (takes effect at commit()) ----------------------------------------
+  /// Adds a static mesh: vertices 3 x V (m), triangles 3 x T vertex indices < V.
+  /// Degenerate triangles are allowed (they are never hit).
+  Status add_mesh(const Eigen::Ref<const Eigen::Matrix3Xf>& vertices,
+                  const Eigen::Ref<const Eigen::Matrix<uint32_t, 3, Eigen::Dynamic>>& triangles,
+                  uint32_t layer, MeshHandle* out);
+  /// Replaces all spheres (SoA: centres, radii > 0, layers; layer may be empty = all 1).
+  /// Same count as before: an update (refit or rebuild per DynamicUpdate); else rebuild.
+  Status set_spheres(std::span<const float> x, std::span<const float> y, std::span<const float> z,
+                     std::span<const float> radius, std::span<const uint32_t> layer = {});
+  /// Spheres from a World's bodies (slot i -> sphere i; hits report the body handle).
+  Status sync_spheres(const World& world);
+  /// Replaces all capsules: segment end points a, b (3 x n), radii > 0, layers (may be empty).
+  Status set_capsules(const Eigen::Ref<const Eigen::Matrix3Xf>& a, const Eigen::Ref<const Eigen::Matrix3Xf>& b,
+                      std::span<const float> radius, std::span<const uint32_t> layer = {});
+  /// Replaces all static half-spaces {x : dot(normal, x) <= offset}; normals need not
+  /// be unit but must be finite and non-zero. layer may be empty (all 1).
+  Status set_planes(const Eigen::Ref<const Eigen::Matrix3Xf>& normals, std::span<const float> offsets,
+                    std::span<const uint32_t> layer = {});
+  /// Builds or updates acceleration structures for everything set since the last commit.
+  Status commit();
+
+  // --- queries (after commit(); kInvalidArgument while changes are pending) ----------
+  /// Closest hit per ray; out.size() == rays.size(). On error out is unspecified.
+  Status closest_hit(std::span<const Ray> rays, std::span<RayHit> out) const;
+  /// 1 per segment that something blocks, else 0; out.size() == segments.size().
+  Status any_hit(std::span<const Segment> segments, std::span<uint8_t> out) const;
+  /// Picking: rays from the camera through screen points in [0,1]^2 ((0,0) top left,
+  /// x right, y down), then closest hits.
+  Status pick(const Camera& camera, std::span<const Eigen::Vector2f> screen, uint32_t mask,
+              std::span<RayHit> out) const;
+
+  /// Switches the thread runtime of the queries (results do not depend on it).
+  Status set_threads(Backend backend, uint32_t threads);
+  const RaySceneDesc& desc() const;
+  const RaySceneInfo& info() const;
+
+ private:
+  explicit RayScene(std::unique_ptr<RaySceneImpl> impl);
+  std::unique_ptr<RaySceneImpl> impl_;
+  friend class RaySceneImpl;
+};
+
+/// Rays from a camera through screen points in [0,1]^2 (see RayScene::pick); the
+/// rays get tmax = +inf and `mask`. Points outside [0,1]^2 are allowed (off-screen).
+Status camera_rays(const Camera& camera, std::span<const Eigen::Vector2f> screen, uint32_t mask,
+                   std::span<Ray> out);
+
+}  // namespace impact
