@@ -8,6 +8,8 @@
 #include <vector>
 
 #include "host/world_impl.h"
+#include "host/broadphase/query.h"
+#include "impact/broadphase.h"
 #include "impact/world.h"
 
 namespace impact {
@@ -108,6 +110,7 @@ void push(host::Buffer<T>& v, T x) {
 WorldImpl::WorldImpl(const WorldDesc& d) : desc(d), exec(d.backend, d.threads) { configure_broad_phase(); }
 
 void WorldImpl::configure_broad_phase() {
+  positions_changed();
   broad_phase.set_kind(desc.broad_phase);
   host::LbvhOptions o = broad_phase.lbvh.options();
   o.update = desc.lbvh_update;
@@ -117,6 +120,7 @@ void WorldImpl::configure_broad_phase() {
 
 void WorldImpl::swap_remove_body(uint32_t slot) {
   broad_phase.invalidate();  // slots change meaning
+  positions_changed();
   BodyStore& s = bodies;
   const uint32_t last_slot = static_cast<uint32_t>(s.size() - 1);
   auto move = [&](auto& v) {
@@ -181,6 +185,7 @@ BodyHandle append_body(WorldImpl& w, const Eigen::Vector3f& p, const Eigen::Vect
   w.body_handles.acquire(slot, &h.index, &h.generation);
   s.handle.push_back(h);
   w.broad_phase.invalidate();
+  w.positions_changed();
   return h;
 }
 
@@ -308,6 +313,7 @@ Status World::set_positions(std::span<const BodyHandle> handles, std::span<const
   for (size_t i = 0; i < values.size(); ++i)
     if (Status s = check_position("set_positions: body " + std::to_string(i), values[i]); !s.ok()) return s;
   BodyStore& b = impl_->bodies;
+  impl_->positions_changed();
   for (size_t i = 0; i < values.size(); ++i) {
     const uint32_t k = slots[i];
     b.pos_x[k] = values[i].x();
@@ -516,6 +522,33 @@ static_assert(sizeof(BodyPair) == sizeof(kernels::Pair) && alignof(BodyPair) == 
 std::span<const BodyPair> World::pairs() const {
   const auto& p = impl_->pairs;
   return {reinterpret_cast<const BodyPair*>(p.data()), p.size()};
+}
+
+// --- queries -----------------------------------------------------------------------------
+
+namespace {
+
+template <class Queries>
+Status world_query(WorldImpl& w, const Queries& q, const char* what, QueryHits* out) {
+  if (out == nullptr) return Status(StatusCode::kInvalidArgument, std::string(what) + ": out must not be null");
+  host::QueryBatch batch{};
+  if (Status s = host::make_batch(q, what, &batch); !s.ok()) return s;
+  if (Status s = w.prepare_queries(); !s.ok()) return Status(s.code(), std::string(what) + ": " + s.message());
+  if (Status s = w.broad_phase.query(w.exec, batch, &out->offsets, &out->hits); !s.ok())
+    return Status(s.code(), std::string(what) + ": " + s.message());
+  return Status();
+}
+
+}  // namespace
+
+Status World::query_aabbs(const AabbQueries& queries, QueryHits* out) {
+  return world_query(*impl_, queries, "query_aabbs", out);
+}
+Status World::query_spheres(const SphereQueries& queries, QueryHits* out) {
+  return world_query(*impl_, queries, "query_spheres", out);
+}
+Status World::query_points(const PointQueries& queries, QueryHits* out) {
+  return world_query(*impl_, queries, "query_points", out);
 }
 
 uint64_t World::state_hash() const {

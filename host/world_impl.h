@@ -53,6 +53,11 @@ class WorldImpl {
   void reorder_bodies();
   /// Applies desc's broad-phase settings to the stage (next step builds afresh).
   void configure_broad_phase();
+  /// Brings the broad-phase structure up to the bodies' current boxes for queries.
+  Status prepare_queries();
+  /// Body positions or slots changed: the next query refreshes the structure.
+  void positions_changed() { queries_fresh = false; }
+  bool queries_fresh = false;
   void swap_remove_body(uint32_t slot);
 
   WorldDesc desc;

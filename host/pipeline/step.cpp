@@ -103,9 +103,28 @@ void WorldImpl::reorder_bodies() {
   }
   // Results of the last step name old slots; so does a coherent structure's state.
   broad_phase.invalidate();
+  positions_changed();
   pairs.clear();
   contacts.resize(0);
   impulse_out.clear();
+}
+
+Status WorldImpl::prepare_queries() {
+  if (queries_fresh && broad_phase.built()) return Status();
+  const uint32_t n = static_cast<uint32_t>(bodies.size());
+  const BodyStore& s = bodies;
+  const kernels::AabbSoAOut out{host::scratch(box[0], n), host::scratch(box[1], n), host::scratch(box[2], n),
+                                host::scratch(box[3], n), host::scratch(box[4], n), host::scratch(box[5], n)};
+  exec.for_each_chunk(n, kBodyGrain, [&](uint32_t b, uint32_t e, uint32_t) {
+    kernels::sphere_bounds(s.pos_x.data(), s.pos_y.data(), s.pos_z.data(), s.radius.data(), out, {b, e});
+  });
+  const kernels::AabbSoA boxes{out.min_x, out.min_y, out.min_z, out.max_x, out.max_y, out.max_z};
+  const kernels::PairFilter filter{s.layer.data(), s.mask.data(), s.is_static.data()};
+  // Positions are validated at the API and by every step's range check, so the
+  // boxes are finite.
+  if (Status st = broad_phase.update(exec, boxes, filter, n); !st.ok()) return st;
+  queries_fresh = true;
+  return Status();
 }
 
 Status WorldImpl::step() {
@@ -120,6 +139,7 @@ Status WorldImpl::step() {
   const uint32_t n = static_cast<uint32_t>(bodies.size());
   const float dt = desc.fixed_dt;
   BodyStore& s = bodies;
+  positions_changed();  // the step moves bodies (and its structure sees start poses)
 
   // --- integrate (semi-implicit Euler) -------------------------------------------------
   if (desc.interpolation) {

@@ -120,6 +120,10 @@ struct BodyPair {
 };
 
 class WorldImpl;
+struct AabbQueries;
+struct SphereQueries;
+struct PointQueries;
+struct QueryHits;
 
 class World {
  public:
@@ -178,6 +182,20 @@ class World {
   /// 64-bit hash of every body's state bytes in slot order; equal hashes across
   /// thread counts and backends are the determinism contract.
   uint64_t state_hash() const;
+
+  // --- queries ("what is near me", include/impact/broadphase.h) --------------------
+  /// Bodies near each query, answered by the world's own broad-phase structure over
+  /// the boxes [p - r, p + r] of the bodies' current positions: a body is a hit when
+  /// its box overlaps the query box / lies within the sphere's radius of its centre
+  /// (box distance) / contains the point, and (its layer & the query's mask) != 0.
+  /// Hits are body slots (bodies().handles[slot] is the handle), ascending per query;
+  /// the same bytes for every broad-phase kind, backend and thread count. When bodies
+  /// moved since the structure was last built (a step, set_positions, creation), the
+  /// first query refreshes it through the structure's coherent update (LBVH refit per
+  /// WorldDesc::lbvh_update, grid rebuild, ...), which the next step builds on.
+  Status query_aabbs(const AabbQueries& queries, QueryHits* out);
+  Status query_spheres(const SphereQueries& queries, QueryHits* out);
+  Status query_points(const PointQueries& queries, QueryHits* out);
 
   // --- settings ------------------------------------------------------------------
   const WorldDesc& desc() const;

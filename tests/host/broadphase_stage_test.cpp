@@ -453,3 +453,125 @@ TEST(WorldBroadPhaseStage, MortonReorderIsInvisibleThroughHandles) {
 
 }  // namespace
 }  // namespace impact
+
+// --- World queries ---------------------------------------------------------------------
+
+namespace impact {
+namespace {
+
+// World queries against a double-precision brute force over the bodies' current boxes
+// [p - r, p + r], for every broad-phase kind, after steps that moved the bodies.
+TEST(WorldQueries, MatchBruteForceAfterSteps) {
+  const uint32_t n = scaled(3000, 500);
+  std::mt19937 rng(101);
+  const float side = 1.5f * std::cbrt(static_cast<float>(n));
+  std::uniform_real_distribution<float> pos(-0.5f * side, 0.5f * side), vel(-2.0f, 2.0f), lr(-3.0f, 0.5f);
+  std::vector<BodyDesc> descs(n);
+  for (uint32_t i = 0; i < n; ++i) {
+    descs[i].position = {pos(rng), pos(rng), pos(rng)};
+    descs[i].velocity = {vel(rng), vel(rng), vel(rng)};
+    descs[i].radius = std::exp(lr(rng));
+    descs[i].layer = 1u << (i % 3);
+    descs[i].inv_mass = i % 7 == 0 ? 0.0f : 1.0f;
+  }
+  const uint32_t nq = 300;
+  std::vector<float> qx0(nq), qy0(nq), qz0(nq), qx1(nq), qy1(nq), qz1(nq), px(nq), py(nq), pz(nq), pr(nq);
+  std::vector<uint32_t> qmask(nq);
+  std::uniform_real_distribution<float> ext(0.0f, 3.0f), rad(0.0f, 2.5f);
+  for (uint32_t q = 0; q < nq; ++q) {
+    qx0[q] = pos(rng), qy0[q] = pos(rng), qz0[q] = pos(rng);
+    qx1[q] = qx0[q] + ext(rng), qy1[q] = qy0[q] + ext(rng), qz1[q] = qz0[q] + ext(rng);
+    px[q] = pos(rng), py[q] = pos(rng), pz[q] = pos(rng), pr[q] = rad(rng);
+    qmask[q] = q % 4 == 0 ? 0xffffffffu : (1u << (q % 3));
+  }
+  const AabbQueries aq{qx0, qy0, qz0, qx1, qy1, qz1, qmask};
+  const SphereQueries sq{px, py, pz, pr, qmask};
+  const PointQueries ptq{px, py, pz, qmask};
+
+  for (BroadPhaseKind kind : kAllKinds) {
+    SCOPED_TRACE(to_string(kind));
+    WorldDesc d = test::zero_gravity_desc();
+    d.broad_phase = kind;
+    d.lbvh_update = LbvhUpdate::kRefit;
+    d.reorder_interval = 3;
+    auto w = test::make_world(d);
+    std::vector<BodyHandle> h(n);
+    IMPACT_ASSERT_OK(w->create_bodies(descs, h));
+    for (int s = 0; s < 7; ++s) IMPACT_ASSERT_OK(w->step());
+    QueryHits ha, hs, hp;
+    IMPACT_ASSERT_OK(w->query_aabbs(aq, &ha));
+    IMPACT_ASSERT_OK(w->query_spheres(sq, &hs));
+    IMPACT_ASSERT_OK(w->query_points(ptq, &hp));
+    // Reference over the current state, in slot order.
+    const BodyArrays a = w->bodies();
+    ASSERT_EQ(ha.size(), nq);
+    size_t total = 0;
+    for (uint32_t q = 0; q < nq; ++q) {
+      std::vector<uint32_t> ref_a, ref_p;
+      for (uint32_t i = 0; i < n; ++i) {
+        if ((a.layer[i] & qmask[q]) == 0) continue;
+        const float r = a.radius[i];
+        const double lo[3] = {a.pos_x[i] - r, a.pos_y[i] - r, a.pos_z[i] - r};
+        const double hi[3] = {a.pos_x[i] + r, a.pos_y[i] + r, a.pos_z[i] + r};
+        if (lo[0] <= qx1[q] && qx0[q] <= hi[0] && lo[1] <= qy1[q] && qy0[q] <= hi[1] && lo[2] <= qz1[q] &&
+            qz0[q] <= hi[2])
+          ref_a.push_back(i);
+        if (lo[0] <= px[q] && px[q] <= hi[0] && lo[1] <= py[q] && py[q] <= hi[1] && lo[2] <= pz[q] && pz[q] <= hi[2])
+          ref_p.push_back(i);
+        // Sphere: box distance in double; a disagreement is allowed only within 1e-5 of the radius.
+        const double c[3] = {px[q], py[q], pz[q]};
+        double d2 = 0;
+        for (int k = 0; k < 3; ++k) {
+          const double e = std::max({lo[k] - c[k], 0.0, c[k] - hi[k]});
+          d2 += e * e;
+        }
+        const auto got = hs.of(q);
+        const bool in_got = std::binary_search(got.begin(), got.end(), i);
+        const bool in_ref = d2 <= static_cast<double>(pr[q]) * pr[q];
+        if (in_got != in_ref) {
+          EXPECT_NEAR(std::sqrt(d2), pr[q], 1e-5) << "sphere query " << q << " body " << i;
+        }
+      }
+      const auto ga = ha.of(q), gp = hp.of(q);
+      ASSERT_EQ(std::vector<uint32_t>(ga.begin(), ga.end()), ref_a) << "aabb query " << q;
+      ASSERT_EQ(std::vector<uint32_t>(gp.begin(), gp.end()), ref_p) << "point query " << q;
+      total += ref_a.size();
+    }
+    EXPECT_GT(total, nq / 2) << "queries should hit something";
+  }
+}
+
+TEST(WorldQueries, RefreshAfterSetPositionsAndRejectBadInput) {
+  for (BroadPhaseKind kind : {BroadPhaseKind::kGrid, BroadPhaseKind::kLbvh}) {
+    SCOPED_TRACE(to_string(kind));
+    WorldDesc d = test::zero_gravity_desc();
+    d.broad_phase = kind;
+    d.lbvh_update = LbvhUpdate::kRefit;
+    auto w = test::make_world(d);
+    std::vector<BodyDesc> descs(50);
+    for (size_t i = 0; i < descs.size(); ++i) descs[i].position = {3.0f * static_cast<float>(i), 0.0f, 0.0f};
+    std::vector<BodyHandle> h(descs.size());
+    IMPACT_ASSERT_OK(w->create_bodies(descs, h));
+    const std::vector<float> x{30.0f}, y{0.0f}, z{0.0f};
+    QueryHits hits;
+    IMPACT_ASSERT_OK(w->query_points(PointQueries{x, y, z}, &hits));  // before any step
+    ASSERT_EQ(hits.of(0).size(), 1u);
+    uint32_t slot = 0;
+    IMPACT_ASSERT_OK(w->slot_of(h[10], &slot));
+    EXPECT_EQ(hits.of(0)[0], slot);
+    // Teleport body 10 away and body 20 onto the point: the next query sees it.
+    const Eigen::Vector3f p10{500.0f, 0.0f, 0.0f}, p20{30.0f, 0.0f, 0.0f};
+    IMPACT_ASSERT_OK(w->set_positions(std::span<const BodyHandle>(&h[10], 1), std::span<const Eigen::Vector3f>(&p10, 1)));
+    IMPACT_ASSERT_OK(w->set_positions(std::span<const BodyHandle>(&h[20], 1), std::span<const Eigen::Vector3f>(&p20, 1)));
+    IMPACT_ASSERT_OK(w->query_points(PointQueries{x, y, z}, &hits));
+    ASSERT_EQ(hits.of(0).size(), 1u);
+    IMPACT_ASSERT_OK(w->slot_of(h[20], &slot));
+    EXPECT_EQ(hits.of(0)[0], slot);
+    const std::vector<float> bad{std::nanf("")};
+    EXPECT_TRUE(IsError(w->query_points(PointQueries{bad, y, z}, &hits), StatusCode::kInvalidArgument, {"query_points"}));
+    EXPECT_TRUE(IsError(w->query_points(PointQueries{x, y, z}, nullptr), StatusCode::kInvalidArgument, {"null"}));
+  }
+}
+
+}  // namespace
+}  // namespace impact
