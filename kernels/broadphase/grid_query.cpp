@@ -117,7 +117,8 @@ uint64_t grid_query(const GridView* grids, uint32_t grid_count, const QueryView&
   HitSink sink{out_hits, capacity, 0};
   const bool filtered = grid_count > 0 && grids[0].layer != nullptr;
   dispatch_query(q.shape, filtered, [&]<QueryShape S, bool kF>() {
-    for (uint32_t i = r.begin; i < r.end; ++i) {
+    for (uint32_t p = r.begin; p < r.end; ++p) {
+      const uint32_t i = q.order ? q.order[p] : p;
       const QueryItem item = make_query_item<S>(q, i);
       const uint64_t k0 = sink.k;
       for (uint32_t l = 0; l < grid_count; ++l) {

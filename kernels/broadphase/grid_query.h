@@ -22,7 +22,11 @@
 //   over a sparse hashed world costs O(n), not O(cells).
 // Cost: O(rows + candidates) per query and grid, capped near O(n); plus k log k to
 //   sort k hits (insertion sort up to 16).
-// Inputs: finite queries (|v| <= 1e18); grids built by grid_gather/segment_starts.
+// Inputs: finite queries (|v| <= 1e18); grids built by grid_keys_pack / grid_gather_packed
+//   / segment_starts.
+// Method: the region query of a uniform (hashed) grid: visit the cells the query's
+//   bounds overlap, widened by one cell where boxes are stored by their min corner
+//   (Teschner et al. 2003; Ericson, "Real-Time Collision Detection", 7.1).
 #pragma once
 
 #include "kernels/broadphase/grid.h"

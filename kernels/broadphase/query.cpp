@@ -39,7 +39,8 @@ uint64_t brute_force(AabbSoA b, const uint32_t* layer, uint32_t n, const QueryVi
   const float* IMPACT_RESTRICT max_y = b.max_y;
   const float* IMPACT_RESTRICT max_z = b.max_z;
   const uint32_t blocks_end = n - n % kBlock;
-  for (uint32_t i = r.begin; i < r.end; ++i) {
+  for (uint32_t p = r.begin; p < r.end; ++p) {
+    const uint32_t i = qv.order ? qv.order[p] : p;
     const QueryItem q = make_query_item<S>(qv, i);
     const float q0x = q.min_x, q0y = q.min_y, q0z = q.min_z, q1x = q.max_x, q1y = q.max_y, q1z = q.max_z;
     const uint32_t mask = q.mask;

@@ -18,10 +18,15 @@
 //   and, when the structure was built with a filter, (B.layer & mask_i) != 0 (a null
 //   mask array means all ones; unfiltered structures ignore masks). The "static
 //   never pairs with static" rule of the pair filter does not apply to queries.
-// Output: out_count[i] = hits of query i, for each i in the range (every entry
+// Order: the range r holds processing positions p; position p answers query
+//   i = order[p] (QueryView::order, a permutation of the batch; null = identity). The
+//   host may process queries in a spatial order (Morton order of the query centres
+//   for the LBVH, sweep-axis order for sweep-and-prune) so that consecutive queries
+//   reuse cached nodes and slots; the answers do not depend on it.
+// Output: out_count[i] = hits of query i, for each query of the range (every entry
 //   written, whatever the capacity); the hit box indices of the range's queries, in
-//   query order, each query's hits sorted ascending, at out_hits[0, capacity); the
-//   return value is the range's total. Past capacity nothing more is written (the
+//   processing order, each query's hits sorted ascending, at out_hits[0, capacity);
+//   the return value is the range's total. Past capacity nothing more is written (the
 //   host reruns the range with room), and a query cut by the capacity is left
 //   unsorted. Sorted hits make the bytes independent of the structure's traversal
 //   order, of the chunking and of the thread count: every structure returns the same
@@ -31,6 +36,9 @@
 //   test; a box it rejects is provably rejected by the exact test too.
 // Preconditions: finite query coordinates, min <= max, radius >= 0 (validated at the
 //   API), |coordinates| <= 1e18 (so bounds and cell arithmetic stay finite).
+// Method: the box-sphere test is Arvo's ("A Simple Method for Box-Sphere Intersection
+//   Testing", Graphics Gems 1990): the squared distance from the centre to the box,
+//   summed per axis over the axes where the centre lies outside the slab.
 #pragma once
 
 #include <algorithm>
@@ -60,14 +68,23 @@ struct QueryView {
   const float* z1;
   const float* radius;    ///< sphere radius, m (unused otherwise)
   const uint32_t* mask;   ///< per query; null = all ones
+  const uint32_t* order = nullptr;  ///< processing position -> query; null = identity
 };
+
+/// A query's bounding box laid out like SortedBox / LbvhNode (32 bytes, min then max
+/// in 16-byte halves), so the box test against those records is one 4-lane compare
+/// (kernels::records_overlap).
+struct alignas(32) QueryBox {
+  float min_x, min_y, min_z;
+  uint32_t mask;  ///< the query's mask (lane 3: ignored by the box test)
+  float max_x, max_y, max_z;
+  uint32_t pad;
+};
+static_assert(sizeof(QueryBox) == 32);
 
 /// One query, prepared: its bounding box (exact for AABB and point queries,
 /// conservative for spheres), its mask and, for spheres, centre and r^2 in double.
-struct QueryItem {
-  float min_x, min_y, min_z;
-  float max_x, max_y, max_z;
-  uint32_t mask;
+struct QueryItem : QueryBox {
   double cx, cy, cz, r2;
 };
 
@@ -125,7 +142,11 @@ IMPACT_INLINE double sphere_box_dist2(double cx, double cy, double cz, const B& 
 /// The hit test of query q on box b (any type with min_x .. max_z), filter aside.
 template <QueryShape S, class B>
 IMPACT_INLINE bool query_hits(const QueryItem& q, const B& b) {
-  if (!boxes_overlap(q, b)) return false;
+  if constexpr (sizeof(B) == 32 && alignof(B) >= 16) {
+    if (!records_overlap(static_cast<const QueryBox&>(q), b)) return false;
+  } else {
+    if (!boxes_overlap(q, b)) return false;
+  }
   if constexpr (S == QueryShape::kSphere) return sphere_box_dist2(q.cx, q.cy, q.cz, b) <= q.r2;
   return true;
 }

@@ -21,7 +21,8 @@ void run(const SapView& v, uint32_t axis, double max_extent, const QueryView& qv
   const uint32_t a2 = a1 == 2 ? 0 : a1 + 1;
   uint32_t slot[3];
   slot[axis] = 0, slot[a1] = 1, slot[a2] = 2;
-  for (uint32_t i = r.begin; i < r.end; ++i) {
+  for (uint32_t p = r.begin; p < r.end; ++p) {
+    const uint32_t i = qv.order ? qv.order[p] : p;
     const QueryItem q = make_query_item<S>(qv, i);
     const float lo[3] = {q.min_x, q.min_y, q.min_z};
     const float hi[3] = {q.max_x, q.max_y, q.max_z};
@@ -36,12 +37,21 @@ void run(const SapView& v, uint32_t axis, double max_extent, const QueryView& qv
     // Blocks of kSapPad slots; lanes at or past `last` fail min0 <= hi0 (sorted), and
     // the sentinels after slot n fail every test, so no tail loop is needed.
     for (uint32_t t = first; t < last; t += kSapPad) {
+      // Block-relative pointers: with a uint32 index t + j (which may wrap, as far as
+      // the compiler knows) the loads become scalar gathers; with a pointer plus j
+      // they are contiguous vector loads (measured: 1M boxes, ~2x per slot).
+      const float* IMPACT_RESTRICT b_min0 = min0 + t;
+      const float* IMPACT_RESTRICT b_max0 = max0 + t;
+      const float* IMPACT_RESTRICT b_min1 = min1 + t;
+      const float* IMPACT_RESTRICT b_max1 = max1 + t;
+      const float* IMPACT_RESTRICT b_min2 = min2 + t;
+      const float* IMPACT_RESTRICT b_max2 = max2 + t;
+      const uint32_t* IMPACT_RESTRICT b_layer = kFiltered ? layer + t : nullptr;
       uint32_t hit[kSapPad];
       for (uint32_t j = 0; j < kSapPad; ++j) {
-        const uint32_t u = t + j;
-        uint32_t h = static_cast<uint32_t>((min0[u] <= hi0) & (lo0 <= max0[u]) & (min1[u] <= hi1) &
-                                           (lo1 <= max1[u]) & (min2[u] <= hi2) & (lo2 <= max2[u]));
-        if constexpr (kFiltered) h &= static_cast<uint32_t>((layer[u] & mask) != 0);
+        uint32_t h = static_cast<uint32_t>((b_min0[j] <= hi0) & (lo0 <= b_max0[j]) & (b_min1[j] <= hi1) &
+                                           (lo1 <= b_max1[j]) & (b_min2[j] <= hi2) & (lo2 <= b_max2[j]));
+        if constexpr (kFiltered) h &= static_cast<uint32_t>((b_layer[j] & mask) != 0);
         hit[j] = h;
       }
       uint32_t any = 0;
@@ -67,12 +77,14 @@ void run(const SapView& v, uint32_t axis, double max_extent, const QueryView& qv
 }  // namespace
 
 double sap_max_extent(const SapView& v, Range r) {
-  const float* IMPACT_RESTRICT min0 = v.min[0];
-  const float* IMPACT_RESTRICT max0 = v.max[0];
+  // Pointers to the range and a size_t count: contiguous vector loads (a uint32 slot
+  // index here compiled to scalar gathers).
+  const float* IMPACT_RESTRICT min0 = v.min[0] + r.begin;
+  const float* IMPACT_RESTRICT max0 = v.max[0] + r.begin;
+  const size_t count = r.end > r.begin ? r.end - r.begin : 0;
   double e = 0.0;
 #pragma omp simd reduction(max : e)
-  for (uint32_t s = r.begin; s < r.end; ++s)
-    e = std::max(e, static_cast<double>(max0[s]) - static_cast<double>(min0[s]));
+  for (size_t s = 0; s < count; ++s) e = std::max(e, static_cast<double>(max0[s]) - static_cast<double>(min0[s]));
   return e;
 }
 

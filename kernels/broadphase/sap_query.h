@@ -18,6 +18,9 @@
 //   O(n) per batch (the host computes it once per query call).
 // Inputs: a SapView of n >= 1 slots plus kSapPad sentinels, the sweep axis its
 //   arrays start with, finite queries.
+// Method: a 1-D stabbing/range query over intervals sorted by their lower end, bounded
+//   by the largest interval length (the "maximum extent" trick of sorted interval
+//   lists; cf. Ericson, "Real-Time Collision Detection", 7.5 sort and sweep).
 #pragma once
 
 #include "kernels/broadphase/query.h"

@@ -6,7 +6,8 @@ namespace {
 template <QueryShape S, bool kFiltered>
 void run(const LbvhView& t, const QueryView& qv, uint32_t* out_count, HitSink& sink, Range r) {
   uint32_t stack[kLbvhMaxDepth + 1];
-  for (uint32_t i = r.begin; i < r.end; ++i) {
+  for (uint32_t p = r.begin; p < r.end; ++p) {
+    const uint32_t i = qv.order ? qv.order[p] : p;
     const QueryItem q = make_query_item<S>(qv, i);
     const uint64_t k0 = sink.k;
     auto leaf = [&](uint32_t u) {

@@ -13,6 +13,9 @@
 //   covers everything; plus k log k to sort the hits. One leaf (n == 1) is tested
 //   directly; n == 0 gives no hits.
 // Inputs: the tree built and refitted for its boxes; finite queries.
+// Method: the per-query stack traversal of a BVH as in Karras, "Thinking Parallel,
+//   Part II: Tree Traversal on the GPU" (NVIDIA blog, 2012), with a top-down start
+//   (the query is not a leaf of the tree).
 #pragma once
 
 #include "kernels/broadphase/query.h"
