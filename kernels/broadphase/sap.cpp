@@ -43,13 +43,20 @@ uint64_t sweep(const SapView& v, Pair* IMPACT_RESTRICT out, uint64_t capacity, R
       // One word per lane (float-width, so the lane loop vectorises at full
       // width), OR-reduced to one test; the rare hits are emitted in slot order
       // by the scalar loop below.
+      // Block-relative pointers: indexing with the 32-bit t + j made GCC emit
+      // scalar gathers (vinsertps) instead of contiguous 8-wide loads.
       uint32_t hit[kSapPad];
+      const float* b_min0 = min0 + t;
+      const float* b_max0 = max0 + t;
+      const float* b_min1 = min1 + t;
+      const float* b_max1 = max1 + t;
+      const float* b_min2 = min2 + t;
+      const float* b_max2 = max2 + t;
       for (uint32_t j = 0; j < kSapPad; ++j) {
-        const uint32_t u = t + j;
         // Bitwise & (not &&): branch-free, so the lanes vectorise.
-        hit[j] = static_cast<uint32_t>((min0[u] <= a_max0) & (a_min0 <= max0[u]) &  //
-                                       (min1[u] <= a_max1) & (a_min1 <= max1[u]) &  //
-                                       (min2[u] <= a_max2) & (a_min2 <= max2[u]));
+        hit[j] = static_cast<uint32_t>((b_min0[j] <= a_max0) & (a_min0 <= b_max0[j]) &  //
+                                       (b_min1[j] <= a_max1) & (a_min1 <= b_max1[j]) &  //
+                                       (b_min2[j] <= a_max2) & (a_min2 <= b_max2[j]));
       }
       uint32_t any = 0;
       for (uint32_t j = 0; j < kSapPad; ++j) any |= hit[j];
