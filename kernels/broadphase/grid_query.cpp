@@ -2,35 +2,12 @@
 
 #include <cmath>
 
+#include "kernels/broadphase/grid_cells.h"
+
 namespace impact::kernels {
 namespace {
 
-// --- the grid's cell and bucket arithmetic ---------------------------------------------
-// A copy of grid.cpp's private helpers (axis_cell, row_base, bucket_mask): they must
-// stay identical. tests/kernels/broadphase/query_test.cpp checks grid_query_bucket
-// against grid_keys on dense and hashed grids, so a drift fails a test.
-
-constexpr uint64_t kAxisMask = (1ull << kGridAxisBits) - 1;
-
-IMPACT_INLINE uint32_t axis_cell(float v, double origin, double inv_cell, uint32_t dim) {
-  const double u = (static_cast<double>(v) - origin) * inv_cell;
-  int64_t c = static_cast<int64_t>(u);
-  c = c < 0 ? 0 : c;
-  c = c >= static_cast<int64_t>(dim) ? static_cast<int64_t>(dim) - 1 : c;
-  return static_cast<uint32_t>(c);
-}
-
-IMPACT_INLINE uint64_t row_base(const GridParams& g, uint64_t cy, uint64_t cz) {
-  if (g.dense) return g.dims[0] * (cy + g.dims[1] * cz);
-  uint64_t h = (cy | (cz << kGridAxisBits)) + 0x9e3779b97f4a7c15ull;
-  h = (h ^ (h >> 30)) * 0xbf58476d1ce4e5b9ull;
-  h = (h ^ (h >> 27)) * 0x94d049bb133111ebull;
-  return h ^ (h >> 31);
-}
-
-IMPACT_INLINE uint32_t bucket_mask(const GridParams& g) {
-  return g.dense ? 0xffffffffu : (g.table_bits == 0 ? 0u : (1u << g.table_bits) - 1u);
-}
+using namespace grid_cells;  // NOLINT: the grid's cell arithmetic, shared with grid.cpp
 
 // Cells [lo, hi] on one axis that can hold the min corner of a box overlapping
 // [q_min, q_max] (see grid_query.h); false when the range misses the grid. Clamped in

@@ -46,8 +46,8 @@ uint64_t grid_query(const GridView* grids, uint32_t grid_count, const QueryView&
                     Range r);
 
 /// Bucket of the cell holding point (x, y, z) under g: the bucket grid_keys gives a
-/// box whose min corner is that point. Exposed so tests can check that the query's
-/// copy of the cell and bucket arithmetic matches grid.cpp.
+/// box whose min corner is that point. Exposed so tests can check that the queries
+/// use the same cell and bucket arithmetic as grid_keys (grid_cells.h).
 uint32_t grid_query_bucket(const GridParams& g, float x, float y, float z);
 
 }  // namespace impact::kernels

@@ -440,7 +440,7 @@ TEST(BroadPhaseQuery, SpatialProcessingOrderGivesTheSameBytes) {
 // --- the grid's cell arithmetic --------------------------------------------------------------
 
 TEST(BroadPhaseQuery, GridBucketArithmeticMatchesGridKeys) {
-  // grid_query.cpp keeps a copy of grid.cpp's cell and bucket helpers; they must agree.
+  // grid_query.cpp and grid.cpp share kernels/broadphase/grid_cells.h; this pins the query side to grid_keys.
   std::mt19937 rng(17);
   std::uniform_real_distribution<float> pos(-5.0e5f, 5.0e5f);
   Boxes sparse;
