@@ -22,6 +22,7 @@
 #include "kernels/broadphase/grid_query.h"
 #include "kernels/broadphase/query.h"
 #include "support/aabb_reference.h"
+#include "support/kernel_views.h"
 #include "support/query_reference.h"
 #include "support/test_support.h"
 
@@ -38,14 +39,9 @@ using test::Queries;
 using test::random_queries;
 using test::scaled;
 
-kernels::AabbSoA soa(const Boxes& b) {
-  return {b.min_x.data(), b.min_y.data(), b.min_z.data(), b.max_x.data(), b.max_y.data(), b.max_z.data()};
-}
-kernels::PairFilter filter_of(const Boxes& b) {
-  if (!b.filtered()) return {nullptr, nullptr, nullptr};
-  return {b.layer.data(), b.mask.data(), b.is_static.data()};
-}
-uint32_t count(const Boxes& b) { return static_cast<uint32_t>(b.size()); }
+using test::count;
+using test::filter_of;
+using test::soa;
 
 QueryBatch batch(const Queries& q) {
   auto ptr = [](const std::vector<float>& v) { return v.empty() ? nullptr : v.data(); };

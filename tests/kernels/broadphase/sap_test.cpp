@@ -23,6 +23,7 @@
 #include "host/parallel.h"
 #include "kernels/broadphase/sap.h"
 #include "support/aabb_reference.h"
+#include "support/kernel_views.h"
 #include "support/test_support.h"
 
 namespace impact {
@@ -41,14 +42,9 @@ using test::PairVec;
 using test::reference_pairs;
 using test::scaled;
 
-kernels::AabbSoA soa(const Boxes& b) {
-  return {b.min_x.data(), b.min_y.data(), b.min_z.data(), b.max_x.data(), b.max_y.data(), b.max_z.data()};
-}
-kernels::PairFilter filter_of(const Boxes& b) {
-  if (!b.filtered()) return {nullptr, nullptr, nullptr};
-  return {b.layer.data(), b.mask.data(), b.is_static.data()};
-}
-uint32_t count(const Boxes& b) { return static_cast<uint32_t>(b.size()); }
+using test::count;
+using test::filter_of;
+using test::soa;
 
 const Executor& serial() {
   static const Executor e(Backend::kSerial, 1);

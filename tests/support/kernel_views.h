@@ -1,0 +1,25 @@
+// Kernel-level views of the tests' box sets (tests/support/aabb_reference.h), for the
+// tests that drive host/ and kernels/ directly.
+#pragma once
+
+#include <cstdint>
+
+#include "kernels/broadphase/bounds.h"
+#include "kernels/broadphase/grid.h"
+#include "support/aabb_reference.h"
+
+namespace impact::test {
+
+inline kernels::AabbSoA soa(const Boxes& b) {
+  return {b.min_x.data(), b.min_y.data(), b.min_z.data(), b.max_x.data(), b.max_y.data(), b.max_z.data()};
+}
+
+/// The box set's filter, or all null when it has none.
+inline kernels::PairFilter filter_of(const Boxes& b) {
+  if (!b.filtered()) return {nullptr, nullptr, nullptr};
+  return {b.layer.data(), b.mask.data(), b.is_static.data()};
+}
+
+inline uint32_t count(const Boxes& b) { return static_cast<uint32_t>(b.size()); }
+
+}  // namespace impact::test
