@@ -99,13 +99,6 @@ IMPACT_INLINE void dispatch(const GridView& g, Fn&& fn) {
 
 }  // namespace
 
-void grid_keys(const GridParams& g, AabbSoA boxes, uint64_t* IMPACT_RESTRICT out_keys, Range r) {
-  for (uint32_t i = r.begin; i < r.end; ++i) {
-    const uint64_t cell = box_cell(g, boxes.min_x[i], boxes.min_y[i], boxes.min_z[i]);
-    out_keys[i] = (static_cast<uint64_t>(bucket_of(g, cell)) << 32) | i;
-  }
-}
-
 void grid_keys_pack(const GridParams& g, AabbSoA boxes, PairFilter filter, const uint32_t* original_index,
                     uint64_t* IMPACT_RESTRICT out_keys, SortedBox* IMPACT_RESTRICT out_packed,
                     FilterRecord* IMPACT_RESTRICT out_filter, Range r) {

@@ -134,9 +134,6 @@ struct GridView {
   const uint32_t* bucket_start;  // bucket_count + 1 entries
 };
 
-/// Keys (bucket << 32 | i) of the boxes in r (grid_keys_pack without the packing).
-void grid_keys(const GridParams& g, AabbSoA boxes, uint64_t* IMPACT_RESTRICT out_keys, Range r);
-
 /// A box's filter data packed for one read.
 struct alignas(16) FilterRecord {
   uint32_t layer;

@@ -45,9 +45,9 @@ uint64_t grid_query(const GridView* grids, uint32_t grid_count, const QueryView&
                     uint32_t* IMPACT_RESTRICT out_count, uint32_t* IMPACT_RESTRICT out_hits, uint64_t capacity,
                     Range r);
 
-/// Bucket of the cell holding point (x, y, z) under g: the bucket grid_keys gives a
+/// Bucket of the cell holding point (x, y, z) under g: the bucket grid_keys_pack gives a
 /// box whose min corner is that point. Exposed so tests can check that the queries
-/// use the same cell and bucket arithmetic as grid_keys (grid_cells.h).
+/// use the same cell and bucket arithmetic as grid_keys_pack (grid_cells.h).
 uint32_t grid_query_bucket(const GridParams& g, float x, float y, float z);
 
 }  // namespace impact::kernels

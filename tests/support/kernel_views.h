@@ -1,9 +1,10 @@
-// Kernel-level views of the tests' box sets (tests/support/aabb_reference.h), for the
-// tests that drive host/ and kernels/ directly.
+// Kernel-level views of the tests' box sets (tests/support/aabb_reference.h) and a
+// serial executor, for the tests that drive host/ and kernels/ directly.
 #pragma once
 
 #include <cstdint>
 
+#include "host/parallel.h"
 #include "kernels/broadphase/bounds.h"
 #include "kernels/broadphase/grid.h"
 #include "support/aabb_reference.h"
@@ -21,5 +22,11 @@ inline kernels::PairFilter filter_of(const Boxes& b) {
 }
 
 inline uint32_t count(const Boxes& b) { return static_cast<uint32_t>(b.size()); }
+
+/// A one-thread serial executor shared by a test binary.
+inline const host::Executor& serial() {
+  static const host::Executor e(Backend::kSerial, 1);
+  return e;
+}
 
 }  // namespace impact::test

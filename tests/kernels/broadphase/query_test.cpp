@@ -41,6 +41,7 @@ using test::scaled;
 
 using test::count;
 using test::filter_of;
+using test::serial;
 using test::soa;
 
 QueryBatch batch(const Queries& q) {
@@ -53,10 +54,6 @@ QueryBatch batch(const Queries& q) {
                     static_cast<uint32_t>(q.size())};
 }
 
-const Executor& serial() {
-  static const Executor e(Backend::kSerial, 1);
-  return e;
-}
 
 // Every structure over one box set. The grid comes in two flavours (levels allowed,
 // levels off) and the LBVH in both code widths.
@@ -436,7 +433,7 @@ TEST(BroadPhaseQuery, SpatialProcessingOrderGivesTheSameBytes) {
 // --- the grid's cell arithmetic --------------------------------------------------------------
 
 TEST(BroadPhaseQuery, GridBucketArithmeticMatchesGridKeys) {
-  // grid_query.cpp and grid.cpp share kernels/broadphase/grid_cells.h; this pins the query side to grid_keys.
+  // grid_query.cpp and grid.cpp share kernels/broadphase/grid_cells.h; this pins the query side to grid_keys_pack.
   std::mt19937 rng(17);
   std::uniform_real_distribution<float> pos(-5.0e5f, 5.0e5f);
   Boxes sparse;
@@ -450,7 +447,9 @@ TEST(BroadPhaseQuery, GridBucketArithmeticMatchesGridKeys) {
     ASSERT_NE(v, nullptr);
     EXPECT_EQ(v->params.dense != 0, b == &dense);
     std::vector<uint64_t> keys(b->size());
-    kernels::grid_keys(v->params, soa(*b), keys.data(), {0, count(*b)});
+    std::vector<kernels::SortedBox> packed(b->size());
+    kernels::grid_keys_pack(v->params, soa(*b), kernels::PairFilter{nullptr, nullptr, nullptr}, nullptr,
+                            keys.data(), packed.data(), nullptr, {0, count(*b)});
     for (size_t i = 0; i < b->size(); ++i)
       ASSERT_EQ(static_cast<uint32_t>(keys[i] >> 32),
                 kernels::grid_query_bucket(v->params, b->min_x[i], b->min_y[i], b->min_z[i]))

@@ -44,12 +44,9 @@ using test::scaled;
 
 using test::count;
 using test::filter_of;
+using test::serial;
 using test::soa;
 
-const Executor& serial() {
-  static const Executor e(Backend::kSerial, 1);
-  return e;
-}
 
 bool same_bytes(const Buffer<Pair>& a, const Buffer<Pair>& b) {
   return a.size() == b.size() && (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(Pair)) == 0);

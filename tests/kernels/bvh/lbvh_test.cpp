@@ -40,12 +40,9 @@ using test::scaled;
 
 using test::count;
 using test::filter_of;
+using test::serial;
 using test::soa;
 
-const Executor& serial() {
-  static const Executor e(Backend::kSerial, 1);
-  return e;
-}
 
 // --- tree invariants ----------------------------------------------------------------------
 
