@@ -6,5 +6,7 @@
 #include "impact/world.h"
 #include "impact/broadphase.h"
 #include "impact/firing.h"
+#include "impact/narrowphase.h"
 #include "impact/raycast.h"
+#include "impact/shapes.h"
 #include "impact/version.h"

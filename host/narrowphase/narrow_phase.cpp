@@ -1,0 +1,626 @@
+// impact::NarrowPhase: validation, expansion of meshes and compounds into leaf pairs,
+// bucketing by leaf-type pair, gather into SoA, the per-bucket kernels, and the
+// ordered output.
+//
+// Passes (each a for_each_chunk over a fixed grain, so the bytes never depend on
+// the thread count):
+//   poses      quaternion -> rotation matrix per object
+//   expand     per pair: its leaf pairs (a shape, a compound child, a mesh triangle
+//              found through the mesh's BVH), in (child_a, child_b) order, into
+//              per-chunk lists concatenated in chunk order
+//   bucket     key = (type_a * 8 + type_b) << 32 | record, LSD radix sort on the
+//              type bits: buckets are contiguous and keep record order inside
+//   gather     both sides of every record into LeafSoA arrays (sorted position)
+//   kernels    pair_kernel(ta, tb) over each bucket
+//   output     manifolds of touching records in record order = (pair, child_a,
+//              child_b) order
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+#include "host/narrowphase/pose.h"
+#include "host/narrowphase/shape_store.h"
+#include "host/parallel.h"
+#include "host/radix_sort.h"
+#include "impact/narrowphase.h"
+#include "kernels/narrowphase/leaf.h"
+
+namespace impact {
+
+namespace {
+
+using kernels::LeafType;
+
+constexpr uint32_t kExpandGrain = 2048;
+constexpr uint32_t kLaneGrain = 1024;
+
+/// One leaf pair: pair index, children (kNoChild for plain shapes), the leaf types
+/// as stored (side 0 = the pair's a), and whether the kernel sees b as its A.
+struct LeafPair {
+  uint32_t pair;
+  uint32_t child_a;
+  uint32_t child_b;
+  uint8_t type_a;
+  uint8_t type_b;
+  uint8_t swapped;
+  uint8_t pad = 0;
+};
+
+LeafType leaf_of(ShapeType t) {
+  switch (t) {
+    case ShapeType::kSphere: return kernels::kLeafSphere;
+    case ShapeType::kCapsule: return kernels::kLeafCapsule;
+    case ShapeType::kBox:
+    case ShapeType::kAabb: return kernels::kLeafBox;
+    case ShapeType::kConvex: return kernels::kLeafConvex;
+    case ShapeType::kCylinder: return kernels::kLeafCylinder;
+    case ShapeType::kEllipsoid: return kernels::kLeafEllipsoid;
+    case ShapeType::kHalfSpace: return kernels::kLeafHalfSpace;
+    case ShapeType::kMesh: return kernels::kLeafTriangle;
+    case ShapeType::kCompound: break;
+  }
+  return kernels::kLeafTypeCount;
+}
+
+struct Box3 {
+  Eigen::Vector3f lo, hi;
+  bool overlaps(const Box3& o) const {
+    return (lo.array() <= o.hi.array()).all() && (o.lo.array() <= hi.array()).all();
+  }
+};
+
+/// Pose of every object, normalised, with its rotation matrix.
+struct Posed {
+  Eigen::Matrix3f R;
+  Eigen::Vector3f p;
+};
+
+/// SoA of one side of all records (indexed by sorted position).
+struct SideArrays {
+  std::vector<float> f[21];  // p[3], r[9], e[3], w[6]
+  std::vector<uint32_t> ref;
+  void resize(size_t n) {
+    for (auto& v : f) v.resize(n);
+    ref.resize(n);
+  }
+  kernels::LeafSoA view(size_t offset) const {
+    kernels::LeafSoA s{};
+    for (int i = 0; i < 3; ++i) s.p[i] = f[i].data() + offset;
+    for (int i = 0; i < 9; ++i) s.r[i] = f[3 + i].data() + offset;
+    for (int i = 0; i < 3; ++i) s.e[i] = f[12 + i].data() + offset;
+    for (int i = 0; i < 6; ++i) s.w[i] = f[15 + i].data() + offset;
+    s.ref = ref.data() + offset;
+    return s;
+  }
+};
+
+struct OutArrays {
+  std::vector<uint8_t> count;
+  std::vector<float> f[1 + 3 + 4 * 3 + 4];  // depth, n[3], point[4][3], pdepth[4]
+  void resize(size_t n) {
+    count.resize(n);
+    for (auto& v : f) v.resize(n);
+  }
+  kernels::ManifoldSoA view(size_t offset) {
+    kernels::ManifoldSoA m{};
+    m.count = count.data() + offset;
+    m.depth = f[0].data() + offset;
+    for (int i = 0; i < 3; ++i) m.n[i] = f[1 + i].data() + offset;
+    for (uint32_t k = 0; k < 4; ++k) {
+      for (int i = 0; i < 3; ++i) m.point[k][i] = f[4 + 3 * k + i].data() + offset;
+      m.pdepth[k] = f[16 + k].data() + offset;
+    }
+    return m;
+  }
+};
+
+}  // namespace
+
+struct NarrowPhase::Impl {
+  NarrowPhaseOptions options;
+  Status options_status;  // a constructor given invalid options keeps the defaults and fails calls
+  host::Executor exec;
+  host::RadixSorter sorter;
+
+  std::vector<Posed> posed;
+  std::vector<std::vector<LeafPair>> chunk_records;
+  std::vector<LeafPair> records;
+  std::vector<uint64_t> keys;
+  std::vector<uint32_t> order;     // sorted position -> record
+  std::vector<uint32_t> position;  // record -> sorted position
+  SideArrays side[2];
+  OutArrays manifold;
+  std::vector<uint32_t> chunk_hits;
+
+  // Inputs of the current call.
+  const ShapeStore* store = nullptr;
+  const ShapeId* shape_of = nullptr;
+  const ShapePair* pairs = nullptr;
+
+  const ShapeRecord& shape(uint32_t obj) const { return store->shapes[shape_of[obj].index]; }
+
+  Status collide(const ShapeSet& shapes, std::span<const ShapeId> shape_of_in,
+                 std::span<const Pose> poses, std::span<const ShapePair> pairs_in,
+                 std::vector<Manifold>* result);
+
+  // --- expansion ---------------------------------------------------------------------
+  Box3 leaf_bounds(uint32_t obj, uint32_t child) const;
+  void mesh_query(const MeshData& m, const Posed& pose, const Box3& world_box,
+                  std::vector<uint32_t>* tris) const;
+  void mesh_below_plane(const MeshData& m, const Posed& pose, const Eigen::Vector3f& n, float d,
+                        std::vector<uint32_t>* tris) const;
+  void expand(uint32_t pair_index, std::vector<LeafPair>* out, std::vector<uint32_t>* scratch_a,
+              std::vector<uint32_t>* scratch_b) const;
+  void child_list(uint32_t obj, const Box3& other, std::vector<uint32_t>* out) const;
+
+  // --- gather ------------------------------------------------------------------------
+  void fill(SideArrays& s, size_t k, uint32_t obj, uint32_t child) const;
+};
+
+Box3 NarrowPhase::Impl::leaf_bounds(uint32_t obj, uint32_t child) const {
+  const ShapeRecord& r = shape(obj);
+  const Posed& P = posed[obj];
+  Box3 b;
+  if (r.type == ShapeType::kCompound && child != kNoChild) {
+    const CompoundChild& c = store->children[store->child_begin[r.ref] + child];
+    const ShapeRecord& cr = store->shapes[c.shape.index];
+    Pose w;
+    w.orientation = Eigen::Quaternionf(P.R) * c.local.orientation;
+    w.position = P.R * c.local.position + P.p;
+    host::posed_bounds(cr, w, store->hulls, &b.lo, &b.hi);
+    return b;
+  }
+  if (r.type == ShapeType::kMesh && child != kNoChild) {
+    const MeshData& m = store->meshes[r.ref];
+    b.lo = Eigen::Vector3f::Constant(INFINITY);
+    b.hi = -b.lo;
+    for (int k = 0; k < 3; ++k) {
+      const Eigen::Vector3f v = P.R * m.vertices[m.indices[3 * child + k]] + P.p;
+      b.lo = b.lo.cwiseMin(v);
+      b.hi = b.hi.cwiseMax(v);
+    }
+    return b;
+  }
+  Pose w;
+  w.orientation = Eigen::Quaternionf(P.R);
+  w.position = P.p;
+  host::posed_bounds(r, w, store->hulls, &b.lo, &b.hi);
+  return b;
+}
+
+void NarrowPhase::Impl::mesh_query(const MeshData& m, const Posed& pose, const Box3& world_box,
+                                   std::vector<uint32_t>* tris) const {
+  tris->clear();
+  // The query box in the mesh's frame (conservative: the box of the rotated box).
+  const Eigen::Vector3f c = (world_box.lo + world_box.hi) * 0.5f;
+  const Eigen::Vector3f e = (world_box.hi - world_box.lo) * 0.5f;
+  const Eigen::Vector3f lc = pose.R.transpose() * (c - pose.p);
+  const Eigen::Vector3f le = pose.R.transpose().cwiseAbs() * e;
+  // Float slack: the two transforms round; a triangle just touching the box must not
+  // be lost (the kernel decides).
+  const float slack = 1e-5f * (le.maxCoeff() + lc.cwiseAbs().maxCoeff());
+  const Eigen::Vector3f qlo = lc - le - Eigen::Vector3f::Constant(slack);
+  const Eigen::Vector3f qhi = lc + le + Eigen::Vector3f::Constant(slack);
+  uint32_t stack[64];
+  uint32_t top = 0;
+  stack[top++] = 0;
+  while (top > 0) {
+    const MeshData::Node& n = m.nodes[stack[--top]];
+    if (n.lo[0] > qhi[0] || n.hi[0] < qlo[0] || n.lo[1] > qhi[1] || n.hi[1] < qlo[1] ||
+        n.lo[2] > qhi[2] || n.hi[2] < qlo[2]) {
+      continue;
+    }
+    if (n.count > 0) {
+      for (uint32_t i = n.left_or_first; i < n.left_or_first + n.count; ++i) {
+        tris->push_back(m.tri_order[i]);
+      }
+    } else {
+      stack[top++] = n.right;
+      stack[top++] = n.left_or_first;
+    }
+  }
+  std::sort(tris->begin(), tris->end());
+}
+
+void NarrowPhase::Impl::mesh_below_plane(const MeshData& m, const Posed& pose, const Eigen::Vector3f& n,
+                                         float d, std::vector<uint32_t>* tris) const {
+  tris->clear();
+  // Plane in the mesh frame: n_l . x <= d_l.
+  const Eigen::Vector3f nl = pose.R.transpose() * n;
+  const float dl = d - n.dot(pose.p);
+  uint32_t stack[64];
+  uint32_t top = 0;
+  stack[top++] = 0;
+  while (top > 0) {
+    const MeshData::Node& node = m.nodes[stack[--top]];
+    float lowest = 0.0f, scale = std::fabs(dl);
+    for (int k = 0; k < 3; ++k) {
+      lowest += nl[k] * (nl[k] >= 0.0f ? node.lo[k] : node.hi[k]);
+      scale += std::fabs(nl[k]) * std::max(std::fabs(node.lo[k]), std::fabs(node.hi[k]));
+    }
+    if (lowest > dl + 1e-6f * scale) continue;
+    if (node.count > 0) {
+      for (uint32_t i = node.left_or_first; i < node.left_or_first + node.count; ++i) {
+        tris->push_back(m.tri_order[i]);
+      }
+    } else {
+      stack[top++] = node.right;
+      stack[top++] = node.left_or_first;
+    }
+  }
+  std::sort(tris->begin(), tris->end());
+}
+
+void NarrowPhase::Impl::child_list(uint32_t obj, const Box3& other, std::vector<uint32_t>* out) const {
+  out->clear();
+  const ShapeRecord& r = shape(obj);
+  if (r.type == ShapeType::kCompound) {
+    const uint32_t n = store->child_begin[r.ref + 1] - store->child_begin[r.ref];
+    for (uint32_t c = 0; c < n; ++c) {
+      if (leaf_bounds(obj, c).overlaps(other)) out->push_back(c);
+    }
+  } else if (r.type == ShapeType::kMesh) {
+    mesh_query(store->meshes[r.ref], posed[obj], other, out);
+  } else {
+    out->push_back(kNoChild);
+  }
+}
+
+void NarrowPhase::Impl::expand(uint32_t pair_index, std::vector<LeafPair>* out,
+                               std::vector<uint32_t>* ca, std::vector<uint32_t>* cb) const {
+  const uint32_t a = pairs[pair_index].a, b = pairs[pair_index].b;
+  const ShapeRecord& ra = shape(a);
+  const ShapeRecord& rb = shape(b);
+  auto leaf_type = [&](const ShapeRecord& r, uint32_t child) -> uint8_t {
+    if (r.type == ShapeType::kCompound) {
+      const CompoundChild& c = store->children[store->child_begin[r.ref] + child];
+      return leaf_of(store->shapes[c.shape.index].type);
+    }
+    return leaf_of(r.type);
+  };
+  auto emit = [&](uint32_t child_a, uint32_t child_b) {
+    LeafPair lp;
+    lp.pair = pair_index;
+    lp.child_a = child_a;
+    lp.child_b = child_b;
+    lp.type_a = leaf_type(ra, child_a);
+    lp.type_b = leaf_type(rb, child_b);
+    lp.swapped = lp.type_a > lp.type_b ? 1 : 0;
+    out->push_back(lp);
+  };
+  const bool a_plain = ra.type != ShapeType::kCompound && ra.type != ShapeType::kMesh;
+  const bool b_plain = rb.type != ShapeType::kCompound && rb.type != ShapeType::kMesh;
+  if (a_plain && b_plain) {
+    emit(kNoChild, kNoChild);
+    return;
+  }
+  // One side a half-space: the other side's children that reach below the plane.
+  auto plane_of = [&](uint32_t obj, Eigen::Vector3f* n, float* d) {
+    const ShapeRecord& r = shape(obj);
+    *n = posed[obj].R * Eigen::Vector3f(r.e[0], r.e[1], r.e[2]);
+    *d = r.offset + n->dot(posed[obj].p);
+  };
+  auto children_below = [&](uint32_t obj, const Eigen::Vector3f& n, float d, std::vector<uint32_t>* list) {
+    const ShapeRecord& r = shape(obj);
+    list->clear();
+    if (r.type == ShapeType::kMesh) {
+      mesh_below_plane(store->meshes[r.ref], posed[obj], n, d, list);
+      return;
+    }
+    const uint32_t count = store->child_begin[r.ref + 1] - store->child_begin[r.ref];
+    for (uint32_t c = 0; c < count; ++c) {
+      const Box3 bx = leaf_bounds(obj, c);
+      float lowest = 0.0f, scale = std::fabs(d);
+      for (int k = 0; k < 3; ++k) {
+        lowest += n[k] * (n[k] >= 0.0f ? bx.lo[k] : bx.hi[k]);
+        scale += std::fabs(n[k]) * std::max(std::fabs(bx.lo[k]), std::fabs(bx.hi[k]));
+      }
+      if (lowest <= d + 1e-6f * scale) list->push_back(c);
+    }
+  };
+  if (ra.type == ShapeType::kHalfSpace || rb.type == ShapeType::kHalfSpace) {
+    const bool plane_is_a = ra.type == ShapeType::kHalfSpace;
+    Eigen::Vector3f n;
+    float d;
+    plane_of(plane_is_a ? a : b, &n, &d);
+    children_below(plane_is_a ? b : a, n, d, ca);
+    for (uint32_t c : *ca) plane_is_a ? emit(kNoChild, c) : emit(c, kNoChild);
+    return;
+  }
+  // Children of a that touch b's bounds, then for each, children of b touching it.
+  const Box3 box_b = leaf_bounds(b, kNoChild);
+  child_list(a, box_b, ca);
+  for (uint32_t c : *ca) {
+    const Box3 box_c = a_plain ? leaf_bounds(a, kNoChild) : leaf_bounds(a, c);
+    child_list(b, box_c, cb);
+    for (uint32_t d : *cb) emit(c, d);
+  }
+}
+
+void NarrowPhase::Impl::fill(SideArrays& s, size_t k, uint32_t obj, uint32_t child) const {
+  const ShapeRecord* r = &shape(obj);
+  Eigen::Matrix3f R = posed[obj].R;
+  Eigen::Vector3f p = posed[obj].p;
+  float w[6] = {0, 0, 0, 0, 0, 0};
+  if (r->type == ShapeType::kCompound) {
+    const CompoundChild& c = store->children[store->child_begin[r->ref] + child];
+    p = R * c.local.position + p;
+    R = R * c.local.orientation.toRotationMatrix();
+    r = &store->shapes[c.shape.index];
+  }
+  float e[3] = {r->e[0], r->e[1], r->e[2]};
+  uint32_t ref = 0;
+  switch (r->type) {
+    case ShapeType::kAabb:
+      R.setIdentity();
+      break;
+    case ShapeType::kConvex:
+      ref = r->ref;
+      break;
+    case ShapeType::kHalfSpace: {
+      const Eigen::Vector3f n = R * Eigen::Vector3f(r->e[0], r->e[1], r->e[2]);
+      const Eigen::Vector3f nn = n / n.norm();
+      p = p + R * (Eigen::Vector3f(r->e[0], r->e[1], r->e[2]) * r->offset);
+      e[0] = nn[0];
+      e[1] = nn[1];
+      e[2] = nn[2];
+      break;
+    }
+    case ShapeType::kMesh: {
+      const MeshData& m = store->meshes[r->ref];
+      const Eigen::Vector3f v0 = R * m.vertices[m.indices[3 * child]] + p;
+      const Eigen::Vector3f v1 = R * m.vertices[m.indices[3 * child + 1]] + p;
+      const Eigen::Vector3f v2 = R * m.vertices[m.indices[3 * child + 2]] + p;
+      p = v0;
+      for (int i = 0; i < 3; ++i) {
+        w[i] = v1[i];
+        w[3 + i] = v2[i];
+      }
+      R.setIdentity();
+      e[0] = e[1] = e[2] = 0.0f;
+      break;
+    }
+    default:
+      break;
+  }
+  for (int i = 0; i < 3; ++i) s.f[i][k] = p[i];
+  for (int i = 0; i < 3; ++i) {
+    for (int j = 0; j < 3; ++j) s.f[3 + 3 * i + j][k] = R(i, j);
+  }
+  for (int i = 0; i < 3; ++i) s.f[12 + i][k] = e[i];
+  for (int i = 0; i < 6; ++i) s.f[15 + i][k] = w[i];
+  s.ref[k] = ref;
+}
+
+Status NarrowPhase::Impl::collide(const ShapeSet& shapes, std::span<const ShapeId> shape_of_in,
+                                  std::span<const Pose> poses, std::span<const ShapePair> pairs_in,
+                                  std::vector<Manifold>* result) {
+  if (result == nullptr) return Status(StatusCode::kInvalidArgument, "out must not be null");
+  if (shape_of_in.size() != poses.size()) {
+    return Status(StatusCode::kSizeMismatch, "shape_of has " + std::to_string(shape_of_in.size()) +
+                                                 " entries but poses has " + std::to_string(poses.size()));
+  }
+  if (shape_of_in.size() >= 0xffffffffu || pairs_in.size() >= 0xffffffffu) {
+    return Status(StatusCode::kCapacityExceeded, "more than 2^32 - 2 objects or pairs");
+  }
+  store = &shapes.store();
+  const auto n = static_cast<uint32_t>(shape_of_in.size());
+  for (uint32_t i = 0; i < n; ++i) {
+    if (shape_of_in[i].index >= store->shapes.size()) {
+      return Status(StatusCode::kInvalidArgument,
+                    "object " + std::to_string(i) + ": unknown shape id " + std::to_string(shape_of_in[i].index));
+    }
+    const std::string who = "object " + std::to_string(i);
+    if (Status st = host::check_pose(poses[i], who.c_str()); !st.ok()) return st;
+  }
+  for (size_t k = 0; k < pairs_in.size(); ++k) {
+    const ShapePair& pr = pairs_in[k];
+    if (pr.a >= n || pr.b >= n) {
+      return Status(StatusCode::kInvalidArgument, "pair " + std::to_string(k) + ": index out of range (" +
+                                                      std::to_string(n) + " objects)");
+    }
+    if (pr.a == pr.b) {
+      return Status(StatusCode::kInvalidArgument,
+                    "pair " + std::to_string(k) + ": an object cannot collide with itself");
+    }
+    if (store->shapes[shape_of_in[pr.a].index].type == ShapeType::kHalfSpace &&
+        store->shapes[shape_of_in[pr.b].index].type == ShapeType::kHalfSpace) {
+      return Status(StatusCode::kInvalidArgument,
+                    "pair " + std::to_string(k) + ": two half-spaces have no finite collision data");
+    }
+  }
+  shape_of = shape_of_in.data();
+  pairs = pairs_in.data();
+  result->clear();
+
+  // Poses.
+  posed.resize(n);
+  exec.for_each_chunk(n, kExpandGrain, [&](uint32_t b, uint32_t e, uint32_t) {
+    for (uint32_t i = b; i < e; ++i) {
+      const Pose p = host::normalized(poses[i]);
+      posed[i].R = p.orientation.toRotationMatrix();
+      posed[i].p = p.position;
+    }
+  });
+
+  // Expansion into leaf-pair records, per chunk, concatenated in chunk order.
+  const auto np = static_cast<uint32_t>(pairs_in.size());
+  const uint32_t chunks = host::chunk_count(np, kExpandGrain);
+  chunk_records.resize(chunks);
+  exec.for_each_chunk(np, kExpandGrain, [&](uint32_t b, uint32_t e, uint32_t chunk) {
+    std::vector<LeafPair>& out = chunk_records[chunk];
+    out.clear();
+    std::vector<uint32_t> ca, cb;
+    for (uint32_t k = b; k < e; ++k) expand(k, &out, &ca, &cb);
+  });
+  size_t total = 0;
+  for (uint32_t c = 0; c < chunks; ++c) total += chunk_records[c].size();
+  if (total >= 0xffffffffu) {
+    return Status(StatusCode::kCapacityExceeded,
+                  "narrow phase: more than 2^32 - 2 leaf pairs after expanding meshes and compounds");
+  }
+  records.resize(total);
+  {
+    size_t at = 0;
+    for (uint32_t c = 0; c < chunks; ++c) {
+      std::copy(chunk_records[c].begin(), chunk_records[c].end(), records.begin() + static_cast<ptrdiff_t>(at));
+      at += chunk_records[c].size();
+    }
+  }
+  const auto nr = static_cast<uint32_t>(total);
+
+  // Buckets: stable sort of (type pair, record).
+  keys.resize(nr);
+  exec.for_each_chunk(nr, kLaneGrain * 16, [&](uint32_t b, uint32_t e, uint32_t) {
+    for (uint32_t i = b; i < e; ++i) {
+      const LeafPair& lp = records[i];
+      const uint32_t lo = std::min(lp.type_a, lp.type_b), hi = std::max(lp.type_a, lp.type_b);
+      keys[i] = (static_cast<uint64_t>(lo * kernels::kLeafTypeCount + hi) << 32) | i;
+    }
+  });
+  if (nr > 0) sorter.sort(exec, keys.data(), nr, 32, 32 + 6);
+  order.resize(nr);
+  position.resize(nr);
+  exec.for_each_chunk(nr, kLaneGrain * 16, [&](uint32_t b, uint32_t e, uint32_t) {
+    for (uint32_t s = b; s < e; ++s) {
+      const auto rec = static_cast<uint32_t>(keys[s]);
+      order[s] = rec;
+      position[rec] = s;
+    }
+  });
+
+  // Gather both sides in sorted order; side 0 is the kernel's A (the lower leaf type).
+  side[0].resize(nr);
+  side[1].resize(nr);
+  manifold.resize(nr);
+  exec.for_each_chunk(nr, kLaneGrain, [&](uint32_t b, uint32_t e, uint32_t) {
+    for (uint32_t s = b; s < e; ++s) {
+      const LeafPair& lp = records[order[s]];
+      const ShapePair& pr = pairs[lp.pair];
+      if (lp.swapped) {
+        fill(side[0], s, pr.b, lp.child_b);
+        fill(side[1], s, pr.a, lp.child_a);
+      } else {
+        fill(side[0], s, pr.a, lp.child_a);
+        fill(side[1], s, pr.b, lp.child_b);
+      }
+    }
+  });
+
+  // Kernels, bucket by bucket.
+  kernels::NarrowConfig cfg;
+  cfg.path = options.simd ? kernels::KernelPath::kSimd : kernels::KernelPath::kScalar;
+  cfg.gjk_max_iterations = options.gjk_max_iterations;
+  cfg.gjk_tolerance = options.gjk_tolerance;
+  cfg.epa_max_iterations = options.epa_max_iterations;
+  cfg.epa_tolerance = options.epa_tolerance;
+  cfg.hulls = store->hulls.view();
+  for (uint32_t begin = 0; begin < nr;) {
+    const uint64_t bucket = keys[begin] >> 32;
+    uint32_t end = begin + 1;
+    while (end < nr && (keys[end] >> 32) == bucket) ++end;
+    const auto ta = static_cast<LeafType>(bucket / kernels::kLeafTypeCount);
+    const auto tb = static_cast<LeafType>(bucket % kernels::kLeafTypeCount);
+    const kernels::PairKernel kernel = kernels::pair_kernel(ta, tb);
+    IMPACT_ASSERT(kernel != nullptr);
+    const kernels::LeafSoA A = side[0].view(begin);
+    const kernels::LeafSoA B = side[1].view(begin);
+    const kernels::ManifoldSoA M = manifold.view(begin);
+    exec.for_each_chunk(end - begin, kLaneGrain, [&](uint32_t b, uint32_t e, uint32_t) {
+      kernel(A, B, M, kernels::Range{b, e}, cfg);
+    });
+    begin = end;
+  }
+
+  // Output in record order.
+  const uint32_t out_chunks = host::chunk_count(nr, kLaneGrain * 4);
+  chunk_hits.assign(out_chunks + 1, 0);
+  exec.for_each_chunk(nr, kLaneGrain * 4, [&](uint32_t b, uint32_t e, uint32_t chunk) {
+    uint32_t hits = 0;
+    for (uint32_t i = b; i < e; ++i) hits += manifold.count[position[i]] > 0 ? 1u : 0u;
+    chunk_hits[chunk + 1] = hits;
+  });
+  for (uint32_t c = 0; c < out_chunks; ++c) chunk_hits[c + 1] += chunk_hits[c];
+  result->resize(chunk_hits[out_chunks]);
+  exec.for_each_chunk(nr, kLaneGrain * 4, [&](uint32_t b, uint32_t e, uint32_t chunk) {
+    uint32_t at = chunk_hits[chunk];
+    for (uint32_t i = b; i < e; ++i) {
+      const uint32_t s = position[i];
+      const uint32_t count = manifold.count[s];
+      if (count == 0) continue;
+      const LeafPair& lp = records[i];
+      Manifold& m = (*result)[at++];
+      m.pair = lp.pair;
+      m.child_a = lp.child_a;
+      m.child_b = lp.child_b;
+      const float sign = lp.swapped ? -1.0f : 1.0f;
+      m.normal = Eigen::Vector3f(manifold.f[1][s], manifold.f[2][s], manifold.f[3][s]) * sign;
+      m.depth = manifold.f[0][s];
+      m.point_count = std::min<uint32_t>(count, kernels::kMaxManifoldPoints);
+      for (uint32_t k = 0; k < 4; ++k) {
+        if (k < m.point_count) {
+          m.points[k] = Eigen::Vector3f(manifold.f[4 + 3 * k][s], manifold.f[5 + 3 * k][s], manifold.f[6 + 3 * k][s]);
+          m.point_depth[k] = manifold.f[16 + k][s];
+        } else {
+          m.points[k].setZero();
+          m.point_depth[k] = 0.0f;
+        }
+      }
+    }
+  });
+  return {};
+}
+
+// --- public ------------------------------------------------------------------------------
+
+namespace {
+Status validate(const NarrowPhaseOptions& o) {
+  auto bad = [](const std::string& m) { return Status(StatusCode::kInvalidArgument, m); };
+  if (o.gjk_max_iterations == 0) return bad("gjk_max_iterations must be >= 1");
+  if (o.epa_max_iterations == 0) return bad("epa_max_iterations must be >= 1");
+  if (!std::isfinite(o.gjk_tolerance) || !(o.gjk_tolerance > 0.0f) || o.gjk_tolerance >= 1.0f) {
+    return bad("gjk_tolerance must be in (0, 1)");
+  }
+  if (!std::isfinite(o.epa_tolerance) || !(o.epa_tolerance > 0.0f) || o.epa_tolerance >= 1.0f) {
+    return bad("epa_tolerance must be in (0, 1)");
+  }
+  Backend resolved;
+  if (!host::resolve_backend(o.exec.backend, &resolved)) {
+    return Status(StatusCode::kUnsupported, std::string("backend ") + to_string(o.exec.backend) +
+                                                " is not built into this library");
+  }
+  return {};
+}
+}  // namespace
+
+NarrowPhase::NarrowPhase(const NarrowPhaseOptions& options) : impl_(std::make_unique<Impl>()) {
+  impl_->options_status = validate(options);
+  if (impl_->options_status.ok()) {
+    impl_->options = options;
+    impl_->exec = host::Executor(options.exec.backend, options.exec.threads);
+  }
+}
+NarrowPhase::~NarrowPhase() = default;
+NarrowPhase::NarrowPhase(NarrowPhase&&) noexcept = default;
+NarrowPhase& NarrowPhase::operator=(NarrowPhase&&) noexcept = default;
+
+Status NarrowPhase::set_options(const NarrowPhaseOptions& options) {
+  if (Status st = validate(options); !st.ok()) return st;
+  const bool exec_changed = options.exec.backend != impl_->options.exec.backend ||
+                            options.exec.threads != impl_->options.exec.threads;
+  impl_->options = options;
+  impl_->options_status = {};
+  if (exec_changed) impl_->exec = host::Executor(options.exec.backend, options.exec.threads);
+  return {};
+}
+
+const NarrowPhaseOptions& NarrowPhase::options() const { return impl_->options; }
+
+Status NarrowPhase::collide(const ShapeSet& shapes, std::span<const ShapeId> shape_of,
+                            std::span<const Pose> poses, std::span<const ShapePair> pairs,
+                            std::vector<Manifold>* out) {
+  if (!impl_->options_status.ok()) return impl_->options_status;
+  return impl_->collide(shapes, shape_of, poses, pairs, out);
+}
+
+}  // namespace impact

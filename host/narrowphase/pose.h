@@ -1,0 +1,110 @@
+// Pose validation and posed bounds of shapes (host side of the narrow phase).
+#pragma once
+
+#include <cmath>
+#include <cstdio>
+#include <string>
+
+#include <Eigen/Geometry>
+
+#include "host/narrowphase/shape_store.h"
+#include "impact/shapes.h"
+#include "impact/status.h"
+
+namespace impact::host {
+
+/// Finite position, finite quaternion of unit length within 1e-3.
+inline Status check_pose(const Pose& p, const char* who) {
+  if (!p.position.allFinite()) {
+    return Status(StatusCode::kInvalidArgument, std::string(who) + ": position is not finite");
+  }
+  if (!p.orientation.coeffs().allFinite()) {
+    return Status(StatusCode::kInvalidArgument, std::string(who) + ": orientation is not finite");
+  }
+  const double n2 = p.orientation.coeffs().cast<double>().squaredNorm();
+  if (!(std::fabs(n2 - 1.0) <= 2e-3)) {
+    char buf[64];
+    std::snprintf(buf, sizeof buf, "%g", std::sqrt(n2));
+    return Status(StatusCode::kInvalidArgument,
+                  std::string(who) + ": orientation must be a unit quaternion (|q| = " + buf + ")");
+  }
+  return {};
+}
+
+inline Pose normalized(const Pose& p) {
+  Pose out;
+  out.position = p.position;
+  out.orientation = Eigen::Quaternionf(p.orientation.coeffs().cast<double>().normalized().cast<float>());
+  return out;
+}
+
+/// a * b: the pose of b's frame (given in a's frame) in the world.
+inline Pose compose(const Pose& a, const Pose& b) {
+  Pose out;
+  out.orientation = a.orientation * b.orientation;
+  out.position = a.orientation * b.position + a.position;
+  return out;
+}
+
+/// World AABB of a (non-half-space) shape at a normalised pose.
+inline void posed_bounds(const ShapeRecord& r, const Pose& pose, const HullStore& hulls,
+                         Eigen::Vector3f* lo, Eigen::Vector3f* hi) {
+  const Eigen::Matrix3f R = pose.orientation.toRotationMatrix();
+  const Eigen::Vector3f& p = pose.position;
+  Eigen::Vector3f half = Eigen::Vector3f::Zero();
+  switch (r.type) {
+    case ShapeType::kSphere:
+      half = Eigen::Vector3f::Constant(r.e[0]);
+      break;
+    case ShapeType::kCapsule:
+      half = R.col(2).cwiseAbs() * r.e[1] + Eigen::Vector3f::Constant(r.e[0]);
+      break;
+    case ShapeType::kAabb:
+      half = Eigen::Vector3f(r.e[0], r.e[1], r.e[2]);
+      break;
+    case ShapeType::kBox:
+      half = R.cwiseAbs() * Eigen::Vector3f(r.e[0], r.e[1], r.e[2]);
+      break;
+    case ShapeType::kCylinder: {
+      const Eigen::Vector3f u = R.col(2);
+      for (int i = 0; i < 3; ++i) {
+        half[i] = std::fabs(u[i]) * r.e[1] + r.e[0] * std::sqrt(std::max(0.0f, 1.0f - u[i] * u[i]));
+      }
+      break;
+    }
+    case ShapeType::kEllipsoid:
+      for (int i = 0; i < 3; ++i) {
+        half[i] = Eigen::Vector3f(R(i, 0) * r.e[0], R(i, 1) * r.e[1], R(i, 2) * r.e[2]).norm();
+      }
+      break;
+    case ShapeType::kConvex: {
+      Eigen::Vector3f l = Eigen::Vector3f::Constant(INFINITY), h = -l;
+      for (uint32_t v = hulls.vert_begin[r.ref]; v < hulls.vert_begin[r.ref + 1]; ++v) {
+        const Eigen::Vector3f w = R * Eigen::Vector3f(hulls.vx[v], hulls.vy[v], hulls.vz[v]);
+        l = l.cwiseMin(w);
+        h = h.cwiseMax(w);
+      }
+      *lo = l + p;
+      *hi = h + p;
+      return;
+    }
+    case ShapeType::kMesh:
+    case ShapeType::kCompound: {
+      const Eigen::Vector3f c = (r.local_min + r.local_max) * 0.5f;
+      const Eigen::Vector3f e = (r.local_max - r.local_min) * 0.5f;
+      const Eigen::Vector3f wc = R * c + p;
+      const Eigen::Vector3f we = R.cwiseAbs() * e;
+      *lo = wc - we;
+      *hi = wc + we;
+      return;
+    }
+    case ShapeType::kHalfSpace:
+      *lo = Eigen::Vector3f::Constant(-INFINITY);
+      *hi = Eigen::Vector3f::Constant(INFINITY);
+      return;
+  }
+  *lo = p - half;
+  *hi = p + half;
+}
+
+}  // namespace impact::host

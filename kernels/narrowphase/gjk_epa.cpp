@@ -1,0 +1,910 @@
+// General convex pairs: GJK + EPA on support functions, face clipping for polytopes.
+//
+// What: collide_gjk_epa computes, per lane k of a bucket (A's type <= B's type, neither
+// a half-space), the collision data of leaf.h: count, unit normal A->B, depth, up to 4
+// contact points midway between the surfaces with their penetration along n.
+// Method, per lane:
+//  1. Both leaves are loaded relative to A's position (float precision far from the
+//     world origin: every coordinate is then a difference of nearby values).
+//  2. GJK (Gilbert, Johnson, Keerthi 1988; van den Bergen 1999 termination) on the
+//     cores (sphere = point, capsule = segment, other types = themselves, support.h):
+//     distance d and closest points. A margin lower bound v.w/|v| > ra + rb stops a
+//     separated lane early. Cores apart (d > 1e-5 of the scale): depth = ra + rb - d,
+//     exact for spheres / capsules; d >= ra + rb (or no radius) -> count 0.
+//  3. Cores overlapping: EPA (Van den Bergen 2001) on the cores, from GJK's simplex
+//     blown up to a tetrahedron; depth = EPA depth + ra + rb, the exact penetration of
+//     the inflated shapes. A flat core difference (crossing segments, coincident
+//     centres, coplanar triangles) has core depth 0 along a deterministic normal.
+//  4. Contact points: box / convex / triangle on both sides: the reference face (the
+//     face most aligned with n of either side) clips the incident face (Sutherland-
+//     Hodgman against the reference side planes); points below the reference plane
+//     are kept, reduced to 4 (deepest, farthest, then largest area). Otherwise, or when
+//     the faces are not aligned with n (edge-edge), one point from EPA's witnesses.
+// Precision: supports are float; the simplex and polytope arithmetic is double (no
+// cost on a CPU, and it keeps the sub-algorithm's sign tests away from cancellation).
+// Tolerances: cfg.gjk_tolerance and cfg.epa_tolerance times the scale (the sum of the
+// two shapes' sizes, support.h leaf_size); iteration caps cfg.gjk_max_iterations and
+// cfg.epa_max_iterations (EPA also stops at its fixed polytope capacity).
+// Paths: GJK/EPA do not vectorise across lanes; cfg.path kSimd and kScalar run this same
+// per-lane code (bit-identical results).
+// Robustness: degenerate simplices fall back to their best sub-simplex, EPA aborts to
+// its last valid face on any topological inconsistency, no division without a guard:
+// no NaN for finite input. No allocation (the EPA polytope lives on the stack).
+// Cost: GJK ~5-15 iterations of 2 supports; EPA ~10-40 iterations (curved shapes
+// take the most); hull supports are O(vertices).
+#include "kernels/narrowphase/gjk_epa.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "kernels/narrowphase/pair_kernels.h"
+
+namespace impact::kernels::cvx {
+
+namespace {
+
+IMPACT_INLINE D3 operator+(D3 a, D3 b) { return {a.x + b.x, a.y + b.y, a.z + b.z}; }
+IMPACT_INLINE D3 operator-(D3 a, D3 b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
+IMPACT_INLINE D3 operator*(D3 a, double s) { return {a.x * s, a.y * s, a.z * s}; }
+IMPACT_INLINE double dot(D3 a, D3 b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
+IMPACT_INLINE D3 cross(D3 a, D3 b) {
+  return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
+}
+IMPACT_INLINE D3 to_d(V3 a) { return {a.x, a.y, a.z}; }
+IMPACT_INLINE V3 to_f(D3 a) {
+  return {static_cast<float>(a.x), static_cast<float>(a.y), static_cast<float>(a.z)};
+}
+IMPACT_INLINE double len2(D3 a) { return dot(a, a); }
+
+/// Support of the core difference A - B along d.
+IMPACT_INLINE SupportPoint support_diff(const Leaf& A, const Leaf& B, V3 d) {
+  SupportPoint s;
+  s.a = support_core(A, d);
+  s.b = support_core(B, -d);
+  s.w = to_d(s.a) - to_d(s.b);
+  return s;
+}
+
+// --- GJK sub-algorithm: closest point of a simplex to the origin ---------------------------
+
+/// Segment [v0, v1]: reduces s to the sub-simplex holding the closest point.
+void closest_segment(Simplex& s) {
+  const D3 a = s.v[0].w, b = s.v[1].w;
+  const D3 ab = b - a;
+  const double l2 = len2(ab);
+  const double t = l2 > 0.0 ? -dot(a, ab) / l2 : 1.0;
+  if (t >= 1.0) {
+    s.v[0] = s.v[1];
+    s.n = 1;
+    s.lambda[0] = 1.0;
+  } else if (t <= 0.0) {
+    s.n = 1;
+    s.lambda[0] = 1.0;
+  } else {
+    s.lambda[0] = 1.0 - t;
+    s.lambda[1] = t;
+  }
+}
+
+/// Triangle: Ericson, Real-Time Collision Detection, 5.1.5, with the origin as query.
+void closest_triangle(Simplex& s) {
+  const D3 a = s.v[0].w, b = s.v[1].w, c = s.v[2].w;
+  const D3 ab = b - a, ac = c - a;
+  const double d1 = -dot(ab, a), d2 = -dot(ac, a);
+  if (d1 <= 0.0 && d2 <= 0.0) {
+    s.n = 1;
+    s.lambda[0] = 1.0;
+    return;
+  }
+  const double d3 = -dot(ab, b), d4 = -dot(ac, b);
+  if (d3 >= 0.0 && d4 <= d3) {
+    s.v[0] = s.v[1];
+    s.n = 1;
+    s.lambda[0] = 1.0;
+    return;
+  }
+  const double vc = d1 * d4 - d3 * d2;
+  if (vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0) {
+    const double t = d1 / (d1 - d3);
+    s.n = 2;
+    s.lambda[0] = 1.0 - t;
+    s.lambda[1] = t;
+    return;
+  }
+  const double d5 = -dot(ab, c), d6 = -dot(ac, c);
+  if (d6 >= 0.0 && d5 <= d6) {
+    s.v[0] = s.v[2];
+    s.n = 1;
+    s.lambda[0] = 1.0;
+    return;
+  }
+  const double vb = d5 * d2 - d1 * d6;
+  if (vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0) {
+    const double t = d2 / (d2 - d6);
+    s.v[1] = s.v[2];
+    s.n = 2;
+    s.lambda[0] = 1.0 - t;
+    s.lambda[1] = t;
+    return;
+  }
+  const double va = d3 * d6 - d5 * d4;
+  if (va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0) {
+    const double t = (d4 - d3) / ((d4 - d3) + (d5 - d6));
+    s.v[0] = s.v[1];
+    s.v[1] = s.v[2];
+    s.n = 2;
+    s.lambda[0] = 1.0 - t;
+    s.lambda[1] = t;
+    return;
+  }
+  const double sum = va + vb + vc;
+  const double area2 = len2(cross(ab, ac));
+  if (!(sum > 1e-14 * (len2(ab) * len2(ac))) || !(area2 > 0.0)) {
+    // Degenerate (collinear) triangle: the best of its three edges.
+    Simplex best;
+    double best_d = INFINITY;
+    const int e[3][2] = {{0, 1}, {1, 2}, {2, 0}};
+    for (const auto& ed : e) {
+      Simplex t;
+      t.n = 2;
+      t.v[0] = s.v[ed[0]];
+      t.v[1] = s.v[ed[1]];
+      closest_segment(t);
+      D3 p{0, 0, 0};
+      for (uint32_t i = 0; i < t.n; ++i) p = p + t.v[i].w * t.lambda[i];
+      const double dd = len2(p);
+      if (dd < best_d) {
+        best_d = dd;
+        best = t;
+      }
+    }
+    s = best;
+    return;
+  }
+  const double inv = 1.0 / sum;
+  s.lambda[1] = vb * inv;
+  s.lambda[2] = vc * inv;
+  s.lambda[0] = 1.0 - s.lambda[1] - s.lambda[2];
+}
+
+/// Tetrahedron: returns true when the origin is inside (s unchanged, lambdas set);
+/// else s becomes the closest face's sub-simplex.
+bool closest_tetrahedron(Simplex& s) {
+  const D3 p[4] = {s.v[0].w, s.v[1].w, s.v[2].w, s.v[3].w};
+  static constexpr int kFace[4][4] = {{0, 1, 2, 3}, {0, 1, 3, 2}, {0, 2, 3, 1}, {1, 2, 3, 0}};
+  const double vol = dot(p[1] - p[0], cross(p[2] - p[0], p[3] - p[0]));
+  const double scale3 = std::sqrt(len2(p[1] - p[0]) * len2(p[2] - p[0]) * len2(p[3] - p[0]));
+  const bool degenerate = !(std::fabs(vol) > 1e-12 * scale3);
+  bool outside[4];
+  bool any = false;
+  for (int f = 0; f < 4; ++f) {
+    const D3 a = p[kFace[f][0]], b = p[kFace[f][1]], c = p[kFace[f][2]], o = p[kFace[f][3]];
+    const D3 n = cross(b - a, c - a);
+    const double so = dot(n, o - a), s0 = -dot(n, a);
+    outside[f] = degenerate || (so * s0 < 0.0);
+    any = any || outside[f];
+  }
+  if (!any) {
+    // Barycentric weights of the origin.
+    const double inv = 1.0 / vol;
+    s.lambda[1] = dot(p[0] * -1.0, cross(p[2] - p[0], p[3] - p[0])) * inv;
+    s.lambda[2] = dot(p[1] - p[0], cross(p[0] * -1.0, p[3] - p[0])) * inv;
+    s.lambda[3] = dot(p[1] - p[0], cross(p[2] - p[0], p[0] * -1.0)) * inv;
+    s.lambda[0] = 1.0 - s.lambda[1] - s.lambda[2] - s.lambda[3];
+    return true;
+  }
+  Simplex best;
+  double best_d = INFINITY;
+  for (int f = 0; f < 4; ++f) {
+    if (!outside[f]) continue;
+    Simplex t;
+    t.n = 3;
+    for (int i = 0; i < 3; ++i) t.v[i] = s.v[kFace[f][i]];
+    closest_triangle(t);
+    D3 q{0, 0, 0};
+    for (uint32_t i = 0; i < t.n; ++i) q = q + t.v[i].w * t.lambda[i];
+    const double dd = len2(q);
+    if (dd < best_d) {
+      best_d = dd;
+      best = t;
+    }
+  }
+  s = best;
+  return false;
+}
+
+/// Reduces s to the sub-simplex closest to the origin; returns the closest point and
+/// whether the origin is enclosed by a tetrahedron.
+bool solve_simplex(Simplex& s, D3* v) {
+  bool inside = false;
+  switch (s.n) {
+    case 1: s.lambda[0] = 1.0; break;
+    case 2: closest_segment(s); break;
+    case 3: closest_triangle(s); break;
+    default: inside = closest_tetrahedron(s); break;
+  }
+  D3 q{0, 0, 0};
+  for (uint32_t i = 0; i < s.n; ++i) q = q + s.v[i].w * s.lambda[i];
+  *v = inside ? D3{0, 0, 0} : q;
+  return inside;
+}
+
+void witnesses(const Simplex& s, V3* pa, V3* pb) {
+  D3 a{0, 0, 0}, b{0, 0, 0};
+  for (uint32_t i = 0; i < s.n; ++i) {
+    a = a + to_d(s.v[i].a) * s.lambda[i];
+    b = b + to_d(s.v[i].b) * s.lambda[i];
+  }
+  *pa = to_f(a);
+  *pb = to_f(b);
+}
+
+// --- EPA polytope ----------------------------------------------------------------------
+
+constexpr uint32_t kEpaMaxVerts = 132;
+constexpr uint32_t kEpaMaxFaces = 2 * kEpaMaxVerts;
+constexpr uint32_t kEpaMaxHorizon = 3 * kEpaMaxVerts;
+
+struct EpaFace {
+  uint16_t i[3];
+  bool alive;
+  D3 n;
+  double d;  // n . w[i0]: signed distance of the plane from the origin
+};
+
+struct Polytope {
+  SupportPoint v[kEpaMaxVerts];
+  uint32_t nv = 0;
+  EpaFace f[kEpaMaxFaces];
+  uint32_t nf = 0;
+};
+
+/// Adds face (a, b, c), counter-clockwise seen from outside; false if degenerate/full.
+bool add_face(Polytope& P, uint32_t a, uint32_t b, uint32_t c) {
+  if (P.nf >= kEpaMaxFaces) {
+    // Compact out dead faces.
+    uint32_t m = 0;
+    for (uint32_t k = 0; k < P.nf; ++k)
+      if (P.f[k].alive) P.f[m++] = P.f[k];
+    P.nf = m;
+    if (P.nf >= kEpaMaxFaces) return false;
+  }
+  const D3 n = cross(P.v[b].w - P.v[a].w, P.v[c].w - P.v[a].w);
+  const double l2 = len2(n);
+  if (!(l2 > 0.0)) return false;
+  EpaFace& F = P.f[P.nf++];
+  F.i[0] = static_cast<uint16_t>(a);
+  F.i[1] = static_cast<uint16_t>(b);
+  F.i[2] = static_cast<uint16_t>(c);
+  F.alive = true;
+  F.n = n * (1.0 / std::sqrt(l2));
+  F.d = dot(F.n, P.v[a].w);
+  return true;
+}
+
+D3 unit_perp(D3 e) {
+  // The axis least aligned with e, crossed with e.
+  const double ax = std::fabs(e.x), ay = std::fabs(e.y), az = std::fabs(e.z);
+  const D3 axis = (ax <= ay && ax <= az) ? D3{1, 0, 0} : (ay <= az ? D3{0, 1, 0} : D3{0, 0, 1});
+  const D3 p = cross(e, axis);
+  return p * (1.0 / std::sqrt(len2(p)));
+}
+
+/// Deterministic normal of a flat (dimension < 3) core difference: the unit direction
+/// `normal_space` allows that is closest to centre(B) - centre(A); else a fixed axis.
+V3 flat_normal(const Leaf& A, const Leaf& B, const Simplex& s, uint32_t dim) {
+  const D3 c = to_d(leaf_center(B) - leaf_center(A));
+  D3 n{0, 1, 0};
+  if (dim == 2) {
+    // Plane of the difference: its normal, signed towards B.
+    n = cross(s.v[1].w - s.v[0].w, s.v[2].w - s.v[0].w);
+    n = n * (1.0 / std::sqrt(len2(n)));
+    if (dot(n, c) < 0.0) n = n * -1.0;
+  } else if (dim == 1) {
+    const D3 e0 = s.v[1].w - s.v[0].w;
+    const D3 e = e0 * (1.0 / std::sqrt(len2(e0)));
+    const D3 q = c - e * dot(c, e);
+    const double cl = std::sqrt(len2(c));
+    if (len2(q) > 1e-12 * (cl * cl) && len2(q) > 0.0) {
+      n = q * (1.0 / std::sqrt(len2(q)));
+    } else {
+      n = unit_perp(e);
+    }
+  } else {
+    if (len2(c) > 0.0) n = c * (1.0 / std::sqrt(len2(c)));
+  }
+  return to_f(n);
+}
+
+/// Normal, depth and witnesses from the polytope face F (its vertices are still stored).
+/// The depth reported is the support of A - B along the normal, n.w >= F.d: moving B by
+/// n * depth always separates (within float rounding), converged or not; converged,
+/// the two differ by at most the tolerance.
+/// Not converged (cap or inconsistency): a few projected-gradient steps on the
+/// support function h(n) = max_w n.w over the unit sphere (its gradient is the
+/// support point w; the minimum of h is the penetration depth), each accepted only if
+/// it lowers h, so the answer only improves.
+void epa_finish(const Leaf& A, const Leaf& B, const Polytope& P, const EpaFace& F, bool converged,
+                double tol, EpaResult* r) {
+  V3 n = to_f(F.n);
+  n = n * (1.0f / len(n));  // unit to float rounding
+  SupportPoint w = support_diff(A, B, n);
+  double h = dot(to_d(n), w.w);
+  if (converged) {
+    Simplex t;
+    t.n = 3;
+    const D3 q = F.n * F.d;
+    for (int i = 0; i < 3; ++i) {
+      t.v[i] = P.v[F.i[i]];
+      t.v[i].w = t.v[i].w - q;  // the projection of the origin becomes the query point
+    }
+    closest_triangle(t);
+    witnesses(t, &r->pa, &r->pb);
+  } else {
+    constexpr int kRefineSteps = 16;
+    double alpha = 1.0 / std::fmax(h, tol);
+    for (int k = 0; k < kRefineSteps; ++k) {
+      const D3 nd = to_d(n);
+      const D3 g = w.w - nd * dot(w.w, nd);  // tangential part of the gradient
+      const double gl = std::sqrt(len2(g));
+      if (!(gl > tol)) break;
+      D3 m = nd - g * alpha;
+      m = m * (1.0 / std::sqrt(len2(m)));
+      V3 mf = to_f(m);
+      mf = mf * (1.0f / len(mf));
+      const SupportPoint wm = support_diff(A, B, mf);
+      const double hm = dot(to_d(mf), wm.w);
+      if (hm < h) {
+        n = mf;
+        w = wm;
+        h = hm;
+        alpha *= 1.5;
+      } else {
+        alpha *= 0.25;
+      }
+    }
+    r->pa = w.a;
+    r->pb = w.b;
+  }
+  r->n = n;
+  r->depth = static_cast<float>(h);
+}
+
+}  // namespace
+
+// --- GJK ---------------------------------------------------------------------------------
+
+GjkResult gjk_cores(const Leaf& A, const Leaf& B, float margin, float scale, uint32_t max_iterations,
+                    float tolerance) {
+  GjkResult r;
+  Simplex& s = r.simplex;
+  const double tol = static_cast<double>(std::fmax(tolerance, 1e-7f)) * scale;
+  const double touch = 1e-5 * scale;
+  // Start from the centres' difference (A - B).
+  V3 d0 = leaf_center(B) - leaf_center(A);
+  if (!(len2(d0) > 0.0f)) d0 = V3{0, 1, 0};
+  s.v[0] = support_diff(A, B, d0);
+  s.n = 1;
+  s.lambda[0] = 1.0;
+  D3 v = s.v[0].w;
+  double v2 = len2(v);
+  uint32_t it = 0;
+  bool inside = false;
+  while (it < max_iterations) {
+    if (v2 <= touch * touch) break;
+    ++it;
+    const V3 dir = to_f(v * -1.0);
+    const SupportPoint w = support_diff(A, B, dir);
+    const double vw = dot(v, w.w);
+    const double vl = std::sqrt(v2);
+    if (vw > static_cast<double>(margin) * vl + tol) {
+      // Lower bound on the distance exceeds the margin: separated.
+      r.separated_early = true;
+      break;
+    }
+    if (v2 - vw <= tol * vl) break;  // converged
+    bool dup = false;
+    for (uint32_t i = 0; i < s.n; ++i)
+      if (s.v[i].w.x == w.w.x && s.v[i].w.y == w.w.y && s.v[i].w.z == w.w.z) dup = true;
+    if (dup) break;
+    const Simplex prev = s;
+    s.v[s.n++] = w;
+    D3 nv;
+    inside = solve_simplex(s, &nv);
+    if (inside) {
+      v = nv;
+      v2 = 0.0;
+      break;
+    }
+    const double nv2 = len2(nv);
+    if (!(nv2 < v2)) {
+      // No progress (rounding): keep the previous simplex.
+      s = prev;
+      break;
+    }
+    v = nv;
+    v2 = nv2;
+  }
+  r.iterations = it;
+  witnesses(s, &r.pa, &r.pb);
+  if (inside || v2 <= touch * touch) {
+    r.overlap = true;
+    r.distance = 0.0f;
+  } else {
+    const double vl = std::sqrt(v2);
+    r.distance = static_cast<float>(vl);
+    r.n = to_f(v * (-1.0 / vl));
+  }
+  return r;
+}
+
+// --- EPA ---------------------------------------------------------------------------------
+
+EpaResult epa_cores(const Leaf& A, const Leaf& B, const Simplex& start, float scale,
+                    uint32_t max_iterations, float tolerance) {
+  EpaResult r;
+  const double eps_len = 1e-5 * scale;
+  const double tol = static_cast<double>(std::fmax(tolerance, 1e-7f)) * scale;
+  Simplex s = start;
+  // A tetrahedron from GJK's simplex; a degenerate one drops its last vertex first.
+  if (s.n == 4) {
+    const D3 p0 = s.v[0].w;
+    const double vol = dot(s.v[1].w - p0, cross(s.v[2].w - p0, s.v[3].w - p0));
+    const double l = std::sqrt(std::fmax(std::fmax(len2(s.v[1].w - p0), len2(s.v[2].w - p0)), len2(s.v[3].w - p0)));
+    if (!(std::fabs(vol) > eps_len * l * l)) s.n = 3;
+  }
+  if (s.n == 3) {
+    const D3 n = cross(s.v[1].w - s.v[0].w, s.v[2].w - s.v[0].w);
+    const double nl = std::sqrt(len2(n));
+    const double l = std::sqrt(std::fmax(len2(s.v[1].w - s.v[0].w), len2(s.v[2].w - s.v[0].w)));
+    if (!(nl > eps_len * l)) s.n = 2;  // collinear
+    // Drop the middle vertex of a collinear triple: keep the two farthest apart.
+    if (s.n == 2) {
+      const double d01 = len2(s.v[1].w - s.v[0].w), d02 = len2(s.v[2].w - s.v[0].w),
+                   d12 = len2(s.v[2].w - s.v[1].w);
+      if (d02 >= d01 && d02 >= d12) s.v[1] = s.v[2];
+      else if (d12 > d01 && d12 > d02) s.v[0] = s.v[2];
+    }
+  }
+  if (s.n == 2 && !(len2(s.v[1].w - s.v[0].w) > eps_len * eps_len)) s.n = 1;
+  // Blow up to 3 dimensions by supports along directions the simplex lacks.
+  uint32_t dim = s.n - 1;
+  if (s.n == 1) {
+    const V3 dirs[6] = {{1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}, {0, 0, 1}, {0, 0, -1}};
+    for (const V3& d : dirs) {
+      const SupportPoint w = support_diff(A, B, d);
+      if (len2(w.w - s.v[0].w) > eps_len * eps_len) {
+        s.v[s.n++] = w;
+        break;
+      }
+    }
+    dim = s.n - 1;
+  }
+  if (s.n == 2) {
+    const D3 e = s.v[1].w - s.v[0].w;
+    const D3 eu = e * (1.0 / std::sqrt(len2(e)));
+    const D3 p1 = unit_perp(e);
+    const D3 p2 = cross(eu, p1);
+    const D3 dirs[4] = {p1, p1 * -1.0, p2, p2 * -1.0};
+    for (const D3& d : dirs) {
+      const SupportPoint w = support_diff(A, B, to_f(d));
+      const D3 q = w.w - s.v[0].w;
+      const D3 off = q - eu * dot(q, eu);
+      if (len2(off) > eps_len * eps_len) {
+        s.v[s.n++] = w;
+        break;
+      }
+    }
+    dim = s.n - 1;
+  }
+  if (s.n == 3) {
+    D3 n = cross(s.v[1].w - s.v[0].w, s.v[2].w - s.v[0].w);
+    n = n * (1.0 / std::sqrt(len2(n)));
+    for (double sign : {1.0, -1.0}) {
+      const SupportPoint w = support_diff(A, B, to_f(n * sign));
+      if (std::fabs(dot(n, w.w - s.v[0].w)) > eps_len) {
+        s.v[s.n++] = w;
+        break;
+      }
+    }
+    dim = s.n - 1;
+  }
+  if (s.n < 4) {
+    // Flat difference: zero core depth along the normal of its affine hull.
+    r.status = 1;
+    r.n = flat_normal(A, B, s, dim);
+    r.depth = 0.0f;
+    // Witnesses: GJK's closest points (the origin lies on the difference).
+    witnesses(start, &r.pa, &r.pb);
+    return r;
+  }
+
+  Polytope P;
+  for (uint32_t i = 0; i < 4; ++i) P.v[i] = s.v[i];
+  P.nv = 4;
+  {
+    const D3 p0 = P.v[0].w;
+    const double vol = dot(P.v[1].w - p0, cross(P.v[2].w - p0, P.v[3].w - p0));
+    // Orient faces outward: with vol > 0, (0,1,2) has v3 on its negative side... check.
+    if (vol < 0.0) {
+      add_face(P, 0, 1, 2);
+      add_face(P, 0, 3, 1);
+      add_face(P, 0, 2, 3);
+      add_face(P, 1, 3, 2);
+    } else {
+      add_face(P, 0, 2, 1);
+      add_face(P, 0, 1, 3);
+      add_face(P, 0, 3, 2);
+      add_face(P, 1, 2, 3);
+    }
+  }
+  uint32_t best = 0;
+  uint32_t it = 0;
+  bool converged = false;
+  uint16_t horizon[kEpaMaxHorizon][2];
+  for (;;) {
+    // Closest face (lowest index wins ties).
+    double bd = INFINITY;
+    for (uint32_t k = 0; k < P.nf; ++k)
+      if (P.f[k].alive && P.f[k].d < bd) {
+        bd = P.f[k].d;
+        best = k;
+      }
+    const EpaFace F = P.f[best];
+    const SupportPoint w = support_diff(A, B, to_f(F.n));
+    const double gap = dot(F.n, w.w) - F.d;
+    if (gap <= tol) {
+      converged = true;
+      break;
+    }
+    if (it >= max_iterations || P.nv >= kEpaMaxVerts) break;
+    ++it;
+    // Faces that see w, and their horizon (edges not shared by two visible faces).
+    uint32_t nh = 0;
+    bool ok = true;
+    const uint32_t nf_before = P.nf;
+    for (uint32_t k = 0; k < nf_before && ok; ++k) {
+      EpaFace& G = P.f[k];
+      if (!G.alive) continue;
+      if (k != best && !(dot(G.n, w.w - P.v[G.i[0]].w) > 0.0)) continue;
+      G.alive = false;
+      for (int e = 0; e < 3; ++e) {
+        const uint16_t a = G.i[e], b = G.i[(e + 1) % 3];
+        bool cancelled = false;
+        for (uint32_t h = 0; h < nh; ++h) {
+          if (horizon[h][0] == b && horizon[h][1] == a) {
+            horizon[h][0] = horizon[nh - 1][0];
+            horizon[h][1] = horizon[nh - 1][1];
+            --nh;
+            cancelled = true;
+            break;
+          }
+        }
+        if (!cancelled) {
+          if (nh >= kEpaMaxHorizon) {
+            ok = false;
+            break;
+          }
+          horizon[nh][0] = a;
+          horizon[nh][1] = b;
+          ++nh;
+        }
+      }
+    }
+    // The horizon must be one simple loop: every vertex starts and ends one edge.
+    if (ok) {
+      for (uint32_t h = 0; h < nh && ok; ++h) {
+        uint32_t starts = 0, ends = 0;
+        for (uint32_t g = 0; g < nh; ++g) {
+          starts += horizon[g][0] == horizon[h][0];
+          ends += horizon[g][1] == horizon[h][0];
+        }
+        ok = starts == 1 && ends == 1;
+      }
+      ok = ok && nh >= 3;
+    }
+    if (ok) {
+      const uint32_t wi = P.nv++;
+      P.v[wi] = w;
+      for (uint32_t h = 0; h < nh && ok; ++h) ok = add_face(P, horizon[h][0], horizon[h][1], wi);
+    }
+    if (!ok) {
+      // Inconsistent topology (rounding) or capacity: stop at the last good face. The
+      // dead flags may be partly applied, so report F itself.
+      epa_finish(A, B, P, F, false, tol, &r);
+      r.status = 2;
+      r.iterations = it;
+      return r;
+    }
+  }
+  epa_finish(A, B, P, P.f[best], converged, tol, &r);
+  r.iterations = it;
+  return r;
+}
+
+// --- manifold --------------------------------------------------------------------------
+
+namespace {
+
+constexpr uint32_t kMaxFaceVerts = 32;
+constexpr uint32_t kMaxClip = 2 * kMaxFaceVerts + 8;
+
+IMPACT_INLINE bool is_polytope(LeafType t) {
+  return t == kLeafBox || t == kLeafConvex || t == kLeafTriangle;
+}
+
+struct Face {
+  V3 v[kMaxFaceVerts];
+  uint32_t n = 0;
+  V3 normal{0, 0, 1};  // unit, outward
+  float d = 0.0f;      // plane normal . x = d
+  float align = -2.0f; // normal . dir
+};
+
+/// The face of a polytope leaf whose outward normal is most aligned with dir.
+bool supporting_face(const Leaf& l, V3 dir, Face* out) {
+  if (l.type == kLeafBox) {
+    int bi = 0;
+    float bs = -1.0f, sgn = 1.0f;
+    for (int i = 0; i < 3; ++i) {
+      const float s = dot(dir, l.ax[i]);
+      if (std::fabs(s) > bs) {
+        bs = std::fabs(s);
+        bi = i;
+        sgn = s >= 0.0f ? 1.0f : -1.0f;
+      }
+    }
+    const int j = (bi + 1) % 3, k = (bi + 2) % 3;
+    const V3 c = l.p + l.ax[bi] * (sgn * l.e[bi]);
+    const V3 u = l.ax[j] * l.e[j], w = l.ax[k] * l.e[k];
+    out->n = 4;
+    out->v[0] = c + u + w;
+    out->v[1] = c - u + w;
+    out->v[2] = c - u - w;
+    out->v[3] = c + u - w;
+    out->normal = l.ax[bi] * sgn;
+    out->d = dot(out->normal, c);
+    out->align = bs;
+    return true;
+  }
+  if (l.type == kLeafTriangle) {
+    V3 n = cross(l.v1 - l.p, l.v2 - l.p);
+    const float nl = len(n);
+    if (!(nl > 0.0f)) return false;
+    n = n * (1.0f / nl);
+    if (dot(n, dir) < 0.0f) n = -n;
+    out->n = 3;
+    out->v[0] = l.p;
+    out->v[1] = l.v1;
+    out->v[2] = l.v2;
+    out->normal = n;
+    out->d = dot(n, l.p);
+    out->align = dot(n, dir);
+    return true;
+  }
+  if (l.type == kLeafConvex) {
+    const HullView& h = *l.hulls;
+    const float dx = dot(dir, l.ax[0]), dy = dot(dir, l.ax[1]), dz = dot(dir, l.ax[2]);
+    uint32_t bf = h.face_begin[l.hull];
+    float bs = -INFINITY;
+    for (uint32_t f = h.face_begin[l.hull]; f < h.face_begin[l.hull + 1]; ++f) {
+      const float s = dx * h.fnx[f] + dy * h.fny[f] + dz * h.fnz[f];
+      if (s > bs) {
+        bs = s;
+        bf = f;
+      }
+    }
+    const uint32_t vb = h.face_vert_begin[bf], ve = h.face_vert_begin[bf + 1];
+    if (ve - vb > kMaxFaceVerts || ve - vb < 3) return false;
+    out->n = ve - vb;
+    for (uint32_t i = vb; i < ve; ++i) out->v[i - vb] = hull_vertex(l, h.face_verts[i]);
+    out->normal = l.ax[0] * h.fnx[bf] + l.ax[1] * h.fny[bf] + l.ax[2] * h.fnz[bf];
+    out->d = dot(out->normal, l.p) + h.fd[bf];
+    out->align = bs;
+    return true;
+  }
+  return false;
+}
+
+/// Clips the incident face against the reference face's side planes; writes the
+/// points that lie below the reference plane (penetration along n > 0).
+uint32_t clip_faces(const Face& ref, const Face& inc, V3 n, bool ref_is_a, float depth, V3* pts,
+                    float* pd) {
+  V3 buf0[kMaxClip], buf1[kMaxClip];
+  uint32_t cnt = inc.n;
+  for (uint32_t i = 0; i < cnt; ++i) buf0[i] = inc.v[i];
+  V3* in = buf0;
+  V3* out = buf1;
+  V3 centroid{0, 0, 0};
+  for (uint32_t i = 0; i < ref.n; ++i) centroid = centroid + ref.v[i];
+  centroid = centroid * (1.0f / static_cast<float>(ref.n));
+  for (uint32_t e = 0; e < ref.n && cnt > 0; ++e) {
+    const V3 a = ref.v[e], b = ref.v[(e + 1) % ref.n];
+    V3 sn = cross(b - a, ref.normal);
+    if (dot(sn, centroid - a) > 0.0f) sn = -sn;  // outward whatever the winding
+    const float snl = len(sn);
+    if (!(snl > 0.0f)) continue;                 // degenerate edge
+    sn = sn * (1.0f / snl);
+    const float sd = dot(sn, a);
+    uint32_t m = 0;
+    for (uint32_t i = 0; i < cnt; ++i) {
+      const V3 p = in[i], q = in[(i + 1) % cnt];
+      const float dp = dot(sn, p) - sd, dq = dot(sn, q) - sd;
+      if (dp <= 0.0f) out[m++] = p;
+      if ((dp < 0.0f && dq > 0.0f) || (dp > 0.0f && dq < 0.0f)) {
+        const float t = dp / (dp - dq);
+        out[m++] = p + (q - p) * t;
+      }
+      if (m >= kMaxClip - 2) break;
+    }
+    cnt = m;
+    V3* tmp = in;
+    in = out;
+    out = tmp;
+  }
+  const float cosn = ref_is_a ? dot(ref.normal, n) : -dot(ref.normal, n);
+  uint32_t k = 0;
+  for (uint32_t i = 0; i < cnt; ++i) {
+    const float s = ref.d - dot(ref.normal, in[i]);  // below the reference plane
+    if (!(s > 0.0f)) continue;
+    float pdepth = s / cosn;
+    pdepth = std::fmin(pdepth, depth);
+    const V3 mid = in[i] + n * (ref_is_a ? 0.5f * pdepth : -0.5f * pdepth);
+    pts[k] = mid;
+    pd[k] = pdepth;
+    ++k;
+  }
+  return k;
+}
+
+}  // namespace
+
+uint32_t reduce_manifold(V3* pts, float* depth, uint32_t n, V3 normal) {
+  if (n <= kMaxManifoldPoints) return n;
+  uint32_t i0 = 0;
+  for (uint32_t i = 1; i < n; ++i)
+    if (depth[i] > depth[i0]) i0 = i;
+  uint32_t i1 = i0;
+  float best = -1.0f;
+  for (uint32_t i = 0; i < n; ++i) {
+    const float d2 = len2(pts[i] - pts[i0]);
+    if (d2 > best) {
+      best = d2;
+      i1 = i;
+    }
+  }
+  auto area = [&](uint32_t a, uint32_t b, uint32_t c) {
+    return dot(cross(pts[b] - pts[a], pts[c] - pts[a]), normal);
+  };
+  uint32_t i2 = i0;
+  best = -1.0f;
+  for (uint32_t i = 0; i < n; ++i) {
+    const float a = std::fabs(area(i0, i1, i));
+    if (a > best) {
+      best = a;
+      i2 = i;
+    }
+  }
+  const float sgn = area(i0, i1, i2) >= 0.0f ? 1.0f : -1.0f;
+  uint32_t i3 = n;
+  best = 0.0f;
+  for (uint32_t i = 0; i < n; ++i) {
+    const float out = std::fmax(-sgn * area(i0, i1, i), std::fmax(-sgn * area(i1, i2, i), -sgn * area(i2, i0, i)));
+    if (out > best) {
+      best = out;
+      i3 = i;
+    }
+  }
+  uint32_t keep[4] = {i0, i1, i2, i3};
+  uint32_t m = (i3 == n) ? 3u : 4u;
+  // Drop duplicates (tiny manifolds: i1/i2 may repeat i0).
+  uint32_t u = 0;
+  for (uint32_t i = 0; i < m; ++i) {
+    bool dup = false;
+    for (uint32_t j = 0; j < u; ++j) dup = dup || keep[j] == keep[i];
+    if (!dup) keep[u++] = keep[i];
+  }
+  V3 tp[4];
+  float td[4];
+  for (uint32_t i = 0; i < u; ++i) {
+    tp[i] = pts[keep[i]];
+    td[i] = depth[keep[i]];
+  }
+  for (uint32_t i = 0; i < u; ++i) {
+    pts[i] = tp[i];
+    depth[i] = td[i];
+  }
+  return u;
+}
+
+void collide_convex_lane(const Leaf& A, const Leaf& B, const NarrowConfig& cfg, LaneContact* out) {
+  out->count = 0;
+  out->used_epa = false;
+  const float ra = core_radius(A), rb = core_radius(B);
+  const float margin = ra + rb;
+  const float scale = std::fmax(leaf_size(A) + leaf_size(B), 1e-30f);
+  const GjkResult g = gjk_cores(A, B, margin, scale, cfg.gjk_max_iterations, cfg.gjk_tolerance);
+  out->gjk_iterations = g.iterations;
+  out->epa_iterations = 0;
+  if (g.separated_early) return;
+  V3 n, pa, pb;
+  float depth;
+  if (!g.overlap) {
+    if (!(g.distance < margin)) return;
+    n = g.n;
+    depth = margin - g.distance;
+    pa = g.pa;
+    pb = g.pb;
+  } else {
+    const EpaResult e = epa_cores(A, B, g.simplex, scale, cfg.epa_max_iterations, cfg.epa_tolerance);
+    out->used_epa = true;
+    out->epa_iterations = e.iterations;
+    out->epa_status = e.status;
+    n = e.n;
+    depth = e.depth + margin;
+    pa = e.pa;
+    pb = e.pb;
+  }
+  if (!(depth > 0.0f)) return;
+  out->n = n;
+  out->depth = depth;
+  // Polytope pairs: clipped face manifold.
+  if (is_polytope(A.type) && is_polytope(B.type)) {
+    Face fa, fb;
+    if (supporting_face(A, n, &fa) && supporting_face(B, -n, &fb)) {
+      constexpr float kMinAlign = 0.9f;
+      const bool ref_is_a = fa.align >= fb.align;
+      const Face& ref = ref_is_a ? fa : fb;
+      const Face& inc = ref_is_a ? fb : fa;
+      if (ref.align >= kMinAlign) {
+        V3 pts[kMaxClip];
+        float pd[kMaxClip];
+        uint32_t m = clip_faces(ref, inc, n, ref_is_a, depth, pts, pd);
+        if (m > 0) {
+          m = reduce_manifold(pts, pd, m, n);
+          out->count = m;
+          for (uint32_t i = 0; i < m; ++i) {
+            out->point[i] = pts[i];
+            out->pdepth[i] = pd[i];
+          }
+          return;
+        }
+      }
+    }
+  }
+  // One point, midway between the surfaces (the witnesses moved out by the radii).
+  const V3 sa = pa + n * ra, sb = pb - n * rb;
+  out->count = 1;
+  out->point[0] = (sa + sb) * 0.5f;
+  out->pdepth[0] = depth;
+}
+
+}  // namespace impact::kernels::cvx
+
+namespace impact::kernels {
+
+void collide_gjk_epa(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out, Range r,
+                     const NarrowConfig& cfg, LeafType ta, LeafType tb) {
+  // kSimd and kScalar run the same per-lane code (see the header block).
+  for (uint32_t k = r.begin; k < r.end; ++k) {
+    const cvx::V3 origin{a.p[0][k], a.p[1][k], a.p[2][k]};
+    const cvx::Leaf A = cvx::load_leaf(a, k, ta, &cfg.hulls, origin);
+    const cvx::Leaf B = cvx::load_leaf(b, k, tb, &cfg.hulls, origin);
+    cvx::LaneContact c;
+    cvx::collide_convex_lane(A, B, cfg, &c);
+    out.count[k] = static_cast<uint8_t>(c.count);
+    if (c.count == 0) continue;
+    out.n[0][k] = c.n.x;
+    out.n[1][k] = c.n.y;
+    out.n[2][k] = c.n.z;
+    out.depth[k] = c.depth;
+    for (uint32_t i = 0; i < c.count; ++i) {
+      out.point[i][0][k] = c.point[i].x + origin.x;
+      out.point[i][1][k] = c.point[i].y + origin.y;
+      out.point[i][2][k] = c.point[i].z + origin.z;
+      out.pdepth[i][k] = c.pdepth[i];
+    }
+  }
+}
+
+}  // namespace impact::kernels

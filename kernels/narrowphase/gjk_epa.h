@@ -1,0 +1,81 @@
+// Internals of the general convex path (gjk_epa.cpp), exposed for tests: GJK on the
+// leaves' cores, EPA on the cores, and the one-lane contact routine behind
+// collide_gjk_epa. Coordinates are relative to the origin the leaves were loaded with.
+#pragma once
+
+#include <cstdint>
+
+#include "kernels/narrowphase/support.h"
+
+namespace impact::kernels::cvx {
+
+/// A double 3-vector for the simplex and polytope arithmetic (supports stay float).
+struct D3 {
+  double x, y, z;
+};
+
+/// A vertex of the Minkowski difference A - B with the support points it came from.
+struct SupportPoint {
+  D3 w;     // a - b
+  V3 a, b;  // on A's and B's cores
+};
+
+struct Simplex {
+  SupportPoint v[4];
+  double lambda[4];  // barycentric weights of the closest point (sum 1)
+  uint32_t n = 0;
+};
+
+struct GjkResult {
+  /// Cores overlap or are closer than the touching tolerance (1e-5 of the scale).
+  bool overlap = false;
+  /// The lower bound v.w/|v| exceeded the margin: separated, `distance` is not exact.
+  bool separated_early = false;
+  float distance = 0.0f;  // |pa - pb| of the cores when !overlap
+  V3 pa{0, 0, 0}, pb{0, 0, 0};  // closest points of the cores
+  V3 n{0, 1, 0};  // unit, from A's core to B's core (-v/|v|), when !overlap
+  Simplex simplex;
+  uint32_t iterations = 0;
+};
+
+/// GJK distance of A's and B's cores (van den Bergen 1999). margin: ra + rb; a lane
+/// whose distance lower bound exceeds it stops early. scale: size for the tolerances.
+GjkResult gjk_cores(const Leaf& A, const Leaf& B, float margin, float scale, uint32_t max_iterations,
+                    float tolerance);
+
+struct EpaResult {
+  /// 0: converged or stopped at the cap (n, depth valid); 1: the Minkowski difference
+  /// of the cores is flat (dimension < 3): n is the deterministic fallback, depth 0;
+  /// 2: stopped early at an inconsistent polytope (rounding) or its capacity: n, depth
+  /// are the last closest face's (a lower bound).
+  int status = 0;
+  V3 n{0, 1, 0};       // unit, from A to B
+  float depth = 0.0f;  // of the cores (may be slightly < 0 when they barely touch)
+  V3 pa{0, 0, 0}, pb{0, 0, 0};  // witness points on the cores
+  uint32_t iterations = 0;
+};
+
+/// EPA on the cores, seeded with GJK's final simplex (the origin on or in it).
+EpaResult epa_cores(const Leaf& A, const Leaf& B, const Simplex& start, float scale,
+                    uint32_t max_iterations, float tolerance);
+
+/// The collision data of one lane (points relative to the origin of the leaves).
+struct LaneContact {
+  uint32_t count = 0;
+  V3 n{0, 1, 0};
+  float depth = 0.0f;
+  V3 point[kMaxManifoldPoints]{};
+  float pdepth[kMaxManifoldPoints]{};
+  uint32_t gjk_iterations = 0, epa_iterations = 0;
+  bool used_epa = false;
+  int epa_status = 0;
+};
+
+/// GJK + EPA + manifold for one pair of convex leaves (neither a half-space).
+void collide_convex_lane(const Leaf& A, const Leaf& B, const NarrowConfig& cfg, LaneContact* out);
+
+/// Keeps at most 4 of n (point, depth) entries in place: the deepest, the farthest from
+/// it, then the two that add most area (normal n). Returns the new count.
+uint32_t reduce_manifold(V3* pts, float* depth, uint32_t n, V3 normal);
+
+}  // namespace impact::kernels::cvx

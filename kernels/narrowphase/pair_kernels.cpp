@@ -1,0 +1,80 @@
+#include "kernels/narrowphase/pair_kernels.h"
+
+#include <utility>
+
+namespace impact::kernels {
+
+const char* leaf_type_name(LeafType t) {
+  switch (t) {
+    case kLeafSphere: return "sphere";
+    case kLeafCapsule: return "capsule";
+    case kLeafBox: return "box";
+    case kLeafConvex: return "convex";
+    case kLeafCylinder: return "cylinder";
+    case kLeafEllipsoid: return "ellipsoid";
+    case kLeafTriangle: return "triangle";
+    case kLeafHalfSpace: return "half-space";
+    default: return "unknown";
+  }
+}
+
+namespace {
+
+template <LeafType A, LeafType B>
+void generic_pair(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out, Range r,
+                  const NarrowConfig& cfg) {
+  if constexpr (B == kLeafHalfSpace) {
+    collide_support_halfspace(a, b, out, r, cfg, A);
+  } else {
+    collide_gjk_epa(a, b, out, r, cfg, A, B);
+  }
+}
+
+struct Table {
+  PairKernel k[kLeafTypeCount][kLeafTypeCount] = {};
+
+  template <uint8_t A, uint8_t B>
+  constexpr void fill_one() {
+    if constexpr (A <= B && !(A == kLeafHalfSpace && B == kLeafHalfSpace)) {
+      k[A][B] = &generic_pair<static_cast<LeafType>(A), static_cast<LeafType>(B)>;
+    }
+  }
+  template <uint8_t A, uint8_t... Bs>
+  constexpr void fill_row(std::integer_sequence<uint8_t, Bs...>) {
+    (fill_one<A, Bs>(), ...);
+  }
+  template <uint8_t... As>
+  constexpr void fill(std::integer_sequence<uint8_t, As...> seq) {
+    (fill_row<As>(seq), ...);
+  }
+
+  Table() {
+    fill(std::make_integer_sequence<uint8_t, kLeafTypeCount>{});
+    // Specialised kernels replace the general path where they exist.
+    k[kLeafSphere][kLeafSphere] = &collide_sphere_sphere;
+    k[kLeafSphere][kLeafCapsule] = &collide_sphere_capsule;
+    k[kLeafSphere][kLeafBox] = &collide_sphere_box;
+    k[kLeafCapsule][kLeafCapsule] = &collide_capsule_capsule;
+    k[kLeafCapsule][kLeafBox] = &collide_capsule_box;
+    k[kLeafBox][kLeafBox] = &collide_box_box;
+    k[kLeafSphere][kLeafTriangle] = &collide_sphere_triangle;
+    k[kLeafCapsule][kLeafTriangle] = &collide_capsule_triangle;
+    k[kLeafSphere][kLeafHalfSpace] = &collide_sphere_halfspace;
+    k[kLeafCapsule][kLeafHalfSpace] = &collide_capsule_halfspace;
+    k[kLeafBox][kLeafHalfSpace] = &collide_box_halfspace;
+  }
+};
+
+const Table& table() {
+  static const Table t;
+  return t;
+}
+
+}  // namespace
+
+PairKernel pair_kernel(LeafType ta, LeafType tb) {
+  if (ta >= kLeafTypeCount || tb >= kLeafTypeCount || ta > tb) return nullptr;
+  return table().k[ta][tb];
+}
+
+}  // namespace impact::kernels

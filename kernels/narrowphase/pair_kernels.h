@@ -1,0 +1,39 @@
+// Every narrow-phase kernel of the (leaf type, leaf type) matrix, with the PairKernel
+// signature of kernels/narrowphase/leaf.h (A's type <= B's type). pair_kernel() in
+// pair_kernels.cpp maps each bucket to one of them.
+//
+// Specialised, vectorised across pairs (kernels/narrowphase/primitives_*.cpp): the
+// sphere / capsule / box / triangle / half-space pairs below. Everything else goes
+// through the general convex path (kernels/narrowphase/gjk_epa.cpp): GJK + EPA on the
+// leaves' support functions, with face clipping for polytope manifolds, and a
+// support-function kernel against half-spaces.
+#pragma once
+
+#include "kernels/narrowphase/leaf.h"
+
+namespace impact::kernels {
+
+// --- specialised --------------------------------------------------------------------------
+void collide_sphere_sphere(const LeafSoA&, const LeafSoA&, const ManifoldSoA&, Range, const NarrowConfig&);
+void collide_sphere_capsule(const LeafSoA&, const LeafSoA&, const ManifoldSoA&, Range, const NarrowConfig&);
+void collide_sphere_box(const LeafSoA&, const LeafSoA&, const ManifoldSoA&, Range, const NarrowConfig&);
+void collide_capsule_capsule(const LeafSoA&, const LeafSoA&, const ManifoldSoA&, Range, const NarrowConfig&);
+void collide_capsule_box(const LeafSoA&, const LeafSoA&, const ManifoldSoA&, Range, const NarrowConfig&);
+void collide_box_box(const LeafSoA&, const LeafSoA&, const ManifoldSoA&, Range, const NarrowConfig&);
+void collide_sphere_triangle(const LeafSoA&, const LeafSoA&, const ManifoldSoA&, Range, const NarrowConfig&);
+void collide_capsule_triangle(const LeafSoA&, const LeafSoA&, const ManifoldSoA&, Range, const NarrowConfig&);
+void collide_sphere_halfspace(const LeafSoA&, const LeafSoA&, const ManifoldSoA&, Range, const NarrowConfig&);
+void collide_capsule_halfspace(const LeafSoA&, const LeafSoA&, const ManifoldSoA&, Range, const NarrowConfig&);
+void collide_box_halfspace(const LeafSoA&, const LeafSoA&, const ManifoldSoA&, Range, const NarrowConfig&);
+
+// --- general convex -----------------------------------------------------------------------
+/// GJK + EPA for any two convex leaf types ta <= tb (neither a half-space), one pair
+/// per lane; polytope pairs (box, convex, triangle) get a clipped face manifold.
+void collide_gjk_epa(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out, Range r,
+                     const NarrowConfig& cfg, LeafType ta, LeafType tb);
+/// Any convex leaf type ta against a half-space (B): the deepest point by the support
+/// function, and for polytopes / cylinders up to 4 manifold points below the plane.
+void collide_support_halfspace(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out, Range r,
+                               const NarrowConfig& cfg, LeafType ta);
+
+}  // namespace impact::kernels

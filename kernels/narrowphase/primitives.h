@@ -1,0 +1,286 @@
+// Shared lane helpers of the specialised narrow-phase kernels
+// (kernels/narrowphase/primitives_{sphere,capsule,box}.cpp): the block driver that
+// walks a Range kSimdWidth pairs at a time, LeafSoA loads, the manifold store, and the
+// geometric queries the kernels share (closest point on a segment, closest points of
+// two segments robust for parallel ones, closest point on a triangle, a deterministic
+// perpendicular for degenerate normals).
+//
+// Every helper is a template over the lane type F (simd::FloatW or simd::Float1), so
+// the SIMD path and the scalar reference path run the same code. Positions are taken
+// relative to A's position (the driver's `origin`) before any arithmetic, so poses
+// 1e5 from the origin lose no more than the inputs' own rounding.
+//
+// Tail: a Range that is not a multiple of the width ends with a partial block. Its
+// inputs are copied into a local full-width block (the last valid lane repeated in
+// the padding, so padding lanes compute finite values), the same block code runs,
+// and only the valid lanes are copied out. So a pair's output bytes do not depend on
+// where a range boundary falls, and no array is read or written past the Range.
+#pragma once
+
+#include <cfloat>
+#include <cstdint>
+
+#include "kernels/narrowphase/leaf.h"
+#include "kernels/simd/lanes.h"
+#include "kernels/simd/vec3.h"
+
+namespace impact::kernels::prim {
+
+using simd::M3;
+using simd::V3;
+
+// ---------------------------------------------------------------------------------------
+// Loads and stores
+// ---------------------------------------------------------------------------------------
+
+template <class F>
+IMPACT_INLINE F ld(const float* p, uint32_t k) {
+  return F::load(p + k);
+}
+template <class F>
+IMPACT_INLINE V3<F> load_p(const LeafSoA& s, uint32_t k) {
+  return {ld<F>(s.p[0], k), ld<F>(s.p[1], k), ld<F>(s.p[2], k)};
+}
+template <class F>
+IMPACT_INLINE V3<F> load_w(const LeafSoA& s, uint32_t k, uint32_t first) {
+  return {ld<F>(s.w[first], k), ld<F>(s.w[first + 1], k), ld<F>(s.w[first + 2], k)};
+}
+template <class F>
+IMPACT_INLINE V3<F> load_e(const LeafSoA& s, uint32_t k) {
+  return {ld<F>(s.e[0], k), ld<F>(s.e[1], k), ld<F>(s.e[2], k)};
+}
+/// Rotation by columns (LeafSoA stores R row-major: r[3*row + col]).
+template <class F>
+IMPACT_INLINE M3<F> load_r(const LeafSoA& s, uint32_t k) {
+  M3<F> m;
+  for (uint32_t c = 0; c < 3; ++c) m.c[c] = {ld<F>(s.r[c], k), ld<F>(s.r[3 + c], k), ld<F>(s.r[6 + c], k)};
+  return m;
+}
+/// Column 2 of R: a capsule's axis.
+template <class F>
+IMPACT_INLINE V3<F> load_axis_z(const LeafSoA& s, uint32_t k) {
+  return {ld<F>(s.r[2], k), ld<F>(s.r[5], k), ld<F>(s.r[8], k)};
+}
+
+/// One block's collision data, points relative to the driver's origin (A's position).
+template <class F, uint32_t P>
+struct Lanes {
+  typename F::Int count;
+  V3<F> n;
+  F depth;
+  V3<F> point[P];
+  F pdepth[P];
+};
+
+/// Writes lanes k .. k + width of out: count, n, depth and point slots 0 .. P-1
+/// (points made absolute by adding origin).
+template <class F, uint32_t P>
+IMPACT_INLINE void store(const ManifoldSoA& out, uint32_t k, const Lanes<F, P>& m, const V3<F>& origin) {
+  for (uint32_t i = 0; i < F::kWidth; ++i) out.count[k + i] = static_cast<uint8_t>(m.count.lane(i));
+  m.n.x.store(out.n[0] + k);
+  m.n.y.store(out.n[1] + k);
+  m.n.z.store(out.n[2] + k);
+  m.depth.store(out.depth + k);
+  for (uint32_t j = 0; j < P; ++j) {
+    (origin.x + m.point[j].x).store(out.point[j][0] + k);
+    (origin.y + m.point[j].y).store(out.point[j][1] + k);
+    (origin.z + m.point[j].z).store(out.point[j][2] + k);
+    m.pdepth[j].store(out.pdepth[j] + k);
+  }
+}
+
+// ---------------------------------------------------------------------------------------
+// Block driver
+// ---------------------------------------------------------------------------------------
+
+/// Local full-width copy of one side's lanes (tail blocks).
+template <uint32_t W>
+struct TailSide {
+  float p[3][W], r[9][W], e[3][W], w[6][W];
+  LeafSoA view{};
+
+  void fill(const LeafSoA& s, uint32_t k, uint32_t n) {
+    auto copy = [&](const float* src, float* dst) -> const float* {
+      if (src == nullptr) return nullptr;
+      for (uint32_t i = 0; i < W; ++i) dst[i] = src[k + (i < n ? i : n - 1)];
+      return dst;
+    };
+    for (uint32_t j = 0; j < 3; ++j) view.p[j] = copy(s.p[j], p[j]);
+    for (uint32_t j = 0; j < 9; ++j) view.r[j] = copy(s.r[j], r[j]);
+    for (uint32_t j = 0; j < 3; ++j) view.e[j] = copy(s.e[j], e[j]);
+    for (uint32_t j = 0; j < 6; ++j) view.w[j] = copy(s.w[j], w[j]);
+    view.ref = nullptr;
+  }
+};
+
+template <uint32_t W, uint32_t P>
+struct TailOut {
+  uint8_t count[W];
+  float n[3][W], depth[W], point[P][3][W], pdepth[P][W];
+  ManifoldSoA view() {
+    ManifoldSoA m{};
+    m.count = count;
+    for (uint32_t j = 0; j < 3; ++j) m.n[j] = n[j];
+    m.depth = depth;
+    for (uint32_t i = 0; i < P; ++i) {
+      for (uint32_t j = 0; j < 3; ++j) m.point[i][j] = point[i][j];
+      m.pdepth[i] = pdepth[i];
+    }
+    return m;
+  }
+  void copy_to(const ManifoldSoA& out, uint32_t k, uint32_t n_lanes) const {
+    for (uint32_t i = 0; i < n_lanes; ++i) {
+      out.count[k + i] = count[i];
+      for (uint32_t j = 0; j < 3; ++j) out.n[j][k + i] = n[j][i];
+      out.depth[k + i] = depth[i];
+      for (uint32_t q = 0; q < P; ++q) {
+        for (uint32_t j = 0; j < 3; ++j) out.point[q][j][k + i] = point[q][j][i];
+        out.pdepth[q][k + i] = pdepth[q][i];
+      }
+    }
+  }
+};
+
+/// Runs block(a, b, out, k) for every full block of F::kWidth lanes of r, then the
+/// tail through local copies. P = the point slots the kernel writes.
+template <class F, uint32_t P, class Block>
+IMPACT_INLINE void for_each_block(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out, Range r,
+                                  Block&& block) {
+  constexpr uint32_t W = F::kWidth;
+  uint32_t k = r.begin;
+  for (; k + W <= r.end; k += W) block(a, b, out, k);
+  if constexpr (W > 1) {
+    if (k < r.end) {
+      const uint32_t n = r.end - k;
+      TailSide<W> ta, tb;
+      ta.fill(a, k, n);
+      tb.fill(b, k, n);
+      TailOut<W, P> to;
+      const ManifoldSoA lo = to.view();
+      block(ta.view, tb.view, lo, 0u);
+      to.copy_to(out, k, n);
+    }
+  }
+}
+
+// ---------------------------------------------------------------------------------------
+// Geometry
+// ---------------------------------------------------------------------------------------
+
+/// Squared lengths below this are treated as zero (normalising them would lose all
+/// precision): the smallest normal float.
+inline constexpr float kTinySq = FLT_MIN;
+
+/// A unit vector perpendicular to unit u, chosen deterministically: u x (the world axis
+/// least aligned with u).
+template <class F>
+IMPACT_INLINE V3<F> any_perpendicular(const V3<F>& u) {
+  const F ax = abs(u.x), ay = abs(u.y), az = abs(u.z);
+  const auto use_x = (ax <= ay) & (ax <= az);
+  const auto use_y = andnot(ay <= az, use_x);
+  // u x e_x = (0, uz, -uy); u x e_y = (-uz, 0, ux); u x e_z = (uy, -ux, 0)
+  const F zero(0.0f);
+  V3<F> c = {u.y, -u.x, zero};
+  c = select(use_y, V3<F>{-u.z, zero, u.x}, c);
+  c = select(use_x, V3<F>{zero, u.z, -u.y}, c);
+  const F inv = F(1.0f) / sqrt(length_sq(c));
+  return c * inv;
+}
+
+/// v / |v|, or fallback where |v|^2 < kTinySq. len receives |v| (0 where fallback).
+template <class F>
+IMPACT_INLINE V3<F> normalize_or(const V3<F>& v, const V3<F>& fallback, F& len) {
+  const F l2 = length_sq(v);
+  const auto ok = l2 >= F(kTinySq);
+  const F l = sqrt(l2);
+  const F inv = F(1.0f) / select(ok, l, F(1.0f));
+  len = select(ok, l, F(0.0f));
+  return select(ok, v * inv, fallback);
+}
+
+/// Parameter t in [-h, h] of the point of segment c + t*u (u unit) closest to q.
+template <class F>
+IMPACT_INLINE F closest_on_segment(const V3<F>& c, const V3<F>& u, F h, const V3<F>& q) {
+  return clamp(dot(q - c, u), -h, h);
+}
+
+/// Closest points of segments A: pa + s*ua, s in [-ha, ha] and B: pb + t*ub, t in
+/// [-hb, hb] (ua, ub unit). Robust for parallel and degenerate (h = 0) segments: with
+/// near-parallel axes s is the middle of the overlap of B's projection onto A
+/// (Ericson, Real-Time Collision Detection 5.1.9, with that parallel rule).
+template <class F>
+IMPACT_INLINE void closest_segment_segment(const V3<F>& pa, const V3<F>& ua, F ha, const V3<F>& pb,
+                                           const V3<F>& ub, F hb, F& s, F& t) {
+  const V3<F> r = pa - pb;
+  const F b = dot(ua, ub);
+  const F c = dot(ua, r);
+  const F f = dot(ub, r);
+  const F denom = length_sq(cross(ua, ub));  // 1 - b^2 without cancellation
+  const auto parallel = denom < F(1e-10f);
+  // Non-parallel: the unconstrained minimiser's s, clamped.
+  const F s_gen = clamp((b * f - c) / select(parallel, F(1.0f), denom), -ha, ha);
+  // Parallel: middle of [-ha, ha] intersected with B's projection [-c - |b|hb, -c + |b|hb].
+  const F ext = abs(b) * hb;
+  const F lo = max(-ha, -c - ext), hi = min(ha, -c + ext);
+  const F s_par = clamp(F(0.5f) * (lo + hi), -ha, ha);
+  s = select(parallel, s_par, s_gen);
+  const F t_raw = mul_add(b, s, f);
+  t = clamp(t_raw, -hb, hb);
+  const F s_back = clamp(mul_add(b, t, -c), -ha, ha);
+  s = select(t_raw != t, s_back, s);
+}
+
+/// Closest point of triangle (a, b, c) to q (Ericson 5.1.5, regions by selects; the
+/// interior point is the projection onto the plane, which keeps its precision for
+/// large triangles). Returns the point; region_face receives the interior lanes.
+template <class F>
+IMPACT_INLINE V3<F> closest_on_triangle(const V3<F>& a, const V3<F>& b, const V3<F>& c, const V3<F>& q,
+                                        const V3<F>& unit_normal, typename F::Mask& region_face) {
+  const V3<F> ab = b - a, ac = c - a, bc = c - b;
+  const V3<F> ap = q - a, bp = q - b, cp = q - c;
+  const F d1 = dot(ab, ap), d2 = dot(ac, ap);
+  const F d3 = dot(ab, bp), d4 = dot(ac, bp);
+  const F d5 = dot(ab, cp), d6 = dot(ac, cp);
+  const F zero(0.0f), one(1.0f);
+  const F vc = d1 * d4 - d3 * d2;
+  const F vb = d5 * d2 - d1 * d6;
+  const F va = d3 * d6 - d5 * d4;
+  const auto in_a = (d1 <= zero) & (d2 <= zero);
+  const auto in_b = (d3 >= zero) & (d4 <= d3);
+  const auto in_ab = (vc <= zero) & (d1 >= zero) & (d3 <= zero);
+  const auto in_c = (d6 >= zero) & (d5 <= d6);
+  const auto in_ac = (vb <= zero) & (d2 >= zero) & (d6 <= zero);
+  const auto in_bc = (va <= zero) & ((d4 - d3) >= zero) & ((d5 - d6) >= zero);
+  // Edge points by projection onto the edge (accurate), clamped.
+  const F lab = length_sq(ab), lac = length_sq(ac), lbc = length_sq(bc);
+  const F tab = clamp(d1 / select(lab > zero, lab, one), zero, one);
+  const F tac = clamp(d2 / select(lac > zero, lac, one), zero, one);
+  const F tbc = clamp(dot(bc, bp) / select(lbc > zero, lbc, one), zero, one);
+  V3<F> r = q - unit_normal * dot(unit_normal, ap);
+  r = select(in_bc, madd(b, tbc, bc), r);
+  r = select(in_ac, madd(a, tac, ac), r);
+  r = select(in_c, c, r);
+  r = select(in_ab, madd(a, tab, ab), r);
+  r = select(in_b, b, r);
+  r = select(in_a, a, r);
+  region_face = ~(in_a | in_b | in_ab | in_c | in_ac | in_bc);
+  return r;
+}
+
+/// Unit normal of triangle (a, b, c) (counter-clockwise); for a degenerate triangle a
+/// unit vector perpendicular to its longest edge (or +z for a point).
+template <class F>
+IMPACT_INLINE V3<F> triangle_normal(const V3<F>& a, const V3<F>& b, const V3<F>& c) {
+  const V3<F> ab = b - a, ac = c - a, bc = c - b;
+  const V3<F> nrm = cross(ab, ac);
+  F l;
+  // Fallback: perpendicular to the longest edge.
+  const F lab = length_sq(ab), lac = length_sq(ac), lbc = length_sq(bc);
+  V3<F> e = select(lab >= lac, ab, ac);
+  e = select(lbc > max(lab, lac), bc, e);
+  F el;
+  const V3<F> eu = normalize_or(e, V3<F>{F(0.0f), F(0.0f), F(1.0f)}, el);
+  return normalize_or(nrm, any_perpendicular(eu), l);
+}
+
+}  // namespace impact::kernels::prim

@@ -1,0 +1,519 @@
+// Capsule (A) against capsule, box, triangle and half-space (B): collision data of
+// 1 or 2 points per pair, vectorised across pairs (one lane = one pair).
+//
+// Inputs: LeafSoA lanes per leaf.h (A a capsule: p, R column 2 = axis, e0 = radius,
+// e1 = half length). Outputs: ManifoldSoA lanes of the Range, point slots 0 and 1.
+// Methods (all relative to A's centre):
+//  capsule-capsule  closest points of the two core segments (Ericson 5.1.9, with a
+//                   parallel rule: middle of the overlap); near-parallel axes whose
+//                   projections overlap give the 2 ends of the overlap interval, so a
+//                   capsule lying on another rests on two points. Axes that meet:
+//                   n = ua x ub (the minimum translation), parallel: a perpendicular.
+//  capsule-box      in the box frame. The core's distance to the box is convex along
+//                   the segment and its derivative is piecewise linear with kinks
+//                   where the segment crosses the box's slab planes: the minimiser is
+//                   found exactly by evaluating the derivative at those 6 kinks and
+//                   interpolating. Core outside: n along the closest points, depth =
+//                   r - distance; a segment parallel to the touching face gives the 2
+//                   ends of its clip against the face's side slabs. Core inside: SAT
+//                   over the 3 face normals and the 3 axis x edge directions (exact
+//                   minimum translation of a segment-swept sphere), with a small bias
+//                   to faces; face axes give the clipped ends, edge axes one point.
+//  capsule-triangle two-sided triangle. Core outside: closest points of segment and
+//                   triangle (endpoints vs triangle, segment vs edges); a segment
+//                   parallel to the face gives 2 points clipped to the triangle's
+//                   prism. Core crossing the triangle: SAT over the face normal and the
+//                   3 axis x edge directions.
+//  capsule-halfspace the 1-2 core endpoints below the plane (+ radius).
+// Preconditions: finite inputs, positive radius, half lengths >= 0, unit axes,
+// non-degenerate triangles for a meaningful face normal (degenerate ones still give
+// finite output). Cost: 60 (half-space) to ~600 (triangle) flops per pair, no
+// branches on lane data except skipping work no lane of a block needs.
+#include <cstdint>
+
+#include "kernels/narrowphase/pair_kernels.h"
+#include "kernels/narrowphase/primitives.h"
+
+namespace impact::kernels {
+namespace {
+
+using namespace prim;  // NOLINT: lane helpers of this kernel family
+using simd::cross;
+using simd::dot;
+using simd::length_sq;
+
+/// Relative bias: an edge axis wins over a face axis only when clearly shallower, so
+/// resting contacts keep their face normal under rounding.
+inline constexpr float kFaceBias = 0.99f;
+/// |ua x ub| below this: capsule axes near-parallel enough for a 2-point manifold.
+inline constexpr float kParallelSin = 0.05f;
+
+template <class F>
+using L2 = Lanes<F, 2>;
+
+/// Distance lambda from the core point at axial parameter t (|t| <= h) along unit
+/// direction n (s = n.axis) to the capsule's surface: through the cylinder, or through
+/// an end cap where the cylinder exit would lie beyond the segment.
+template <class F>
+IMPACT_INLINE F capsule_exit(F t, F s, F r, F h) {
+  const F c2 = max(F(1.0f) - s * s, F(1e-12f));  // sin^2 of the angle to the axis
+  const F lc = r / sqrt(c2);
+  const F ax = mul_add(lc, s, t);
+  const auto over = ax > h, under = ax < -h;
+  const F delta = select(over, t - h, t + h);  // from the cap's centre
+  const F disc = max(r * r - delta * delta * c2, F(0.0f));
+  const F lcap = sqrt(disc) - delta * s;
+  return select(over | under, lcap, lc);
+}
+
+/// Two candidate points p0 (depth d0) and p1 (d1) and a single fallback point pf (df):
+/// the result holds both where `two`, else the fallback alone.
+template <class F>
+IMPACT_INLINE void finish(L2<F>& m, const V3<F>& n, F depth, typename F::Mask two, const V3<F>& p0, F d0,
+                          const V3<F>& p1, F d1, const V3<F>& pf, F df) {
+  const F zero(0.0f);
+  const auto hit = depth > zero;
+  m.n = n;
+  m.depth = depth;
+  m.point[0] = select(two, p0, pf);
+  m.pdepth[0] = select(two, min(d0, depth), df);
+  m.point[1] = p1;
+  m.pdepth[1] = min(d1, depth);
+  m.count = select(hit, select(two, typename F::Int(2), typename F::Int(1)), typename F::Int(0));
+}
+
+// ---------------------------------------------------------------------------------------
+// capsule - capsule
+// ---------------------------------------------------------------------------------------
+
+template <class F>
+IMPACT_INLINE void capsule_capsule_block(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out, uint32_t k) {
+  const V3<F> pa = load_p<F>(a, k);
+  const V3<F> cb = load_p<F>(b, k) - pa;
+  const V3<F> ua = load_axis_z<F>(a, k), ub = load_axis_z<F>(b, k);
+  const F ra = ld<F>(a.e[0], k), ha = ld<F>(a.e[1], k);
+  const F rb = ld<F>(b.e[0], k), hb = ld<F>(b.e[1], k);
+  const F zero(0.0f), half(0.5f);
+  const V3<F> ca{zero, zero, zero};
+  F s, t;
+  closest_segment_segment(ca, ua, ha, cb, ub, hb, s, t);
+  const V3<F> qa = ua * s;
+  const V3<F> qb = madd(cb, t, ub);
+  // Fallback normal where the axes meet: ua x ub towards B (or any perpendicular).
+  const V3<F> c = cross(ua, ub);
+  const F c2 = length_sq(c);
+  F cl;
+  V3<F> fb = normalize_or(c, any_perpendicular(ua), cl);
+  fb = select(dot(fb, cb) < zero, -fb, fb);
+  F dist;
+  const V3<F> n = normalize_or(qb - qa, fb, dist);
+  const F rs = ra + rb;
+  const F depth = rs - dist;
+  const V3<F> pf = (qa + qb + n * (ra - rb)) * half;
+
+  // Near-parallel: the ends of the overlap of B's projection onto A's axis.
+  const F sb = dot(cb, ua), eb = abs(dot(ub, ua)) * hb;
+  const F lo = max(-ha, sb - eb), hi = min(ha, sb + eb);
+  const auto par = (c2 < F(kParallelSin * kParallelSin)) & (hi - lo > F(1e-4f) * (ha + hb));
+  const F sna = dot(n, ua), snb = -dot(n, ub);
+  auto end_point = [&](F sa, V3<F>& p, F& d) {
+    const V3<F> xa = ua * sa;
+    const F tb = closest_on_segment(cb, ub, hb, xa);
+    const V3<F> xb = madd(cb, tb, ub);
+    // the surfaces along n from the two core points
+    const V3<F> on_a = madd(xa, capsule_exit(sa, sna, ra, ha), n);
+    const V3<F> on_b = madd(xb, -capsule_exit(tb, snb, rb, hb), n);
+    d = dot(n, on_a - on_b);
+    p = (on_a + on_b) * half;
+  };
+  V3<F> p0, p1;
+  F d0, d1;
+  end_point(lo, p0, d0);
+  end_point(hi, p1, d1);
+  const auto two = par & (d0 > zero) & (d1 > zero);
+  L2<F> m;
+  finish(m, n, depth, two, p0, d0, p1, d1, pf, depth);
+  store(out, k, m, pa);
+}
+
+// ---------------------------------------------------------------------------------------
+// capsule - box
+// ---------------------------------------------------------------------------------------
+
+/// Sum over axes of u_k * (x_k - clamp(x_k)): half the derivative of the squared
+/// distance from the segment point x = c + u*t to the box.
+template <class F>
+IMPACT_INLINE F dist_slope(const V3<F>& c, const V3<F>& u, const V3<F>& e, F t) {
+  const V3<F> x = madd(c, t, u);
+  return u.x * (x.x - clamp(x.x, -e.x, e.x)) + u.y * (x.y - clamp(x.y, -e.y, e.y)) +
+         u.z * (x.z - clamp(x.z, -e.z, e.z));
+}
+
+/// Segment parameter interval where |c_j + u_j t| <= e_j, intersected into [lo, hi].
+template <class F>
+IMPACT_INLINE void clip_slab(F c, F u, F e, F& lo, F& hi) {
+  const auto flat = abs(u) < F(1e-20f);
+  const F inv = F(1.0f) / select(flat, F(1.0f), u);
+  const F t0 = (-e - c) * inv, t1 = (e - c) * inv;
+  const F tmin = min(t0, t1), tmax = max(t0, t1);
+  const auto inside = abs(c) <= e;
+  // flat and inside: no constraint; flat and outside: empty
+  lo = select(flat, select(inside, lo, F(1e30f)), max(lo, tmin));
+  hi = select(flat, select(inside, hi, F(-1e30f)), min(hi, tmax));
+}
+
+template <class F>
+IMPACT_INLINE void capsule_box_block(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out, uint32_t k) {
+  using Mask = typename F::Mask;
+  const V3<F> pa = load_p<F>(a, k);
+  const V3<F> cb = load_p<F>(b, k) - pa;
+  const M3<F> rot = load_r<F>(b, k);
+  const V3<F> e = load_e<F>(b, k);
+  const F ra = ld<F>(a.e[0], k), ha = ld<F>(a.e[1], k);
+  const F zero(0.0f), one(1.0f), half(0.5f);
+  // Capsule core in the box frame (box centre at the origin).
+  const V3<F> c = rot.apply_t(-cb);
+  const V3<F> u = rot.apply_t(load_axis_z<F>(a, k));
+
+  // --- closest point of the core to the box: root of the piecewise-linear slope ---
+  const F g_lo0 = dist_slope(c, u, e, -ha), g_hi0 = dist_slope(c, u, e, ha);
+  F t_lo = -ha, g_lo = g_lo0, t_hi = ha, g_hi = g_hi0;
+  auto visit = [&](F cc, F uu, F ee) {
+    const auto flat = abs(uu) < F(1e-20f);
+    const F inv = one / select(flat, one, uu);
+    for (int sgn = -1; sgn <= 1; sgn += 2) {
+      const F tb = clamp((F(static_cast<float>(sgn)) * ee - cc) * inv, -ha, ha);
+      const F g = dist_slope(c, u, e, tb);
+      const auto take_lo = andnot((g <= zero) & (tb > t_lo), flat);
+      t_lo = select(take_lo, tb, t_lo);
+      g_lo = select(take_lo, g, g_lo);
+      const auto take_hi = andnot((g >= zero) & (tb < t_hi), flat);
+      t_hi = select(take_hi, tb, t_hi);
+      g_hi = select(take_hi, g, g_hi);
+    }
+  };
+  visit(c.x, u.x, e.x);
+  visit(c.y, u.y, e.y);
+  visit(c.z, u.z, e.z);
+  const F dg = g_hi - g_lo;
+  F ts = t_lo - (t_hi - t_lo) * g_lo / select(dg > zero, dg, one);
+  ts = clamp(ts, min(t_lo, t_hi), max(t_lo, t_hi));
+  ts = select(g_lo0 >= zero, -ha, ts);
+  ts = select(g_hi0 <= zero, ha, ts);
+  const V3<F> ps = madd(c, ts, u);
+  const V3<F> qs{clamp(ps.x, -e.x, e.x), clamp(ps.y, -e.y, e.y), clamp(ps.z, -e.z, e.z)};
+  const V3<F> v = qs - ps;
+  const F v2 = length_sq(v);
+  const Mask shallow = v2 >= F(kTinySq);
+  const F dist = sqrt(v2);
+  const V3<F> n_sh = v * (one / select(shallow, dist, one));
+
+  // --- core inside: SAT over 3 faces and 3 axis x edge directions ---
+  // face k: overlap = e_k + r + h|u_k| - |c_k|, n = -sign(c_k) axis_k
+  const F ox = e.x + ra + ha * abs(u.x) - abs(c.x);
+  const F oy = e.y + ra + ha * abs(u.y) - abs(c.y);
+  const F oz = e.z + ra + ha * abs(u.z) - abs(c.z);
+  const Mask fx = (ox <= oy) & (ox <= oz);
+  const Mask fy = andnot(oy <= oz, fx);
+  F best = select(fx, ox, select(fy, oy, oz));
+  V3<F> n_dp{zero, zero, -simd::sign_nonneg(c.z)};
+  n_dp = select(fy, V3<F>{zero, -simd::sign_nonneg(c.y), zero}, n_dp);
+  n_dp = select(fx, V3<F>{-simd::sign_nonneg(c.x), zero, zero}, n_dp);
+  Mask edge = Mask(false);
+  F edge_axis(0.0f);  // which box edge direction (0, 1, 2) when `edge`
+  const F face_best = best;
+  auto edge_axis_try = [&](const V3<F>& l, float which) {
+    const F l2 = length_sq(l);
+    const Mask ok = l2 > F(1e-10f);
+    const F inv = one / sqrt(select(ok, l2, one));
+    const V3<F> ln = l * inv;
+    const F cl = dot(c, ln);
+    const F o = e.x * abs(ln.x) + e.y * abs(ln.y) + e.z * abs(ln.z) + ra - abs(cl);
+    const Mask take = ok & (o < kFaceBias * face_best) & (o < best);
+    best = select(take, o, best);
+    n_dp = select(take, ln * -simd::sign_nonneg(cl), n_dp);
+    edge = edge | take;
+    edge_axis = select(take, F(which), edge_axis);
+  };
+  edge_axis_try(V3<F>{zero, u.z, -u.y}, 0.0f);  // u x e_x
+  edge_axis_try(V3<F>{-u.z, zero, u.x}, 1.0f);  // u x e_y
+  edge_axis_try(V3<F>{u.y, -u.x, zero}, 2.0f);  // u x e_z
+
+  const V3<F> nl = select(shallow, n_sh, n_dp);
+  const F depth = select(shallow, ra - dist, best);
+
+  // --- face manifold: clip the core to the side slabs of the face nl points at ---
+  const F ax = abs(nl.x), ay = abs(nl.y), az = abs(nl.z);
+  const Mask kx = (ax >= ay) & (ax >= az);
+  const Mask ky = andnot(ay >= az, kx);
+  const F nk = select(kx, nl.x, select(ky, nl.y, nl.z));
+  const Mask face_normal = abs(nk) > F(0.99999f);
+  const Mask parallel_enough = abs(select(kx, u.x, select(ky, u.y, u.z))) < F(kParallelSin);
+  F lo = -ha, hi = ha;
+  {
+    F lo_x = lo, hi_x = hi, lo_y = lo, hi_y = hi, lo_z = lo, hi_z = hi;
+    clip_slab(c.x, u.x, e.x, lo_x, hi_x);
+    clip_slab(c.y, u.y, e.y, lo_y, hi_y);
+    clip_slab(c.z, u.z, e.z, lo_z, hi_z);
+    lo = select(kx, max(lo_y, lo_z), select(ky, max(lo_x, lo_z), max(lo_x, lo_y)));
+    hi = select(kx, min(hi_y, hi_z), select(ky, min(hi_x, hi_z), min(hi_x, hi_y)));
+  }
+  // Face plane: x_k = -sign(n_k) e_k (the face of B that looks at the capsule).
+  const F ek = select(kx, e.x, select(ky, e.y, e.z));
+  const F snu = dot(nl, u);
+  auto face_point = [&](F t, V3<F>& p, F& d) {
+    // the capsule's surface along nl from core point x, then along -nl to the face
+    // plane x_k = -sign(n_k) e_k
+    const V3<F> on_a = madd(madd(c, t, u), capsule_exit(t, snu, ra, ha), nl);
+    const F ak = select(kx, on_a.x, select(ky, on_a.y, on_a.z));
+    d = (ak + simd::sign_nonneg(nk) * ek) / nk;
+    p = madd(on_a, -half * d, nl);
+  };
+  V3<F> p0, p1;
+  F d0, d1;
+  face_point(lo, p0, d0);
+  face_point(hi, p1, d1);
+  const Mask clip_ok = hi - lo > F(1e-4f) * (ha + max(e.x, max(e.y, e.z)));
+  Mask two = face_normal & clip_ok & (d0 > zero) & (d1 > zero) & (parallel_enough | ~shallow);
+  // A deep face contact whose clip lost one end keeps the deeper end alone.
+  const Mask deep_face = andnot(face_normal & clip_ok, shallow | two | edge);
+  V3<F> pf;
+  F df;
+  {
+    // shallow: midway between the closest points
+    pf = (ps + qs + nl * ra) * half;
+    df = depth;
+    // deep, edge axis: the core against the box edge along axis `edge_axis` on the
+    // side facing the capsule
+    const V3<F> sgn{-simd::sign_nonneg(nl.x), -simd::sign_nonneg(nl.y), -simd::sign_nonneg(nl.z)};
+    const Mask ex = edge_axis == zero, ey = edge_axis == one;
+    const V3<F> emid{select(ex, zero, sgn.x * e.x), select(ey, zero, sgn.y * e.y),
+                     select(andnot(~ex, ey), zero, sgn.z * e.z)};
+    const V3<F> edir{select(ex, one, zero), select(ey, one, zero), select(ex | ey, zero, one)};
+    const F eh = select(ex, e.x, select(ey, e.y, e.z));
+    F s_seg, t_edge;
+    closest_segment_segment(c, u, ha, emid, edir, eh, s_seg, t_edge);
+    const V3<F> xs = madd(c, s_seg, u);
+    const V3<F> xe = madd(emid, t_edge, edir);
+    const V3<F> pe = (xs + xe + nl * ra) * half;
+    const Mask use_edge = andnot(edge, shallow);
+    pf = select(use_edge, pe, pf);
+    // deep, face axis with one end clipped away: the deeper clipped end
+    const Mask first = d0 >= d1;
+    pf = select(deep_face, select(first, p0, p1), pf);
+    df = select(deep_face, select(first, d0, d1), df);
+    // deep face contact with nothing to clip (core inside the slab nowhere): core point
+    const Mask deep_face_none = andnot(~shallow, edge | clip_ok);
+    pf = select(deep_face_none, madd(ps, ra - half * depth, nl), pf);
+  }
+  two = two & (depth > zero);
+  // back to the world frame, relative to A's centre
+  L2<F> m;
+  const V3<F> to_world = cb;
+  finish(m, rot.apply(nl), depth, two, to_world + rot.apply(p0), d0, to_world + rot.apply(p1), d1,
+         to_world + rot.apply(pf), df);
+  store(out, k, m, pa);
+}
+
+// ---------------------------------------------------------------------------------------
+// capsule - triangle
+// ---------------------------------------------------------------------------------------
+
+template <class F>
+IMPACT_INLINE void capsule_triangle_block(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out,
+                                          uint32_t k) {
+  using Mask = typename F::Mask;
+  const V3<F> pa = load_p<F>(a, k);
+  const V3<F> u = load_axis_z<F>(a, k);
+  const F ra = ld<F>(a.e[0], k), ha = ld<F>(a.e[1], k);
+  const V3<F> v[3] = {load_p<F>(b, k) - pa, load_w<F>(b, k, 0) - pa, load_w<F>(b, k, 3) - pa};
+  const F zero(0.0f), one(1.0f), half(0.5f);
+  const V3<F> c{zero, zero, zero};
+  const V3<F> nf = triangle_normal(v[0], v[1], v[2]);
+
+  // --- closest points of the core segment and the triangle ---
+  Mask face;
+  const V3<F> e0 = u * (-ha), e1 = u * ha;
+  V3<F> bp = e0, bq = closest_on_triangle(v[0], v[1], v[2], e0, nf, face);
+  F bd = length_sq(bq - bp);
+  auto consider = [&](const V3<F>& p, const V3<F>& q) {
+    const F d = length_sq(q - p);
+    const Mask take = d < bd;
+    bd = select(take, d, bd);
+    bp = select(take, p, bp);
+    bq = select(take, q, bq);
+  };
+  consider(e1, closest_on_triangle(v[0], v[1], v[2], e1, nf, face));
+  V3<F> ed[3], em[3];
+  F eh[3];
+  for (int i = 0; i < 3; ++i) {
+    const V3<F> d = v[(i + 1) % 3] - v[i];
+    F len;
+    ed[i] = normalize_or(d, V3<F>{one, zero, zero}, len);
+    eh[i] = half * len;
+    em[i] = (v[i] + v[(i + 1) % 3]) * half;
+    F s, t;
+    closest_segment_segment(c, u, ha, em[i], ed[i], eh[i], s, t);
+    consider(u * s, madd(em[i], t, ed[i]));
+  }
+  // segment crossing the triangle's interior
+  const F hc = -dot(nf, v[0]);  // height of the centre above the plane
+  const F hu = dot(nf, u);
+  const F h0 = hc - hu * ha, h1 = hc + hu * ha;
+  const Mask crosses_plane = ((h0 <= zero) & (h1 >= zero)) | ((h0 >= zero) & (h1 <= zero));
+  const F tc = clamp(-hc / select(abs(hu) > F(1e-30f), hu, one), -ha, ha);
+  const V3<F> xc = u * tc;
+  Mask inside = crosses_plane;
+  for (int i = 0; i < 3; ++i)
+    inside = inside & (dot(cross(v[(i + 1) % 3] - v[i], xc - v[i]), nf) >= zero);
+  bp = select(inside, xc, bp);
+  bq = select(inside, xc, bq);
+  bd = select(inside, zero, bd);
+
+  const Mask shallow = bd >= F(kTinySq);
+  const F dist = sqrt(bd);
+  const V3<F> n_sh = (bq - bp) * (one / select(shallow, dist, one));
+
+  // --- core crossing: SAT over the face normal and 3 axis x edge directions ---
+  // overlap along unit l: capsule [l.c - ha|u.l| - r, + ...] vs triangle [min l.v, max l.v]
+  F best(3.0e38f);
+  V3<F> n_dp = nf;
+  Mask edge_win = Mask(false);
+  F edge_which(0.0f);
+  auto axis = [&](const V3<F>& l, Mask ok, bool is_edge, float which) {
+    const F t0 = dot(l, v[0]), t1 = dot(l, v[1]), t2 = dot(l, v[2]);
+    const F tmin = min(t0, min(t1, t2)), tmax = max(t0, max(t1, t2));
+    const F ext = ha * abs(dot(l, u)) + ra;
+    const F o_pos = ext - tmin;  // move the triangle along +l
+    const F o_neg = tmax + ext;  // move the triangle along -l
+    const Mask pos = o_pos <= o_neg;
+    const F o = min(o_pos, o_neg);
+    const Mask take = is_edge ? ok & (o < kFaceBias * best) : ok;
+    best = select(take, o, best);
+    n_dp = select(take, select(pos, l, -l), n_dp);
+    if (is_edge) {
+      edge_win = select(take, Mask(true), edge_win);
+      edge_which = select(take, F(which), edge_which);
+    }
+  };
+  axis(nf, Mask(true), false, 0.0f);
+  for (int i = 0; i < 3; ++i) {
+    const V3<F> l = cross(u, ed[i]);
+    const F l2 = length_sq(l);
+    const Mask ok = l2 > F(1e-10f);
+    axis(l * (one / sqrt(select(ok, l2, one))), ok, true, static_cast<float>(i));
+  }
+  const V3<F> n = select(shallow, n_sh, n_dp);
+  const F depth = select(shallow, ra - dist, best);
+
+  // --- face manifold: clip the core to the triangle's prism ---
+  const F nn = dot(n, nf);
+  const Mask face_normal = abs(nn) > F(0.99999f);
+  F lo = -ha, hi = ha;
+  for (int i = 0; i < 3; ++i) {
+    // inward edge normal m: m.(x - v_i) >= 0 inside
+    const V3<F> mi = cross(nf, ed[i]);
+    const F a0 = dot(mi, c - v[i]);  // at t = 0
+    const F a1 = dot(mi, u);         // per unit t
+    const Mask flat = abs(a1) < F(1e-20f);
+    const F tcut = -a0 / select(flat, one, a1);
+    lo = select(flat, select(a0 >= zero, lo, F(1e30f)), select(a1 > zero, max(lo, tcut), lo));
+    hi = select(flat, select(a0 >= zero, hi, F(-1e30f)), select(a1 < zero, min(hi, tcut), hi));
+  }
+  const F snu = dot(n, u);
+  auto face_point = [&](F t, V3<F>& p, F& d) {
+    // the capsule's surface along n from core point u*t, then along -n to the plane
+    const V3<F> on_a = madd(u * t, capsule_exit(t, snu, ra, ha), n);
+    d = dot(nf, on_a - v[0]) / select(abs(nn) > F(0.5f), nn, one);
+    p = madd(on_a, -half * d, n);
+  };
+  V3<F> p0, p1;
+  F d0, d1;
+  face_point(lo, p0, d0);
+  face_point(hi, p1, d1);
+  const Mask clip_ok = hi - lo > F(1e-4f) * ha;
+  const Mask parallel_enough = abs(hu) < F(kParallelSin);
+  const Mask two = face_normal & clip_ok & (d0 > zero) & (d1 > zero) & (parallel_enough | ~shallow) &
+                   (depth > zero);
+  // single point
+  V3<F> pf = (bp + bq + n * ra) * half;
+  F df = depth;
+  {
+    // deep, face axis: the deeper clipped end (inside the prism)
+    const Mask deep_face = andnot(face_normal & clip_ok, shallow | edge_win);
+    const Mask first = d0 >= d1;
+    pf = select(deep_face, select(first, p0, p1), pf);
+    df = select(deep_face, select(first, d0, d1), df);
+    // deep, edge axis: the core against that edge
+    const Mask deep_edge = andnot(edge_win, shallow);
+    const Mask w0 = edge_which == zero, w1 = edge_which == one;
+    const V3<F> emid = select(w0, em[0], select(w1, em[1], em[2]));
+    const V3<F> edir = select(w0, ed[0], select(w1, ed[1], ed[2]));
+    const F ehl = select(w0, eh[0], select(w1, eh[1], eh[2]));
+    F s, t;
+    closest_segment_segment(c, u, ha, emid, edir, ehl, s, t);
+    const V3<F> xs = u * s;
+    pf = select(deep_edge, madd(xs, ra - half * depth, n), pf);
+    // deep, face axis, nothing inside the prism: the crossing point
+    const Mask deep_none = andnot(~shallow, edge_win | clip_ok);
+    pf = select(deep_none, madd(bp, ra - half * depth, n), pf);
+  }
+  L2<F> m;
+  finish(m, n, depth, two, p0, d0, p1, d1, pf, df);
+  store(out, k, m, pa);
+}
+
+// ---------------------------------------------------------------------------------------
+// capsule - half-space
+// ---------------------------------------------------------------------------------------
+
+template <class F>
+IMPACT_INLINE void capsule_halfspace_block(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out,
+                                           uint32_t k) {
+  const V3<F> pa = load_p<F>(a, k);
+  const V3<F> q = load_p<F>(b, k) - pa;
+  const V3<F> nh = load_e<F>(b, k);
+  const V3<F> u = load_axis_z<F>(a, k);
+  const F ra = ld<F>(a.e[0], k), ha = ld<F>(a.e[1], k);
+  const F zero(0.0f), half(0.5f);
+  const F hc = -dot(nh, q);       // centre height above the plane
+  const F hu = dot(nh, u) * ha;   // endpoint offset
+  const V3<F> n = -nh;
+  // the capsule's surface along n from each endpoint (its cap, or the cylinder when n
+  // leans back along the axis), and its penetration below the plane
+  const F snu = dot(n, u);
+  const F l0 = capsule_exit(-ha, snu, ra, ha), l1 = capsule_exit(ha, snu, ra, ha);
+  const F d0 = l0 - (hc - hu), d1 = l1 - (hc + hu);  // endpoints -ha, +ha
+  const V3<F> x0 = u * (-ha), x1 = u * ha;
+  const V3<F> p0 = madd(x0, l0 - half * d0, n), p1 = madd(x1, l1 - half * d1, n);
+  const auto two = (d0 > zero) & (d1 > zero);
+  const auto first = d0 >= d1;
+  L2<F> m;
+  finish(m, n, max(d0, d1), two, p0, d0, p1, d1, select(first, p0, p1), max(d0, d1));
+  store(out, k, m, pa);
+}
+
+#define IMPACT_CAPSULE_KERNEL(name, block)                                                          \
+  void name(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out, Range r,                   \
+            const NarrowConfig& cfg) {                                                              \
+    if (cfg.path == KernelPath::kScalar) {                                                          \
+      for_each_block<simd::Float1, 2>(a, b, out, r, [](const LeafSoA& aa, const LeafSoA& bb,        \
+                                                       const ManifoldSoA& o, uint32_t k) {          \
+        block<simd::Float1>(aa, bb, o, k);                                                          \
+      });                                                                                           \
+    } else {                                                                                        \
+      for_each_block<simd::FloatW, 2>(a, b, out, r, [](const LeafSoA& aa, const LeafSoA& bb,        \
+                                                       const ManifoldSoA& o, uint32_t k) {          \
+        block<simd::FloatW>(aa, bb, o, k);                                                          \
+      });                                                                                           \
+    }                                                                                               \
+  }
+
+}  // namespace
+
+IMPACT_CAPSULE_KERNEL(collide_capsule_capsule, capsule_capsule_block)
+IMPACT_CAPSULE_KERNEL(collide_capsule_box, capsule_box_block)
+IMPACT_CAPSULE_KERNEL(collide_capsule_triangle, capsule_triangle_block)
+IMPACT_CAPSULE_KERNEL(collide_capsule_halfspace, capsule_halfspace_block)
+
+}  // namespace impact::kernels

@@ -1,0 +1,198 @@
+// Any convex leaf (A) against a half-space (B), by A's support function.
+//
+// What: per lane k, the half-space B = { x : nh.(x - pB) <= 0 } (leaf.h: p = pB, e =
+// unit nh). A's deepest point is its support along -nh; depth = -nh.(x - pB). Normal
+// A->B: n = -nh (B must move down, away from A, to separate). depth <= 0: count 0.
+// Manifold: every candidate point of A below the plane, reduced to at most 4: the
+// deepest, the farthest from it, then the two adding most area:
+//   box, convex hull, triangle: their vertices;
+//   cylinder: 4 rim points per cap (along the deepest radial direction and at 90, 180,
+//     270 degrees from it): a cap lying flat gives 4 points, a cylinder on its side 2;
+//   capsule: the lowest points of the two end spheres (up to 2);
+//   sphere, ellipsoid: the deepest point.
+// Each point lies midway between A's point x and its projection onto the plane; its
+// pdepth is x's depth. Points are computed relative to A's position (precision far from
+// the origin) and shifted back on output.
+// Inputs: posed leaves per leaf.h (finite, unit nh). Deterministic (fixed loop order,
+// first index wins ties). cfg.path kSimd and kScalar run the same per-lane code.
+// Cost: O(1) per lane, O(vertex count) for convex hulls. No allocation.
+#include <cmath>
+
+#include "kernels/narrowphase/pair_kernels.h"
+#include "kernels/narrowphase/support.h"
+
+namespace impact::kernels {
+
+namespace {
+
+using cvx::V3;
+
+/// Picks up to 4 of the candidates get(i, &x) (i < n) whose depth d(x) > 0.
+template <class Get>
+uint32_t pick_below(uint32_t n, Get get, V3 nh, float off, V3* pts, float* pd) {
+  auto depth_of = [&](uint32_t i, V3* x) {
+    *x = get(i);
+    return off - cvx::dot(nh, *x);
+  };
+  V3 x;
+  uint32_t i0 = n;
+  float d0 = 0.0f;
+  for (uint32_t i = 0; i < n; ++i) {
+    const float d = depth_of(i, &x);
+    if (d > d0) {
+      d0 = d;
+      i0 = i;
+    }
+  }
+  if (i0 == n) return 0;
+  uint32_t idx[4] = {i0, n, n, n};
+  V3 p0;
+  depth_of(i0, &p0);
+  // Farthest from p0.
+  float best = 0.0f;
+  V3 p1 = p0;
+  for (uint32_t i = 0; i < n; ++i) {
+    if (!(depth_of(i, &x) > 0.0f)) continue;
+    const float d2 = cvx::len2(x - p0);
+    if (d2 > best) {
+      best = d2;
+      idx[1] = i;
+      p1 = x;
+    }
+  }
+  uint32_t m = 1;
+  if (idx[1] != n) {
+    m = 2;
+    // Largest |area| with p0, p1 (areas measured about nh).
+    best = 0.0f;
+    V3 p2 = p0;
+    float sgn = 1.0f;
+    for (uint32_t i = 0; i < n; ++i) {
+      if (!(depth_of(i, &x) > 0.0f)) continue;
+      const float a = cvx::dot(cvx::cross(p1 - p0, x - p0), nh);
+      if (std::fabs(a) > best) {
+        best = std::fabs(a);
+        idx[2] = i;
+        p2 = x;
+        sgn = a >= 0.0f ? 1.0f : -1.0f;
+      }
+    }
+    // Area threshold: a relative 1e-6 of the squared span, so rounding never adds a
+    // collinear point.
+    const float tiny = 1e-6f * cvx::len2(p1 - p0);
+    if (idx[2] != n && best > tiny) {
+      m = 3;
+      best = tiny;
+      for (uint32_t i = 0; i < n; ++i) {
+        if (!(depth_of(i, &x) > 0.0f)) continue;
+        const float o0 = -sgn * cvx::dot(cvx::cross(p1 - p0, x - p0), nh);
+        const float o1 = -sgn * cvx::dot(cvx::cross(p2 - p1, x - p1), nh);
+        const float o2 = -sgn * cvx::dot(cvx::cross(p0 - p2, x - p2), nh);
+        const float o = std::fmax(o0, std::fmax(o1, o2));
+        if (o > best) {
+          best = o;
+          idx[3] = i;
+        }
+      }
+      if (idx[3] != n) m = 4;
+    }
+  }
+  uint32_t k = 0;
+  for (uint32_t j = 0; j < m; ++j) {
+    if (idx[j] == n) continue;
+    const float d = depth_of(idx[j], &x);
+    pts[k] = x + nh * (0.5f * d);
+    pd[k] = d;
+    ++k;
+  }
+  return k;
+}
+
+}  // namespace
+
+void collide_support_halfspace(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out, Range r,
+                               const NarrowConfig& cfg, LeafType ta) {
+  for (uint32_t k = r.begin; k < r.end; ++k) {
+    const V3 origin{a.p[0][k], a.p[1][k], a.p[2][k]};
+    const cvx::Leaf A = cvx::load_leaf(a, k, ta, &cfg.hulls, origin);
+    const V3 nh{b.e[0][k], b.e[1][k], b.e[2][k]};
+    const V3 pb = V3{b.p[0][k], b.p[1][k], b.p[2][k]} - origin;
+    const float off = cvx::dot(nh, pb);  // x is below when nh.x < off
+    const V3 deepest = cvx::support(A, -nh);
+    const float depth = off - cvx::dot(nh, deepest);
+    if (!(depth > 0.0f)) {
+      out.count[k] = 0;
+      continue;
+    }
+    V3 pts[4];
+    float pd[4];
+    uint32_t m = 0;
+    switch (ta) {
+      case kLeafBox:
+        m = pick_below(
+            8,
+            [&](uint32_t i) {
+              return A.p + A.ax[0] * ((i & 1) ? A.e[0] : -A.e[0]) + A.ax[1] * ((i & 2) ? A.e[1] : -A.e[1]) +
+                     A.ax[2] * ((i & 4) ? A.e[2] : -A.e[2]);
+            },
+            nh, off, pts, pd);
+        break;
+      case kLeafConvex: {
+        const uint32_t vb = cfg.hulls.vert_begin[A.hull];
+        const uint32_t ve = cfg.hulls.vert_begin[A.hull + 1];
+        m = pick_below(ve - vb, [&](uint32_t i) { return cvx::hull_vertex(A, vb + i); }, nh, off, pts, pd);
+        break;
+      }
+      case kLeafTriangle:
+        m = pick_below(3, [&](uint32_t i) { return i == 0 ? A.p : (i == 1 ? A.v1 : A.v2); }, nh, off, pts, pd);
+        break;
+      case kLeafCapsule:
+        m = pick_below(
+            2, [&](uint32_t i) { return A.p + A.ax[2] * (i == 0 ? -A.e[1] : A.e[1]) - nh * A.e[0]; }, nh, off,
+            pts, pd);
+        break;
+      case kLeafCylinder: {
+        const V3 u = A.ax[2];
+        const V3 down = -nh;
+        const float dx = cvx::dot(down, A.ax[0]), dy = cvx::dot(down, A.ax[1]);
+        const float rl = std::sqrt(dx * dx + dy * dy);
+        const V3 rad = rl > 1e-6f ? (A.ax[0] * dx + A.ax[1] * dy) * (1.0f / rl) : A.ax[0];
+        const V3 side = cvx::cross(u, rad);
+        m = pick_below(
+            8,
+            [&](uint32_t i) {
+              const V3 c = A.p + u * ((i & 4) ? A.e[1] : -A.e[1]);
+              const uint32_t q = i & 3;
+              const V3 dir = q == 0 ? rad : (q == 1 ? side : (q == 2 ? -rad : -side));
+              return c + dir * A.e[0];
+            },
+            nh, off, pts, pd);
+        break;
+      }
+      default:
+        break;
+    }
+    if (m == 0) {
+      // Smooth shapes (and any rounding miss): the deepest point.
+      pts[0] = deepest + nh * (0.5f * depth);
+      pd[0] = depth;
+      m = 1;
+    }
+    out.count[k] = static_cast<uint8_t>(m);
+    out.n[0][k] = -nh.x;
+    out.n[1][k] = -nh.y;
+    out.n[2][k] = -nh.z;
+    // The reported depth is the support's (the exact deepest point, also for curved sides).
+    float dmax = depth;
+    for (uint32_t i = 0; i < m; ++i) dmax = std::fmax(dmax, pd[i]);
+    out.depth[k] = dmax;
+    for (uint32_t i = 0; i < m; ++i) {
+      out.point[i][0][k] = pts[i].x + origin.x;
+      out.point[i][1][k] = pts[i].y + origin.y;
+      out.point[i][2][k] = pts[i].z + origin.z;
+      out.pdepth[i][k] = pd[i];
+    }
+  }
+}
+
+}  // namespace impact::kernels

@@ -1,0 +1,347 @@
+// The one SIMD vocabulary of kernels/: lanes of float, int32 and mask, and the verbs
+// kernels use on them. A kernel is written once as a template over a lane type `F`
+// (FloatN<N>) and instantiated twice: FloatW (kSimdWidth lanes, the SIMD path) and
+// Float1 (one plain float, the scalar reference path).
+//
+//   FloatN<N>  N floats           arithmetic + - * /, unary -, compare -> MaskN<N>
+//   MaskN<N>   N lane predicates  & | ^ ~, andnot, any / all / none
+//   IntN<N>    N int32            + -, select, lane access (manifold point counts)
+//   verbs      load / store (contiguous, unaligned), broadcast (implicit from float),
+//              mul_add, min, max, abs, sqrt, select(mask, if_true, if_false),
+//              copysign-free sign helpers are built from select.
+//
+// Width: kSimdWidth = 8 where AVX is enabled (one ymm register), 4 elsewhere (SSE2 /
+// NEON / any target: GCC lowers the generic vectors itself), 1 with -DIMPACT_SIMD_SCALAR.
+// Why GCC/Clang vector extensions rather than Highway or xsimd: the kernels need a
+// dozen verbs on one fixed width, the extensions give exactly that with the
+// compiler's own register allocation and instruction selection on every target, and
+// add no dependency; intrinsics appear only where the extensions have no spelling
+// (sqrt, min/max, movemask) and each has a portable fallback.
+//
+// Semantics: every verb is lane-wise and IEEE (sqrt and / correctly rounded; no
+// approximate rsqrt/rcp), so a lane's result never depends on its neighbours: a
+// kernel gives the same bytes for a pair whichever block / range it lands in.
+// min/max follow the x86 rule (second operand on NaN); kernels assume finite inputs.
+#pragma once
+
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+
+#if defined(__SSE2__) || defined(__AVX__)
+#include <immintrin.h>
+#endif
+
+#include "kernels/common/kernel.h"
+
+namespace impact::kernels::simd {
+
+#if defined(IMPACT_SIMD_SCALAR)
+inline constexpr uint32_t kSimdWidth = 1;
+#elif defined(__AVX__)
+inline constexpr uint32_t kSimdWidth = 8;
+#else
+inline constexpr uint32_t kSimdWidth = 4;
+#endif
+
+template <uint32_t N>
+struct MaskN;
+template <uint32_t N>
+struct IntN;
+
+/// The raw generic vector types (spelled per width: GCC drops a vector_size that
+/// depends on a template parameter inside a class template).
+template <uint32_t N>
+struct RawVec;
+template <>
+struct RawVec<4> {
+  typedef float F __attribute__((vector_size(16)));
+  typedef int32_t I __attribute__((vector_size(16)));
+};
+template <>
+struct RawVec<8> {
+  typedef float F __attribute__((vector_size(32)));
+  typedef int32_t I __attribute__((vector_size(32)));
+};
+template <>
+struct RawVec<16> {
+  typedef float F __attribute__((vector_size(64)));
+  typedef int32_t I __attribute__((vector_size(64)));
+};
+
+// ---------------------------------------------------------------------------------------
+// N > 1: GCC / Clang generic vectors.
+// ---------------------------------------------------------------------------------------
+
+/// N lanes of float.
+template <uint32_t N>
+struct FloatN {
+  using Raw = typename RawVec<N>::F;
+  using IRaw = typename RawVec<N>::I;
+  static constexpr uint32_t kWidth = N;
+  using Mask = MaskN<N>;
+  using Int = IntN<N>;
+
+  Raw v;
+
+  FloatN() = default;
+  /// Broadcast (implicit, so literals mix with lanes: 0.5f * x).
+  IMPACT_INLINE FloatN(float s) : v(Raw{} + s) {}
+  IMPACT_INLINE explicit FloatN(Raw r) : v(r) {}
+
+  /// N contiguous floats from p (no alignment needed).
+  static IMPACT_INLINE FloatN load(const float* p) {
+    FloatN r;
+    std::memcpy(&r.v, p, sizeof(Raw));
+    return r;
+  }
+  IMPACT_INLINE void store(float* p) const { std::memcpy(p, &v, sizeof(Raw)); }
+  IMPACT_INLINE float lane(uint32_t i) const { return v[i]; }
+
+  friend IMPACT_INLINE FloatN operator+(FloatN a, FloatN b) { return FloatN(a.v + b.v); }
+  friend IMPACT_INLINE FloatN operator-(FloatN a, FloatN b) { return FloatN(a.v - b.v); }
+  friend IMPACT_INLINE FloatN operator*(FloatN a, FloatN b) { return FloatN(a.v * b.v); }
+  friend IMPACT_INLINE FloatN operator/(FloatN a, FloatN b) { return FloatN(a.v / b.v); }
+  friend IMPACT_INLINE FloatN operator-(FloatN a) { return FloatN(-a.v); }
+  IMPACT_INLINE FloatN& operator+=(FloatN b) { v += b.v; return *this; }
+  IMPACT_INLINE FloatN& operator-=(FloatN b) { v -= b.v; return *this; }
+  IMPACT_INLINE FloatN& operator*=(FloatN b) { v *= b.v; return *this; }
+
+  friend IMPACT_INLINE Mask operator<(FloatN a, FloatN b) { return Mask(a.v < b.v); }
+  friend IMPACT_INLINE Mask operator<=(FloatN a, FloatN b) { return Mask(a.v <= b.v); }
+  friend IMPACT_INLINE Mask operator>(FloatN a, FloatN b) { return Mask(a.v > b.v); }
+  friend IMPACT_INLINE Mask operator>=(FloatN a, FloatN b) { return Mask(a.v >= b.v); }
+  friend IMPACT_INLINE Mask operator==(FloatN a, FloatN b) { return Mask(a.v == b.v); }
+  friend IMPACT_INLINE Mask operator!=(FloatN a, FloatN b) { return Mask(a.v != b.v); }
+};
+
+/// N lane predicates: each lane all ones (true) or zero.
+template <uint32_t N>
+struct MaskN {
+  using Raw = typename RawVec<N>::I;
+  static constexpr uint32_t kWidth = N;
+  Raw v;
+
+  MaskN() = default;
+  IMPACT_INLINE explicit MaskN(Raw r) : v(r) {}
+  /// Every lane b.
+  IMPACT_INLINE explicit MaskN(bool b) : v(Raw{} + (b ? -1 : 0)) {}
+  IMPACT_INLINE bool lane(uint32_t i) const { return v[i] != 0; }
+
+  friend IMPACT_INLINE MaskN operator&(MaskN a, MaskN b) { return MaskN(a.v & b.v); }
+  friend IMPACT_INLINE MaskN operator|(MaskN a, MaskN b) { return MaskN(a.v | b.v); }
+  friend IMPACT_INLINE MaskN operator^(MaskN a, MaskN b) { return MaskN(a.v ^ b.v); }
+  friend IMPACT_INLINE MaskN operator~(MaskN a) { return MaskN(~a.v); }
+};
+
+/// N lanes of int32.
+template <uint32_t N>
+struct IntN {
+  using Raw = typename RawVec<N>::I;
+  static constexpr uint32_t kWidth = N;
+  Raw v;
+
+  IntN() = default;
+  IMPACT_INLINE IntN(int32_t s) : v(Raw{} + s) {}
+  IMPACT_INLINE explicit IntN(Raw r) : v(r) {}
+  IMPACT_INLINE int32_t lane(uint32_t i) const { return v[i]; }
+
+  friend IMPACT_INLINE IntN operator+(IntN a, IntN b) { return IntN(a.v + b.v); }
+  friend IMPACT_INLINE IntN operator-(IntN a, IntN b) { return IntN(a.v - b.v); }
+  friend IMPACT_INLINE MaskN<N> operator==(IntN a, IntN b) { return MaskN<N>(a.v == b.v); }
+  friend IMPACT_INLINE MaskN<N> operator>(IntN a, IntN b) { return MaskN<N>(a.v > b.v); }
+};
+
+template <uint32_t N>
+IMPACT_INLINE FloatN<N> select(MaskN<N> m, FloatN<N> a, FloatN<N> b) {
+  return FloatN<N>(m.v ? a.v : b.v);
+}
+template <uint32_t N>
+IMPACT_INLINE IntN<N> select(MaskN<N> m, IntN<N> a, IntN<N> b) {
+  return IntN<N>(m.v ? a.v : b.v);
+}
+template <uint32_t N>
+IMPACT_INLINE MaskN<N> select(MaskN<N> m, MaskN<N> a, MaskN<N> b) {
+  return MaskN<N>((m.v & a.v) | (~m.v & b.v));
+}
+/// a & !b
+template <uint32_t N>
+IMPACT_INLINE MaskN<N> andnot(MaskN<N> a, MaskN<N> b) {
+  return MaskN<N>(a.v & ~b.v);
+}
+/// 1 where m, else 0.
+template <uint32_t N>
+IMPACT_INLINE IntN<N> to_int(MaskN<N> m) {
+  return IntN<N>(-m.v);
+}
+
+template <uint32_t N>
+IMPACT_INLINE bool any(MaskN<N> m) {
+#if defined(__AVX__)
+  if constexpr (N == 8) return _mm256_movemask_ps(reinterpret_cast<__m256>(m.v)) != 0;
+#endif
+#if defined(__SSE2__)
+  if constexpr (N == 4) return _mm_movemask_ps(reinterpret_cast<__m128>(m.v)) != 0;
+#endif
+  int32_t r = 0;
+  for (uint32_t i = 0; i < N; ++i) r |= m.v[i];
+  return r != 0;
+}
+template <uint32_t N>
+IMPACT_INLINE bool all(MaskN<N> m) {
+#if defined(__AVX__)
+  if constexpr (N == 8) return _mm256_movemask_ps(reinterpret_cast<__m256>(m.v)) == 0xff;
+#endif
+#if defined(__SSE2__)
+  if constexpr (N == 4) return _mm_movemask_ps(reinterpret_cast<__m128>(m.v)) == 0xf;
+#endif
+  int32_t r = -1;
+  for (uint32_t i = 0; i < N; ++i) r &= m.v[i];
+  return r != 0;
+}
+template <uint32_t N>
+IMPACT_INLINE bool none(MaskN<N> m) {
+  return !any(m);
+}
+
+template <uint32_t N>
+IMPACT_INLINE FloatN<N> min(FloatN<N> a, FloatN<N> b) {
+#if defined(__AVX__)
+  if constexpr (N == 8) return FloatN<N>(reinterpret_cast<typename FloatN<N>::Raw>(_mm256_min_ps(a.v, b.v)));
+#endif
+#if defined(__SSE2__)
+  if constexpr (N == 4) return FloatN<N>(reinterpret_cast<typename FloatN<N>::Raw>(_mm_min_ps(a.v, b.v)));
+#endif
+  return FloatN<N>(a.v < b.v ? a.v : b.v);
+}
+template <uint32_t N>
+IMPACT_INLINE FloatN<N> max(FloatN<N> a, FloatN<N> b) {
+#if defined(__AVX__)
+  if constexpr (N == 8) return FloatN<N>(reinterpret_cast<typename FloatN<N>::Raw>(_mm256_max_ps(a.v, b.v)));
+#endif
+#if defined(__SSE2__)
+  if constexpr (N == 4) return FloatN<N>(reinterpret_cast<typename FloatN<N>::Raw>(_mm_max_ps(a.v, b.v)));
+#endif
+  return FloatN<N>(a.v > b.v ? a.v : b.v);
+}
+template <uint32_t N>
+IMPACT_INLINE FloatN<N> sqrt(FloatN<N> a) {
+#if defined(__AVX__)
+  if constexpr (N == 8) return FloatN<N>(reinterpret_cast<typename FloatN<N>::Raw>(_mm256_sqrt_ps(a.v)));
+#endif
+#if defined(__SSE2__)
+  if constexpr (N == 4) return FloatN<N>(reinterpret_cast<typename FloatN<N>::Raw>(_mm_sqrt_ps(a.v)));
+#endif
+  FloatN<N> r;
+  for (uint32_t i = 0; i < N; ++i) r.v[i] = std::sqrt(a.v[i]);
+  return r;
+}
+template <uint32_t N>
+IMPACT_INLINE FloatN<N> abs(FloatN<N> a) {
+  using I = typename FloatN<N>::IRaw;
+  return FloatN<N>(reinterpret_cast<typename FloatN<N>::Raw>(reinterpret_cast<I>(a.v) & 0x7fffffff));
+}
+
+// ---------------------------------------------------------------------------------------
+// N == 1: the scalar reference path, plain float / bool / int32.
+// ---------------------------------------------------------------------------------------
+
+template <>
+struct MaskN<1> {
+  static constexpr uint32_t kWidth = 1;
+  bool v;
+  MaskN() = default;
+  IMPACT_INLINE explicit MaskN(bool b) : v(b) {}
+  IMPACT_INLINE bool lane(uint32_t) const { return v; }
+  friend IMPACT_INLINE MaskN operator&(MaskN a, MaskN b) { return MaskN(a.v && b.v); }
+  friend IMPACT_INLINE MaskN operator|(MaskN a, MaskN b) { return MaskN(a.v || b.v); }
+  friend IMPACT_INLINE MaskN operator^(MaskN a, MaskN b) { return MaskN(a.v != b.v); }
+  friend IMPACT_INLINE MaskN operator~(MaskN a) { return MaskN(!a.v); }
+};
+
+template <>
+struct IntN<1> {
+  static constexpr uint32_t kWidth = 1;
+  int32_t v;
+  IntN() = default;
+  IMPACT_INLINE IntN(int32_t s) : v(s) {}
+  IMPACT_INLINE int32_t lane(uint32_t) const { return v; }
+  friend IMPACT_INLINE IntN operator+(IntN a, IntN b) { return IntN(a.v + b.v); }
+  friend IMPACT_INLINE IntN operator-(IntN a, IntN b) { return IntN(a.v - b.v); }
+  friend IMPACT_INLINE MaskN<1> operator==(IntN a, IntN b) { return MaskN<1>(a.v == b.v); }
+  friend IMPACT_INLINE MaskN<1> operator>(IntN a, IntN b) { return MaskN<1>(a.v > b.v); }
+};
+
+template <>
+struct FloatN<1> {
+  static constexpr uint32_t kWidth = 1;
+  using Mask = MaskN<1>;
+  using Int = IntN<1>;
+  float v;
+
+  FloatN() = default;
+  IMPACT_INLINE FloatN(float s) : v(s) {}
+
+  static IMPACT_INLINE FloatN load(const float* p) { return FloatN(*p); }
+  IMPACT_INLINE void store(float* p) const { *p = v; }
+  IMPACT_INLINE float lane(uint32_t) const { return v; }
+
+  friend IMPACT_INLINE FloatN operator+(FloatN a, FloatN b) { return FloatN(a.v + b.v); }
+  friend IMPACT_INLINE FloatN operator-(FloatN a, FloatN b) { return FloatN(a.v - b.v); }
+  friend IMPACT_INLINE FloatN operator*(FloatN a, FloatN b) { return FloatN(a.v * b.v); }
+  friend IMPACT_INLINE FloatN operator/(FloatN a, FloatN b) { return FloatN(a.v / b.v); }
+  friend IMPACT_INLINE FloatN operator-(FloatN a) { return FloatN(-a.v); }
+  IMPACT_INLINE FloatN& operator+=(FloatN b) { v += b.v; return *this; }
+  IMPACT_INLINE FloatN& operator-=(FloatN b) { v -= b.v; return *this; }
+  IMPACT_INLINE FloatN& operator*=(FloatN b) { v *= b.v; return *this; }
+
+  friend IMPACT_INLINE Mask operator<(FloatN a, FloatN b) { return Mask(a.v < b.v); }
+  friend IMPACT_INLINE Mask operator<=(FloatN a, FloatN b) { return Mask(a.v <= b.v); }
+  friend IMPACT_INLINE Mask operator>(FloatN a, FloatN b) { return Mask(a.v > b.v); }
+  friend IMPACT_INLINE Mask operator>=(FloatN a, FloatN b) { return Mask(a.v >= b.v); }
+  friend IMPACT_INLINE Mask operator==(FloatN a, FloatN b) { return Mask(a.v == b.v); }
+  friend IMPACT_INLINE Mask operator!=(FloatN a, FloatN b) { return Mask(a.v != b.v); }
+};
+
+IMPACT_INLINE FloatN<1> select(MaskN<1> m, FloatN<1> a, FloatN<1> b) { return m.v ? a : b; }
+IMPACT_INLINE IntN<1> select(MaskN<1> m, IntN<1> a, IntN<1> b) { return m.v ? a : b; }
+IMPACT_INLINE MaskN<1> select(MaskN<1> m, MaskN<1> a, MaskN<1> b) { return m.v ? a : b; }
+IMPACT_INLINE MaskN<1> andnot(MaskN<1> a, MaskN<1> b) { return MaskN<1>(a.v && !b.v); }
+IMPACT_INLINE IntN<1> to_int(MaskN<1> m) { return IntN<1>(m.v ? 1 : 0); }
+IMPACT_INLINE bool any(MaskN<1> m) { return m.v; }
+IMPACT_INLINE bool all(MaskN<1> m) { return m.v; }
+IMPACT_INLINE bool none(MaskN<1> m) { return !m.v; }
+// Same operand order as the x86 instructions, so both paths agree bit for bit.
+IMPACT_INLINE FloatN<1> min(FloatN<1> a, FloatN<1> b) { return a.v < b.v ? a : b; }
+IMPACT_INLINE FloatN<1> max(FloatN<1> a, FloatN<1> b) { return a.v > b.v ? a : b; }
+IMPACT_INLINE FloatN<1> sqrt(FloatN<1> a) { return FloatN<1>(std::sqrt(a.v)); }
+IMPACT_INLINE FloatN<1> abs(FloatN<1> a) { return FloatN<1>(std::fabs(a.v)); }
+
+// ---------------------------------------------------------------------------------------
+// Shared verbs and the two instantiations.
+// ---------------------------------------------------------------------------------------
+
+/// a * b + c. Written plainly: the build's -ffp-contract decides whether it fuses,
+/// the same way for both paths (IMPACT_STRICT_FP turns fusion off everywhere).
+template <class F>
+IMPACT_INLINE F mul_add(F a, F b, F c) {
+  return a * b + c;
+}
+template <class F>
+IMPACT_INLINE F clamp(F x, F lo, F hi) {
+  return min(max(x, lo), hi);
+}
+/// +1 where x >= 0 (also +0 and -0), else -1.
+template <class F>
+IMPACT_INLINE F sign_nonneg(F x) {
+  return select(x >= F(0.0f), F(1.0f), F(-1.0f));
+}
+
+using FloatW = FloatN<kSimdWidth>;
+using MaskW = MaskN<kSimdWidth>;
+using IntW = IntN<kSimdWidth>;
+using Float1 = FloatN<1>;
+using Mask1 = MaskN<1>;
+using Int1 = IntN<1>;
+
+}  // namespace impact::kernels::simd
