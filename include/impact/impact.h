@@ -8,5 +8,6 @@
 #include "impact/firing.h"
 #include "impact/narrowphase.h"
 #include "impact/raycast.h"
+#include "impact/shape_queries.h"
 #include "impact/shapes.h"
 #include "impact/version.h"
