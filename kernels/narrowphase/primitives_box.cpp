@@ -12,8 +12,12 @@
 //      rotation B->A (no 1 - c^2 cancellation), so near-parallel edges, needles and
 //      pancakes keep their precision. Overlap per axis is computed on the normalised
 //      axis; separated (or exactly touching) on any axis -> count 0.
-//   2. The axis of least overlap, biased: a B face beats an A face, and an edge beats
-//      a face, only when at least 1% shallower, so resting contacts do not flip.
+//   2. The axis of least overlap, with a tie tolerance so resting contacts do not
+//      flip: a B face beats an A face, and an edge beats the best face, only when
+//      shallower by more than tie = 1e-5 * overlap + 1e-6 * (sum of all extents);
+//      an edge axis also by its own rounding error, ~2e-7 * (extents + |t|) / |a_i x
+//      b_j| (its components lose relative precision as the edges become parallel).
+//      So the depth is the true minimum to ~1e-5 relative.
 //   3. Face axis: the reference face (on the box owning the axis) and the incident
 //      face (the other box's face most anti-parallel to it). Their intersection in
 //      the reference face's frame is found without a variable-length polygon: its
@@ -45,7 +49,9 @@ using simd::cross;
 using simd::dot;
 using simd::length_sq;
 
-inline constexpr float kAxisBias = 0.99f;  // relative: a later axis class must be 1% shallower
+inline constexpr float kTieRel = 1e-5f;       // tie tolerance, relative to the overlap
+inline constexpr float kTieSize = 1e-6f;      // tie tolerance floor, relative to the boxes' size
+inline constexpr float kEdgeRound = 2e-7f;    // edge axis rounding, relative to size / |a_i x b_j|
 inline constexpr float kEdgeSkipSq = 1e-12f;  // |a_i x b_j|^2 below this: skip the axis
 
 template <class F>
@@ -152,17 +158,22 @@ IMPACT_INLINE void box_box_block(const LeafSoA& a, const LeafSoA& b, const Manif
     axis = select(take, F(static_cast<float>(i)), axis);
   }
   min_all = best;
+  const F size = eA[0] + eA[1] + eA[2] + eB[0] + eB[1] + eB[2];
+  const F tie_floor = F(kTieSize) * size;
   {
     const F best_a = best;
+    const F lim_a = best_a - mul_add(F(kTieRel), abs(best_a), tie_floor);
     for (int j = 0; j < 3; ++j) {
       const F o = eB[j] + eA[0] * AR[0][j] + eA[1] * AR[1][j] + eA[2] * AR[2][j] - abs(tB[j]);
       min_all = min(min_all, o);
-      const Mask take = (o < kAxisBias * best_a) & (o < best);
+      const Mask take = (o < lim_a) & (o < best);
       best = select(take, o, best);
       axis = select(take, F(static_cast<float>(3 + j)), axis);
     }
   }
   const F best_face = best;
+  const F lim_face = best_face - mul_add(F(kTieRel), abs(best_face), tie_floor);
+  const F edge_round = F(kEdgeRound) * (size + abs(ta.x) + abs(ta.y) + abs(ta.z));
   F edge_len(1.0f);
   V3<F> edge_l{zero, zero, zero};  // the winning edge axis in A's frame (normalised)
   for (int i = 0; i < 3; ++i) {
@@ -182,7 +193,7 @@ IMPACT_INLINE void box_box_block(const LeafSoA& a, const LeafSoA& b, const Manif
       const F tl = l[0] * tA[0] + l[1] * tA[1] + l[2] * tA[2];
       const F o = (ra_ + rb_ - abs(tl)) / len;
       min_all = select(ok, min(min_all, o), min_all);
-      const Mask take = ok & (o < kAxisBias * best_face) & (o < best);
+      const Mask take = ok & (o < lim_face - edge_round / len) & (o < best);
       best = select(take, o, best);
       axis = select(take, F(static_cast<float>(6 + 3 * i + j)), axis);
       const F inv = one / len;

@@ -17,8 +17,9 @@
 //                   r - distance; a segment parallel to the touching face gives the 2
 //                   ends of its clip against the face's side slabs. Core inside: SAT
 //                   over the 3 face normals and the 3 axis x edge directions (exact
-//                   minimum translation of a segment-swept sphere), with a small bias
-//                   to faces; face axes give the clipped ends, edge axes one point.
+//                   minimum translation of a segment-swept sphere), with a tie
+//                   tolerance favouring faces (kTieRel); face axes give the clipped
+//                   ends, edge axes one point.
 //  capsule-triangle two-sided triangle. Core outside: closest points of segment and
 //                   triangle (endpoints vs triangle, segment vs edges); a segment
 //                   parallel to the face gives 2 points clipped to the triangle's
@@ -42,9 +43,14 @@ using simd::cross;
 using simd::dot;
 using simd::length_sq;
 
-/// Relative bias: an edge axis wins over a face axis only when clearly shallower, so
-/// resting contacts keep their face normal under rounding.
-inline constexpr float kFaceBias = 0.99f;
+/// SAT tie tolerance: an edge axis wins over the best face axis only when shallower by
+/// more than kTieRel * overlap + kTieSize * (the shapes' size) + its own rounding,
+/// kEdgeRound * (size + offset) / |axis x edge| (an axis x edge direction loses
+/// relative precision as the two become parallel). So resting contacts keep their face
+/// normal under rounding, and the depth is the true minimum to ~1e-5 relative.
+inline constexpr float kTieRel = 1e-5f;
+inline constexpr float kTieSize = 1e-6f;
+inline constexpr float kEdgeRound = 2e-7f;
 /// |ua x ub| below this: capsule axes near-parallel enough for a 2-point manifold.
 inline constexpr float kParallelSin = 0.05f;
 
@@ -221,7 +227,9 @@ IMPACT_INLINE void capsule_box_block(const LeafSoA& a, const LeafSoA& b, const M
   n_dp = select(fx, V3<F>{-simd::sign_nonneg(c.x), zero, zero}, n_dp);
   Mask edge = Mask(false);
   F edge_axis(0.0f);  // which box edge direction (0, 1, 2) when `edge`
-  const F face_best = best;
+  const F size = ra + ha + e.x + e.y + e.z;
+  const F lim_face = best - mul_add(F(kTieRel), abs(best), F(kTieSize) * size);
+  const F edge_round = F(kEdgeRound) * (size + abs(c.x) + abs(c.y) + abs(c.z));
   auto edge_axis_try = [&](const V3<F>& l, float which) {
     const F l2 = length_sq(l);
     const Mask ok = l2 > F(1e-10f);
@@ -229,7 +237,7 @@ IMPACT_INLINE void capsule_box_block(const LeafSoA& a, const LeafSoA& b, const M
     const V3<F> ln = l * inv;
     const F cl = dot(c, ln);
     const F o = e.x * abs(ln.x) + e.y * abs(ln.y) + e.z * abs(ln.z) + ra - abs(cl);
-    const Mask take = ok & (o < kFaceBias * face_best) & (o < best);
+    const Mask take = ok & (o < lim_face - edge_round * inv) & (o < best);
     best = select(take, o, best);
     n_dp = select(take, ln * -simd::sign_nonneg(cl), n_dp);
     edge = edge | take;
@@ -274,7 +282,10 @@ IMPACT_INLINE void capsule_box_block(const LeafSoA& a, const LeafSoA& b, const M
   face_point(lo, p0, d0);
   face_point(hi, p1, d1);
   const Mask clip_ok = hi - lo > F(1e-4f) * (ha + max(e.x, max(e.y, e.z)));
-  Mask two = face_normal & clip_ok & (d0 > zero) & (d1 > zero) & (parallel_enough | ~shallow);
+  // (a deep edge axis within 0.26 deg of a face normal is no face contact: its points
+  // would be off the surfaces by that angle times the extents)
+  Mask two = andnot(face_normal & clip_ok & (d0 > zero) & (d1 > zero) & (parallel_enough | ~shallow),
+                    andnot(edge, shallow));
   // A deep face contact whose clip lost one end keeps the deeper end alone.
   const Mask deep_face = andnot(face_normal & clip_ok, shallow | two | edge);
   V3<F> pf;
@@ -380,7 +391,10 @@ IMPACT_INLINE void capsule_triangle_block(const LeafSoA& a, const LeafSoA& b, co
   V3<F> n_dp = nf;
   Mask edge_win = Mask(false);
   F edge_which(0.0f);
-  auto axis = [&](const V3<F>& l, Mask ok, bool is_edge, float which) {
+  F lim_face(0.0f);  // set after the face axis: an edge axis must be below it
+  const F size = ra + ha + eh[0] + eh[1] + eh[2];
+  const F edge_round = F(kEdgeRound) * (size + abs(v[0].x) + abs(v[0].y) + abs(v[0].z));
+  auto axis = [&](const V3<F>& l, Mask ok, bool is_edge, float which, F round) {
     const F t0 = dot(l, v[0]), t1 = dot(l, v[1]), t2 = dot(l, v[2]);
     const F tmin = min(t0, min(t1, t2)), tmax = max(t0, max(t1, t2));
     const F ext = ha * abs(dot(l, u)) + ra;
@@ -388,7 +402,7 @@ IMPACT_INLINE void capsule_triangle_block(const LeafSoA& a, const LeafSoA& b, co
     const F o_neg = tmax + ext;  // move the triangle along -l
     const Mask pos = o_pos <= o_neg;
     const F o = min(o_pos, o_neg);
-    const Mask take = is_edge ? ok & (o < kFaceBias * best) : ok;
+    const Mask take = is_edge ? ok & (o < best) & (o < lim_face - round) : ok;
     best = select(take, o, best);
     n_dp = select(take, select(pos, l, -l), n_dp);
     if (is_edge) {
@@ -396,12 +410,14 @@ IMPACT_INLINE void capsule_triangle_block(const LeafSoA& a, const LeafSoA& b, co
       edge_which = select(take, F(which), edge_which);
     }
   };
-  axis(nf, Mask(true), false, 0.0f);
+  axis(nf, Mask(true), false, 0.0f, zero);
+  lim_face = best - mul_add(F(kTieRel), abs(best), F(kTieSize) * size);
   for (int i = 0; i < 3; ++i) {
     const V3<F> l = cross(u, ed[i]);
     const F l2 = length_sq(l);
     const Mask ok = l2 > F(1e-10f);
-    axis(l * (one / sqrt(select(ok, l2, one))), ok, true, static_cast<float>(i));
+    const F inv = one / sqrt(select(ok, l2, one));
+    axis(l * inv, ok, true, static_cast<float>(i), edge_round * inv);
   }
   const V3<F> n = select(shallow, n_sh, n_dp);
   const F depth = select(shallow, ra - dist, best);
@@ -433,8 +449,9 @@ IMPACT_INLINE void capsule_triangle_block(const LeafSoA& a, const LeafSoA& b, co
   face_point(hi, p1, d1);
   const Mask clip_ok = hi - lo > F(1e-4f) * ha;
   const Mask parallel_enough = abs(hu) < F(kParallelSin);
-  const Mask two = face_normal & clip_ok & (d0 > zero) & (d1 > zero) & (parallel_enough | ~shallow) &
-                   (depth > zero);
+  const Mask two = andnot(
+      face_normal & clip_ok & (d0 > zero) & (d1 > zero) & (parallel_enough | ~shallow) & (depth > zero),
+      andnot(edge_win, shallow));
   // single point
   V3<F> pf = (bp + bq + n * ra) * half;
   F df = depth;

@@ -6,6 +6,10 @@
 //                      places give bytes identical to one whole range.
 //   Analytic*          cases with exact answers (resting boxes, crossed edges, parallel
 //                      capsules, sphere inside a box, coincident centres, touching).
+//   MinimumAxis        deep lanes where an edge axis is slightly shallower than every
+//                      face axis (once lost to a 1% face bias), against the exact
+//                      double-precision reference of tests/support/narrow_reference.h;
+//                      tilted resting boxes still give a 4-point face manifold.
 //   Random / Extremes  for every contact, independent double-precision checks:
 //                      (a) the surfaces: x + n*pdepth/2 lies on A's surface and
 //                          x - n*pdepth/2 on B's (signed distances in double);
@@ -31,6 +35,7 @@
 #include <vector>
 
 #include "kernels/narrowphase/pair_kernels.h"
+#include "support/narrow_reference.h"
 #include "support/test_support.h"
 
 namespace impact::kernels {
@@ -1039,6 +1044,105 @@ TEST(PrimitivesExtremes, NeedleAndPancakeBoxes) {
     // min-translation checked; surfaces with the size-scaled tolerance
     const uint32_t contacts = check_bucket(t, a, b, o);
     EXPECT_GT(contacts, n / 10);
+  }
+}
+
+// ---------------------------------------------------------------------------------------
+// Minimum axis: an edge axis a little shallower than the faces must win
+// ---------------------------------------------------------------------------------------
+
+/// The reference's view of a primitives_test shape.
+test::nref::Shape to_ref(const Shape& s) {
+  using test::nref::V3;
+  const V3 p{s.p[0], s.p[1], s.p[2]};
+  const double r9[9] = {s.R[0][0], s.R[0][1], s.R[0][2], s.R[1][0], s.R[1][1],
+                        s.R[1][2], s.R[2][0], s.R[2][1], s.R[2][2]};
+  switch (s.kind) {
+    case Kind::kCapsule: {
+      test::nref::Shape t =
+          test::nref::make_axial(kLeafCapsule, p, {s.R[0][2], s.R[1][2], s.R[2][2]}, s.e[0], s.e[1]);
+      test::nref::set_rotation(t, r9);
+      return t;
+    }
+    case Kind::kBox:
+      return test::nref::make_box(p, r9, s.e[0], s.e[1], s.e[2]);
+    case Kind::kTriangle:
+      return test::nref::make_triangle(p, {s.v1[0], s.v1[1], s.v1[2]}, {s.v2[0], s.v2[1], s.v2[2]});
+    default:
+      return test::nref::make_sphere(p, s.e[0]);
+  }
+}
+
+/// A shape from float literals (R row-major).
+Shape literal(Kind kind, const std::array<float, 3>& p, const std::array<float, 9>& r,
+              const std::array<float, 3>& e, const std::array<float, 6>& w = {}) {
+  Shape s;
+  s.kind = kind;
+  for (int i = 0; i < 3; ++i) s.p[i] = p[i], s.e[i] = e[i], s.v1[i] = w[i], s.v2[i] = w[3 + i];
+  for (int i = 0; i < 9; ++i) s.R[i / 3][i % 3] = r[i];
+  return s;
+}
+
+void expect_minimum(const char* type, const Shape& a, const Shape& b) {
+  const test::nref::PairResult ref = test::nref::solve_pair(to_ref(a), to_ref(b));
+  ASSERT_GT(ref.s, 0.0);
+  const double tol = 1e-4 * std::max(a.bound(), b.bound());
+  for (KernelPath path : {KernelPath::kSimd, KernelPath::kScalar}) {
+    const Out o = run_one(type, a, b, path);
+    ASSERT_GT(o.count[0], 0) << type;
+    EXPECT_NEAR(o.depth[0], ref.s, tol) << type;
+    const D3 n = o.normal(0);
+    const double ang = test::nref::angle({n[0], n[1], n[2]}, ref.n);
+    EXPECT_LT(ang, 1e-3) << type << " normal " << n[0] << " " << n[1] << " " << n[2];
+  }
+}
+
+TEST(PrimitivesMinimumAxis, DeepEdgeAxesAgainstReference) {
+  // box-box: an edge axis 0.9% shallower than the best face
+  expect_minimum("box-box",
+                 literal(Kind::kBox, {-0.0958060026f, -0.433721513f, -0.349768162f},
+                         {-0.687881529f, -0.602422893f, 0.404852659f, 0.448655039f, 0.0855477005f,
+                          0.889601171f, -0.570550323f, 0.7935794f, 0.211433396f},
+                         {0.680252671f, 0.22365512f, 0.877120435f}),
+                 literal(Kind::kBox, {-0.238325879f, -0.301449776f, -0.182889134f},
+                         {-0.506703436f, -0.831654012f, 0.227163449f, -0.861302793f, 0.476860315f,
+                          -0.175390288f, 0.0375388041f, -0.284527361f, -0.957932651f},
+                         {0.557256877f, 0.90927273f, 0.757196665f}));
+  // capsule-box: core inside the box, axis x box edge 0.67% shallower than a face
+  expect_minimum("capsule-box",
+                 literal(Kind::kCapsule, {0.651563466f, 0.035944283f, -0.648745835f},
+                         {-0.0432255976f, 0.976309776f, -0.212015823f, 0.49665907f, 0.205132961f, 0.84335655f,
+                          0.866868675f, -0.0688449964f, -0.493760139f},
+                         {0.140245631f, 0.534180522f, 0.0f}),
+                 literal(Kind::kBox, {0.716778338f, 0.23175633f, -0.653880894f},
+                         {-0.750863433f, 0.211657524f, 0.625623822f, -0.590800345f, 0.208176941f, -0.7794981f,
+                          -0.295227081f, -0.954915404f, -0.0312651098f},
+                         {0.248116925f, 0.284482121f, 0.973235309f}));
+  // capsule-triangle: core crossing the triangle, an axis x edge direction wins
+  expect_minimum(
+      "capsule-triangle",
+      literal(Kind::kCapsule, {-0.937919021f, -0.951433539f, -0.434715748f},
+              {-0.0989829749f, -0.665195584f, -0.740079224f, -0.924715042f, 0.336207688f, -0.178511739f,
+               0.367565542f, 0.666692734f, -0.648395181f},
+              {0.421726763f, 0.520743072f, 0.0f}),
+      literal(Kind::kTriangle, {-1.47319317f, -0.833539069f, -0.622549891f}, {1, 0, 0, 0, 1, 0, 0, 0, 1},
+              {0, 0, 0},
+              {-0.243811056f, -1.00577545f, -0.438361138f, -1.18273866f, -1.01132023f, -0.282669425f}));
+}
+
+TEST(PrimitivesMinimumAxis, TiltedRestingBoxesKeepFaceManifold) {
+  // B resting on A, tilted by small angles about a diagonal axis: the face axis (or an
+  // edge axis equal to it) must win and give 4 points.
+  for (KernelPath path : {KernelPath::kSimd, KernelPath::kScalar}) {
+    for (double tilt : {1e-6, 1e-4, 1e-3, 1e-2}) {
+      const Shape a = box({0, 0, 0}, {1, 1, 1});
+      const Shape b = rotated(box({0.1, -0.2, 1.9}, {1, 1, 1}), {1, 1, 0}, tilt);
+      const Out o = run_one("box-box", a, b, path);
+      ASSERT_EQ(o.count[0], 4) << "tilt " << tilt;
+      EXPECT_LT(test::nref::angle({o.n[0][0], o.n[1][0], o.n[2][0]}, {0, 0, 1}), 1.5 * tilt + 1e-6) << tilt;
+      const test::nref::PairResult ref = test::nref::solve_pair(to_ref(a), to_ref(b));
+      EXPECT_NEAR(o.depth[0], ref.s, 1e-4 * b.bound()) << tilt;
+    }
   }
 }
 
