@@ -13,13 +13,25 @@
 //     exact for spheres / capsules; d >= ra + rb (or no radius) -> count 0.
 //  3. Cores overlapping: EPA (Van den Bergen 2001) on the cores, from GJK's simplex
 //     blown up to a tetrahedron; depth = EPA depth + ra + rb, the exact penetration of
-//     the inflated shapes. A flat core difference (crossing segments, coincident
-//     centres, coplanar triangles) has core depth 0 along a deterministic normal.
-//  4. Contact points: box / convex / triangle on both sides: the reference face (the
-//     face most aligned with n of either side) clips the incident face (Sutherland-
-//     Hodgman against the reference side planes); points below the reference plane
-//     are kept, reduced to 4 (deepest, farthest, then largest area). Otherwise, or when
-//     the faces are not aligned with n (edge-edge), one point from EPA's witnesses.
+//     the inflated shapes. The EPA depth reported is the support of A - B along the
+//     final normal (>= the polytope's face distance, equal within the tolerance when
+//     converged), so moving B by n * depth always separates the pair. EPA stopped by
+//     its cap (curved, deep pairs) is followed by up to 16 projected-gradient steps on
+//     that support function and a GJK on the pair moved just clear for the witnesses.
+//     A flat core difference (crossing segments, coincident centres, coplanar
+//     triangles) has core depth 0 along a deterministic normal (towards B's centre,
+//     else +y).
+//  4. Contact points: when both sides offer a flat feature along n (box, convex and
+//     triangle faces; a cylinder's cap as an inscribed octagon or its side line; a
+//     capsule's side line), the reference face (the better aligned one with >= 3
+//     vertices, within ~26 degrees of n) clips the incident face (Sutherland-Hodgman
+//     against side planes through the reference edges along n); points below the
+//     reference plane are kept, with their penetration along n (where the ray along n
+//     leaves the reference shape), reduced to 4 (deepest, farthest, then largest
+//     area). Otherwise (edge-edge, rims, ellipsoids, spheres), one point midway
+//     between EPA's / GJK's witnesses. Either way point +- n pdepth/2 lie on B and A.
+// Triangles are two-sided and zero-thickness: the normal is whichever side separates
+// with less motion; two coplanar triangles have depth 0 (count 0).
 // Precision: supports are float; the simplex and polytope arithmetic is double (no
 // cost on a CPU, and it keeps the sub-algorithm's sign tests away from cancellation).
 // Tolerances: cfg.gjk_tolerance and cfg.epa_tolerance times the scale (the sum of the
@@ -30,8 +42,9 @@
 // Robustness: degenerate simplices fall back to their best sub-simplex, EPA aborts to
 // its last valid face on any topological inconsistency, no division without a guard:
 // no NaN for finite input. No allocation (the EPA polytope lives on the stack).
-// Cost: GJK ~5-15 iterations of 2 supports; EPA ~10-40 iterations (curved shapes
-// take the most); hull supports are O(vertices).
+// Cost: GJK ~5-15 iterations of 2 supports; EPA ~5-40 iterations (curved shapes take
+// the most); hull supports are O(vertices). Measured (one core, -O2, random deep
+// pairs of size ~1): 0.2-1 us per box/triangle pair, 2-3 us for hulls and curved pairs.
 #include "kernels/narrowphase/gjk_epa.h"
 
 #include <algorithm>
@@ -325,21 +338,35 @@ V3 flat_normal(const Leaf& A, const Leaf& B, const Simplex& s, uint32_t dim) {
 /// support point w; the minimum of h is the penetration depth), each accepted only if
 /// it lowers h, so the answer only improves.
 void epa_finish(const Leaf& A, const Leaf& B, const Polytope& P, const EpaFace& F, bool converged,
-                double tol, EpaResult* r) {
+                double tol, float scale, EpaResult* r) {
   V3 n = to_f(F.n);
   n = n * (1.0f / len(n));  // unit to float rounding
   SupportPoint w = support_diff(A, B, n);
   double h = dot(to_d(n), w.w);
   if (converged) {
-    Simplex t;
-    t.n = 3;
+    // Barycentric witnesses of the origin's projection. A flat face of A - B is split
+    // into coplanar triangles with (nearly) tied distances; the projection lies in one
+    // of them, not necessarily in F: prefer a tied, parallel face that contains it.
     const D3 q = F.n * F.d;
-    for (int i = 0; i < 3; ++i) {
-      t.v[i] = P.v[F.i[i]];
-      t.v[i].w = t.v[i].w - q;  // the projection of the origin becomes the query point
+    Simplex best;
+    bool found = false;
+    for (uint32_t k = 0; k <= P.nf && !found; ++k) {
+      const EpaFace& G = k == 0 ? F : P.f[k - 1];
+      if (k > 0 && (!G.alive || !(std::fabs(G.d - F.d) <= tol) || !(dot(G.n, F.n) > 1.0 - 1e-9))) continue;
+      Simplex t;
+      t.n = 3;
+      for (int i = 0; i < 3; ++i) {
+        t.v[i] = P.v[G.i[i]];
+        t.v[i].w = t.v[i].w - q;  // the projection of the origin becomes the query point
+      }
+      closest_triangle(t);
+      if (k == 0) best = t;
+      if (t.n == 3) {
+        best = t;
+        found = true;
+      }
     }
-    closest_triangle(t);
-    witnesses(t, &r->pa, &r->pb);
+    witnesses(best, &r->pa, &r->pb);
   } else {
     constexpr int kRefineSteps = 16;
     double alpha = 1.0 / std::fmax(h, tol);
@@ -363,8 +390,23 @@ void epa_finish(const Leaf& A, const Leaf& B, const Polytope& P, const EpaFace& 
         alpha *= 0.25;
       }
     }
+    // Witnesses: at a kink of h (a support set that is an edge or a face, as a
+    // capsule's side) the support points need not face each other. GJK on the pair
+    // with B moved just clear along n (by depth + 1e-3 of the scale) finds the closest,
+    // facing points; moved back, they are the contact's witnesses.
     r->pa = w.a;
     r->pb = w.b;
+    const float clear = static_cast<float>(h + 1e-3 * scale);
+    const V3 off = n * clear;
+    Leaf moved = B;
+    moved.p = moved.p + off;
+    moved.v1 = moved.v1 + off;
+    moved.v2 = moved.v2 + off;
+    const GjkResult g = gjk_cores(A, moved, scale, scale, 64, 1e-6f);  // margin: no early out
+    if (!g.overlap && !g.separated_early) {
+      r->pa = g.pa;
+      r->pb = g.pb - off;
+    }
   }
   r->n = n;
   r->depth = static_cast<float>(h);
@@ -611,13 +653,13 @@ EpaResult epa_cores(const Leaf& A, const Leaf& B, const Simplex& start, float sc
     if (!ok) {
       // Inconsistent topology (rounding) or capacity: stop at the last good face. The
       // dead flags may be partly applied, so report F itself.
-      epa_finish(A, B, P, F, false, tol, &r);
+      epa_finish(A, B, P, F, false, tol, scale, &r);
       r.status = 2;
       r.iterations = it;
       return r;
     }
   }
-  epa_finish(A, B, P, P.f[best], converged, tol, &r);
+  epa_finish(A, B, P, P.f[best], converged, tol, scale, &r);
   r.iterations = it;
   return r;
 }
@@ -629,8 +671,9 @@ namespace {
 constexpr uint32_t kMaxFaceVerts = 32;
 constexpr uint32_t kMaxClip = 2 * kMaxFaceVerts + 8;
 
-IMPACT_INLINE bool is_polytope(LeafType t) {
-  return t == kLeafBox || t == kLeafConvex || t == kLeafTriangle;
+/// Types whose supporting feature can be a flat face (or a straight line).
+IMPACT_INLINE bool has_faces(LeafType t) {
+  return t == kLeafBox || t == kLeafConvex || t == kLeafTriangle || t == kLeafCylinder || t == kLeafCapsule;
 }
 
 struct Face {
@@ -682,6 +725,57 @@ bool supporting_face(const Leaf& l, V3 dir, Face* out) {
     out->align = dot(n, dir);
     return true;
   }
+  if (l.type == kLeafCapsule) {
+    // Lying within ~17 degrees of across dir: the line of its surface facing dir (a
+    // 2-vertex face, only ever clipped).
+    const float dl = len(dir);
+    const float dz = dot(dir, l.ax[2]);
+    if (!(dl > 0.0f) || std::fabs(dz) > 0.3f * dl) return false;
+    const V3 off = dir * (l.e[0] / dl);
+    out->n = 2;
+    out->v[0] = l.p - l.ax[2] * l.e[1] + off;
+    out->v[1] = l.p + l.ax[2] * l.e[1] + off;
+    out->normal = dir * (1.0f / dl);
+    out->d = dot(out->normal, out->v[0]);
+    out->align = 1.0f;
+    return true;
+  }
+  if (l.type == kLeafCylinder) {
+    // Cap within ~45 degrees of dir: the cap as an inscribed octagon (its vertices are
+    // on the rim). Side within ~17 degrees: the generator line, a 2-vertex "face" that
+    // is only ever clipped (never a reference). In between: no face (one point).
+    const float dx = dot(dir, l.ax[0]), dy = dot(dir, l.ax[1]), dz = dot(dir, l.ax[2]);
+    const float dl = std::sqrt(dx * dx + dy * dy + dz * dz);
+    if (!(dl > 0.0f)) return false;
+    if (std::fabs(dz) >= 0.7f * dl) {
+      const float sgn = dz >= 0.0f ? 1.0f : -1.0f;
+      const V3 c = l.p + l.ax[2] * (sgn * l.e[1]);
+      constexpr float kC = 0.70710678f;
+      const float cs[8][2] = {{1, 0}, {kC, kC}, {0, 1}, {-kC, kC}, {-1, 0}, {-kC, -kC}, {0, -1}, {kC, -kC}};
+      out->n = 8;
+      for (uint32_t i = 0; i < 8; ++i) {
+        const uint32_t j = sgn > 0.0f ? i : 7 - i;  // counter-clockwise about the outward normal
+        out->v[i] = c + l.ax[0] * (cs[j][0] * l.e[0]) + l.ax[1] * (cs[j][1] * l.e[0]);
+      }
+      out->normal = l.ax[2] * sgn;
+      out->d = dot(out->normal, c);
+      out->align = std::fabs(dz) / dl;
+      return true;
+    }
+    const float rl = std::sqrt(dx * dx + dy * dy);
+    if (rl >= 0.95f * dl) {
+      const V3 rad = (l.ax[0] * dx + l.ax[1] * dy) * (1.0f / rl);
+      const V3 c = l.p + rad * l.e[0];
+      out->n = 2;
+      out->v[0] = c - l.ax[2] * l.e[1];
+      out->v[1] = c + l.ax[2] * l.e[1];
+      out->normal = rad;
+      out->d = dot(rad, c);
+      out->align = rl / dl;
+      return true;
+    }
+    return false;
+  }
   if (l.type == kLeafConvex) {
     const HullView& h = *l.hulls;
     const float dx = dot(dir, l.ax[0]), dy = dot(dir, l.ax[1]), dz = dot(dir, l.ax[2]);
@@ -706,10 +800,49 @@ bool supporting_face(const Leaf& l, V3 dir, Face* out) {
   return false;
 }
 
+/// The chord of the ray x + t dir (unit dir) through the leaf's planes: t_in is the
+/// largest (d_f - n_f.x) / (n_f.dir) over faces facing against dir, t_out the smallest
+/// over faces facing dir (box, convex hull); other types: (-inf, +inf) (their
+/// reference plane bounds it). t_in > t_out: the ray misses the leaf.
+struct Chord {
+  float t_in = -INFINITY, t_out = INFINITY;
+};
+
+IMPACT_INLINE void chord_plane(float c, float slack, Chord* ch) {
+  // slack = d_f - n_f.x; the ray crosses the plane at t = slack / c.
+  if (c > 0.0f) ch->t_out = std::fmin(ch->t_out, slack / c);
+  else if (c < 0.0f) ch->t_in = std::fmax(ch->t_in, slack / c);
+  else if (slack < 0.0f) ch->t_in = INFINITY;  // parallel and outside
+}
+
+Chord chord(const Leaf& l, V3 x, V3 dir) {
+  Chord ch;
+  if (l.type == kLeafBox) {
+    const V3 q = x - l.p;
+    for (int i = 0; i < 3; ++i) {
+      const float c = dot(l.ax[i], dir), s = dot(l.ax[i], q);
+      chord_plane(c, l.e[i] - s, &ch);
+      chord_plane(-c, l.e[i] + s, &ch);
+    }
+  } else if (l.type == kLeafConvex) {
+    const HullView& h = *l.hulls;
+    const V3 q = x - l.p;
+    const float qx = dot(q, l.ax[0]), qy = dot(q, l.ax[1]), qz = dot(q, l.ax[2]);
+    const float dx = dot(dir, l.ax[0]), dy = dot(dir, l.ax[1]), dz = dot(dir, l.ax[2]);
+    for (uint32_t f = h.face_begin[l.hull]; f < h.face_begin[l.hull + 1]; ++f) {
+      const float c = h.fnx[f] * dx + h.fny[f] * dy + h.fnz[f] * dz;
+      chord_plane(c, h.fd[f] - (h.fnx[f] * qx + h.fny[f] * qy + h.fnz[f] * qz), &ch);
+    }
+  }
+  return ch;
+}
+
 /// Clips the incident face against the reference face's side planes; writes the
-/// points that lie below the reference plane (penetration along n > 0).
-uint32_t clip_faces(const Face& ref, const Face& inc, V3 n, bool ref_is_a, float depth, V3* pts,
-                    float* pd) {
+/// points that lie below the reference plane (penetration along n > 0). A point's
+/// penetration is how far it travels along n (or -n) until it leaves the reference
+/// shape, so that the point +- n pd/2 lies on both surfaces.
+uint32_t clip_faces(const Face& ref, const Face& inc, const Leaf& ref_leaf, V3 n, bool ref_is_a, float depth,
+                    V3* pts, float* pd) {
   V3 buf0[kMaxClip], buf1[kMaxClip];
   uint32_t cnt = inc.n;
   for (uint32_t i = 0; i < cnt; ++i) buf0[i] = inc.v[i];
@@ -718,14 +851,26 @@ uint32_t clip_faces(const Face& ref, const Face& inc, V3 n, bool ref_is_a, float
   V3 centroid{0, 0, 0};
   for (uint32_t i = 0; i < ref.n; ++i) centroid = centroid + ref.v[i];
   centroid = centroid * (1.0f / static_cast<float>(ref.n));
+  const bool segment = cnt == 2;  // a cylinder's side line: clipped parametrically
+  float t0 = 0.0f, t1 = 1.0f;
   for (uint32_t e = 0; e < ref.n && cnt > 0; ++e) {
     const V3 a = ref.v[e], b = ref.v[(e + 1) % ref.n];
-    V3 sn = cross(b - a, ref.normal);
+    // Side planes contain n (not the face normal): a point kept, moved along n by its
+    // penetration, lands inside the reference polygon.
+    V3 sn = cross(b - a, n);
     if (dot(sn, centroid - a) > 0.0f) sn = -sn;  // outward whatever the winding
     const float snl = len(sn);
     if (!(snl > 0.0f)) continue;                 // degenerate edge
     sn = sn * (1.0f / snl);
     const float sd = dot(sn, a);
+    if (segment) {
+      const float dp = dot(sn, in[0]) - sd, dq = dot(sn, in[1]) - sd;
+      if (dp > 0.0f && dq > 0.0f) cnt = 0;
+      else if (dp > 0.0f) t0 = std::fmax(t0, dp / (dp - dq));
+      else if (dq > 0.0f) t1 = std::fmin(t1, dp / (dp - dq));
+      if (t0 > t1) cnt = 0;
+      continue;
+    }
     uint32_t m = 0;
     for (uint32_t i = 0; i < cnt; ++i) {
       const V3 p = in[i], q = in[(i + 1) % cnt];
@@ -742,12 +887,24 @@ uint32_t clip_faces(const Face& ref, const Face& inc, V3 n, bool ref_is_a, float
     in = out;
     out = tmp;
   }
+  if (segment && cnt == 2) {
+    const V3 p = in[0], q = in[1];
+    in[0] = p + (q - p) * t0;
+    in[1] = p + (q - p) * t1;
+    if (!(t1 - t0 > 1e-6f)) cnt = 1;
+  }
   const float cosn = ref_is_a ? dot(ref.normal, n) : -dot(ref.normal, n);
   uint32_t k = 0;
   for (uint32_t i = 0; i < cnt; ++i) {
     const float s = ref.d - dot(ref.normal, in[i]);  // below the reference plane
     if (!(s > 0.0f)) continue;
     float pdepth = s / cosn;
+    const Chord ch = chord(ref_leaf, in[i], ref_is_a ? n : -n);
+    // The ray along n from the point must cross the reference shape (a point beside
+    // it, outside a side face, is no contact).
+    if (ch.t_in > ch.t_out + 1e-6f * std::fabs(ch.t_out)) continue;
+    pdepth = std::fmin(pdepth, ch.t_out);
+    if (!(pdepth > 0.0f)) continue;
     pdepth = std::fmin(pdepth, depth);
     const V3 mid = in[i] + n * (ref_is_a ? 0.5f * pdepth : -0.5f * pdepth);
     pts[k] = mid;
@@ -848,18 +1005,21 @@ void collide_convex_lane(const Leaf& A, const Leaf& B, const NarrowConfig& cfg, 
   if (!(depth > 0.0f)) return;
   out->n = n;
   out->depth = depth;
-  // Polytope pairs: clipped face manifold.
-  if (is_polytope(A.type) && is_polytope(B.type)) {
+  // Pairs of faceted sides (polytopes, cylinder caps / side lines): clipped face
+  // manifold. The reference face is the better aligned of the two faces with >= 3
+  // vertices, and must be within ~26 degrees of n (else edge-edge: one point).
+  if (has_faces(A.type) && has_faces(B.type)) {
     Face fa, fb;
     if (supporting_face(A, n, &fa) && supporting_face(B, -n, &fb)) {
       constexpr float kMinAlign = 0.9f;
-      const bool ref_is_a = fa.align >= fb.align;
-      const Face& ref = ref_is_a ? fa : fb;
-      const Face& inc = ref_is_a ? fb : fa;
-      if (ref.align >= kMinAlign) {
+      const bool ca = fa.n >= 3 && fa.align >= kMinAlign, cb = fb.n >= 3 && fb.align >= kMinAlign;
+      if (ca || cb) {
+        const bool ref_is_a = ca && (!cb || fa.align >= fb.align);
+        const Face& ref = ref_is_a ? fa : fb;
+        const Face& inc = ref_is_a ? fb : fa;
         V3 pts[kMaxClip];
         float pd[kMaxClip];
-        uint32_t m = clip_faces(ref, inc, n, ref_is_a, depth, pts, pd);
+        uint32_t m = clip_faces(ref, inc, ref_is_a ? A : B, n, ref_is_a, depth, pts, pd);
         if (m > 0) {
           m = reduce_manifold(pts, pd, m, n);
           out->count = m;

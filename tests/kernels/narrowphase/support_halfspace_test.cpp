@@ -1,0 +1,366 @@
+// collide_support_halfspace (kernels/narrowphase/support_halfspace.cpp) against closed
+// forms in double: the deepest point of every convex leaf type below a plane, the
+// normal, the manifold points (each one a point of A below the plane, midway to the
+// plane), and the manifold sizes of resting boxes, cylinders and capsules.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+#include <vector>
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+
+#include "host/narrowphase/convex_hull.h"
+#include "host/narrowphase/shape_store.h"
+#include "kernels/narrowphase/pair_kernels.h"
+#include "support/test_support.h"
+
+namespace impact::kernels {
+namespace {
+
+using Vec3d = Eigen::Vector3d;
+using Mat3d = Eigen::Matrix3d;
+
+/// Type names without pair_kernels.cpp (which also references the specialised kernels).
+const char* tname(LeafType t) {
+  static const char* const names[] = {"sphere", "capsule", "box", "convex", "cylinder", "ellipsoid", "triangle", "half-space"};
+  return t < kLeafTypeCount ? names[t] : "unknown";
+}
+
+struct Leaf1 {
+  LeafType type = kLeafSphere;
+  Vec3d p = Vec3d::Zero();
+  Mat3d R = Mat3d::Identity();
+  Vec3d e = Vec3d::Zero();
+  Vec3d v1 = Vec3d::Zero(), v2 = Vec3d::Zero();
+  uint32_t hull = 0;
+};
+
+struct Arrays {
+  float p[3], r[9], e[3], w[6];
+  uint32_t ref;
+  LeafSoA soa() {
+    LeafSoA s{};
+    for (int i = 0; i < 3; ++i) s.p[i] = &p[i];
+    for (int i = 0; i < 9; ++i) s.r[i] = &r[i];
+    for (int i = 0; i < 3; ++i) s.e[i] = &e[i];
+    for (int i = 0; i < 6; ++i) s.w[i] = &w[i];
+    s.ref = &ref;
+    return s;
+  }
+};
+
+Arrays arrays_of(const Leaf1& l) {
+  Arrays a{};
+  for (int i = 0; i < 3; ++i) a.p[i] = static_cast<float>(l.p[i]);
+  for (int i = 0; i < 9; ++i) a.r[i] = static_cast<float>(l.R(i / 3, i % 3));
+  for (int i = 0; i < 3; ++i) a.e[i] = static_cast<float>(l.e[i]);
+  for (int i = 0; i < 3; ++i) a.w[i] = static_cast<float>(l.v1[i]);
+  for (int i = 0; i < 3; ++i) a.w[3 + i] = static_cast<float>(l.v2[i]);
+  a.ref = l.hull;
+  return a;
+}
+
+/// The leaf as the kernel sees it (float).
+Leaf1 rounded(Leaf1 l) {
+  l.p = l.p.cast<float>().cast<double>();
+  l.R = l.R.cast<float>().cast<double>();
+  l.e = l.e.cast<float>().cast<double>();
+  l.v1 = l.v1.cast<float>().cast<double>();
+  l.v2 = l.v2.cast<float>().cast<double>();
+  return l;
+}
+
+struct Plane {
+  Vec3d p, n;  // solid: n.(x - p) <= 0
+};
+
+struct Result {
+  uint32_t count = 0;
+  Vec3d n = Vec3d::Zero();
+  double depth = 0;
+  Vec3d pt[4];
+  double pd[4] = {0, 0, 0, 0};
+};
+
+HullStore& store() {
+  static HullStore s;
+  return s;
+}
+std::vector<HullData>& hull_data() {
+  static std::vector<HullData> d;
+  return d;
+}
+
+Result run(const Leaf1& l, const Plane& pl) {
+  Arrays a = arrays_of(l);
+  Arrays b{};
+  for (int i = 0; i < 3; ++i) {
+    b.p[i] = static_cast<float>(pl.p[i]);
+    b.e[i] = static_cast<float>(pl.n[i]);
+  }
+  uint8_t count = 0xff;
+  float n[3], depth, pt[4][3], pd[4];
+  ManifoldSoA o{};
+  o.count = &count;
+  for (int i = 0; i < 3; ++i) o.n[i] = &n[i];
+  o.depth = &depth;
+  for (int j = 0; j < 4; ++j) {
+    for (int i = 0; i < 3; ++i) o.point[j][i] = &pt[j][i];
+    o.pdepth[j] = &pd[j];
+  }
+  NarrowConfig cfg;
+  cfg.hulls = store().view();
+  collide_support_halfspace(a.soa(), b.soa(), o, Range{0, 1}, cfg, l.type);
+  Result r;
+  r.count = count;
+  if (count == 0) return r;
+  r.n = Vec3d(n[0], n[1], n[2]);
+  r.depth = depth;
+  for (uint32_t j = 0; j < count; ++j) {
+    r.pt[j] = Vec3d(pt[j][0], pt[j][1], pt[j][2]);
+    r.pd[j] = pd[j];
+  }
+  return r;
+}
+
+/// Signed distance of A's lowest point to the plane (closed forms, double).
+double lowest(const Leaf1& l, const Plane& pl) {
+  const Vec3d& n = pl.n;
+  auto sd = [&](const Vec3d& x) { return n.dot(x - pl.p); };
+  switch (l.type) {
+    case kLeafSphere: return sd(l.p) - l.e[0];
+    case kLeafCapsule: {
+      const Vec3d u = l.R.col(2);
+      return std::min(sd(l.p + u * l.e[1]), sd(l.p - u * l.e[1])) - l.e[0];
+    }
+    case kLeafBox: {
+      double m = INFINITY;
+      for (int i = 0; i < 8; ++i)
+        m = std::min(m, sd(l.p + l.R * Vec3d((i & 1) ? l.e[0] : -l.e[0], (i & 2) ? l.e[1] : -l.e[1],
+                                              (i & 4) ? l.e[2] : -l.e[2])));
+      return m;
+    }
+    case kLeafConvex: {
+      double m = INFINITY;
+      for (const auto& v : hull_data()[l.hull].vertices) m = std::min(m, sd(l.p + l.R * v.cast<double>()));
+      return m;
+    }
+    case kLeafCylinder: {
+      const Vec3d u = l.R.col(2);
+      // |n x u| = sin of the tilt (well conditioned, unlike sqrt(1 - (n.u)^2)).
+      const double radial = l.e[0] * n.cross(u).norm();
+      return std::min(sd(l.p + u * l.e[1]), sd(l.p - u * l.e[1])) - radial;
+    }
+    case kLeafEllipsoid: {
+      const Vec3d nl = l.R.transpose() * n;
+      return sd(l.p) - std::sqrt((nl.cwiseProduct(l.e)).squaredNorm());
+    }
+    case kLeafTriangle: return std::min({sd(l.p), sd(l.v1), sd(l.v2)});
+    default: return 0;
+  }
+}
+
+/// Is x in the leaf (within tol)?
+bool contains(const Leaf1& l, const Vec3d& x, double tol) {
+  const Vec3d q = l.R.transpose() * (x - l.p);
+  switch (l.type) {
+    case kLeafSphere: return (x - l.p).norm() <= l.e[0] + tol;
+    case kLeafCapsule: {
+      const double z = std::clamp(q.z(), -l.e[1], l.e[1]);
+      return (q - Vec3d(0, 0, z)).norm() <= l.e[0] + tol;
+    }
+    case kLeafBox: return (q.cwiseAbs() - l.e).maxCoeff() <= tol;
+    case kLeafConvex: {
+      const HullData& h = hull_data()[l.hull];
+      for (size_t f = 0; f < h.faces.size(); ++f)
+        if (h.face_normals[f].cast<double>().dot(q) > h.face_offsets[f] + tol) return false;
+      return true;
+    }
+    case kLeafCylinder: return std::hypot(q.x(), q.y()) <= l.e[0] + tol && std::fabs(q.z()) <= l.e[1] + tol;
+    case kLeafEllipsoid: return q.cwiseQuotient(l.e).norm() <= 1 + tol / l.e.minCoeff();
+    case kLeafTriangle: {
+      const Vec3d nn = (l.v1 - l.p).cross(l.v2 - l.p).normalized();
+      if (std::fabs(nn.dot(x - l.p)) > tol) return false;
+      const Vec3d vs[3] = {l.p, l.v1, l.v2};
+      for (int i = 0; i < 3; ++i)
+        if ((vs[(i + 1) % 3] - vs[i]).normalized().cross(x - vs[i]).dot(nn) < -tol) return false;
+      return true;
+    }
+    default: return false;
+  }
+}
+
+Mat3d random_rotation(std::mt19937& rng) {
+  std::normal_distribution<double> g;
+  Eigen::Quaterniond q(g(rng), g(rng), g(rng), g(rng));
+  q.normalize();
+  return q.toRotationMatrix();
+}
+
+uint32_t test_hull() {
+  static const uint32_t id = [] {
+    std::mt19937 g(5);
+    std::normal_distribution<float> n;
+    std::vector<Eigen::Vector3f> pts;
+    for (int i = 0; i < 30; ++i) pts.emplace_back(n(g), 0.5f * n(g), 0.8f * n(g));
+    HullData h;
+    EXPECT_TRUE(test::IsOk(build_convex_hull(pts, &h)));
+    hull_data().push_back(h);
+    return store().add(h);
+  }();
+  return id;
+}
+
+Leaf1 random_leaf(LeafType t, std::mt19937& rng, const Vec3d& c, double size) {
+  std::uniform_real_distribution<double> u(0.2, 1.0), v(-1, 1);
+  Leaf1 l;
+  l.type = t;
+  l.p = c;
+  l.R = random_rotation(rng);
+  l.e = Vec3d(u(rng), u(rng), u(rng)) * size;
+  if (t == kLeafConvex) l.hull = test_hull();
+  if (t == kLeafTriangle) {
+    l.p = c + Vec3d(v(rng), v(rng), v(rng)) * size;
+    l.v1 = c + Vec3d(v(rng), v(rng), v(rng)) * size;
+    l.v2 = c + Vec3d(v(rng), v(rng), v(rng)) * size;
+  }
+  return rounded(l);
+}
+
+class SupportHalfspace : public ::testing::TestWithParam<std::tuple<double, double>> {};
+
+TEST_P(SupportHalfspace, DeepestPointAndManifoldAgreeWithClosedForms) {
+  const auto [size, offset] = GetParam();
+  std::mt19937 rng(31);
+  std::uniform_real_distribution<double> v(-1, 1);
+  const LeafType types[] = {kLeafSphere, kLeafCapsule, kLeafBox, kLeafConvex, kLeafCylinder, kLeafEllipsoid, kLeafTriangle};
+  const int trials = static_cast<int>(test::scaled(300));
+  // Float rounding of the inputs: the size's and the offset's.
+  const double tol = 2e-6 * size + 4e-7 * offset;
+  for (LeafType t : types) {
+    if (t == kLeafConvex && size != 1.0) continue;  // the test hull has size ~1
+    int hits = 0;
+    for (int k = 0; k < trials; ++k) {
+      const Vec3d c = Vec3d(1, -2, 0.5) * offset + Vec3d(v(rng), v(rng), v(rng)) * size;
+      const Leaf1 l = random_leaf(t, rng, c, size);
+      Plane pl;
+      pl.n = Vec3d(v(rng), v(rng), v(rng)).normalized();
+      if (k % 5 == 0) pl.n = l.R.col(k % 3);  // axis-aligned with the shape: flat contacts
+      pl.n = pl.n.cast<float>().cast<double>();
+      pl.p = (Vec3d(1, -2, 0.5) * offset + Vec3d(v(rng), v(rng), v(rng)) * size * 0.5).cast<float>().cast<double>();
+      const double depth = -lowest(l, pl);
+      const Result r = run(l, pl);
+      if (std::fabs(depth) < tol * 4) continue;
+      ASSERT_EQ(r.count > 0, depth > 0) << tname(t) << " " << k << " depth " << depth;
+      if (depth <= 0) continue;
+      ++hits;
+      ASSERT_LE(r.count, 4u);
+      EXPECT_NEAR(r.depth, depth, tol * 4) << tname(t) << " " << k;
+      EXPECT_NEAR((r.n + pl.n).norm(), 0.0, 1e-6);
+      double maxpd = 0;
+      for (uint32_t j = 0; j < r.count; ++j) {
+        EXPECT_GT(r.pd[j], 0.0);
+        EXPECT_LE(r.pd[j], r.depth + tol);
+        maxpd = std::max(maxpd, r.pd[j]);
+        // A's point x = pt - nh pd/2 lies in A, pd below the plane.
+        const Vec3d x = r.pt[j] - pl.n * (0.5 * r.pd[j]);
+        EXPECT_NEAR(pl.n.dot(x - pl.p), -r.pd[j], tol * 4) << tname(t) << " " << k;
+        EXPECT_TRUE(contains(l, x, tol * 4)) << tname(t) << " " << k;
+      }
+      EXPECT_NEAR(maxpd, r.depth, tol * 4);
+      // Distinct points.
+      for (uint32_t i = 0; i < r.count; ++i)
+        for (uint32_t j = i + 1; j < r.count; ++j) EXPECT_GT((r.pt[i] - r.pt[j]).norm(), 1e-6 * size);
+    }
+    EXPECT_GT(hits, trials / 10) << tname(t);
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(Scales, SupportHalfspace,
+                         ::testing::Values(std::make_tuple(1.0, 0.0), std::make_tuple(1e-4, 0.0),
+                                           std::make_tuple(1e4, 0.0), std::make_tuple(1.0, 1e5)));
+
+TEST(SupportHalfspaceManifold, RestingShapesGiveTheirContactPatch) {
+  const Plane ground{Vec3d::Zero(), Vec3d::UnitZ()};
+  const Mat3d I = Mat3d::Identity();
+  // A box resting flat, 0.01 deep: 4 corners.
+  Leaf1 b;
+  b.type = kLeafBox;
+  b.p = Vec3d(3, 4, 0.49);
+  b.R = Eigen::AngleAxisd(0.4, Vec3d::UnitZ()).toRotationMatrix();
+  b.e = Vec3d(1, 0.7, 0.5);
+  Result r = run(rounded(b), ground);
+  ASSERT_EQ(r.count, 4u);
+  for (uint32_t j = 0; j < 4; ++j) {
+    EXPECT_NEAR(r.pd[j], 0.01, 1e-6);
+    EXPECT_NEAR(r.pt[j].z(), -0.005, 1e-6);
+  }
+  // A box on an edge: 2 points.
+  b.p = Vec3d(0, 0, 0.5 * std::sqrt(2.0) - 0.01);
+  b.R = Eigen::AngleAxisd(M_PI / 4, Vec3d::UnitX()).toRotationMatrix();
+  b.e = Vec3d(1, 0.5, 0.5);
+  r = run(rounded(b), ground);
+  ASSERT_EQ(r.count, 2u);
+  EXPECT_NEAR(std::fabs(r.pt[0].x() - r.pt[1].x()), 2.0, 1e-5);
+  // An upright cylinder: 4 rim points; lying on its side: 2; tilted on its rim: 1.
+  Leaf1 c;
+  c.type = kLeafCylinder;
+  c.p = Vec3d(0, 0, 0.99);
+  c.R = I;
+  c.e = Vec3d(0.5, 1.0, 0);
+  r = run(rounded(c), ground);
+  ASSERT_EQ(r.count, 4u);
+  for (uint32_t j = 0; j < 4; ++j) EXPECT_NEAR(Vec3d(r.pt[j].x(), r.pt[j].y(), 0).norm(), 0.5, 1e-6);
+  c.p = Vec3d(0, 0, 0.49);
+  c.R = Eigen::AngleAxisd(M_PI / 2, Vec3d::UnitY()).toRotationMatrix();
+  r = run(rounded(c), ground);
+  ASSERT_EQ(r.count, 2u);
+  EXPECT_NEAR(std::fabs(r.pt[0].x() - r.pt[1].x()), 2.0, 1e-5);
+  c.R = Eigen::AngleAxisd(0.3, Vec3d::UnitY()).toRotationMatrix();
+  c.p = Vec3d(0, 0, std::cos(0.3) * 1.0 + std::sin(0.3) * 0.5 - 0.01);
+  r = run(rounded(c), ground);
+  ASSERT_EQ(r.count, 1u);
+  EXPECT_NEAR(r.depth, 0.01, 1e-6);
+  // A capsule lying flat: 2 points; a sphere and an ellipsoid: 1.
+  Leaf1 k;
+  k.type = kLeafCapsule;
+  k.p = Vec3d(0, 0, 0.29);
+  k.R = Eigen::AngleAxisd(M_PI / 2, Vec3d::UnitX()).toRotationMatrix();
+  k.e = Vec3d(0.3, 1.0, 0);
+  r = run(rounded(k), ground);
+  ASSERT_EQ(r.count, 2u);
+  EXPECT_NEAR(r.pd[0], 0.01, 1e-6);
+  Leaf1 e;
+  e.type = kLeafEllipsoid;
+  e.p = Vec3d(0, 0, 0.19);
+  e.e = Vec3d(1, 2, 0.2);
+  r = run(rounded(e), ground);
+  ASSERT_EQ(r.count, 1u);
+  EXPECT_NEAR(r.depth, 0.01, 1e-6);
+  // Separated, and a box exactly touching: nothing.
+  e.p = Vec3d(0, 0, 0.2001);
+  EXPECT_EQ(run(rounded(e), ground).count, 0u);
+  e.p = Vec3d(0, 0, 0.3);
+  EXPECT_EQ(run(rounded(e), ground).count, 0u);
+  b.p = Vec3d(0.25, 0, 0.5);
+  b.R = I;
+  EXPECT_EQ(run(rounded(b), ground).count, 0u);
+}
+
+/// A deeply sunk hull: the 4 points spread out (the deepest first, then the farthest).
+TEST(SupportHalfspaceManifold, SunkHullKeepsDeepestAndSpreadPoints) {
+  Leaf1 h;
+  h.type = kLeafConvex;
+  h.hull = test_hull();
+  h.p = Vec3d(0, 0, -10);  // entirely below
+  const Result r = run(rounded(h), Plane{Vec3d::Zero(), Vec3d::UnitZ()});
+  ASSERT_EQ(r.count, 4u);
+  for (uint32_t j = 1; j < 4; ++j) EXPECT_LE(r.pd[j], r.pd[0]);
+  EXPECT_NEAR(r.pd[0], r.depth, 1e-6);
+  EXPECT_GT((r.pt[1] - r.pt[0]).norm(), 1.0);
+}
+
+}  // namespace
+}  // namespace impact::kernels
