@@ -383,13 +383,26 @@ void NarrowPhase::Impl::fill(SideArrays& s, size_t k, uint32_t obj, uint32_t chi
     default:
       break;
   }
+  // Only the fields the leaf type uses (leaf.h's table): a sphere lane writes 4 of the
+  // 22 arrays. Unused fields keep stale values that no kernel reads.
+  const ShapeType t = r->type;
   for (int i = 0; i < 3; ++i) s.f[i][k] = p[i];
-  for (int i = 0; i < 3; ++i) {
-    for (int j = 0; j < 3; ++j) s.f[3 + 3 * i + j][k] = R(i, j);
+  if (t != ShapeType::kSphere && t != ShapeType::kMesh && t != ShapeType::kHalfSpace) {
+    for (int i = 0; i < 3; ++i) {
+      for (int j = 0; j < 3; ++j) s.f[3 + 3 * i + j][k] = R(i, j);
+    }
   }
-  for (int i = 0; i < 3; ++i) s.f[12 + i][k] = e[i];
-  for (int i = 0; i < 6; ++i) s.f[15 + i][k] = w[i];
-  s.ref[k] = ref;
+  if (t == ShapeType::kMesh) {
+    for (int i = 0; i < 6; ++i) s.f[15 + i][k] = w[i];
+  } else if (t == ShapeType::kConvex) {
+    s.ref[k] = ref;
+  } else {
+    s.f[12][k] = e[0];
+    if (t != ShapeType::kSphere) {
+      s.f[13][k] = e[1];
+      s.f[14][k] = e[2];
+    }
+  }
 }
 
 Status NarrowPhase::Impl::collide(const ShapeSet& shapes, std::span<const ShapeId> shape_of_in,
@@ -410,8 +423,10 @@ Status NarrowPhase::Impl::collide(const ShapeSet& shapes, std::span<const ShapeI
       return Status(StatusCode::kInvalidArgument,
                     "object " + std::to_string(i) + ": unknown shape id " + std::to_string(shape_of_in[i].index));
     }
-    const std::string who = "object " + std::to_string(i);
-    if (Status st = host::check_pose(poses[i], who.c_str()); !st.ok()) return st;
+    if (!host::pose_ok(poses[i])) {
+      const std::string who = "object " + std::to_string(i);
+      return host::check_pose(poses[i], who.c_str());
+    }
   }
   for (size_t k = 0; k < pairs_in.size(); ++k) {
     const ShapePair& pr = pairs_in[k];
@@ -437,9 +452,8 @@ Status NarrowPhase::Impl::collide(const ShapeSet& shapes, std::span<const ShapeI
   posed.resize(n);
   exec.for_each_chunk(n, kExpandGrain, [&](uint32_t b, uint32_t e, uint32_t) {
     for (uint32_t i = b; i < e; ++i) {
-      const Pose p = host::normalized(poses[i]);
-      posed[i].R = p.orientation.toRotationMatrix();
-      posed[i].p = p.position;
+      posed[i].R = poses[i].orientation.normalized().toRotationMatrix();
+      posed[i].p = poses[i].position;
     }
   });
 

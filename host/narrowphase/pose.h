@@ -13,6 +13,13 @@
 
 namespace impact::host {
 
+/// The check of check_pose without building a message (the per-object fast path).
+inline bool pose_ok(const Pose& p) {
+  if (!p.position.allFinite() || !p.orientation.coeffs().allFinite()) return false;
+  const double n2 = p.orientation.coeffs().cast<double>().squaredNorm();
+  return std::fabs(n2 - 1.0) <= 2e-3;
+}
+
 /// Finite position, finite quaternion of unit length within 1e-3.
 inline Status check_pose(const Pose& p, const char* who) {
   if (!p.position.allFinite()) {

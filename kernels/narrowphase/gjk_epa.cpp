@@ -16,8 +16,11 @@
 //     the inflated shapes. The EPA depth reported is the support of A - B along the
 //     final normal (>= the polytope's face distance, equal within the tolerance when
 //     converged), so moving B by n * depth always separates the pair. EPA stopped by
-//     its cap (curved, deep pairs) is followed by up to 16 projected-gradient steps on
-//     that support function and a GJK on the pair moved just clear for the witnesses.
+//     its cap (curved, deep, near-concentric pairs: the polytope is refined evenly)
+//     restarts from the face normal of least support value and minimises that support
+//     function over the unit sphere (up to 40 descent steps with a quadratic-model step
+//     and a two-subgradient bundle across kinks such as a cylinder's side), then runs a
+//     GJK on the pair moved just clear for the witnesses. Converged lanes skip this.
 //     A flat core difference (crossing segments, coincident centres, coplanar
 //     triangles) has core depth 0 along a deterministic normal (towards B's centre,
 //     else +y).
@@ -44,7 +47,8 @@
 // no NaN for finite input. No allocation (the EPA polytope lives on the stack).
 // Cost: GJK ~5-15 iterations of 2 supports; EPA ~5-40 iterations (curved shapes take
 // the most); hull supports are O(vertices). Measured (one core, -O2, random deep
-// pairs of size ~1): 0.2-1 us per box/triangle pair, 2-3 us for hulls and curved pairs.
+// pairs of size ~1): 0.2-1 us per box/triangle pair, 2-3 us for hulls and curved pairs;
+// a lane at the EPA cap ~25-35 us (the cap refinement ~6-10 us of it).
 #include "kernels/narrowphase/gjk_epa.h"
 
 #include <algorithm>
@@ -333,8 +337,8 @@ V3 flat_normal(const Leaf& A, const Leaf& B, const Simplex& s, uint32_t dim) {
 /// The depth reported is the support of A - B along the normal, n.w >= F.d: moving B by
 /// n * depth always separates (within float rounding), converged or not; converged,
 /// the two differ by at most the tolerance.
-/// Not converged (cap or inconsistency): a few projected-gradient steps on the
-/// support function h(n) = max_w n.w over the unit sphere (its gradient is the
+/// Not converged (cap or inconsistency): the best face normal by h, then descent steps
+/// on the support function h(n) = max_w n.w over the unit sphere (its gradient is the
 /// support point w; the minimum of h is the penetration depth), each accepted only if
 /// it lowers h, so the answer only improves.
 void epa_finish(const Leaf& A, const Leaf& B, const Polytope& P, const EpaFace& F, bool converged,
@@ -368,26 +372,71 @@ void epa_finish(const Leaf& A, const Leaf& B, const Polytope& P, const EpaFace& 
     }
     witnesses(best, &r->pa, &r->pb);
   } else {
-    constexpr int kRefineSteps = 16;
-    double alpha = 1.0 / std::fmax(h, tol);
+    // Start from the face normal with the lowest support value h (an upper bound),
+    // not the lowest face distance (a lower bound): on a nearly round difference
+    // (near-concentric curved shapes) the polytope at the cap is refined evenly and
+    // its closest face may lie in the wrong basin of h. Lowest index wins ties.
+    for (uint32_t k = 0; k < P.nf; ++k) {
+      const EpaFace& G = P.f[k];
+      if (!G.alive) continue;
+      V3 m = to_f(G.n);
+      m = m * (1.0f / len(m));
+      const SupportPoint wm = support_diff(A, B, m);
+      const double hm = dot(to_d(m), wm.w);
+      if (hm < h) {
+        n = m;
+        w = wm;
+        h = hm;
+      }
+    }
+    // Descent on the sphere of directions. The (sub)gradient of h at n is the support
+    // point w; its tangential part g is the descent direction where h is smooth. At a
+    // kink (a support set that is a segment or a face: a cylinder's side, a capsule)
+    // the step overshoots and fails; the failed trial's support gives a second
+    // subgradient, and the next step follows the least-norm point of the segment
+    // between them (a two-element bundle), which is the descent direction along the
+    // kink. Each step is accepted only if it lowers h, so the answer only improves.
+    // Step control: a step is an angle along the great circle; each trial fits the
+    // quadratic h0 - |g| s + c s^2 / 2 through its result and the next step is that
+    // model's minimum (clamped to [s / 8, 4 s]); nearly concentric shapes make h very
+    // flat (c ~ the centres' offset), so a fixed or slowly growing step would stall
+    // in float rounding noise far from the minimum.
+    constexpr int kRefineSteps = 40;
+    constexpr double kMaxStep = 0.5;  // radians
+    double step = 0.25;
+    D3 dir{0, 0, 0};
+    bool fresh = true;  // dir is the plain gradient at n
     for (int k = 0; k < kRefineSteps; ++k) {
       const D3 nd = to_d(n);
-      const D3 g = w.w - nd * dot(w.w, nd);  // tangential part of the gradient
-      const double gl = std::sqrt(len2(g));
-      if (!(gl > tol)) break;
-      D3 m = nd - g * alpha;
+      if (fresh) dir = w.w - nd * dot(w.w, nd);
+      const double dl = std::sqrt(len2(dir));
+      if (!(dl > 1e-3 * tol) || !(step > 1e-7)) break;
+      D3 m = nd - dir * (std::tan(step) / dl);
       m = m * (1.0 / std::sqrt(len2(m)));
       V3 mf = to_f(m);
       mf = mf * (1.0f / len(mf));
       const SupportPoint wm = support_diff(A, B, mf);
       const double hm = dot(to_d(mf), wm.w);
+      const double curv = 2.0 * (hm - h + dl * step) / (step * step);
+      const bool model = curv > 0.0;
+      const double newton = model ? std::fmin(4.0 * step, std::fmax(0.125 * step, dl / curv)) : 0.0;
       if (hm < h) {
         n = mf;
         w = wm;
         h = hm;
-        alpha *= 1.5;
+        step = std::fmin(kMaxStep, model ? newton : 2.0 * step);
+        fresh = true;
       } else {
-        alpha *= 0.25;
+        // Second subgradient: the trial's support, tangential at n.
+        const D3 g2 = wm.w - nd * dot(wm.w, nd);
+        const D3 e = g2 - dir;
+        const double e2 = len2(e);
+        double t = e2 > 0.0 ? -dot(dir, e) / e2 : 0.0;
+        t = std::fmin(1.0, std::fmax(0.0, t));
+        const D3 bundle = dir + e * t;
+        if (len2(bundle) < 0.25 * len2(dir)) dir = bundle;  // a kink: follow it
+        step = model ? std::fmin(0.5 * step, newton) : 0.25 * step;
+        fresh = false;
       }
     }
     // Witnesses: at a kink of h (a support set that is an edge or a face, as a

@@ -629,6 +629,46 @@ TEST(GjkEpa, RoundEllipsoidIsASphere) {
   }
 }
 
+/// Near-concentric round ellipsoids: the core difference is a ball of radius R1 + R2
+/// about a point close to the origin, so every face of EPA's polytope is about as close
+/// and EPA stops at its cap far from the answer (before the refinement on the sphere of
+/// directions, its closest face could lie in the wrong basin: errors of ~|offset|).
+TEST(GjkEpa, NearConcentricRoundEllipsoids) {
+  std::mt19937 rng(21);
+  std::uniform_real_distribution<double> u(-1, 1), mag(1e-3, 0.05);
+  for (int t = 0; t < 200; ++t) {
+    Vec3d dir(u(rng), u(rng), u(rng));
+    if (!(dir.norm() > 1e-3)) continue;
+    const Vec3d c = dir.normalized() * mag(rng);
+    const Shape a = rounded(ellipsoid(Vec3d(u(rng), u(rng), u(rng)) * 0.5, random_rotation(rng), {0.45, 0.45, 0.45}));
+    const Shape b = rounded(ellipsoid(a.p + c, random_rotation(rng), {0.9, 0.9, 0.9}));
+    const double depth = 1.35 - (b.p - a.p).norm();
+    const Result r = run_pair(a, b);
+    ASSERT_GE(r.count, 1u) << t;
+    EXPECT_NEAR(r.depth, depth, 5e-5) << t;
+  }
+}
+
+/// A sphere deep inside a cylinder, near its centre, where the side and the caps are
+/// about equally close: depth = r + min(radius - radial offset, half-length - |axial
+/// offset|). The support function of the cylinder has a kink across the side (a
+/// segment support set), which plain gradient steps cannot follow.
+TEST(GjkEpa, SphereDeepInCylinder) {
+  std::mt19937 rng(22);
+  std::uniform_real_distribution<double> u(-1, 1), size(0.25, 0.3), rs(0.1, 0.3);
+  for (int t = 0; t < 300; ++t) {
+    const Mat3d R = random_rotation(rng);
+    const double rad = size(rng), hl = size(rng), r0 = rs(rng);
+    const Shape b = rounded(cylinder(Vec3d(u(rng), u(rng), u(rng)), R, rad, hl));
+    const Shape a = rounded(sphere(b.p + Vec3d(u(rng), u(rng), u(rng)) * 0.01, r0));
+    const Vec3d q = b.R.transpose() * (a.p - b.p);
+    const double depth = r0 + std::min(rad - std::hypot(q.x(), q.y()), hl - std::fabs(q.z()));
+    const Result r = run_pair(a, b);
+    ASSERT_GE(r.count, 1u) << t;
+    EXPECT_NEAR(r.depth, depth, 2e-5) << t;
+  }
+}
+
 /// Type names without pair_kernels.cpp (which also references the specialised kernels).
 const char* tname(LeafType t) {
   static const char* const names[] = {"sphere", "capsule", "box", "convex", "cylinder", "ellipsoid", "triangle", "half-space"};
