@@ -45,6 +45,7 @@ struct Table {
     k[kLeafBox][kLeafBox] = &collide_box_box;
     k[kLeafSphere][kLeafTriangle] = &collide_sphere_triangle;
     k[kLeafCapsule][kLeafTriangle] = &collide_capsule_triangle;
+    k[kLeafBox][kLeafTriangle] = &collide_box_triangle;
     k[kLeafSphere][kLeafHalfSpace] = &collide_sphere_halfspace;
     k[kLeafCapsule][kLeafHalfSpace] = &collide_capsule_halfspace;
     k[kLeafBox][kLeafHalfSpace] = &collide_box_halfspace;

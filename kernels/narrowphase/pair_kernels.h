@@ -22,6 +22,7 @@ void collide_capsule_box(const LeafSoA&, const LeafSoA&, const ManifoldSoA&, Ran
 void collide_box_box(const LeafSoA&, const LeafSoA&, const ManifoldSoA&, Range, const NarrowConfig&);
 void collide_sphere_triangle(const LeafSoA&, const LeafSoA&, const ManifoldSoA&, Range, const NarrowConfig&);
 void collide_capsule_triangle(const LeafSoA&, const LeafSoA&, const ManifoldSoA&, Range, const NarrowConfig&);
+void collide_box_triangle(const LeafSoA&, const LeafSoA&, const ManifoldSoA&, Range, const NarrowConfig&);
 void collide_sphere_halfspace(const LeafSoA&, const LeafSoA&, const ManifoldSoA&, Range, const NarrowConfig&);
 void collide_capsule_halfspace(const LeafSoA&, const LeafSoA&, const ManifoldSoA&, Range, const NarrowConfig&);
 void collide_box_halfspace(const LeafSoA&, const LeafSoA&, const ManifoldSoA&, Range, const NarrowConfig&);

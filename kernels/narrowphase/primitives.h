@@ -3,7 +3,8 @@
 // walks a Range kSimdWidth pairs at a time, LeafSoA loads, the manifold store, and the
 // geometric queries the kernels share (closest point on a segment, closest points of
 // two segments robust for parallel ones, closest point on a triangle, a deterministic
-// perpendicular for degenerate normals).
+// perpendicular for degenerate normals), and the reduction of a candidate set of contact
+// points to at most 4 (reduce4).
 //
 // Every helper is a template over the lane type F (simd::FloatW or simd::Float1), so
 // the SIMD path and the scalar reference path run the same code. Positions are taken
@@ -72,21 +73,29 @@ struct Lanes {
   F pdepth[P];
 };
 
-/// Writes lanes k .. k + width of out: count, n, depth and point slots 0 .. P-1
-/// (points made absolute by adding origin).
-template <class F, uint32_t P>
+/// Writes lanes k .. k + width of out: count, n, depth and point slots 0 .. S-1
+/// (S <= P; points made absolute by adding origin).
+template <class F, uint32_t P, uint32_t S = P>
 IMPACT_INLINE void store(const ManifoldSoA& out, uint32_t k, const Lanes<F, P>& m, const V3<F>& origin) {
+  static_assert(S <= P);
   for (uint32_t i = 0; i < F::kWidth; ++i) out.count[k + i] = static_cast<uint8_t>(m.count.lane(i));
   m.n.x.store(out.n[0] + k);
   m.n.y.store(out.n[1] + k);
   m.n.z.store(out.n[2] + k);
   m.depth.store(out.depth + k);
-  for (uint32_t j = 0; j < P; ++j) {
+  for (uint32_t j = 0; j < S; ++j) {
     (origin.x + m.point[j].x).store(out.point[j][0] + k);
     (origin.y + m.point[j].y).store(out.point[j][1] + k);
     (origin.z + m.point[j].z).store(out.point[j][2] + k);
     m.pdepth[j].store(out.pdepth[j] + k);
   }
+}
+
+/// Writes count 0 to lanes k .. k + width (a block with no contact: the contract lets
+/// every other field of a count-0 lane stay unwritten).
+template <class F>
+IMPACT_INLINE void store_no_contact(const ManifoldSoA& out, uint32_t k) {
+  for (uint32_t i = 0; i < F::kWidth; ++i) out.count[k + i] = 0;
 }
 
 // ---------------------------------------------------------------------------------------
@@ -155,7 +164,7 @@ IMPACT_INLINE void for_each_block(const LeafSoA& a, const LeafSoA& b, const Mani
       TailSide<W> ta, tb;
       ta.fill(a, k, n);
       tb.fill(b, k, n);
-      TailOut<W, P> to;
+      TailOut<W, P> to{};  // zeroed: count-0 lanes may leave fields unwritten
       const ManifoldSoA lo = to.view();
       block(ta.view, tb.view, lo, 0u);
       to.copy_to(out, k, n);
@@ -281,6 +290,83 @@ IMPACT_INLINE V3<F> triangle_normal(const V3<F>& a, const V3<F>& b, const V3<F>&
   F el;
   const V3<F> eu = normalize_or(e, V3<F>{F(0.0f), F(0.0f), F(1.0f)}, el);
   return normalize_or(nrm, any_perpendicular(eu), l);
+}
+
+// ---------------------------------------------------------------------------------------
+// Manifold reduction
+// ---------------------------------------------------------------------------------------
+
+/// Picks lane-wise among three values by an index lane holding 0, 1 or 2.
+template <class F, class T>
+IMPACT_INLINE T pick3(F idx, const T& v0, const T& v1, const T& v2) {
+  return select(idx == F(0.0f), v0, select(idx == F(1.0f), v1, v2));
+}
+
+/// Lane-wise maximum (Max = true) or minimum of M values, as a tree (depth log2 M, no
+/// serial dependency). min/max of non-NaN floats is exact, so the order is free.
+template <bool Max, class F, int M>
+IMPACT_INLINE F tree_extreme(const F (&v)[M]) {
+  F t[M];
+  for (int i = 0; i < M; ++i) t[i] = v[i];
+  for (int n = M; n > 1;) {
+    const int h = n / 2;
+    for (int i = 0; i < h; ++i) t[i] = Max ? max(t[i], t[n - 1 - i]) : min(t[i], t[n - 1 - i]);
+    n -= h;
+  }
+  return t[0];
+}
+
+/// Reduces M <= 32 candidate points (2-D coordinates x, y in a plane, depth d, valid)
+/// to at most 4: the deepest, the farthest from it, then the largest-area point on
+/// each side of that diagonal. tol: lengths below it count as coincident.
+/// Each choice is one max/min tree over keys that carry their candidate's index in
+/// their low bits (simd::tag), then a per-lane pick of the winner (gather_lanes): no
+/// select chain through the candidates. Keys equal to ~4e-6 relative may resolve
+/// either way (deterministically); the outputs are the candidates' exact values.
+template <class F, int M>
+IMPACT_INLINE void reduce4(const F (&x)[M], const F (&y)[M], const F (&d)[M], const typename F::Mask (&valid)[M],
+                           F tol, F (&ox)[4], F (&oy)[4], F (&od)[4], typename F::Int& count) {
+  static_assert(M <= 32, "tag() holds indices below 32");
+  using Mask = typename F::Mask;
+  using Int = typename F::Int;
+  const F zero(0.0f);
+  const F neg(-3.0e38f), pos(3.0e38f);
+  F key[M], key2[M];
+  // deepest
+  Mask any = valid[0];
+  for (int i = 1; i < M; ++i) any = any | valid[i];
+  for (int i = 0; i < M; ++i) key[i] = simd::tag(select(valid[i], d[i], neg), i);
+  const Int ib = simd::tag_index(tree_extreme<true>(key));
+  const F bx = simd::gather_lanes(x, ib), by = simd::gather_lanes(y, ib), bd = simd::gather_lanes(d, ib);
+  // farthest from it
+  for (int i = 0; i < M; ++i) {
+    const F dx = x[i] - bx, dy = y[i] - by;
+    key[i] = simd::tag(select(valid[i], dx * dx + dy * dy, neg), i);
+  }
+  const Int jf = simd::tag_index(tree_extreme<true>(key));
+  const F fx = simd::gather_lanes(x, jf), fy = simd::gather_lanes(y, jf), fdp = simd::gather_lanes(d, jf);
+  const F fd2 = (fx - bx) * (fx - bx) + (fy - by) * (fy - by);
+  const Mask v1 = fd2 > tol * tol;
+  // largest signed area on either side of the diagonal
+  const F ex = fx - bx, ey = fy - by;
+  for (int i = 0; i < M; ++i) {
+    const F ar = ex * (y[i] - by) - ey * (x[i] - bx);
+    key[i] = simd::tag(select(valid[i], ar, neg), i);
+    key2[i] = simd::tag(select(valid[i], ar, pos), i);
+  }
+  const Int jp = simd::tag_index(tree_extreme<true>(key)), jq = simd::tag_index(tree_extreme<false>(key2));
+  const F px = simd::gather_lanes(x, jp), py = simd::gather_lanes(y, jp), pd = simd::gather_lanes(d, jp);
+  const F qx = simd::gather_lanes(x, jq), qy = simd::gather_lanes(y, jq), qd = simd::gather_lanes(d, jq);
+  const F amax = ex * (py - by) - ey * (px - bx), amin = ex * (qy - by) - ey * (qx - bx);
+  const F area_tol = tol * sqrt(max(fd2, zero));
+  const Mask v2 = v1 & (amax > area_tol);
+  const Mask v3 = v1 & (-amin > area_tol);
+  ox[0] = bx, oy[0] = by, od[0] = bd;
+  ox[1] = fx, oy[1] = fy, od[1] = fdp;
+  ox[2] = select(v2, px, qx), oy[2] = select(v2, py, qy), od[2] = select(v2, pd, qd);
+  ox[3] = qx, oy[3] = qy, od[3] = qd;
+  const Int c = Int(1) + simd::to_int(v1) + simd::to_int(v2 | v3) + simd::to_int(v2 & v3);
+  count = select(any, c, Int(0));
 }
 
 }  // namespace impact::kernels::prim

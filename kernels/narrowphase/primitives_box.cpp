@@ -31,11 +31,17 @@
 //      reference face; pdepth is its own depth.
 //   4. Edge axis: one point midway between the closest points of the two edges.
 //   n points from A to B. All arithmetic relative to A's centre.
-// box-halfspace: the vertices below the plane; more than 4 -> deepest + spread (the
-//   same reduction).
+// box-halfspace: the deepest vertex and the other corners of the lower face most
+//   parallel to the plane (largest |cos|), sorted by depth, those below the plane
+//   (1, 2 or 4 points: a vertex, an edge or the face; a box sunk deeper keeps the 4
+//   corners of that face, the deepest first). No candidate reduction.
 // Preconditions: finite inputs, positive half extents, orthonormal R.
-// Cost: SAT ~250 flops; the face manifold ~700 flops, run only for blocks where some
-// lane has a face contact.
+// Cost: SAT ~250 flops; the face manifold ~700 flops. The SIMD path runs the SAT block
+// by block, queues the lanes whose face axis won (FaceQueue, chunks of 8 blocks) and
+// clips only those, W to a block (inputs gathered by pair index, points scattered
+// back), so separated and edge lanes cost no clipping; a lane's arithmetic is the
+// same wherever it lands, so the output bytes do not depend on its neighbours.
+// reduce4 picks by max/min trees over index-tagged keys (no select chain).
 #include <cstdint>
 
 #include "kernels/narrowphase/pair_kernels.h"
@@ -57,77 +63,155 @@ inline constexpr float kEdgeSkipSq = 1e-12f;  // |a_i x b_j|^2 below this: skip 
 template <class F>
 using L4 = Lanes<F, 4>;
 
-/// Picks lane-wise among three values by an index lane holding 0, 1 or 2.
-template <class F, class T>
-IMPACT_INLINE T pick3(F idx, const T& v0, const T& v1, const T& v2) {
-  return select(idx == F(0.0f), v0, select(idx == F(1.0f), v1, v2));
-}
-
-/// Reduces M candidate points (2-D coordinates x, y in a plane, depth d, valid) to at
-/// most 4: the deepest, the farthest from it, then the largest-area point on each
-/// side of that diagonal. tol: lengths below it count as coincident.
-template <class F, int M>
-IMPACT_INLINE void reduce4(const F (&x)[M], const F (&y)[M], const F (&d)[M], const typename F::Mask (&valid)[M],
-                           F tol, F (&ox)[4], F (&oy)[4], F (&od)[4], typename F::Int& count) {
-  using Mask = typename F::Mask;
-  const F zero(0.0f);
-  const F neg(-3.0e38f);
-  // deepest
-  F bd = neg, bx = zero, by = zero;
-  Mask any = Mask(false);
-  for (int i = 0; i < M; ++i) {
-    const Mask t = valid[i] & (d[i] > bd);
-    bd = select(t, d[i], bd);
-    bx = select(t, x[i], bx);
-    by = select(t, y[i], by);
-    any = any | valid[i];
+/// Lanes of up to kChunk consecutive pairs whose face manifold is still to be computed
+/// (the SIMD path computes the SAT for every lane, then the costly face clipping only
+/// for these, W at a time: separated and edge lanes no longer ride along).
+struct FaceQueue {
+  static constexpr uint32_t kChunk = 8 * simd::kSimdWidth;
+  static constexpr uint32_t kCap = kChunk + simd::kSimdWidth;  // room to pad the last block
+  int32_t idx[kCap];
+  float axis[kCap], best[kCap], nx[kCap], ny[kCap], nz[kCap];
+  uint32_t n = 0;
+  void push(uint32_t i, float ax, float b, float x, float y, float z) {
+    idx[n] = static_cast<int32_t>(i), axis[n] = ax, best[n] = b, nx[n] = x, ny[n] = y, nz[n] = z;
+    ++n;
   }
-  // farthest from it
-  F fd2 = neg, fx = bx, fy = by, fdp = bd;
-  for (int i = 0; i < M; ++i) {
-    const F dx = x[i] - bx, dy = y[i] - by;
-    const F l2 = dx * dx + dy * dy;
-    const Mask t = valid[i] & (l2 > fd2);
-    fd2 = select(t, l2, fd2);
-    fx = select(t, x[i], fx);
-    fy = select(t, y[i], fy);
-    fdp = select(t, d[i], fdp);
+  void copy(uint32_t from, uint32_t to) {
+    idx[to] = idx[from], axis[to] = axis[from], best[to] = best[from];
+    nx[to] = nx[from], ny[to] = ny[from], nz[to] = nz[from];
   }
-  const Mask v1 = fd2 > tol * tol;
-  // largest signed area on either side of the diagonal
-  const F ex = fx - bx, ey = fy - by;
-  F amax = zero, amin = zero, px = bx, py = by, pd = bd, qx = bx, qy = by, qd = bd;
-  for (int i = 0; i < M; ++i) {
-    const F ar = ex * (y[i] - by) - ey * (x[i] - bx);
-    const Mask tp = valid[i] & (ar > amax);
-    amax = select(tp, ar, amax);
-    px = select(tp, x[i], px);
-    py = select(tp, y[i], py);
-    pd = select(tp, d[i], pd);
-    const Mask tn = valid[i] & (ar < amin);
-    amin = select(tn, ar, amin);
-    qx = select(tn, x[i], qx);
-    qy = select(tn, y[i], qy);
-    qd = select(tn, d[i], qd);
-  }
-  const F area_tol = tol * sqrt(max(fd2, zero));
-  const Mask v2 = v1 & (amax > area_tol);
-  const Mask v3 = v1 & (-amin > area_tol);
-  ox[0] = bx, oy[0] = by, od[0] = bd;
-  ox[1] = fx, oy[1] = fy, od[1] = fdp;
-  ox[2] = select(v2, px, qx), oy[2] = select(v2, py, qy), od[2] = select(v2, pd, qd);
-  ox[3] = qx, oy[3] = qy, od[3] = qd;
-  using Int = typename F::Int;
-  const Int c = Int(1) + simd::to_int(v1) + simd::to_int(v2 | v3) + simd::to_int(v2 & v3);
-  count = select(any, c, Int(0));
-}
+};
 
 // ---------------------------------------------------------------------------------------
 // box - box
 // ---------------------------------------------------------------------------------------
 
+/// Step 3 of box-box for the lanes in `face` (a face axis won): the clipped manifold
+/// into m's points (relative to A's centre), pdepth and count. t = B's centre - A's.
 template <class F>
-IMPACT_INLINE void box_box_block(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out, uint32_t k) {
+IMPACT_INLINE void box_box_face(const V3<F>& t, const M3<F>& ra, const M3<F>& rb, const F (&eA)[3], const F (&eB)[3],
+                                F axis, const V3<F>& n, F best, typename F::Mask face, L4<F>& m) {
+  using Mask = typename F::Mask;
+  using Int = typename F::Int;
+  const F zero(0.0f), one(1.0f);
+  const Mask face_a = axis < F(3.0f);
+    // reference box: A for A's face axes, B for B's
+  const F fk = select(face_a, axis, axis - F(3.0f));  // face axis index 0..2
+  const V3<F> cr = select(face_a, V3<F>{zero, zero, zero}, t);
+  const V3<F> rc0 = select(face_a, ra.c[0], rb.c[0]), rc1 = select(face_a, ra.c[1], rb.c[1]),
+              rc2 = select(face_a, ra.c[2], rb.c[2]);
+  const F rh0 = select(face_a, eA[0], eB[0]), rh1 = select(face_a, eA[1], eB[1]), rh2 = select(face_a, eA[2], eB[2]);
+  const V3<F> ic = select(face_a, t, V3<F>{zero, zero, zero});
+  const V3<F> ic0 = select(face_a, rb.c[0], ra.c[0]), ic1 = select(face_a, rb.c[1], ra.c[1]),
+              ic2 = select(face_a, rb.c[2], ra.c[2]);
+  const F ih0 = select(face_a, eB[0], eA[0]), ih1 = select(face_a, eB[1], eA[1]), ih2 = select(face_a, eB[2], eA[2]);
+  // outward normal of the reference face, towards the incident box
+  const V3<F> mref = select(face_a, n, -n);
+  const V3<F> u1 = pick3(fk, rc1, rc2, rc0), u2 = pick3(fk, rc2, rc0, rc1);
+  const F w1 = pick3(fk, rh1, rh2, rh0), w2 = pick3(fk, rh2, rh0, rh1), wk = pick3(fk, rh0, rh1, rh2);
+  const V3<F> cf = madd(cr, wk, mref);  // reference face centre
+  // incident face: most anti-parallel to mref
+  const F d0 = dot(ic0, mref), d1 = dot(ic1, mref), d2 = dot(ic2, mref);
+  const F a0 = abs(d0), a1 = abs(d1), a2 = abs(d2);
+  const Mask j0 = (a0 >= a1) & (a0 >= a2);
+  const Mask j1 = andnot(a1 >= a2, j0);
+  const F fj = select(j0, zero, select(j1, one, F(2.0f)));
+  const V3<F> inrm = pick3(fj, ic0, ic1, ic2);
+  const F sgn = -simd::sign_nonneg(pick3(fj, d0, d1, d2));
+  const V3<F> icen = madd(ic, sgn * pick3(fj, ih0, ih1, ih2), inrm);
+  const V3<F> T1 = pick3(fj, ic1, ic2, ic0) * pick3(fj, ih1, ih2, ih0);
+  const V3<F> T2 = pick3(fj, ic2, ic0, ic1) * pick3(fj, ih2, ih0, ih1);
+  // incident face in the reference face's frame (x, y in the face, z along mref)
+  const V3<F> dc = icen - cf;
+  const F xc = dot(dc, u1), yc = dot(dc, u2), zc = dot(dc, mref);
+  const F ax1 = dot(T1, u1), ay1 = dot(T1, u2), az1 = dot(T1, mref);
+  const F ax2 = dot(T2, u1), ay2 = dot(T2, u2), az2 = dot(T2, mref);
+  const F scale = w1 + w2;
+  const F tol_in = F(1e-6f) * scale;
+  const F one_in(1.0f + 1e-6f);
+
+  constexpr int M = 24;
+  F cx[M], cy[M], cz[M];
+  Mask cv[M];
+  int q = 0;
+  // (1) incident corners inside the rectangle
+  for (int s1 = -1; s1 <= 1; s1 += 2)
+    for (int s2 = -1; s2 <= 1; s2 += 2) {
+      const F f1(static_cast<float>(s1)), f2(static_cast<float>(s2));
+      cx[q] = xc + f1 * ax1 + f2 * ax2;
+      cy[q] = yc + f1 * ay1 + f2 * ay2;
+      cz[q] = zc + f1 * az1 + f2 * az2;
+      cv[q] = (abs(cx[q]) <= w1 + tol_in) & (abs(cy[q]) <= w2 + tol_in);
+      ++q;
+    }
+  // (2) rectangle corners inside the incident parallelogram (alpha, beta in [-1, 1])
+  const F det = ax1 * ay2 - ax2 * ay1;
+  const Mask det_ok = abs(det) > F(1e-12f) * scale * scale;
+  const F inv_det = one / select(det_ok, det, one);
+  for (int s1 = -1; s1 <= 1; s1 += 2)
+    for (int s2 = -1; s2 <= 1; s2 += 2) {
+      const F X = F(static_cast<float>(s1)) * w1, Y = F(static_cast<float>(s2)) * w2;
+      const F rx = X - xc, ry = Y - yc;
+      const F al = (rx * ay2 - ax2 * ry) * inv_det;
+      const F be = (ax1 * ry - ay1 * rx) * inv_det;
+      cx[q] = X;
+      cy[q] = Y;
+      cz[q] = zc + al * az1 + be * az2;
+      cv[q] = det_ok & (abs(al) <= one_in) & (abs(be) <= one_in);
+      ++q;
+    }
+  // (3) incident edges crossing rectangle edges. Edge (s, param p): point =
+  // centre + s*E_fixed + p*E_run, p in [-1, 1]; lines x = +-w1 and y = +-w2.
+  auto crossings = [&](F fx, F fy, F fz, F rx, F ry, F rz) {
+    const Mask okx = abs(rx) > F(1e-20f), oky = abs(ry) > F(1e-20f);
+    const F irx = one / select(okx, rx, one), iry = one / select(oky, ry, one);
+    for (int s = -1; s <= 1; s += 2) {
+      const F fs(static_cast<float>(s));
+      const F bx = xc + fs * fx, by = yc + fs * fy, bz = zc + fs * fz;
+      for (int side = -1; side <= 1; side += 2) {
+        const F sd(static_cast<float>(side));
+        {  // x = side * w1
+          const F p = (sd * w1 - bx) * irx;
+          cx[q] = sd * w1;
+          cy[q] = by + p * ry;
+          cz[q] = bz + p * rz;
+          cv[q] = okx & (abs(p) <= one_in) & (abs(cy[q]) <= w2 + tol_in);
+          ++q;
+        }
+        {  // y = side * w2
+          const F p = (sd * w2 - by) * iry;
+          cx[q] = bx + p * rx;
+          cy[q] = sd * w2;
+          cz[q] = bz + p * rz;
+          cv[q] = oky & (abs(p) <= one_in) & (abs(cx[q]) <= w1 + tol_in);
+          ++q;
+        }
+      }
+    }
+  };
+  crossings(ax1, ay1, az1, ax2, ay2, az2);  // edges at +-T1, running along T2
+  crossings(ax2, ay2, az2, ax1, ay1, az1);  // edges at +-T2, running along T1
+  // keep those below the reference face
+  F cd[M];
+  for (int i = 0; i < M; ++i) {
+    cd[i] = -cz[i];
+    cv[i] = cv[i] & (cd[i] > zero);
+  }
+  F ox[4], oy[4], od[4];
+  Int cnt;
+  reduce4<F, M>(cx, cy, cd, cv, F(1e-5f) * scale, ox, oy, od, cnt);
+  for (int i = 0; i < 4; ++i) {
+    // midway between the incident point (height -od) and the reference face (0)
+    const V3<F> p = madd(madd(madd(cf, ox[i], u1), oy[i], u2), F(-0.5f) * od[i], mref);
+    m.point[i] = select(face, p, m.point[i]);
+    m.pdepth[i] = select(face, min(od[i], best), m.pdepth[i]);
+  }
+  m.count = select(face, cnt, m.count);
+}
+
+template <class F, bool Compact = false>
+IMPACT_INLINE void box_box_block(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out, uint32_t k,
+                                  FaceQueue* queue = nullptr, uint32_t base = 0, uint32_t lim = 0) {
   using Mask = typename F::Mask;
   using Int = typename F::Int;
   const F zero(0.0f), one(1.0f), half(0.5f);
@@ -224,7 +308,7 @@ IMPACT_INLINE void box_box_block(const LeafSoA& a, const LeafSoA& b, const Manif
   }
   m.count = Int(0);
   if (simd::none(hit)) {
-    store(out, k, m, pa);
+    store_no_contact<F>(out, k);
     return;
   }
 
@@ -257,122 +341,91 @@ IMPACT_INLINE void box_box_block(const LeafSoA& a, const LeafSoA& b, const Manif
 
   // --- 3. face contact: reference and incident faces, 24 clip candidates ---
   const Mask face = hit & ~is_edge;
-  if (simd::any(face)) {
-    // reference box: A for A's face axes, B for B's
-    const F fk = select(face_a, axis, axis - F(3.0f));  // face axis index 0..2
-    const V3<F> cr = select(face_a, V3<F>{zero, zero, zero}, t);
-    const V3<F> rc0 = select(face_a, ra.c[0], rb.c[0]), rc1 = select(face_a, ra.c[1], rb.c[1]),
-                rc2 = select(face_a, ra.c[2], rb.c[2]);
-    const F rh0 = select(face_a, eA[0], eB[0]), rh1 = select(face_a, eA[1], eB[1]), rh2 = select(face_a, eA[2], eB[2]);
-    const V3<F> ic = select(face_a, t, V3<F>{zero, zero, zero});
-    const V3<F> ic0 = select(face_a, rb.c[0], ra.c[0]), ic1 = select(face_a, rb.c[1], ra.c[1]),
-                ic2 = select(face_a, rb.c[2], ra.c[2]);
-    const F ih0 = select(face_a, eB[0], eA[0]), ih1 = select(face_a, eB[1], eA[1]), ih2 = select(face_a, eB[2], eA[2]);
-    // outward normal of the reference face, towards the incident box
-    const V3<F> mref = select(face_a, n, -n);
-    const V3<F> u1 = pick3(fk, rc1, rc2, rc0), u2 = pick3(fk, rc2, rc0, rc1);
-    const F w1 = pick3(fk, rh1, rh2, rh0), w2 = pick3(fk, rh2, rh0, rh1), wk = pick3(fk, rh0, rh1, rh2);
-    const V3<F> cf = madd(cr, wk, mref);  // reference face centre
-    // incident face: most anti-parallel to mref
-    const F d0 = dot(ic0, mref), d1 = dot(ic1, mref), d2 = dot(ic2, mref);
-    const F a0 = abs(d0), a1 = abs(d1), a2 = abs(d2);
-    const Mask j0 = (a0 >= a1) & (a0 >= a2);
-    const Mask j1 = andnot(a1 >= a2, j0);
-    const F fj = select(j0, zero, select(j1, one, F(2.0f)));
-    const V3<F> inrm = pick3(fj, ic0, ic1, ic2);
-    const F sgn = -simd::sign_nonneg(pick3(fj, d0, d1, d2));
-    const V3<F> icen = madd(ic, sgn * pick3(fj, ih0, ih1, ih2), inrm);
-    const V3<F> T1 = pick3(fj, ic1, ic2, ic0) * pick3(fj, ih1, ih2, ih0);
-    const V3<F> T2 = pick3(fj, ic2, ic0, ic1) * pick3(fj, ih2, ih0, ih1);
-    // incident face in the reference face's frame (x, y in the face, z along mref)
-    const V3<F> dc = icen - cf;
-    const F xc = dot(dc, u1), yc = dot(dc, u2), zc = dot(dc, mref);
-    const F ax1 = dot(T1, u1), ay1 = dot(T1, u2), az1 = dot(T1, mref);
-    const F ax2 = dot(T2, u1), ay2 = dot(T2, u2), az2 = dot(T2, mref);
-    const F scale = w1 + w2;
-    const F tol_in = F(1e-6f) * scale;
-    const F one_in(1.0f + 1e-6f);
-
-    constexpr int M = 24;
-    F cx[M], cy[M], cz[M];
-    Mask cv[M];
-    int q = 0;
-    // (1) incident corners inside the rectangle
-    for (int s1 = -1; s1 <= 1; s1 += 2)
-      for (int s2 = -1; s2 <= 1; s2 += 2) {
-        const F f1(static_cast<float>(s1)), f2(static_cast<float>(s2));
-        cx[q] = xc + f1 * ax1 + f2 * ax2;
-        cy[q] = yc + f1 * ay1 + f2 * ay2;
-        cz[q] = zc + f1 * az1 + f2 * az2;
-        cv[q] = (abs(cx[q]) <= w1 + tol_in) & (abs(cy[q]) <= w2 + tol_in);
-        ++q;
-      }
-    // (2) rectangle corners inside the incident parallelogram (alpha, beta in [-1, 1])
-    const F det = ax1 * ay2 - ax2 * ay1;
-    const Mask det_ok = abs(det) > F(1e-12f) * scale * scale;
-    const F inv_det = one / select(det_ok, det, one);
-    for (int s1 = -1; s1 <= 1; s1 += 2)
-      for (int s2 = -1; s2 <= 1; s2 += 2) {
-        const F X = F(static_cast<float>(s1)) * w1, Y = F(static_cast<float>(s2)) * w2;
-        const F rx = X - xc, ry = Y - yc;
-        const F al = (rx * ay2 - ax2 * ry) * inv_det;
-        const F be = (ax1 * ry - ay1 * rx) * inv_det;
-        cx[q] = X;
-        cy[q] = Y;
-        cz[q] = zc + al * az1 + be * az2;
-        cv[q] = det_ok & (abs(al) <= one_in) & (abs(be) <= one_in);
-        ++q;
-      }
-    // (3) incident edges crossing rectangle edges. Edge (s, param p): point =
-    // centre + s*E_fixed + p*E_run, p in [-1, 1]; lines x = +-w1 and y = +-w2.
-    auto crossings = [&](F fx, F fy, F fz, F rx, F ry, F rz) {
-      const Mask okx = abs(rx) > F(1e-20f), oky = abs(ry) > F(1e-20f);
-      const F irx = one / select(okx, rx, one), iry = one / select(oky, ry, one);
-      for (int s = -1; s <= 1; s += 2) {
-        const F fs(static_cast<float>(s));
-        const F bx = xc + fs * fx, by = yc + fs * fy, bz = zc + fs * fz;
-        for (int side = -1; side <= 1; side += 2) {
-          const F sd(static_cast<float>(side));
-          {  // x = side * w1
-            const F p = (sd * w1 - bx) * irx;
-            cx[q] = sd * w1;
-            cy[q] = by + p * ry;
-            cz[q] = bz + p * rz;
-            cv[q] = okx & (abs(p) <= one_in) & (abs(cy[q]) <= w2 + tol_in);
-            ++q;
-          }
-          {  // y = side * w2
-            const F p = (sd * w2 - by) * iry;
-            cx[q] = bx + p * rx;
-            cy[q] = sd * w2;
-            cz[q] = bz + p * rz;
-            cv[q] = oky & (abs(p) <= one_in) & (abs(cx[q]) <= w1 + tol_in);
-            ++q;
-          }
-        }
-      }
-    };
-    crossings(ax1, ay1, az1, ax2, ay2, az2);  // edges at +-T1, running along T2
-    crossings(ax2, ay2, az2, ax1, ay1, az1);  // edges at +-T2, running along T1
-    // keep those below the reference face
-    F cd[M];
-    for (int i = 0; i < M; ++i) {
-      cd[i] = -cz[i];
-      cv[i] = cv[i] & (cd[i] > zero);
-    }
-    F ox[4], oy[4], od[4];
-    Int cnt;
-    reduce4<F, M>(cx, cy, cd, cv, F(1e-5f) * scale, ox, oy, od, cnt);
-    for (int i = 0; i < 4; ++i) {
-      // midway between the incident point (height -od) and the reference face (0)
-      const V3<F> p = madd(madd(madd(cf, ox[i], u1), oy[i], u2), F(-0.5f) * od[i], mref);
-      m.point[i] = select(face, p, m.point[i]);
-      m.pdepth[i] = select(face, min(od[i], best), m.pdepth[i]);
-    }
-    m.count = select(face, cnt, m.count);
+  if constexpr (Compact) {
+    // the face lanes go to the queue; their manifold comes later (box_box_face_queued)
+    const typename F::Int cnt0 = select(face, Int(0), m.count);
+    m.count = cnt0;
+    for (uint32_t i = 0; i < F::kWidth; ++i)
+      if (face.lane(i) && base + i < lim)
+        queue->push(base + i, axis.lane(i), best.lane(i), n.x.lane(i), n.y.lane(i), n.z.lane(i));
+  } else {
+    if (simd::any(face)) box_box_face(t, ra, rb, eA, eB, axis, n, best, face, m);
   }
   m.count = select(hit, m.count, Int(0));
-  store(out, k, m, pa);
+  if constexpr (Compact) {
+    store<F, 4, 1>(out, k, m, pa);  // slots 1..3: count <= 1 here, face lanes come later
+  } else {
+    store(out, k, m, pa);
+  }
+}
+
+/// The face manifold of queue entries j .. j + W (entries past `valid` are padding and
+/// are not written): inputs gathered by pair index, outputs scattered back.
+template <class F>
+IMPACT_INLINE void box_box_face_queued(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out, const FaceQueue& q,
+                                       uint32_t j, uint32_t valid) {
+  using Int = typename F::Int;
+  const F zero(0.0f);
+  const Int idx = Int::load(q.idx + j);
+  auto g = [&](const float* p) { return simd::gather(p, idx); };
+  const V3<F> pa{g(a.p[0]), g(a.p[1]), g(a.p[2])};
+  const V3<F> t = V3<F>{g(b.p[0]), g(b.p[1]), g(b.p[2])} - pa;
+  M3<F> ra, rb;
+  for (uint32_t c = 0; c < 3; ++c) {
+    ra.c[c] = {g(a.r[c]), g(a.r[3 + c]), g(a.r[6 + c])};
+    rb.c[c] = {g(b.r[c]), g(b.r[3 + c]), g(b.r[6 + c])};
+  }
+  const F eA[3] = {g(a.e[0]), g(a.e[1]), g(a.e[2])}, eB[3] = {g(b.e[0]), g(b.e[1]), g(b.e[2])};
+  const F axis = F::load(q.axis + j), best = F::load(q.best + j);
+  const V3<F> n{F::load(q.nx + j), F::load(q.ny + j), F::load(q.nz + j)};
+  L4<F> m;
+  for (int s = 0; s < 4; ++s) {
+    m.point[s] = V3<F>{zero, zero, zero};
+    m.pdepth[s] = zero;
+  }
+  m.count = Int(0);
+  box_box_face(t, ra, rb, eA, eB, axis, n, best, typename F::Mask(true), m);
+  V3<F> pw[4];
+  for (int s = 0; s < 4; ++s) pw[s] = pa + m.point[s];  // as store() makes them absolute
+  for (uint32_t i = 0; i < valid; ++i) {
+    const uint32_t k = static_cast<uint32_t>(q.idx[j + i]);
+    out.count[k] = static_cast<uint8_t>(m.count.lane(i));
+    for (int s = 0; s < 4; ++s) {
+      out.point[s][0][k] = pw[s].x.lane(i);
+      out.point[s][1][k] = pw[s].y.lane(i);
+      out.point[s][2][k] = pw[s].z.lane(i);
+      out.pdepth[s][k] = m.pdepth[s].lane(i);
+    }
+  }
+}
+
+/// The SIMD path of box-box: chunks of FaceQueue::kChunk pairs; the SAT (and edge
+/// contacts) block by block, then the face manifolds of the chunk's face lanes,
+/// packed W to a block. Each lane's arithmetic is the same as box_box_block's alone.
+template <class F>
+void box_box_compact(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out, Range r) {
+  constexpr uint32_t W = F::kWidth;
+  FaceQueue q;
+  for (uint32_t c0 = r.begin; c0 < r.end; c0 += FaceQueue::kChunk) {
+    const uint32_t c1 = c0 + FaceQueue::kChunk < r.end ? c0 + FaceQueue::kChunk : r.end;
+    q.n = 0;
+    uint32_t k = c0;
+    for (; k + W <= c1; k += W) box_box_block<F, true>(a, b, out, k, &q, k, c1);
+    if (k < c1) {
+      const uint32_t n = c1 - k;
+      TailSide<W> ta, tb;
+      ta.fill(a, k, n);
+      tb.fill(b, k, n);
+      TailOut<W, 4> to{};
+      box_box_block<F, true>(ta.view, tb.view, to.view(), 0u, &q, k, c1);
+      to.copy_to(out, k, n);
+    }
+    for (uint32_t j = 0; j < q.n; j += W) {
+      const uint32_t valid = q.n - j < W ? q.n - j : W;
+      for (uint32_t i = valid; i < W; ++i) q.copy(j + valid - 1, j + i);
+      box_box_face_queued<F>(a, b, out, q, j, valid);
+    }
+  }
 }
 
 // ---------------------------------------------------------------------------------------
@@ -382,41 +435,55 @@ IMPACT_INLINE void box_box_block(const LeafSoA& a, const LeafSoA& b, const Manif
 template <class F>
 IMPACT_INLINE void box_halfspace_block(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out, uint32_t k) {
   using Mask = typename F::Mask;
-  const F half(0.5f);
+  using Int = typename F::Int;
+  const F zero(0.0f), half(0.5f), two(2.0f);
   const V3<F> pa = load_p<F>(a, k);
   const V3<F> q = load_p<F>(b, k) - pa;
   const M3<F> ra = load_r<F>(a, k);
   const V3<F> ea = load_e<F>(a, k);
   const V3<F> nh = load_e<F>(b, k);
-  // in-plane 2-D frame for the reduction
-  const V3<F> t1 = any_perpendicular(nh);
-  const V3<F> t2 = cross(nh, t1);
-  const V3<F> h0 = ra.c[0] * ea.x, h1 = ra.c[1] * ea.y, h2 = ra.c[2] * ea.z;
-  const F hc = -dot(nh, q);
-  const F g0 = dot(nh, h0), g1 = dot(nh, h1), g2 = dot(nh, h2);
-  F cx[8], cy[8], cd[8];
-  Mask cv[8];
-  V3<F> v[8];
-  for (int i = 0; i < 8; ++i) {
-    const F s0((i & 1) ? 1.0f : -1.0f), s1((i & 2) ? 1.0f : -1.0f), s2((i & 4) ? 1.0f : -1.0f);
-    v[i] = h0 * s0 + h1 * s1 + h2 * s2;
-    cd[i] = -(hc + s0 * g0 + s1 * g1 + s2 * g2);
-    cx[i] = dot(v[i], t1);
-    cy[i] = dot(v[i], t2);
-    cv[i] = cd[i] > F(0.0f);
+  // cosines of the box axes with the plane normal, and nh . (half-extent vectors)
+  const F c[3] = {dot(nh, ra.c[0]), dot(nh, ra.c[1]), dot(nh, ra.c[2])};
+  const F g[3] = {c[0] * ea.x, c[1] * ea.y, c[2] * ea.z};
+  const F eh[3] = {ea.x, ea.y, ea.z};
+  // the deepest vertex: s_i = -sign(g_i) on every axis; its depth below the plane
+  const F dn = dot(nh, q);  // the plane's height above the box centre
+  const F ag[3] = {abs(g[0]), abs(g[1]), abs(g[2])};
+  const F d0 = ag[0] + ag[1] + ag[2] + dn;
+  V3<F> v0{zero, zero, zero}, flip[3];
+  for (int i = 0; i < 3; ++i) {
+    const V3<F> h = ra.c[i] * (-simd::sign_nonneg(g[i]) * eh[i]);
+    v0 = v0 + h;
+    flip[i] = h * F(-2.0f);  // to the vertex across axis i, 2|g_i| shallower
   }
-  F ox[4], oy[4], od[4];
-  typename F::Int cnt;
-  reduce4<F, 8>(cx, cy, cd, cv, F(1e-5f) * (ea.x + ea.y + ea.z), ox, oy, od, cnt);
-  L4<F> m;
-  m.count = cnt;
+  // the lower face most parallel to the plane (largest |cos|) holds the deepest vertex;
+  // its other 3 corners, sorted by depth, follow: flip the axis of smaller |g|, the
+  // larger, both. Depths fall monotonically, so the corners below the plane are a prefix.
+  const F ac0 = abs(c[0]), ac1 = abs(c[1]), ac2 = abs(c[2]);
+  const Mask j0 = (ac0 >= ac1) & (ac0 >= ac2);
+  const Mask j1 = andnot(ac1 >= ac2, j0);
+  const V3<F> fk = select(j0, flip[1], select(j1, flip[2], flip[0]));
+  const V3<F> fl = select(j0, flip[2], select(j1, flip[0], flip[1]));
+  const F gk = select(j0, ag[1], select(j1, ag[2], ag[0]));
+  const F gl = select(j0, ag[2], select(j1, ag[0], ag[1]));
+  const Mask swap = gl < gk;
+  const V3<F> fs = select(swap, fl, fk), fb = select(swap, fk, fl);
+  const F d1 = d0 - two * min(gk, gl), d2 = d0 - two * max(gk, gl);
+  const F d3 = d1 - two * max(gk, gl);
+  const V3<F> vtx[4] = {v0, v0 + fs, v0 + fb, v0 + fs + fb};
+  const F dep[4] = {d0, d1, d2, d3};
+  Lanes<F, 4> m;
+  m.count = simd::to_int(d0 > zero) + simd::to_int(d1 > zero) + simd::to_int(d2 > zero) + simd::to_int(d3 > zero);
+  if (simd::none(m.count > Int(0))) {
+    store_no_contact<F>(out, k);
+    return;
+  }
   m.n = -nh;
-  m.depth = od[0];
+  m.depth = d0;
   for (int i = 0; i < 4; ++i) {
-    // the vertex is x t1 + y t2 + (nh.q - depth) nh; the point lies half its depth up
-    const V3<F> p = madd(madd(t1 * ox[i], oy[i], t2), mul_add(-half, od[i], dot(nh, q)), nh);
-    m.point[i] = p;
-    m.pdepth[i] = od[i];
+    // the vertex lies dep below the plane; the point half of that up along nh
+    m.point[i] = madd(vtx[i], half * dep[i], nh);
+    m.pdepth[i] = dep[i];
   }
   store(out, k, m, pa);
 }
@@ -439,7 +506,14 @@ IMPACT_INLINE void box_halfspace_block(const LeafSoA& a, const LeafSoA& b, const
 
 }  // namespace
 
-IMPACT_BOX_KERNEL(collide_box_box, box_box_block)
+void collide_box_box(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out, Range r, const NarrowConfig& cfg) {
+  if (cfg.path == KernelPath::kScalar || simd::kSimdWidth == 1) {
+    for_each_block<simd::Float1, 4>(a, b, out, r, [](const LeafSoA& aa, const LeafSoA& bb, const ManifoldSoA& o,
+                                                     uint32_t k) { box_box_block<simd::Float1>(aa, bb, o, k); });
+  } else {
+    box_box_compact<simd::FloatW>(a, b, out, r);
+  }
+}
 IMPACT_BOX_KERNEL(collide_box_halfspace, box_halfspace_block)
 
 }  // namespace impact::kernels

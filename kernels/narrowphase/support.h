@@ -15,14 +15,16 @@
 // half-space lanes never reach these functions). Ties (d orthogonal to an edge or a
 // face) resolve to a fixed vertex (the + side, the lowest index), so the result is a
 // deterministic function of the lane's bytes. d = 0 returns a valid point of the shape.
-// Cost: O(1) per call except convex hulls, O(vertex count) (brute force: the hulls of
-// games have tens of vertices; hill climbing would need adjacency in HullView).
+// Cost: O(1) per call except convex hulls, O(vertex count): brute force, kSimdWidth
+// vertices per step over the SoA vertex arrays (the hulls of games have tens of
+// vertices; hill climbing would need adjacency in HullView).
 #pragma once
 
 #include <cmath>
 #include <cstdint>
 
 #include "kernels/narrowphase/leaf.h"
+#include "kernels/simd/lanes.h"
 
 namespace impact::kernels::cvx {
 
@@ -93,6 +95,48 @@ IMPACT_INLINE V3 hull_vertex(const Leaf& l, uint32_t i) {
   return l.p + l.ax[0] * h.vx[i] + l.ax[1] * h.vy[i] + l.ax[2] * h.vz[i];
 }
 
+/// Index in [b, e) (b < e) of the hull vertex of largest projection on (dx, dy, dz),
+/// the lowest index among ties: kSimdWidth vertices per step, each lane keeping its
+/// first maximum (strict >), then the lanes merged by (score, lowest index); the tail
+/// is scalar with strict > (its indices are larger). Deterministic for given bytes.
+IMPACT_INLINE uint32_t hull_support_index(const HullView& h, uint32_t b, uint32_t e, float dx, float dy, float dz) {
+  using F = simd::FloatN<simd::kSimdWidth>;
+  constexpr uint32_t kW = simd::kSimdWidth;
+  uint32_t best = b;
+  float best_s = -INFINITY;
+  uint32_t i = b;
+  if (e - b >= kW) {
+    float iota[kW];
+    for (uint32_t k = 0; k < kW; ++k) iota[k] = static_cast<float>(k);
+    const F lane = F::load(iota), X(dx), Y(dy), Z(dz);
+    F m(-INFINITY), idx(0.0f);
+    for (; i + kW <= e; i += kW) {
+      const F s = X * F::load(h.vx + i) + Y * F::load(h.vy + i) + Z * F::load(h.vz + i);
+      const auto gt = s > m;
+      m = select(gt, s, m);
+      idx = select(gt, lane + F(static_cast<float>(i - b)), idx);
+    }
+    float bi = idx.lane(0);
+    best_s = m.lane(0);
+    for (uint32_t k = 1; k < kW; ++k) {
+      const float s = m.lane(k), j = idx.lane(k);
+      if (s > best_s || (s == best_s && j < bi)) {
+        best_s = s;
+        bi = j;
+      }
+    }
+    best = b + static_cast<uint32_t>(bi);
+  }
+  for (; i < e; ++i) {
+    const float s = dx * h.vx[i] + dy * h.vy[i] + dz * h.vz[i];
+    if (s > best_s) {
+      best_s = s;
+      best = i;
+    }
+  }
+  return best;
+}
+
 /// Support point of the core (no margin) along d.
 inline V3 support_core(const Leaf& l, V3 d) {
   switch (l.type) {
@@ -109,17 +153,7 @@ inline V3 support_core(const Leaf& l, V3 d) {
       // Local direction, then the vertex of largest projection (first wins ties).
       const HullView& h = *l.hulls;
       const float dx = dot(d, l.ax[0]), dy = dot(d, l.ax[1]), dz = dot(d, l.ax[2]);
-      const uint32_t b = h.vert_begin[l.hull], e = h.vert_begin[l.hull + 1];
-      uint32_t best = b;
-      float best_s = -INFINITY;
-      for (uint32_t i = b; i < e; ++i) {
-        const float s = dx * h.vx[i] + dy * h.vy[i] + dz * h.vz[i];
-        if (s > best_s) {
-          best_s = s;
-          best = i;
-        }
-      }
-      return hull_vertex(l, best);
+      return hull_vertex(l, hull_support_index(h, h.vert_begin[l.hull], h.vert_begin[l.hull + 1], dx, dy, dz));
     }
     case kLeafCylinder: {
       // Radial direction from the local x, y components: d - u (u.d) would keep an
@@ -177,8 +211,10 @@ inline float leaf_size(const Leaf& l) {
     case kLeafConvex: {
       const HullView& h = *l.hulls;
       float m = 0.0f;
-      for (uint32_t i = h.vert_begin[l.hull]; i < h.vert_begin[l.hull + 1]; ++i)
-        m = std::fmax(m, std::fabs(h.vx[i]) + std::fabs(h.vy[i]) + std::fabs(h.vz[i]));
+      for (uint32_t i = h.vert_begin[l.hull]; i < h.vert_begin[l.hull + 1]; ++i) {
+        const float s = std::fabs(h.vx[i]) + std::fabs(h.vy[i]) + std::fabs(h.vz[i]);
+        m = s > m ? s : m;  // not std::fmax: that is a libm call here
+      }
       return m;
     }
     default: return 0.0f;

@@ -8,7 +8,11 @@
 //   IntN<N>    N int32            + -, select, lane access (manifold point counts)
 //   verbs      load / store (contiguous, unaligned), broadcast (implicit from float),
 //              mul_add, min, max, abs, sqrt, select(mask, if_true, if_false),
-//              copysign-free sign helpers are built from select.
+//              copysign-free sign helpers are built from select;
+//              gather(float array, index lanes): lane i of array[index_i];
+//              gather_lanes(array of lanes, index lanes): lane i of array[index_i];
+//              tag / tag_index: a small index kept in a float's 5 low mantissa bits,
+//              so one max/min tree gives both the extreme and where it came from.
 //
 // Width: kSimdWidth = 8 where AVX is enabled (one ymm register), 4 elsewhere (SSE2 /
 // NEON / any target: GCC lowers the generic vectors itself), 1 with -DIMPACT_SIMD_SCALAR.
@@ -144,6 +148,12 @@ struct IntN {
   IntN() = default;
   IMPACT_INLINE IntN(int32_t s) : v(Raw{} + s) {}
   IMPACT_INLINE explicit IntN(Raw r) : v(r) {}
+  /// N contiguous int32 from p (no alignment needed).
+  static IMPACT_INLINE IntN load(const int32_t* p) {
+    IntN r;
+    std::memcpy(&r.v, p, sizeof(Raw));
+    return r;
+  }
   IMPACT_INLINE int32_t lane(uint32_t i) const { return v[i]; }
 
   friend IMPACT_INLINE IntN operator+(IntN a, IntN b) { return IntN(a.v + b.v); }
@@ -242,6 +252,51 @@ IMPACT_INLINE FloatN<N> abs(FloatN<N> a) {
   return FloatN<N>(reinterpret_cast<typename FloatN<N>::Raw>(reinterpret_cast<I>(a.v) & 0x7fffffff));
 }
 
+/// Lane i of arr[idx_i] for every lane i (idx_i in [0, count of arr)): the per-lane pick
+/// of a candidate from an array of lanes.
+template <uint32_t N>
+IMPACT_INLINE FloatN<N> gather_lanes(const FloatN<N>* arr, IntN<N> idx) {
+#if defined(__AVX2__)
+  if constexpr (N == 8) {
+    const __m256i lane = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
+    const __m256i vi = _mm256_add_epi32(_mm256_slli_epi32(reinterpret_cast<__m256i>(idx.v), 3), lane);
+    return FloatN<N>(reinterpret_cast<typename FloatN<N>::Raw>(
+        _mm256_i32gather_ps(reinterpret_cast<const float*>(arr), vi, 4)));
+  }
+#endif
+  FloatN<N> r;
+  for (uint32_t i = 0; i < N; ++i) r.v[i] = arr[idx.v[i]].v[i];
+  return r;
+}
+
+/// base[idx_i] in lane i (a gather from one array by per-lane indices).
+template <uint32_t N>
+IMPACT_INLINE FloatN<N> gather(const float* base, IntN<N> idx) {
+#if defined(__AVX2__)
+  if constexpr (N == 8)
+    return FloatN<N>(reinterpret_cast<typename FloatN<N>::Raw>(
+        _mm256_i32gather_ps(base, reinterpret_cast<__m256i>(idx.v), 4)));
+#endif
+  FloatN<N> r;
+  for (uint32_t i = 0; i < N; ++i) r.v[i] = base[idx.v[i]];
+  return r;
+}
+
+/// key with its 5 low mantissa bits replaced by index i in [0, 32) (a relative change
+/// below 4e-6; among exactly equal positive keys the lower index compares larger).
+template <uint32_t N>
+IMPACT_INLINE FloatN<N> tag(FloatN<N> key, int32_t i) {
+  using I = typename FloatN<N>::IRaw;
+  const I b = (reinterpret_cast<I>(key.v) & ~31) | (31 - i);
+  return FloatN<N>(reinterpret_cast<typename FloatN<N>::Raw>(b));
+}
+/// The index a tag() put in key.
+template <uint32_t N>
+IMPACT_INLINE IntN<N> tag_index(FloatN<N> key) {
+  using I = typename FloatN<N>::IRaw;
+  return IntN<N>(31 - (reinterpret_cast<I>(key.v) & 31));
+}
+
 // ---------------------------------------------------------------------------------------
 // N == 1: the scalar reference path, plain float / bool / int32.
 // ---------------------------------------------------------------------------------------
@@ -265,6 +320,7 @@ struct IntN<1> {
   int32_t v;
   IntN() = default;
   IMPACT_INLINE IntN(int32_t s) : v(s) {}
+  static IMPACT_INLINE IntN load(const int32_t* p) { return IntN(*p); }
   IMPACT_INLINE int32_t lane(uint32_t) const { return v; }
   friend IMPACT_INLINE IntN operator+(IntN a, IntN b) { return IntN(a.v + b.v); }
   friend IMPACT_INLINE IntN operator-(IntN a, IntN b) { return IntN(a.v - b.v); }
@@ -316,6 +372,22 @@ IMPACT_INLINE FloatN<1> min(FloatN<1> a, FloatN<1> b) { return a.v < b.v ? a : b
 IMPACT_INLINE FloatN<1> max(FloatN<1> a, FloatN<1> b) { return a.v > b.v ? a : b; }
 IMPACT_INLINE FloatN<1> sqrt(FloatN<1> a) { return FloatN<1>(std::sqrt(a.v)); }
 IMPACT_INLINE FloatN<1> abs(FloatN<1> a) { return FloatN<1>(std::fabs(a.v)); }
+
+IMPACT_INLINE FloatN<1> gather(const float* base, IntN<1> idx) { return FloatN<1>(base[idx.v]); }
+IMPACT_INLINE FloatN<1> gather_lanes(const FloatN<1>* arr, IntN<1> idx) { return arr[idx.v]; }
+IMPACT_INLINE FloatN<1> tag(FloatN<1> key, int32_t i) {
+  uint32_t b;
+  std::memcpy(&b, &key.v, 4);
+  b = (b & ~31u) | static_cast<uint32_t>(31 - i);
+  float f;
+  std::memcpy(&f, &b, 4);
+  return FloatN<1>(f);
+}
+IMPACT_INLINE IntN<1> tag_index(FloatN<1> key) {
+  uint32_t b;
+  std::memcpy(&b, &key.v, 4);
+  return IntN<1>(31 - static_cast<int32_t>(b & 31u));
+}
 
 // ---------------------------------------------------------------------------------------
 // Shared verbs and the two instantiations.

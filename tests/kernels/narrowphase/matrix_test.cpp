@@ -424,7 +424,7 @@ bool specialised(LeafType a, LeafType b) {
           kp == &k::collide_capsule_capsule || kp == &k::collide_capsule_box || kp == &k::collide_box_box ||
           kp == &k::collide_sphere_triangle || kp == &k::collide_capsule_triangle ||
           kp == &k::collide_sphere_halfspace || kp == &k::collide_capsule_halfspace ||
-          kp == &k::collide_box_halfspace);
+          kp == &k::collide_box_halfspace || kp == &k::collide_box_triangle);
 }
 
 struct Lane {

@@ -5,7 +5,9 @@
 //                      size-scaled tolerance; odd bucket sizes and ranges split at odd
 //                      places give bytes identical to one whole range.
 //   Analytic*          cases with exact answers (resting boxes, crossed edges, parallel
-//                      capsules, sphere inside a box, coincident centres, touching).
+//                      capsules, sphere inside a box, coincident centres, touching; a
+//                      box resting on a triangle, a box corner into a triangle's face,
+//                      a triangle vertex into a box face, box edge x triangle edge).
 //   MinimumAxis        deep lanes where an edge axis is slightly shallower than every
 //                      face axis (once lost to a 1% face bias), against the exact
 //                      double-precision reference of tests/support/narrow_reference.h;
@@ -16,7 +18,7 @@
 //                      (b) minimum translation: B moved by n*(depth + eps) is separated
 //                          and by n*(depth - eps) still overlaps (double overlap tests:
 //                          distance by convex 1-D minimisation for round shapes,
-//                          15-axis SAT for box-box);
+//                          15-axis SAT for box-box, 13-axis for box-triangle);
 //                      (c) every lane the double test calls overlapping (by more than
 //                          a tolerance) has a contact, and every clearly separated
 //                          lane none.
@@ -219,6 +221,32 @@ double box_box_sat(const Shape& a, const Shape& b) {
   return best;
 }
 
+/// Box-triangle overlap depth by SAT over all 13 axes in double (> 0 overlap): box
+/// faces, the triangle normal, box axes x triangle edges.
+double box_triangle_sat(const Shape& a, const Shape& b) {
+  const D3 v[3] = {b.p, b.v1, b.v2};
+  std::vector<D3> axes;
+  for (int i = 0; i < 3; ++i) axes.push_back(a.col(i));
+  const D3 nt = cross(sub(v[1], v[0]), sub(v[2], v[0]));
+  if (norm(nt) > 0) axes.push_back(mul(nt, 1.0 / norm(nt)));
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) {
+      const D3 f = sub(v[(j + 1) % 3], v[j]);
+      const D3 c = cross(a.col(i), f);
+      if (norm(c) > 1e-12 * norm(f)) axes.push_back(mul(c, 1.0 / norm(c)));
+    }
+  double best = 1e300;
+  for (const D3& l : axes) {
+    double ra = 0;
+    for (int k = 0; k < 3; ++k) ra += a.e[k] * std::fabs(dot(a.col(k), l));
+    const double c = dot(a.p, l);
+    double lo = 1e300, hi = -1e300;
+    for (const D3& x : v) lo = std::min(lo, dot(x, l) - c), hi = std::max(hi, dot(x, l) - c);
+    best = std::min(best, std::min(ra - lo, hi + ra));
+  }
+  return best;
+}
+
 /// "Core" of a round shape: segment (a, b) and radius; spheres have a == b.
 struct Core {
   D3 a, b;
@@ -234,6 +262,7 @@ Core core(const Shape& s) {
 /// margin, exact at 0). A is never a triangle / half-space (kernel order).
 double overlap(const Shape& a, const Shape& b) {
   if (a.kind == Kind::kBox && b.kind == Kind::kBox) return box_box_sat(a, b);
+  if (a.kind == Kind::kBox && b.kind == Kind::kTriangle) return box_triangle_sat(a, b);
   if (a.kind == Kind::kBox && b.kind == Kind::kHalfSpace) {
     double m = 1e300;
     for (int i = 0; i < 8; ++i) {
@@ -511,6 +540,7 @@ const std::vector<PairType>& pair_types() {
       {"capsule-triangle", Kind::kCapsule, Kind::kTriangle, &collide_capsule_triangle, 2},
       {"capsule-halfspace", Kind::kCapsule, Kind::kHalfSpace, &collide_capsule_halfspace, 2},
       {"box-box", Kind::kBox, Kind::kBox, &collide_box_box, 4},
+      {"box-triangle", Kind::kBox, Kind::kTriangle, &collide_box_triangle, 4},
       {"box-halfspace", Kind::kBox, Kind::kHalfSpace, &collide_box_halfspace, 4},
   };
   return types;
@@ -1000,6 +1030,86 @@ TEST(PrimitivesAnalytic, BoxHalfSpace) {
     EXPECT_NEAR(o.pdepth[0][0], o.depth[0], 0);
     // touching
     o = run_one("box-halfspace", box({0, 0, 1}, {2, 1, 1}), ground, path);
+    EXPECT_EQ(o.count[0], 0);
+  }
+}
+
+TEST(PrimitivesAnalytic, BoxTriangle) {
+  const PairType& t = pair_type("box-triangle");
+  for (KernelPath path : {KernelPath::kSimd, KernelPath::kScalar}) {
+    // a box resting on a big triangle (below it): the 4 bottom corners, n = -z
+    const Shape big = triangle({-10, -10, 0}, {10, -10, 0}, {0, 10, 0});
+    Out o = run_one("box-triangle", box({0.5, -1, 0.9}, {2, 1, 1}), big, path);
+    ASSERT_EQ(o.count[0], 4);
+    expect_near3(o.normal(0), {0, 0, -1}, 1e-6, "n");
+    EXPECT_NEAR(o.depth[0], 0.1, 1e-6);
+    std::vector<D3> pts = points_of(o);
+    const std::vector<D3> want = {{-1.5, -2, -0.05}, {-1.5, 0, -0.05}, {2.5, -2, -0.05}, {2.5, 0, -0.05}};
+    for (int i = 0; i < 4; ++i) expect_near3(pts[i], want[i], 1e-6, "corner");
+    for (int j = 0; j < 4; ++j) EXPECT_NEAR(o.pdepth[j][0], 0.1, 1e-6);
+    // the same triangle above the box (two-sided): n = +z
+    o = run_one("box-triangle", box({0.5, -1, -0.9}, {2, 1, 1}), big, path);
+    ASSERT_EQ(o.count[0], 4);
+    expect_near3(o.normal(0), {0, 0, 1}, 1e-6, "n");
+    EXPECT_NEAR(o.depth[0], 0.1, 1e-6);
+    for (const D3& p : points_of(o)) EXPECT_NEAR(p[2], 0.05, 1e-6);
+    // tilted triangle under a tilted box, still resting flat: 4 points of equal depth
+    {
+      const Shape tr = rotated(box({0, 0, 0}, {1, 1, 1}), {0.3, 1, 0.2}, 0.4);
+      const D3 c0 = tr.col(0), c1 = tr.col(1);
+      const Shape bx = rotated(box(mul(tr.col(2), 0.9), {1, 0.5, 1}), {0.3, 1, 0.2}, 0.4);
+      const Shape tri = triangle(add(mul(c0, -10), mul(c1, -10)), add(mul(c0, 10), mul(c1, -10)), mul(c1, 10));
+      o = run_one("box-triangle", bx, tri, path);
+      ASSERT_EQ(o.count[0], 4);
+      EXPECT_EQ(check_contact(t, bx, tri, o, 0), "");
+      EXPECT_NEAR(o.depth[0], 0.1, 1e-5);
+      for (int j = 0; j < 4; ++j) EXPECT_NEAR(o.pdepth[j][0], 0.1, 1e-5);
+    }
+    // a box corner into the triangle's face: the box rotated so its corner points down
+    // (-z); the corner at depth 0.1 below the plane z = 0, one point, n = -z
+    {
+      const double h = std::sqrt(3.0);  // half diagonal of the unit-half-extent cube
+      Shape bx = box({0.2, 0.1, h - 0.1}, {1, 1, 1});
+      // rotate the diagonal (1,1,1)/sqrt3 onto +z: axis (1,-1,0), angle acos(1/sqrt3)
+      bx = rotated(bx, {1, -1, 0}, std::acos(1.0 / h));
+      o = run_one("box-triangle", bx, big, path);
+      ASSERT_EQ(o.count[0], 1);
+      expect_near3(o.normal(0), {0, 0, -1}, 1e-6, "n");
+      EXPECT_NEAR(o.depth[0], 0.1, 1e-5);
+      expect_near3(o.pt(0, 0), {0.2, 0.1, -0.05}, 1e-5, "corner point");
+      EXPECT_EQ(check_contact(t, bx, big, o, 0), "");
+    }
+    // a triangle vertex poking into a box face: vertex (0, 0, 0.9) under the face
+    // z = 1 of a box at the origin; the triangle leans away, n = +z, one point
+    {
+      const Shape tri = triangle({0, 0, 0.9}, {-3, -2, 5}, {3, -2, 5});
+      o = run_one("box-triangle", box({0, 0, 0}, {1, 1, 1}), tri, path);
+      ASSERT_EQ(o.count[0], 1);
+      expect_near3(o.normal(0), {0, 0, 1}, 1e-6, "n");
+      EXPECT_NEAR(o.depth[0], 0.1, 1e-6);
+      expect_near3(o.pt(0, 0), {0, 0, 0.95}, 1e-6, "vertex point");
+    }
+    // edge-edge: the box's top edge along x (rotated 45 deg about x, at z = sqrt2)
+    // against the triangle's edge (0, 3, z) -> (-1, -3, z) at z = sqrt2 - 0.1, the
+    // triangle rising from it: the crossing edges separate fastest, along +z by 0.1
+    {
+      const double r2 = std::sqrt(2.0);
+      const Shape bx = rotated(box({0, 0, 0}, {1, 1, 1}), {1, 0, 0}, M_PI / 4);
+      const double z = r2 - 0.1;
+      const Shape tri = triangle({-1, -3, z}, {1, -3, z + 2}, {0, 3, z});
+      o = run_one("box-triangle", bx, tri, path);
+      ASSERT_EQ(o.count[0], 1);
+      expect_near3(o.normal(0), {0, 0, 1}, 1e-6, "n");
+      EXPECT_NEAR(o.depth[0], 0.1, 1e-6);
+      EXPECT_NEAR(o.depth[0], box_triangle_sat(bx, tri), 1e-6);
+      expect_near3(o.pt(0, 0), {-0.5, 0, r2 - 0.05}, 1e-6, "crossing point");
+      EXPECT_EQ(check_contact(t, bx, tri, o, 0), "");
+    }
+    // touching exactly (the box's top face on the triangle's plane): no contact
+    o = run_one("box-triangle", box({0, 0, -1}, {1, 1, 1}), big, path);
+    EXPECT_EQ(o.count[0], 0);
+    // separated along an edge axis only
+    o = run_one("box-triangle", box({0, 0, 0}, {1, 1, 1}), triangle({2.1, 0, 5}, {2.1, 0, -5}, {7, 0, 0}), path);
     EXPECT_EQ(o.count[0], 0);
   }
 }
