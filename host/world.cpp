@@ -11,11 +11,14 @@
 #include "host/broadphase/query.h"
 #include "impact/broadphase.h"
 #include "impact/world.h"
+#include "host/narrowphase/pose.h"
 
 namespace impact {
 namespace {
 
-constexpr uint64_t kMaxBodies = 0xfffffff0ull;  // kernels use index n as a sentinel
+// Kernels use index n as a sentinel, and the solver's contact keys hold a body slot
+// plus a plane bit and a 2-bit manifold point index in 32 bits.
+constexpr uint64_t kMaxBodies = (1ull << 29) - 16;
 
 std::string fmt_float(float v) {
   char buf[48];
@@ -60,6 +63,30 @@ Status check_body(const std::string& who, const Eigen::Vector3f& pos, const Eige
     return invalid(who, "radius must be finite and > 0, got " + fmt_float(radius));
   if (!(restitution >= 0.0f && restitution <= 1.0f))
     return invalid(who, "restitution must be in [0, 1], got " + fmt_float(restitution));
+  return Status();
+}
+
+// A body's shape and orientation: a shape of the world's set that can be a body, a
+// unit quaternion. *bounding_radius: the shape's local bounds' farthest corner (the
+// radius stored for shaped bodies), or `radius` for spheres.
+Status check_shape(const std::string& who, const WorldImpl& w, const BodyDesc& d, float* bounding_radius) {
+  *bounding_radius = d.radius;
+  if (!d.shape.valid()) return Status();
+  const ShapeStore& st = w.shapes.store();
+  if (d.shape.index >= st.shapes.size())
+    return invalid(who, "shape " + std::to_string(d.shape.index) + " is not in World::shapes() (" +
+                            std::to_string(st.shapes.size()) + " shapes)");
+  const ShapeRecord& r = st.shapes[d.shape.index];
+  if (r.type == ShapeType::kHalfSpace)
+    return invalid(who, "a half-space shape cannot be a body (use create_planes)");
+  if (r.type == ShapeType::kMesh && d.inv_mass != 0.0f)
+    return invalid(who, "a mesh body must be static (inv_mass 0), got inv_mass " + fmt_float(d.inv_mass));
+  Pose pose;
+  pose.orientation = d.orientation;
+  if (!host::pose_ok(pose)) return host::check_pose(pose, who.c_str());
+  const float rr = std::sqrt(std::max(r.local_min.squaredNorm(), r.local_max.squaredNorm()));
+  *bounding_radius = rr;
+  if (!(rr > 0.0f && rr <= kMaxCoordinate)) return invalid(who, "shape bounds out of range");
   return Status();
 }
 
@@ -134,6 +161,9 @@ void WorldImpl::swap_remove_body(uint32_t slot) {
   move(s.layer);
   move(s.mask);
   move(s.is_static);
+  if (!s.shape.empty() && s.shape[slot] != kNoShape) --shaped_count;
+  move(s.shape);
+  for (auto* v : {&s.qx, &s.qy, &s.qz, &s.qw}) move(*v);
   const BodyHandle gone = s.handle[slot];
   if (slot != last_slot) {
     s.handle[slot] = s.handle[last_slot];
@@ -161,9 +191,25 @@ namespace {
 // Appends one validated body; returns its handle.
 BodyHandle append_body(WorldImpl& w, const Eigen::Vector3f& p, const Eigen::Vector3f& v,
                        float inv_mass, float radius, float restitution, uint32_t layer,
-                       uint32_t mask) {
+                       uint32_t mask, ShapeId shape = {},
+                       const Eigen::Quaternionf& q = Eigen::Quaternionf::Identity()) {
   BodyStore& s = w.bodies;
   const uint32_t slot = static_cast<uint32_t>(s.size());
+  const bool fields_on = !s.shape.empty() || shape.valid();
+  if (shape.valid() && s.shape.empty()) {  // the first shaped body: every body gets the fields
+    s.shape.assign(slot, kNoShape);
+    for (auto* a : {&s.qx, &s.qy, &s.qz}) a->assign(slot, 0.0f);
+    s.qw.assign(slot, 1.0f);
+  }
+  if (fields_on) {
+    const Eigen::Quaternionf n = q.normalized();
+    push(s.shape, shape.valid() ? shape.index : kNoShape);
+    push(s.qx, n.x());
+    push(s.qy, n.y());
+    push(s.qz, n.z());
+    push(s.qw, n.w());
+    if (shape.valid()) ++w.shaped_count;
+  }
   push(s.pos_x, p.x());
   push(s.pos_y, p.y());
   push(s.pos_z, p.z());
@@ -217,18 +263,19 @@ Status World::create_bodies(std::span<const BodyDesc> descs, std::span<BodyHandl
     return Status(StatusCode::kSizeMismatch, "create_bodies: out has " + std::to_string(out.size()) +
                                                  " handles for " + std::to_string(descs.size()) + " bodies");
   if (Status s = check_capacity(*impl_, descs.size(), "create_bodies"); !s.ok()) return s;
+  std::vector<float> radius(descs.size());
   for (size_t i = 0; i < descs.size(); ++i) {
     const BodyDesc& d = descs[i];
-    if (Status s = check_body("create_bodies: body " + std::to_string(i), d.position, d.velocity,
-                              d.inv_mass, d.radius, d.restitution);
-        !s.ok())
+    const std::string who = "create_bodies: body " + std::to_string(i);
+    if (Status s = check_shape(who, *impl_, d, &radius[i]); !s.ok()) return s;
+    if (Status s = check_body(who, d.position, d.velocity, d.inv_mass, radius[i], d.restitution); !s.ok())
       return s;
   }
   reserve_bodies(*impl_, descs.size());
   for (size_t i = 0; i < descs.size(); ++i) {
     const BodyDesc& d = descs[i];
-    out[i] = append_body(*impl_, d.position, d.velocity, d.inv_mass, d.radius, d.restitution, d.layer,
-                         d.mask);
+    out[i] = append_body(*impl_, d.position, d.velocity, d.inv_mass, radius[i], d.restitution, d.layer,
+                         d.mask, d.shape, d.orientation);
   }
   return Status();
 }
@@ -251,6 +298,8 @@ Status World::create_bodies(const Eigen::Ref<const Eigen::Matrix3Xf>& positions,
     return mismatch("inv_masses", static_cast<size_t>(inv_masses.size()));
   if (out.size() != n) return mismatch("out", out.size());
   if (Status s = check_capacity(*impl_, n, "create_bodies"); !s.ok()) return s;
+  if (common.shape.valid())
+    return invalid("create_bodies", "the Eigen bulk import creates spheres; give shaped bodies as BodyDesc");
   const bool has_vel = velocities.cols() != 0;
   auto vel = [&](size_t i) -> Eigen::Vector3f {
     return has_vel ? Eigen::Vector3f(velocities.col(static_cast<Eigen::Index>(i))) : Eigen::Vector3f::Zero();
@@ -609,5 +658,8 @@ Status World::set_gravity(const Eigen::Vector3f& gravity) {
   impl_->desc.gravity = gravity;
   return Status();
 }
+
+ShapeSet& World::shapes() { return impl_->shapes; }
+const ShapeSet& World::shapes() const { return impl_->shapes; }
 
 }  // namespace impact

@@ -8,8 +8,11 @@
 #include "host/broadphase/stage.h"
 #include "host/buffer.h"
 #include "host/handle_table.h"
+#include "host/narrowphase/narrow_phase.h"
+#include "host/narrowphase/shape_store.h"
 #include "host/parallel.h"
 #include "impact/world.h"
+#include "kernels/broadphase/bounds.h"
 #include "kernels/broadphase/grid.h"
 #include "kernels/solver/contact_solver.h"
 
@@ -23,6 +26,10 @@ struct BodyStore {
   host::Buffer<uint32_t> layer, mask;
   host::Buffer<uint8_t> is_static;
   host::Buffer<float> prev_x, prev_y, prev_z;  // only with WorldDesc::interpolation
+  // Only once a body with a shape exists (empty otherwise, and a sphere-only world
+  // never touches them): shape index (kNoShape = sphere of `radius`) and orientation.
+  host::Buffer<uint32_t> shape;
+  host::Buffer<float> qx, qy, qz, qw;
   std::vector<BodyHandle> handle;              // slot -> handle
   size_t size() const { return handle.size(); }
 };
@@ -40,9 +47,12 @@ struct ContactStore {
   host::Buffer<uint8_t> b_is_plane;
   host::Buffer<float> normal_x, normal_y, normal_z, depth, point_x, point_y, point_z;
   host::Buffer<float> mass, target, impulse;
+  host::Buffer<uint8_t> point;  // manifold point index (general narrow phase only; warm-start key)
   size_t count = 0;
   void resize(size_t n);
 };
+
+inline constexpr uint32_t kNoShape = 0xffffffffu;
 
 class WorldImpl {
  public:
@@ -62,6 +72,19 @@ class WorldImpl {
 
   WorldDesc desc;
   host::Executor exec;
+  ShapeSet shapes;
+  uint32_t shaped_count = 0;  // bodies with a shape: the step runs the general narrow phase
+  host::NarrowRunner narrow;
+  std::vector<const ShapeRecord*> narrow_rec;
+  std::vector<host::PosedObject> narrow_pose;
+  std::vector<ShapeRecord> narrow_spheres;  // sphere records of plain bodies, then plane records
+  std::vector<ShapePair> narrow_pairs;
+  std::vector<Manifold> manifolds;
+  /// The general path of the step's narrow phase (bodies with shapes): writes contacts.
+  Status general_narrow_phase();
+  /// Overwrites the boxes of bodies with shapes by their posed bounds (swept over
+  /// swept_dt of motion when > 0).
+  void shaped_bounds(const kernels::AabbSoAOut& out, float swept_dt);
   BodyStore bodies;
   PlaneStore planes;
   host::HandleTable body_handles;

@@ -18,6 +18,7 @@
 #include <cmath>
 #include <string>
 
+#include "host/narrowphase/narrow_phase.h"
 #include "host/narrowphase/pose.h"
 #include "host/narrowphase/shape_store.h"
 #include "host/parallel.h"
@@ -69,11 +70,7 @@ struct Box3 {
   }
 };
 
-/// Pose of every object, normalised, with its rotation matrix.
-struct Posed {
-  Eigen::Matrix3f R;
-  Eigen::Vector3f p;
-};
+using Posed = host::PosedObject;
 
 /// SoA of one side of all records (indexed by sorted position).
 struct SideArrays {
@@ -116,13 +113,9 @@ struct OutArrays {
 
 }  // namespace
 
-struct NarrowPhase::Impl {
-  NarrowPhaseOptions options;
-  Status options_status;  // a constructor given invalid options keeps the defaults and fails calls
-  host::Executor exec;
+struct host::NarrowRunner::State {
   host::RadixSorter sorter;
 
-  std::vector<Posed> posed;
   std::vector<std::vector<LeafPair>> chunk_records;
   std::vector<LeafPair> records;
   std::vector<uint64_t> keys;
@@ -134,14 +127,15 @@ struct NarrowPhase::Impl {
 
   // Inputs of the current call.
   const ShapeStore* store = nullptr;
-  const ShapeId* shape_of = nullptr;
+  const ShapeRecord* const* rec = nullptr;
+  const Posed* posed = nullptr;
   const ShapePair* pairs = nullptr;
 
-  const ShapeRecord& shape(uint32_t obj) const { return store->shapes[shape_of[obj].index]; }
+  const ShapeRecord& shape(uint32_t obj) const { return *rec[obj]; }
 
-  Status collide(const ShapeSet& shapes, std::span<const ShapeId> shape_of_in,
-                 std::span<const Pose> poses, std::span<const ShapePair> pairs_in,
-                 std::vector<Manifold>* result);
+  Status run(const host::Executor& exec, const ShapeStore& store_in, std::span<const ShapeRecord* const> rec_in,
+             std::span<const Posed> posed_in, std::span<const ShapePair> pairs_in, const kernels::NarrowConfig& cfg_in,
+             std::vector<Manifold>* result);
 
   // --- expansion ---------------------------------------------------------------------
   Box3 leaf_bounds(uint32_t obj, uint32_t child) const;
@@ -157,7 +151,7 @@ struct NarrowPhase::Impl {
   void fill(SideArrays& s, size_t k, uint32_t obj, uint32_t child) const;
 };
 
-Box3 NarrowPhase::Impl::leaf_bounds(uint32_t obj, uint32_t child) const {
+Box3 host::NarrowRunner::State::leaf_bounds(uint32_t obj, uint32_t child) const {
   const ShapeRecord& r = shape(obj);
   const Posed& P = posed[obj];
   Box3 b;
@@ -188,7 +182,7 @@ Box3 NarrowPhase::Impl::leaf_bounds(uint32_t obj, uint32_t child) const {
   return b;
 }
 
-void NarrowPhase::Impl::mesh_query(const MeshData& m, const Posed& pose, const Box3& world_box,
+void host::NarrowRunner::State::mesh_query(const MeshData& m, const Posed& pose, const Box3& world_box,
                                    std::vector<uint32_t>* tris) const {
   tris->clear();
   // The query box in the mesh's frame (conservative: the box of the rotated box).
@@ -222,7 +216,7 @@ void NarrowPhase::Impl::mesh_query(const MeshData& m, const Posed& pose, const B
   std::sort(tris->begin(), tris->end());
 }
 
-void NarrowPhase::Impl::mesh_below_plane(const MeshData& m, const Posed& pose, const Eigen::Vector3f& n,
+void host::NarrowRunner::State::mesh_below_plane(const MeshData& m, const Posed& pose, const Eigen::Vector3f& n,
                                          float d, std::vector<uint32_t>* tris) const {
   tris->clear();
   // Plane in the mesh frame: n_l . x <= d_l.
@@ -251,7 +245,7 @@ void NarrowPhase::Impl::mesh_below_plane(const MeshData& m, const Posed& pose, c
   std::sort(tris->begin(), tris->end());
 }
 
-void NarrowPhase::Impl::child_list(uint32_t obj, const Box3& other, std::vector<uint32_t>* out) const {
+void host::NarrowRunner::State::child_list(uint32_t obj, const Box3& other, std::vector<uint32_t>* out) const {
   out->clear();
   const ShapeRecord& r = shape(obj);
   if (r.type == ShapeType::kCompound) {
@@ -266,7 +260,7 @@ void NarrowPhase::Impl::child_list(uint32_t obj, const Box3& other, std::vector<
   }
 }
 
-void NarrowPhase::Impl::expand(uint32_t pair_index, std::vector<LeafPair>* out,
+void host::NarrowRunner::State::expand(uint32_t pair_index, std::vector<LeafPair>* out,
                                std::vector<uint32_t>* ca, std::vector<uint32_t>* cb) const {
   const uint32_t a = pairs[pair_index].a, b = pairs[pair_index].b;
   const ShapeRecord& ra = shape(a);
@@ -337,7 +331,7 @@ void NarrowPhase::Impl::expand(uint32_t pair_index, std::vector<LeafPair>* out,
   }
 }
 
-void NarrowPhase::Impl::fill(SideArrays& s, size_t k, uint32_t obj, uint32_t child) const {
+void host::NarrowRunner::State::fill(SideArrays& s, size_t k, uint32_t obj, uint32_t child) const {
   const ShapeRecord* r = &shape(obj);
   Eigen::Matrix3f R = posed[obj].R;
   Eigen::Vector3f p = posed[obj].p;
@@ -405,57 +399,18 @@ void NarrowPhase::Impl::fill(SideArrays& s, size_t k, uint32_t obj, uint32_t chi
   }
 }
 
-Status NarrowPhase::Impl::collide(const ShapeSet& shapes, std::span<const ShapeId> shape_of_in,
-                                  std::span<const Pose> poses, std::span<const ShapePair> pairs_in,
-                                  std::vector<Manifold>* result) {
-  if (result == nullptr) return Status(StatusCode::kInvalidArgument, "out must not be null");
-  if (shape_of_in.size() != poses.size()) {
-    return Status(StatusCode::kSizeMismatch, "shape_of has " + std::to_string(shape_of_in.size()) +
-                                                 " entries but poses has " + std::to_string(poses.size()));
-  }
-  if (shape_of_in.size() >= 0xffffffffu || pairs_in.size() >= 0xffffffffu) {
-    return Status(StatusCode::kCapacityExceeded, "more than 2^32 - 2 objects or pairs");
-  }
-  store = &shapes.store();
-  const auto n = static_cast<uint32_t>(shape_of_in.size());
-  for (uint32_t i = 0; i < n; ++i) {
-    if (shape_of_in[i].index >= store->shapes.size()) {
-      return Status(StatusCode::kInvalidArgument,
-                    "object " + std::to_string(i) + ": unknown shape id " + std::to_string(shape_of_in[i].index));
-    }
-    if (!host::pose_ok(poses[i])) {
-      const std::string who = "object " + std::to_string(i);
-      return host::check_pose(poses[i], who.c_str());
-    }
-  }
-  for (size_t k = 0; k < pairs_in.size(); ++k) {
-    const ShapePair& pr = pairs_in[k];
-    if (pr.a >= n || pr.b >= n) {
-      return Status(StatusCode::kInvalidArgument, "pair " + std::to_string(k) + ": index out of range (" +
-                                                      std::to_string(n) + " objects)");
-    }
-    if (pr.a == pr.b) {
-      return Status(StatusCode::kInvalidArgument,
-                    "pair " + std::to_string(k) + ": an object cannot collide with itself");
-    }
-    if (store->shapes[shape_of_in[pr.a].index].type == ShapeType::kHalfSpace &&
-        store->shapes[shape_of_in[pr.b].index].type == ShapeType::kHalfSpace) {
-      return Status(StatusCode::kInvalidArgument,
-                    "pair " + std::to_string(k) + ": two half-spaces have no finite collision data");
-    }
-  }
-  shape_of = shape_of_in.data();
+Status host::NarrowRunner::State::run(const host::Executor& exec, const ShapeStore& store_in,
+                                      std::span<const ShapeRecord* const> rec_in, std::span<const Posed> posed_in,
+                                      std::span<const ShapePair> pairs_in, const kernels::NarrowConfig& cfg_in,
+                                      std::vector<Manifold>* result) {
+  store = &store_in;
+  rec = rec_in.data();
+  posed = posed_in.data();
   pairs = pairs_in.data();
   result->clear();
-
-  // Poses.
-  posed.resize(n);
-  exec.for_each_chunk(n, kExpandGrain, [&](uint32_t b, uint32_t e, uint32_t) {
-    for (uint32_t i = b; i < e; ++i) {
-      posed[i].R = poses[i].orientation.normalized().toRotationMatrix();
-      posed[i].p = poses[i].position;
-    }
-  });
+  if (pairs_in.size() >= 0xffffffffu) {
+    return Status(StatusCode::kCapacityExceeded, "narrow phase: more than 2^32 - 2 pairs");
+  }
 
   // Expansion into leaf-pair records, per chunk, concatenated in chunk order.
   const auto np = static_cast<uint32_t>(pairs_in.size());
@@ -497,9 +452,9 @@ Status NarrowPhase::Impl::collide(const ShapeSet& shapes, std::span<const ShapeI
   position.resize(nr);
   exec.for_each_chunk(nr, kLaneGrain * 16, [&](uint32_t b, uint32_t e, uint32_t) {
     for (uint32_t s = b; s < e; ++s) {
-      const auto rec = static_cast<uint32_t>(keys[s]);
-      order[s] = rec;
-      position[rec] = s;
+      const auto record = static_cast<uint32_t>(keys[s]);
+      order[s] = record;
+      position[record] = s;
     }
   });
 
@@ -522,12 +477,7 @@ Status NarrowPhase::Impl::collide(const ShapeSet& shapes, std::span<const ShapeI
   });
 
   // Kernels, bucket by bucket.
-  kernels::NarrowConfig cfg;
-  cfg.path = options.simd ? kernels::KernelPath::kSimd : kernels::KernelPath::kScalar;
-  cfg.gjk_max_iterations = options.gjk_max_iterations;
-  cfg.gjk_tolerance = options.gjk_tolerance;
-  cfg.epa_max_iterations = options.epa_max_iterations;
-  cfg.epa_tolerance = options.epa_tolerance;
+  kernels::NarrowConfig cfg = cfg_in;
   cfg.hulls = store->hulls.view();
   for (uint32_t begin = 0; begin < nr;) {
     const uint64_t bucket = keys[begin] >> 32;
@@ -585,7 +535,92 @@ Status NarrowPhase::Impl::collide(const ShapeSet& shapes, std::span<const ShapeI
   return {};
 }
 
+host::NarrowRunner::NarrowRunner() : s_(std::make_unique<State>()) {}
+host::NarrowRunner::~NarrowRunner() = default;
+
+Status host::NarrowRunner::run(const Executor& exec, const ShapeStore& store,
+                               std::span<const ShapeRecord* const> rec, std::span<const PosedObject> poses,
+                               std::span<const ShapePair> pairs, const kernels::NarrowConfig& cfg,
+                               std::vector<Manifold>* out) {
+  return s_->run(exec, store, rec, poses, pairs, cfg, out);
+}
+
 // --- public ------------------------------------------------------------------------------
+
+struct NarrowPhase::Impl {
+  NarrowPhaseOptions options;
+  Status options_status;  // a constructor given invalid options keeps the defaults and fails calls
+  host::Executor exec;
+  host::NarrowRunner runner;
+  std::vector<Posed> posed;
+  std::vector<const ShapeRecord*> rec;
+
+  Status collide(const ShapeSet& shapes, std::span<const ShapeId> shape_of_in,
+                 std::span<const Pose> poses, std::span<const ShapePair> pairs_in,
+                 std::vector<Manifold>* result);
+};
+
+Status NarrowPhase::Impl::collide(const ShapeSet& shapes, std::span<const ShapeId> shape_of_in,
+                                  std::span<const Pose> poses, std::span<const ShapePair> pairs_in,
+                                  std::vector<Manifold>* result) {
+  if (result == nullptr) return Status(StatusCode::kInvalidArgument, "out must not be null");
+  if (shape_of_in.size() != poses.size()) {
+    return Status(StatusCode::kSizeMismatch, "shape_of has " + std::to_string(shape_of_in.size()) +
+                                                 " entries but poses has " + std::to_string(poses.size()));
+  }
+  if (shape_of_in.size() >= 0xffffffffu || pairs_in.size() >= 0xffffffffu) {
+    return Status(StatusCode::kCapacityExceeded, "more than 2^32 - 2 objects or pairs");
+  }
+  const ShapeStore* store = &shapes.store();
+  const auto n = static_cast<uint32_t>(shape_of_in.size());
+  for (uint32_t i = 0; i < n; ++i) {
+    if (shape_of_in[i].index >= store->shapes.size()) {
+      return Status(StatusCode::kInvalidArgument,
+                    "object " + std::to_string(i) + ": unknown shape id " + std::to_string(shape_of_in[i].index));
+    }
+    if (!host::pose_ok(poses[i])) {
+      const std::string who = "object " + std::to_string(i);
+      return host::check_pose(poses[i], who.c_str());
+    }
+  }
+  for (size_t k = 0; k < pairs_in.size(); ++k) {
+    const ShapePair& pr = pairs_in[k];
+    if (pr.a >= n || pr.b >= n) {
+      return Status(StatusCode::kInvalidArgument, "pair " + std::to_string(k) + ": index out of range (" +
+                                                      std::to_string(n) + " objects)");
+    }
+    if (pr.a == pr.b) {
+      return Status(StatusCode::kInvalidArgument,
+                    "pair " + std::to_string(k) + ": an object cannot collide with itself");
+    }
+    if (store->shapes[shape_of_in[pr.a].index].type == ShapeType::kHalfSpace &&
+        store->shapes[shape_of_in[pr.b].index].type == ShapeType::kHalfSpace) {
+      return Status(StatusCode::kInvalidArgument,
+                    "pair " + std::to_string(k) + ": two half-spaces have no finite collision data");
+    }
+  }
+  result->clear();
+  rec.resize(n);
+  for (uint32_t i = 0; i < n; ++i) rec[i] = &store->shapes[shape_of_in[i].index];
+
+  // Poses.
+  posed.resize(n);
+  exec.for_each_chunk(n, kExpandGrain, [&](uint32_t b, uint32_t e, uint32_t) {
+    for (uint32_t i = b; i < e; ++i) {
+      posed[i].R = poses[i].orientation.normalized().toRotationMatrix();
+      posed[i].p = poses[i].position;
+    }
+  });
+
+  kernels::NarrowConfig cfg;
+  cfg.path = options.simd ? kernels::KernelPath::kSimd : kernels::KernelPath::kScalar;
+  cfg.gjk_max_iterations = options.gjk_max_iterations;
+  cfg.gjk_tolerance = options.gjk_tolerance;
+  cfg.epa_max_iterations = options.epa_max_iterations;
+  cfg.epa_tolerance = options.epa_tolerance;
+  return runner.run(exec, *store, rec, posed, pairs_in, cfg, result);
+}
+
 
 namespace {
 Status validate(const NarrowPhaseOptions& o) {

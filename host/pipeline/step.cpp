@@ -51,6 +51,7 @@ constexpr uint32_t kContactGrain = 1u << 13;  // contacts or pairs per chunk
 void ContactStore::resize(size_t n) {
   for (auto* v : {&a, &b}) v->resize(n);
   b_is_plane.resize(n);
+  point.resize(n);
   for (auto* v : {&normal_x, &normal_y, &normal_z, &depth, &point_x, &point_y, &point_z, &mass,
                   &target, &impulse})
     v->resize(n);
@@ -83,6 +84,8 @@ void WorldImpl::reorder_bodies() {
   permute(s.layer, tmp_u32);
   permute(s.mask, tmp_u32);
   permute(s.is_static, tmp_u8);
+  permute(s.shape, tmp_u32);
+  for (auto* v : {&s.qx, &s.qy, &s.qz, &s.qw}) permute(*v, tmp_f32);
   std::vector<BodyHandle> handles(n);
   for (uint32_t i = 0; i < n; ++i) {
     handles[i] = s.handle[p[i]];
@@ -172,6 +175,7 @@ Status WorldImpl::step() {
                              boxes_out, {b, e});
     });
   }
+  if (shaped_count > 0) shaped_bounds(boxes_out, desc.swept_bounds ? dt : 0.0f);
   const kernels::AabbSoA boxes{boxes_out.min_x, boxes_out.min_y, boxes_out.min_z,
                                boxes_out.max_x, boxes_out.max_y, boxes_out.max_z};
   // Finite inputs can still integrate out of range (a huge speed for long enough):
@@ -210,6 +214,13 @@ Status WorldImpl::step() {
   st.ms.broad_phase = ms_since(t);
 
   // --- narrow phase ----------------------------------------------------------------------
+  ContactStore& c = contacts;
+  if (shaped_count > 0) {
+    if (Status gs = general_narrow_phase(); !gs.ok()) {
+      contacts.resize(0);
+      return gs;
+    }
+  } else {
   const kernels::SphereView sv{s.pos_x.data(), s.pos_y.data(), s.pos_z.data(), s.radius.data()};
   const kernels::PlaneView pv{planes.normal_x.data(), planes.normal_y.data(),
                               planes.normal_z.data(), planes.offset.data(),
@@ -232,7 +243,6 @@ Status WorldImpl::step() {
                   "step: " + std::to_string(n_pair_contacts + n_plane_contacts) +
                       " contacts exceed the limit of 2^31 - 1");
   }
-  ContactStore& c = contacts;
   c.resize(n_pair_contacts + n_plane_contacts);
   const kernels::ContactSoA cs{c.a.data(),        c.b.data(),        c.b_is_plane.data(),
                                c.normal_x.data(), c.normal_y.data(), c.normal_z.data(),
@@ -248,6 +258,7 @@ Status WorldImpl::step() {
   }
   st.contacts = c.count;
   st.plane_contacts = n_plane_contacts;
+  }
   st.ms.narrow_phase = ms_since(t);
 
   // Positions move with the solved velocities (semi-implicit Euler's second half).
@@ -268,7 +279,7 @@ Status WorldImpl::step() {
     const kernels::SolverContacts sc{c.a.data(),        c.b.data(),         c.b_is_plane.data(),
                                      c.normal_x.data(), c.normal_y.data(),  c.normal_z.data(),
                                      c.depth.data(),    c.mass.data(),      c.target.data(),
-                                     c.impulse.data()};
+                                     c.impulse.data(),  shaped_count > 0 ? c.point.data() : nullptr};
     const kernels::SolverParams sp{sd.restitution_threshold, sd.position_correction,
                                    sd.penetration_slop};
     // Hot per-body state; entry n is the immovable zero body that planes use.

@@ -4,6 +4,9 @@
 #include <cstdint>
 
 #include <Eigen/Core>
+#include <Eigen/Geometry>
+
+#include "impact/shapes.h"
 
 namespace impact {
 
@@ -25,7 +28,7 @@ struct PlaneHandle {
   friend bool operator==(const PlaneHandle&, const PlaneHandle&) = default;
 };
 
-/// A sphere body. Units: m, m/s, 1/kg.
+/// A body: a sphere of `radius`, or any shape of World::shapes(). Units: m, m/s, 1/kg.
 struct BodyDesc {
   Eigen::Vector3f position = Eigen::Vector3f::Zero();  ///< centre, m
   Eigen::Vector3f velocity = Eigen::Vector3f::Zero();  ///< m/s
@@ -34,6 +37,14 @@ struct BodyDesc {
   float restitution = 0.0f;   ///< 0 = perfectly inelastic, 1 = perfectly elastic; in [0, 1]
   uint32_t layer = 1u;        ///< layer bits this body belongs to
   uint32_t mask = 0xffffffffu;  ///< layer bits this body collides with
+  /// Collision shape from World::shapes(); the default (invalid id) is a sphere of
+  /// `radius`. With a shape, `radius` is ignored and the body's bounding radius is
+  /// stored in its place (BodyArrays::radius). Half-spaces are not bodies (use planes);
+  /// a mesh body must be static (inv_mass 0).
+  ShapeId shape{};
+  /// Orientation of the shape, a unit quaternion (within 1e-3). Bodies do not rotate
+  /// yet (rigid-body dynamics is a later issue): the orientation stays as given.
+  Eigen::Quaternionf orientation = Eigen::Quaternionf::Identity();
 };
 
 /// A static half-space { x : dot(normal, x) <= offset }. The normal points out of

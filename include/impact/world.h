@@ -156,6 +156,11 @@ class World {
   size_t body_count() const;
   BodyArrays bodies() const;
 
+  /// The shapes bodies may carry (BodyDesc::shape). Add shapes before creating the
+  /// bodies that use them; shapes are never removed.
+  ShapeSet& shapes();
+  const ShapeSet& shapes() const;
+
   // --- planes ------------------------------------------------------------------
   Status create_planes(std::span<const PlaneDesc> descs, std::span<PlaneHandle> out);
   Status destroy_planes(std::span<const PlaneHandle> handles);

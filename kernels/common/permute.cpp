@@ -14,8 +14,9 @@ void remap_pair_keys(const uint32_t* IMPACT_RESTRICT inv, uint64_t* IMPACT_RESTR
     if (lo & 0x80000000u) {  // body-plane: a is the body, the plane index stays
       io_keys[k] = (static_cast<uint64_t>(a) << 32) | lo;
     } else {  // body-body keys are (lower slot, higher slot), as the broad phase emits them
-      const uint32_t b = inv[lo];
-      io_keys[k] = (static_cast<uint64_t>(a < b ? a : b) << 32) | (a < b ? b : a);
+      const uint32_t point = lo & 0x60000000u;  // manifold point index (bits 29-30)
+      const uint32_t b = inv[lo & 0x1fffffffu];
+      io_keys[k] = (static_cast<uint64_t>(a < b ? a : b) << 32) | (a < b ? b : a) | point;
     }
   }
 }

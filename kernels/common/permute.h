@@ -2,7 +2,8 @@
 //
 // gather:        dst[i] = src[perm[i]]          (perm: new slot -> old slot)
 // invert:        inv[perm[i]] = i
-// remap_pair_keys: contact keys (a << 32 | b, bit 31 of b marks a plane) with a
+// remap_pair_keys: contact keys (a << 32 | b, bit 31 of b marks a plane, bits 29-30
+//                the manifold point index) with a
 //                and body b renumbered through inv; body-body keys are rewritten
 //                as (lower, higher) slot, the order the broad phase emits;
 //                planes keep their index.

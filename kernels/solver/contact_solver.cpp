@@ -99,7 +99,8 @@ void contact_prepare(const SolverParams& p, SolverContacts c, const BodyState* s
 
 void contact_pair_keys(SolverContacts c, uint64_t* IMPACT_RESTRICT out_keys, Range r) {
   for (uint32_t k = r.begin; k < r.end; ++k)
-    out_keys[k] = (static_cast<uint64_t>(c.a[k]) << 32) | c.b[k] | (c.b_is_plane[k] ? 0x80000000ull : 0ull);
+    out_keys[k] = (static_cast<uint64_t>(c.a[k]) << 32) | c.b[k] | (c.b_is_plane[k] ? 0x80000000ull : 0ull) |
+                  (c.point != nullptr ? static_cast<uint64_t>(c.point[k] & 3u) << 29 : 0ull);
 }
 
 void contact_warm_start(SolverContacts c, BodyContacts adj, const uint64_t* IMPACT_RESTRICT keys,

@@ -71,6 +71,9 @@ struct SolverContacts {
   float* mass;       ///< 1 / (w_a k_a + w_b k_b), 0 if both immovable
   float* target;     ///< desired relative normal velocity (or displacement) after the solve
   float* impulse;    ///< accumulated normal impulse, N s
+  /// Manifold point index 0..3 of each contact (null: all 0): part of the warm-start
+  /// key, so the points of one pair keep their own impulses. Requires b < 2^29.
+  const uint8_t* point = nullptr;
 };
 
 /// CSR adjacency of bodies to contacts. Entry e in [start[i], start[i+1]) belongs

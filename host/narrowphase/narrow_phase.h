@@ -1,0 +1,47 @@
+// The narrow phase's passes without the public API's validation: what
+// impact::NarrowPhase::collide and the World's step share.
+#pragma once
+
+#include <memory>
+#include <span>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "host/narrowphase/shape_store.h"
+#include "host/parallel.h"
+#include "impact/narrowphase.h"
+#include "impact/status.h"
+#include "kernels/narrowphase/leaf.h"
+
+namespace impact::host {
+
+/// An object's placement: world = R * local + p, R a rotation.
+struct PosedObject {
+  Eigen::Matrix3f R;
+  Eigen::Vector3f p;
+};
+
+/// Expansion, bucketing, gather, kernels and output of host/narrowphase/narrow_phase.cpp.
+/// Keeps its scratch between calls.
+class NarrowRunner {
+ public:
+  NarrowRunner();
+  ~NarrowRunner();
+  NarrowRunner(NarrowRunner&&) noexcept = default;
+  NarrowRunner& operator=(NarrowRunner&&) noexcept = default;
+
+  /// Inputs are valid (the caller checked them): rec[i] is object i's shape (it may
+  /// point outside store, e.g. a sphere or half-space record of the caller's own;
+  /// convex/mesh/compound records index into store), poses[i] its rotation and
+  /// position, pairs index objects (a != b, not two half-spaces). cfg.hulls is set here.
+  Status run(const Executor& exec, const ShapeStore& store, std::span<const ShapeRecord* const> rec,
+             std::span<const PosedObject> poses, std::span<const ShapePair> pairs,
+             const kernels::NarrowConfig& cfg, std::vector<Manifold>* out);
+
+ private:
+  struct State;
+  std::unique_ptr<State> s_;
+};
+
+}  // namespace impact::host

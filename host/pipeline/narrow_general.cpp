@@ -1,0 +1,135 @@
+// The step's general narrow phase: bodies that carry shapes (BodyDesc::shape).
+//
+// A world whose bodies are all plain spheres never comes here (step.cpp runs the
+// sphere kernels). Once one body has a shape, every candidate pair and every
+// body-plane pair goes through host::NarrowRunner (the code of NarrowPhase::collide):
+// plain spheres become sphere records, planes half-space records, and each manifold
+// point becomes one solver contact (a, b, normal, its own depth, point, point index),
+// in manifold order: body pairs in broad-phase order, then body-plane pairs by body
+// slot then plane - the order contacts() documents.
+// Bodies do not rotate yet: a shape keeps the orientation it was created with.
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+#include "host/narrowphase/pose.h"
+#include "host/world_impl.h"
+
+namespace impact {
+
+namespace {
+constexpr uint32_t kGrain = 4096;
+}  // namespace
+
+void WorldImpl::shaped_bounds(const kernels::AabbSoAOut& out, float swept_dt) {
+  const BodyStore& s = bodies;
+  const ShapeStore& st = shapes.store();
+  const auto n = static_cast<uint32_t>(s.size());
+  exec.for_each_chunk(n, kGrain, [&](uint32_t b, uint32_t e, uint32_t) {
+    for (uint32_t i = b; i < e; ++i) {
+      if (s.shape[i] == kNoShape) continue;
+      Pose pose;
+      pose.position = Eigen::Vector3f(s.pos_x[i], s.pos_y[i], s.pos_z[i]);
+      pose.orientation = Eigen::Quaternionf(s.qw[i], s.qx[i], s.qy[i], s.qz[i]);
+      Eigen::Vector3f lo, hi;
+      host::posed_bounds(st.shapes[s.shape[i]], pose, st.hulls, &lo, &hi);
+      if (swept_dt > 0.0f) {  // the union with the box moved by this step's motion
+        const Eigen::Vector3f d = Eigen::Vector3f(s.vel_x[i], s.vel_y[i], s.vel_z[i]) * swept_dt;
+        lo = lo.cwiseMin(lo + d);
+        hi = hi.cwiseMax(hi + d);
+      }
+      out.min_x[i] = lo.x();
+      out.min_y[i] = lo.y();
+      out.min_z[i] = lo.z();
+      out.max_x[i] = hi.x();
+      out.max_y[i] = hi.y();
+      out.max_z[i] = hi.z();
+    }
+  });
+}
+
+Status WorldImpl::general_narrow_phase() {
+  BodyStore& s = bodies;
+  const ShapeStore& st = shapes.store();
+  const auto n = static_cast<uint32_t>(s.size());
+  const auto np = static_cast<uint32_t>(planes.size());
+  const uint32_t objects = n + np;
+  narrow_spheres.resize(objects);
+  narrow_rec.resize(objects);
+  narrow_pose.resize(objects);
+  exec.for_each_chunk(n, kGrain, [&](uint32_t b, uint32_t e, uint32_t) {
+    for (uint32_t i = b; i < e; ++i) {
+      host::PosedObject& P = narrow_pose[i];
+      P.p = Eigen::Vector3f(s.pos_x[i], s.pos_y[i], s.pos_z[i]);
+      if (s.shape[i] == kNoShape) {
+        ShapeRecord& r = narrow_spheres[i];
+        r.type = ShapeType::kSphere;
+        r.e[0] = s.radius[i];
+        narrow_rec[i] = &r;
+        P.R.setIdentity();
+      } else {
+        narrow_rec[i] = &st.shapes[s.shape[i]];
+        P.R = Eigen::Quaternionf(s.qw[i], s.qx[i], s.qy[i], s.qz[i]).toRotationMatrix();
+      }
+    }
+  });
+  for (uint32_t j = 0; j < np; ++j) {
+    ShapeRecord& r = narrow_spheres[n + j];
+    r.type = ShapeType::kHalfSpace;
+    r.e[0] = planes.normal_x[j];
+    r.e[1] = planes.normal_y[j];
+    r.e[2] = planes.normal_z[j];
+    r.offset = planes.offset[j];
+    narrow_rec[n + j] = &r;
+    narrow_pose[n + j].R.setIdentity();
+    narrow_pose[n + j].p.setZero();
+  }
+  // Body pairs as the broad phase found them, then (body, plane) pairs that pass the
+  // filter of the sphere path: dynamic bodies only, layers and masks both ways.
+  narrow_pairs.resize(pairs.size());
+  static_assert(sizeof(ShapePair) == sizeof(kernels::Pair));
+  for (size_t k = 0; k < pairs.size(); ++k) narrow_pairs[k] = ShapePair{pairs[k].a, pairs[k].b};
+  for (uint32_t i = 0; i < n && np > 0; ++i) {
+    if (!(s.inv_mass[i] > 0.0f)) continue;
+    for (uint32_t j = 0; j < np; ++j) {
+      if ((s.layer[i] & planes.mask[j]) != 0 && (planes.layer[j] & s.mask[i]) != 0) {
+        narrow_pairs.push_back(ShapePair{i, n + j});
+      }
+    }
+  }
+  const kernels::NarrowConfig cfg{};
+  if (Status r = narrow.run(exec, st, narrow_rec, narrow_pose, narrow_pairs, cfg, &manifolds); !r.ok()) return r;
+
+  uint64_t points = 0;
+  for (const Manifold& m : manifolds) points += m.point_count;
+  if (points > 0x7fffffffull) {
+    return Status(StatusCode::kCapacityExceeded,
+                  "step: " + std::to_string(points) + " contacts exceed the limit of 2^31 - 1");
+  }
+  ContactStore& c = contacts;
+  c.resize(points);
+  uint64_t at = 0, plane_contacts = 0;
+  for (const Manifold& m : manifolds) {
+    const ShapePair& pr = narrow_pairs[m.pair];
+    const bool plane = pr.b >= n;
+    for (uint32_t k = 0; k < m.point_count; ++k, ++at) {
+      c.a[at] = pr.a;
+      c.b[at] = plane ? pr.b - n : pr.b;
+      c.b_is_plane[at] = plane ? 1 : 0;
+      c.normal_x[at] = m.normal.x();
+      c.normal_y[at] = m.normal.y();
+      c.normal_z[at] = m.normal.z();
+      c.depth[at] = m.point_depth[k];
+      c.point_x[at] = m.points[k].x();
+      c.point_y[at] = m.points[k].y();
+      c.point_z[at] = m.points[k].z();
+      c.point[at] = static_cast<uint8_t>(k);
+    }
+    if (plane) plane_contacts += m.point_count;
+  }
+  last.contacts = c.count;
+  last.plane_contacts = plane_contacts;
+  return Status();
+}
+
+}  // namespace impact

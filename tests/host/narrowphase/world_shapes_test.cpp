@@ -1,0 +1,310 @@
+// Bodies with shapes (BodyDesc::shape) in the World's step: validation, resting
+// contacts against closed-form heights, slot re-sorts that keep each body's shape and
+// orientation, determinism across backends and threads with every proxy type in one
+// scene, and sphere bodies giving the same contacts through the general path as
+// through the sphere path.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <random>
+#include <vector>
+
+#include "impact/impact.h"
+#include "tests/support/test_support.h"
+
+namespace impact {
+namespace {
+
+using test::IsError;
+using test::IsOk;
+
+std::unique_ptr<World> make_world(WorldDesc d = {}) {
+  std::unique_ptr<World> w;
+  EXPECT_TRUE(IsOk(World::create(d, &w)));
+  return w;
+}
+
+PlaneHandle add_floor(World& w, float y = 0.0f) {
+  PlaneDesc p;
+  p.normal = Eigen::Vector3f::UnitY();
+  p.offset = y;
+  PlaneHandle h;
+  EXPECT_TRUE(IsOk(w.create_planes({&p, 1}, {&h, 1})));
+  return h;
+}
+
+TEST(WorldShapes, RejectsBadShapeBodies) {
+  auto w = make_world();
+  ShapeId box, half, mesh;
+  ASSERT_TRUE(IsOk(w->shapes().add_box(Eigen::Vector3f(0.5f, 0.5f, 0.5f), &box)));
+  ASSERT_TRUE(IsOk(w->shapes().add_half_space(Eigen::Vector3f::UnitY(), 0.0f, &half)));
+  const Eigen::Vector3f v[3] = {{0, 0, 0}, {1, 0, 0}, {0, 0, 1}};
+  const uint32_t idx[3] = {0, 1, 2};
+  ASSERT_TRUE(IsOk(w->shapes().add_mesh(v, idx, &mesh)));
+  BodyDesc d;
+  BodyHandle h;
+  d.shape = ShapeId{99};
+  EXPECT_TRUE(IsError(w->create_bodies({&d, 1}, {&h, 1}), StatusCode::kInvalidArgument, {"body 0", "shape 99"}));
+  d.shape = half;
+  EXPECT_TRUE(IsError(w->create_bodies({&d, 1}, {&h, 1}), StatusCode::kInvalidArgument, {"half-space"}));
+  d.shape = mesh;
+  EXPECT_TRUE(IsError(w->create_bodies({&d, 1}, {&h, 1}), StatusCode::kInvalidArgument, {"mesh", "static"}));
+  d.shape = box;
+  d.orientation = Eigen::Quaternionf(2.0f, 0, 0, 0);
+  EXPECT_TRUE(IsError(w->create_bodies({&d, 1}, {&h, 1}), StatusCode::kInvalidArgument, {"body 0", "unit quaternion"}));
+  d.orientation.coeffs()[0] = NAN;
+  EXPECT_TRUE(IsError(w->create_bodies({&d, 1}, {&h, 1}), StatusCode::kInvalidArgument, {"orientation"}));
+  EXPECT_EQ(w->body_count(), 0u);
+  d.orientation = Eigen::Quaternionf::Identity();
+  d.radius = -1.0f;  // ignored with a shape
+  EXPECT_TRUE(IsOk(w->create_bodies({&d, 1}, {&h, 1})));
+  EXPECT_NEAR(w->bodies().radius[0], std::sqrt(0.75f), 1e-6f);  // bounding radius
+  d.shape = mesh;
+  d.inv_mass = 0.0f;
+  EXPECT_TRUE(IsOk(w->create_bodies({&d, 1}, {&h, 1})));
+  BodyDesc common;
+  common.shape = box;
+  Eigen::Matrix3Xf pos = Eigen::Matrix3Xf::Zero(3, 1);
+  Eigen::VectorXf r = Eigen::VectorXf::Ones(1), m = Eigen::VectorXf::Ones(1);
+  EXPECT_TRUE(IsError(w->create_bodies(pos, Eigen::Matrix3Xf(3, 0), r, m, common, {&h, 1}),
+                      StatusCode::kInvalidArgument, {"BodyDesc"}));
+}
+
+// Boxes of distinct half extents lying in different orientations settle on a floor
+// at the height of the half extent that ends up vertical; the world re-sorts slots
+// every 4 steps, so each body's shape and orientation must travel with its handle.
+TEST(WorldShapes, BoxesRestAtTheirClosedFormHeights) {
+  WorldDesc desc;
+  desc.reorder_interval = 4;
+  auto w = make_world(desc);
+  add_floor(*w);
+  ShapeId box;
+  const Eigen::Vector3f half(0.2f, 0.5f, 0.35f);
+  ASSERT_TRUE(IsOk(w->shapes().add_box(half, &box)));
+  std::vector<BodyDesc> descs;
+  std::vector<float> expect;
+  for (int i = 0; i < 30; ++i) {
+    BodyDesc d;
+    d.shape = box;
+    d.position = Eigen::Vector3f(static_cast<float>(i % 6) * 2.0f, 1.5f, static_cast<float>(i / 6) * 2.0f);
+    const int axis = i % 3;  // which local axis points up
+    if (axis == 0) d.orientation = Eigen::Quaternionf(Eigen::AngleAxisf(static_cast<float>(M_PI / 2), Eigen::Vector3f::UnitZ()));
+    if (axis == 2) d.orientation = Eigen::Quaternionf(Eigen::AngleAxisf(static_cast<float>(M_PI / 2), Eigen::Vector3f::UnitX()));
+    descs.push_back(d);
+    expect.push_back(half[axis]);
+  }
+  std::vector<BodyHandle> h(descs.size());
+  ASSERT_TRUE(IsOk(w->create_bodies(descs, h)));
+  for (int s = 0; s < 240; ++s) ASSERT_TRUE(IsOk(w->step()));
+  std::vector<Eigen::Vector3f> p(h.size()), v(h.size());
+  ASSERT_TRUE(IsOk(w->get_positions(h, p)));
+  ASSERT_TRUE(IsOk(w->get_velocities(h, v)));
+  for (size_t i = 0; i < h.size(); ++i) {
+    // Penetration slop and position correction leave a few mm.
+    EXPECT_NEAR(p[i].y(), expect[i], 0.02f) << "body " << i;
+    EXPECT_LT(v[i].norm(), 0.05f) << "body " << i;
+  }
+  // Face contacts on the floor: 4 points per resting box, normals into the plane.
+  const ContactArrays c = w->contacts();
+  EXPECT_EQ(c.size(), 4 * h.size());
+  for (size_t k = 0; k < c.size(); ++k) {
+    EXPECT_TRUE(c.b_is_plane[k]);
+    EXPECT_NEAR(c.normal_y[k], -1.0f, 1e-5f);
+  }
+}
+
+TEST(WorldShapes, StackOfBoxesAndCapsuleOnConvexStaysUp) {
+  auto w = make_world();
+  add_floor(*w);
+  ShapeId box, capsule, hull;
+  ASSERT_TRUE(IsOk(w->shapes().add_box(Eigen::Vector3f(0.5f, 0.25f, 0.5f), &box)));
+  ASSERT_TRUE(IsOk(w->shapes().add_capsule(0.2f, 0.4f, &capsule)));
+  const Eigen::Vector3f cube[8] = {{-1, -0.5f, -1}, {1, -0.5f, -1}, {-1, 0.5f, -1}, {1, 0.5f, -1},
+                                   {-1, -0.5f, 1},  {1, -0.5f, 1},  {-1, 0.5f, 1},  {1, 0.5f, 1}};
+  ASSERT_TRUE(IsOk(w->shapes().add_convex_hull(cube, &hull)));
+  std::vector<BodyDesc> d(5);
+  for (int i = 0; i < 3; ++i) {
+    d[i].shape = box;
+    d[i].position = Eigen::Vector3f(0, 0.25f + 0.5f * static_cast<float>(i) + 0.01f * static_cast<float>(i), 0);
+  }
+  d[3].shape = hull;  // a 2 x 1 x 2 slab, static, beside the stack
+  d[3].inv_mass = 0.0f;
+  d[3].position = Eigen::Vector3f(5, 0.5f, 0);
+  d[4].shape = capsule;  // lying along x on the slab
+  d[4].orientation = Eigen::Quaternionf(Eigen::AngleAxisf(static_cast<float>(M_PI / 2), Eigen::Vector3f::UnitY()));
+  d[4].position = Eigen::Vector3f(5, 1.5f, 0);
+  std::vector<BodyHandle> h(d.size());
+  ASSERT_TRUE(IsOk(w->create_bodies(d, h)));
+  for (int s = 0; s < 300; ++s) ASSERT_TRUE(IsOk(w->step()));
+  std::vector<Eigen::Vector3f> p(h.size());
+  ASSERT_TRUE(IsOk(w->get_positions(h, p)));
+  for (int i = 0; i < 3; ++i) EXPECT_NEAR(p[static_cast<size_t>(i)].y(), 0.25f + 0.5f * static_cast<float>(i), 0.05f) << i;
+  EXPECT_NEAR(p[4].y(), 1.0f + 0.2f, 0.02f);
+  EXPECT_NEAR(p[4].x(), 5.0f, 1e-3f);
+}
+
+/// Every proxy type in one pile, on a static mesh terrain inside a box of planes.
+struct Pile {
+  std::unique_ptr<World> world;
+  std::vector<BodyHandle> handles;
+};
+
+Pile make_pile(Backend backend, uint32_t threads) {
+  WorldDesc desc;
+  desc.backend = backend;
+  desc.threads = threads;
+  desc.reorder_interval = 8;
+  Pile pile;
+  pile.world = make_world(desc);
+  World& w = *pile.world;
+  ShapeSet& s = w.shapes();
+  ShapeId ids[8];
+  EXPECT_TRUE(IsOk(s.add_box(Eigen::Vector3f(0.3f, 0.2f, 0.25f), &ids[0])));
+  EXPECT_TRUE(IsOk(s.add_capsule(0.15f, 0.3f, &ids[1])));
+  EXPECT_TRUE(IsOk(s.add_cylinder(0.25f, 0.2f, &ids[2])));
+  EXPECT_TRUE(IsOk(s.add_ellipsoid(Eigen::Vector3f(0.3f, 0.2f, 0.25f), &ids[3])));
+  std::mt19937 rng(4);
+  std::normal_distribution<float> g(0.0f, 1.0f);
+  std::vector<Eigen::Vector3f> pts;
+  for (int i = 0; i < 20; ++i) pts.push_back(Eigen::Vector3f(g(rng), g(rng), g(rng)).normalized() * 0.3f);
+  EXPECT_TRUE(IsOk(s.add_convex_hull(pts, &ids[4])));
+  Pose l0, l1;
+  l0.position = Eigen::Vector3f(-0.25f, 0, 0);
+  l1.position = Eigen::Vector3f(0.25f, 0, 0);
+  const CompoundChild kids[2] = {{ids[0], l0}, {ids[1], l1}};
+  EXPECT_TRUE(IsOk(s.add_compound(kids, &ids[5])));
+  EXPECT_TRUE(IsOk(s.add_aabb(Eigen::Vector3f(0.2f, 0.2f, 0.2f), &ids[6])));
+  ids[7] = ShapeId{};  // plain sphere
+  // Terrain: a bumpy 12 x 12 grid, static mesh body.
+  std::vector<Eigen::Vector3f> v;
+  std::vector<uint32_t> idx;
+  const int n = 12;
+  for (int i = 0; i <= n; ++i)
+    for (int j = 0; j <= n; ++j)
+      v.emplace_back(-3.0f + 0.5f * static_cast<float>(i), 0.15f * std::sin(static_cast<float>(i) * 0.9f + static_cast<float>(j) * 0.7f),
+                     -3.0f + 0.5f * static_cast<float>(j));
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < n; ++j) {
+      const auto a = static_cast<uint32_t>(i * (n + 1) + j), b = a + 1, c = static_cast<uint32_t>((i + 1) * (n + 1) + j), d = c + 1;
+      idx.insert(idx.end(), {a, b, c, b, d, c});
+    }
+  ShapeId terrain;
+  EXPECT_TRUE(IsOk(s.add_mesh(v, idx, &terrain)));
+  std::vector<BodyDesc> descs;
+  BodyDesc ground;
+  ground.shape = terrain;
+  ground.inv_mass = 0.0f;
+  descs.push_back(ground);
+  std::uniform_real_distribution<float> u(-2.5f, 2.5f);
+  for (int i = 0; i < 120; ++i) {
+    BodyDesc d;
+    d.shape = ids[i % 8];
+    d.radius = 0.2f;
+    d.position = Eigen::Vector3f(u(rng), 0.6f + 0.25f * static_cast<float>(i / 10), u(rng));
+    Eigen::Vector4f q(g(rng), g(rng), g(rng), g(rng));
+    q.normalize();
+    d.orientation = Eigen::Quaternionf(q[3], q[0], q[1], q[2]);
+    descs.push_back(d);
+  }
+  pile.handles.resize(descs.size());
+  EXPECT_TRUE(IsOk(w.create_bodies(descs, pile.handles)));
+  for (const auto& [nrm, off] : {std::pair{Eigen::Vector3f(0, 1, 0), -1.0f}, {Eigen::Vector3f(1, 0, 0), -3.0f},
+                                 {Eigen::Vector3f(-1, 0, 0), -3.0f}, {Eigen::Vector3f(0, 0, 1), -3.0f},
+                                 {Eigen::Vector3f(0, 0, -1), -3.0f}}) {
+    PlaneDesc p;
+    p.normal = nrm;
+    p.offset = off;
+    PlaneHandle ph;
+    EXPECT_TRUE(IsOk(w.create_planes({&p, 1}, {&ph, 1})));
+  }
+  return pile;
+}
+
+TEST(WorldShapes, EveryProxyInOnePileIsDeterministicAndStaysAboveTheTerrain) {
+  const int steps = 90;
+  Pile ref = make_pile(Backend::kSerial, 1);
+  for (int s = 0; s < steps; ++s) ASSERT_TRUE(IsOk(ref.world->step()));
+  const uint64_t hash = ref.world->state_hash();
+  EXPECT_GT(ref.world->contacts().size(), 100u);
+  std::vector<Eigen::Vector3f> p(ref.handles.size());
+  ASSERT_TRUE(IsOk(ref.world->get_positions(ref.handles, p)));
+  for (size_t i = 1; i < p.size(); ++i) {
+    EXPECT_GT(p[i].y(), -0.5f) << "body " << i << " fell through the terrain";
+    EXPECT_TRUE(p[i].allFinite());
+  }
+  for (const test::ExecCase& c : test::exec_cases()) {
+    Pile other = make_pile(c.backend, c.threads);
+    for (int s = 0; s < steps; ++s) ASSERT_TRUE(IsOk(other.world->step()));
+    EXPECT_EQ(other.world->state_hash(), hash) << test::to_string(c);
+  }
+}
+
+// One shaped body far away switches the world to the general narrow phase: its
+// sphere-sphere and sphere-plane contacts are those of the sphere path.
+TEST(WorldShapes, SpheresGiveTheSameContactsThroughTheGeneralPath) {
+  auto build = [](bool with_shape) {
+    auto w = make_world();
+    add_floor(*w);
+    std::mt19937 rng(9);
+    std::uniform_real_distribution<float> u(-2.0f, 2.0f);
+    std::vector<BodyDesc> d(400);
+    for (auto& b : d) {
+      b.position = Eigen::Vector3f(u(rng), 0.3f + 0.5f * (u(rng) + 2.0f), u(rng));
+      b.radius = 0.3f;
+    }
+    if (with_shape) {
+      ShapeId box;
+      EXPECT_TRUE(IsOk(w->shapes().add_box(Eigen::Vector3f(0.5f, 0.5f, 0.5f), &box)));
+      BodyDesc far;
+      far.shape = box;
+      far.position = Eigen::Vector3f(1000, 1000, 1000);
+      d.push_back(far);
+    }
+    std::vector<BodyHandle> h(d.size());
+    EXPECT_TRUE(IsOk(w->create_bodies(d, h)));
+    EXPECT_TRUE(IsOk(w->step()));
+    return w;
+  };
+  auto a = build(false), b = build(true);
+  auto key_of = [](const ContactArrays& c, size_t k) {
+    return std::tuple(c.a[k], c.b[k], c.b_is_plane[k]);
+  };
+  const ContactArrays ca = a->contacts(), cb = b->contacts();
+  ASSERT_EQ(ca.size(), cb.size());
+  ASSERT_GT(ca.size(), 100u);
+  std::map<std::tuple<uint32_t, uint32_t, uint8_t>, size_t> index;
+  for (size_t k = 0; k < cb.size(); ++k) index[key_of(cb, k)] = k;
+  for (size_t k = 0; k < ca.size(); ++k) {
+    auto it = index.find(key_of(ca, k));
+    ASSERT_NE(it, index.end()) << "contact " << k;
+    const size_t j = it->second;
+    EXPECT_NEAR(ca.depth[k], cb.depth[j], 1e-5f);
+    EXPECT_NEAR(ca.normal_x[k], cb.normal_x[j], 1e-5f);
+    EXPECT_NEAR(ca.normal_y[k], cb.normal_y[j], 1e-5f);
+    EXPECT_NEAR(ca.normal_z[k], cb.normal_z[j], 1e-5f);
+  }
+}
+
+TEST(WorldShapes, DestroyingTheShapedBodiesReturnsToTheSpherePath) {
+  auto w = make_world();
+  add_floor(*w);
+  ShapeId box;
+  ASSERT_TRUE(IsOk(w->shapes().add_box(Eigen::Vector3f(0.5f, 0.5f, 0.5f), &box)));
+  std::vector<BodyDesc> d(3);
+  d[0].position = Eigen::Vector3f(0, 0.4f, 0);
+  d[1].shape = box;
+  d[1].position = Eigen::Vector3f(3, 0.4f, 0);
+  d[2].position = Eigen::Vector3f(6, 0.4f, 0);
+  std::vector<BodyHandle> h(3);
+  ASSERT_TRUE(IsOk(w->create_bodies(d, h)));
+  ASSERT_TRUE(IsOk(w->step()));
+  EXPECT_EQ(w->contacts().size(), 1u + 4u + 1u);
+  ASSERT_TRUE(IsOk(w->destroy_bodies({&h[1], 1})));
+  ASSERT_TRUE(IsOk(w->step()));
+  EXPECT_EQ(w->contacts().size(), 2u);
+}
+
+}  // namespace
+}  // namespace impact
