@@ -118,6 +118,7 @@ struct host::NarrowRunner::State {
 
   std::vector<std::vector<LeafPair>> chunk_records;
   std::vector<LeafPair> records;
+  std::vector<size_t> chunk_offsets;
   std::vector<uint64_t> keys;
   std::vector<uint32_t> order;     // sorted position -> record
   std::vector<uint32_t> position;  // record -> sorted position
@@ -429,13 +430,13 @@ Status host::NarrowRunner::State::run(const host::Executor& exec, const ShapeSto
                   "narrow phase: more than 2^32 - 2 leaf pairs after expanding meshes and compounds");
   }
   records.resize(total);
-  {
-    size_t at = 0;
-    for (uint32_t c = 0; c < chunks; ++c) {
-      std::copy(chunk_records[c].begin(), chunk_records[c].end(), records.begin() + static_cast<ptrdiff_t>(at));
-      at += chunk_records[c].size();
-    }
-  }
+  chunk_offsets.resize(static_cast<size_t>(chunks) + 1);
+  chunk_offsets[0] = 0;
+  for (uint32_t c = 0; c < chunks; ++c) chunk_offsets[c + 1] = chunk_offsets[c] + chunk_records[c].size();
+  exec.for_each_chunk(np, kExpandGrain, [&](uint32_t, uint32_t, uint32_t chunk) {
+    std::copy(chunk_records[chunk].begin(), chunk_records[chunk].end(),
+              records.begin() + static_cast<ptrdiff_t>(chunk_offsets[chunk]));
+  });
   const auto nr = static_cast<uint32_t>(total);
 
   // Buckets: stable sort of (type pair, record).
@@ -554,6 +555,7 @@ struct NarrowPhase::Impl {
   host::NarrowRunner runner;
   std::vector<Posed> posed;
   std::vector<const ShapeRecord*> rec;
+  std::vector<uint32_t> first_bad;  // per chunk of objects, then of pairs
 
   Status collide(const ShapeSet& shapes, std::span<const ShapeId> shape_of_in,
                  std::span<const Pose> poses, std::span<const ShapePair> pairs_in,
@@ -573,7 +575,41 @@ Status NarrowPhase::Impl::collide(const ShapeSet& shapes, std::span<const ShapeI
   }
   const ShapeStore* store = &shapes.store();
   const auto n = static_cast<uint32_t>(shape_of_in.size());
-  for (uint32_t i = 0; i < n; ++i) {
+  // A parallel pass finds the first bad object and the first bad pair (lowest index:
+  // the same error for every thread count); the messages come from the serial checks
+  // below, run from there.
+  const auto np_in = static_cast<uint32_t>(pairs_in.size());
+  const uint32_t obj_chunks = host::chunk_count(n, kExpandGrain);
+  const uint32_t pair_chunks = host::chunk_count(np_in, kExpandGrain);
+  first_bad.assign(static_cast<size_t>(obj_chunks) + pair_chunks, 0xffffffffu);
+  const size_t shape_count = store->shapes.size();
+  exec.for_each_chunk(n, kExpandGrain, [&](uint32_t b, uint32_t e, uint32_t chunk) {
+    for (uint32_t i = b; i < e; ++i) {
+      if (shape_of_in[i].index >= shape_count || !host::pose_ok(poses[i])) {
+        first_bad[chunk] = i;
+        return;
+      }
+    }
+  });
+  exec.for_each_chunk(np_in, kExpandGrain, [&](uint32_t b, uint32_t e, uint32_t chunk) {
+    for (uint32_t k = b; k < e; ++k) {
+      const ShapePair& pr = pairs_in[k];
+      // (An unknown shape id is reported as an object error first: flag, don't read.)
+      if (pr.a >= n || pr.b >= n || pr.a == pr.b || shape_of_in[pr.a].index >= shape_count ||
+          shape_of_in[pr.b].index >= shape_count ||
+          (store->shapes[shape_of_in[pr.a].index].type == ShapeType::kHalfSpace &&
+           store->shapes[shape_of_in[pr.b].index].type == ShapeType::kHalfSpace)) {
+        first_bad[obj_chunks + chunk] = k;
+        return;
+      }
+    }
+  });
+  uint32_t bad_obj = n, bad_pair = np_in;
+  for (uint32_t c = 0; c < obj_chunks && bad_obj == n; ++c)
+    if (first_bad[c] != 0xffffffffu) bad_obj = first_bad[c];
+  for (uint32_t c = 0; c < pair_chunks && bad_pair == np_in; ++c)
+    if (first_bad[obj_chunks + c] != 0xffffffffu) bad_pair = first_bad[obj_chunks + c];
+  for (uint32_t i = bad_obj; i < n; ++i) {
     if (shape_of_in[i].index >= store->shapes.size()) {
       return Status(StatusCode::kInvalidArgument,
                     "object " + std::to_string(i) + ": unknown shape id " + std::to_string(shape_of_in[i].index));
@@ -583,7 +619,7 @@ Status NarrowPhase::Impl::collide(const ShapeSet& shapes, std::span<const ShapeI
       return host::check_pose(poses[i], who.c_str());
     }
   }
-  for (size_t k = 0; k < pairs_in.size(); ++k) {
+  for (size_t k = bad_pair; k < pairs_in.size(); ++k) {
     const ShapePair& pr = pairs_in[k];
     if (pr.a >= n || pr.b >= n) {
       return Status(StatusCode::kInvalidArgument, "pair " + std::to_string(k) + ": index out of range (" +
@@ -601,12 +637,10 @@ Status NarrowPhase::Impl::collide(const ShapeSet& shapes, std::span<const ShapeI
   }
   result->clear();
   rec.resize(n);
-  for (uint32_t i = 0; i < n; ++i) rec[i] = &store->shapes[shape_of_in[i].index];
-
-  // Poses.
   posed.resize(n);
   exec.for_each_chunk(n, kExpandGrain, [&](uint32_t b, uint32_t e, uint32_t) {
     for (uint32_t i = b; i < e; ++i) {
+      rec[i] = &store->shapes[shape_of_in[i].index];
       posed[i].R = poses[i].orientation.normalized().toRotationMatrix();
       posed[i].p = poses[i].position;
     }
