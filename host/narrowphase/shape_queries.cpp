@@ -22,6 +22,7 @@
 #include <Eigen/Geometry>
 
 #include "host/narrowphase/pose.h"
+#include "host/narrowphase/shape_ray.h"
 #include "host/narrowphase/shape_store.h"
 #include "host/parallel.h"
 #include "kernels/narrowphase/leaf_queries.h"
@@ -319,20 +320,26 @@ LocalHit ray_local(const ShapeStore& s, const ShapeRecord& rec, const RayQuery& 
   }
 }
 
-ShapeRayHit ray_one(const ShapeStore& s, const ShapeRecord& rec, const Pose& pose, const Ray& ray) {
+ShapeRayHit ray_posed(const ShapeStore& s, const ShapeRecord& rec, const Eigen::Matrix3f& R,
+                      const Eigen::Vector3f& p, const Eigen::Vector3f& origin, const Eigen::Vector3f& d,
+                      float tmax) {
   ShapeRayHit out;
-  const Frame f = object_frame(rec, pose);
-  const Eigen::Vector3f d = ray.direction.cast<double>().normalized().cast<float>();
-  const Eigen::Vector3f o = f.R.transpose() * (ray.origin - f.p);
-  const Eigen::Vector3f dl = f.R.transpose() * d;
-  const LocalHit h = ray_local(s, rec, make_query(o, dl, ray.tmax));
+  const Eigen::Vector3f o = R.transpose() * (origin - p);
+  const Eigen::Vector3f dl = R.transpose() * d;
+  const LocalHit h = ray_local(s, rec, make_query(o, dl, tmax));
   if (h.t < 0.0f) return out;
   out.hit = true;
   out.t = h.t;
-  out.point = ray.origin + h.t * d;
-  out.normal = h.t == 0.0f && rec.type != ShapeType::kMesh ? Eigen::Vector3f(-d) : Eigen::Vector3f(f.R * h.n);
+  out.point = origin + h.t * d;
+  out.normal = h.t == 0.0f && rec.type != ShapeType::kMesh ? Eigen::Vector3f(-d) : Eigen::Vector3f(R * h.n);
   out.child = h.child;
   return out;
+}
+
+ShapeRayHit ray_one(const ShapeStore& s, const ShapeRecord& rec, const Pose& pose, const Ray& ray) {
+  const Frame f = object_frame(rec, pose);
+  const Eigen::Vector3f d = ray.direction.cast<double>().normalized().cast<float>();
+  return ray_posed(s, rec, f.R, f.p, ray.origin, d, ray.tmax);
 }
 
 // A point result in some local frame.
@@ -397,6 +404,18 @@ ShapePointResult point_one(const ShapeStore& s, const ShapeRecord& rec, const Po
 }
 
 }  // namespace
+
+namespace host {
+
+Eigen::Matrix3f shape_rotation(const ShapeRecord& rec, const Pose& pose) { return object_frame(rec, pose).R; }
+
+ShapeRayHit ray_posed_shape(const ShapeStore& store, const ShapeRecord& rec, const Eigen::Matrix3f& R,
+                            const Eigen::Vector3f& p, const Eigen::Vector3f& o, const Eigen::Vector3f& d,
+                            float tmax) {
+  return ray_posed(store, rec, R, p, o, d, tmax);
+}
+
+}  // namespace host
 
 Status raycast_shapes(const ShapeSet& shapes, std::span<const ShapeId> shape_of, std::span<const Pose> poses,
                       std::span<const ObjectRay> rays, std::span<ShapeRayHit> out, const ExecConfig& exec) {

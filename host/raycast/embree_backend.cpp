@@ -5,8 +5,10 @@
 //                 build quality MEDIUM, RTC_SCENE_FLAG_ROBUST when desc.robust;
 //                 committed only when meshes are added.
 //   top scene:    geomID 0 = instance of the static scene (identity),
-//                 geomID 1 = spheres, geomID 2 = capsules.
-// Spheres and capsules are user geometry calling kernels/raycast/ray_primitives.h, so
+//                 geomID 1 = spheres, geomID 2 = capsules, geomID 3 = posed shapes.
+// Spheres and capsules are user geometry calling kernels/raycast/ray_primitives.h, and
+// posed shapes (boxes, hulls, compounds, ...) user geometry calling
+// host/narrowphase/shape_ray.h (bounds: the padded posed AABBs of SceneData), so
 // hits follow the same rules as the LBVH path (solid shapes, per-primitive layers
 // tested in the callback). EmbreeSpheres::kBuiltin uses Embree's sphere points instead,
 // with an intersection filter for per-primitive layers when the layers differ.
@@ -35,7 +37,9 @@
 namespace impact::host {
 namespace {
 
-constexpr unsigned kInstanceId = 0, kSpheresId = 1, kCapsulesId = 2;
+constexpr unsigned kInstanceId = 0, kSpheresId = 1, kCapsulesId = 2, kShapesId = 3;
+// User geometry kinds (template argument K below).
+constexpr int kUserSphere = 0, kUserCapsule = 1, kUserShape = 2;
 
 kernels::RayQuery query_of(RTCRayN* ray, unsigned N, unsigned i) {
   kernels::RayQuery q;
@@ -50,10 +54,12 @@ kernels::RayQuery query_of(RTCRayN* ray, unsigned N, unsigned i) {
   return q;
 }
 
-// Primitive test of user geometry `kind` (spheres or capsules) for one ray; -1 on a miss.
-template <bool kCapsule>
+// Primitive test of user geometry K (sphere, capsule, shape) for one ray; -1 on a miss.
+template <int K>
 float user_hit(const SceneData& d, unsigned prim, const kernels::RayQuery& q) {
-  if constexpr (kCapsule) {
+  if constexpr (K == kUserShape) {
+    return shape_ray_t(d, prim, q);
+  } else if constexpr (K == kUserCapsule) {
     if ((d.c_layer[prim] & q.mask) == 0) return -1.0f;
     const float a[3] = {d.ax[prim], d.ay[prim], d.az[prim]};
     const float b[3] = {d.bx[prim], d.by[prim], d.bz[prim]};
@@ -64,12 +70,19 @@ float user_hit(const SceneData& d, unsigned prim, const kernels::RayQuery& q) {
   }
 }
 
-template <bool kCapsule>
+template <int K>
 void user_bounds(const RTCBoundsFunctionArguments* args) {
   const SceneData& d = *static_cast<const SceneData*>(args->geometryUserPtr);
   const unsigned i = args->primID;
   RTCBounds* b = args->bounds_o;
-  if constexpr (kCapsule) {
+  if constexpr (K == kUserShape) {
+    b->lower_x = d.ob_min_x[i];
+    b->lower_y = d.ob_min_y[i];
+    b->lower_z = d.ob_min_z[i];
+    b->upper_x = d.ob_max_x[i];
+    b->upper_y = d.ob_max_y[i];
+    b->upper_z = d.ob_max_z[i];
+  } else if constexpr (K == kUserCapsule) {
     const float r = d.cr[i];
     b->lower_x = std::fmin(d.ax[i], d.bx[i]) - r;
     b->lower_y = std::fmin(d.ay[i], d.by[i]) - r;
@@ -88,7 +101,7 @@ void user_bounds(const RTCBoundsFunctionArguments* args) {
   }
 }
 
-template <bool kCapsule>
+template <int K>
 void user_intersect(const RTCIntersectFunctionNArguments* args) {
   const SceneData& d = *static_cast<const SceneData*>(args->geometryUserPtr);
   RTCRayN* ray = RTCRayHitN_RayN(args->rayhit, args->N);
@@ -96,7 +109,7 @@ void user_intersect(const RTCIntersectFunctionNArguments* args) {
   for (unsigned i = 0; i < args->N; ++i) {
     if (args->valid[i] == 0) continue;
     const kernels::RayQuery q = query_of(ray, args->N, i);
-    const float t = user_hit<kCapsule>(d, args->primID, q);
+    const float t = user_hit<K>(d, args->primID, q);
     if (t < 0.0f) continue;
     RTCRayN_tfar(ray, args->N, i) = t;
     RTCHitN_Ng_x(hit, args->N, i) = 0.0f;
@@ -110,13 +123,13 @@ void user_intersect(const RTCIntersectFunctionNArguments* args) {
   }
 }
 
-template <bool kCapsule>
+template <int K>
 void user_occluded(const RTCOccludedFunctionNArguments* args) {
   const SceneData& d = *static_cast<const SceneData*>(args->geometryUserPtr);
   for (unsigned i = 0; i < args->N; ++i) {
     if (args->valid[i] == 0) continue;
     const kernels::RayQuery q = query_of(args->ray, args->N, i);
-    if (user_hit<kCapsule>(d, args->primID, q) >= 0.0f)
+    if (user_hit<K>(d, args->primID, q) >= 0.0f)
       RTCRayN_tfar(args->ray, args->N, i) = -std::numeric_limits<float>::infinity();
   }
 }
@@ -258,8 +271,14 @@ class EmbreeBackend final : public TraceBackend {
       }
     }
     if (ch.spheres) *dynamic_rebuilt |= update_spheres(d, ch.spheres_resized);
-    if (ch.capsules) *dynamic_rebuilt |= update_user<true>(d, ch.capsules_resized, d.capsule_count(),
-                                                           d.c_layer, kCapsulesId, &capsules_);
+    if (ch.capsules) *dynamic_rebuilt |= update_user<kUserCapsule>(d, ch.capsules_resized, d.capsule_count(),
+                                                                   d.c_layer, kCapsulesId, &capsules_);
+    if (ch.shapes) {
+      shape_layers_.resize(d.shape_count());
+      for (uint32_t i = 0; i < d.shape_count(); ++i) shape_layers_[i] = d.objects[i].layer;
+      *dynamic_rebuilt |= update_user<kUserShape>(d, ch.shapes_resized, d.shape_count(), shape_layers_,
+                                                  kShapesId, &shapes_);
+    }
     run([&] { rtcCommitScene(top_); });
     return check();
   }
@@ -320,6 +339,9 @@ class EmbreeBackend final : public TraceBackend {
       index = data_.mesh_first_tri[geom] + prim;
     } else if (geom == kSpheresId) {
       kind = kernels::kRayHitSphere;
+      index = prim;
+    } else if (geom == kShapesId) {
+      kind = kernels::kRayHitShape;
       index = prim;
     } else {
       kind = kernels::kRayHitCapsule;
@@ -406,7 +428,7 @@ class EmbreeBackend final : public TraceBackend {
   }
 
   // Returns true when the geometry was made anew (a rebuild).
-  template <bool kCapsule>
+  template <int K>
   bool update_user(const SceneData& d, bool resized, uint32_t n, const Buffer<uint32_t>& layers,
                    unsigned id, RTCGeometry* geom) {
     bool rebuilt = resized || *geom == nullptr || desc_.dynamic_update != DynamicUpdate::kRefit;
@@ -417,9 +439,9 @@ class EmbreeBackend final : public TraceBackend {
       RTCGeometry g = rtcNewGeometry(device_, RTC_GEOMETRY_TYPE_USER);
       rtcSetGeometryUserPrimitiveCount(g, n);
       rtcSetGeometryUserData(g, const_cast<SceneData*>(&d));
-      rtcSetGeometryBoundsFunction(g, user_bounds<kCapsule>, const_cast<SceneData*>(&d));
-      rtcSetGeometryIntersectFunction(g, user_intersect<kCapsule>);
-      rtcSetGeometryOccludedFunction(g, user_occluded<kCapsule>);
+      rtcSetGeometryBoundsFunction(g, user_bounds<K>, const_cast<SceneData*>(&d));
+      rtcSetGeometryIntersectFunction(g, user_intersect<K>);
+      rtcSetGeometryOccludedFunction(g, user_occluded<K>);
       rtcSetGeometryBuildQuality(g, quality_of(desc_.dynamic_update));
       rtcAttachGeometryByID(top_, g, id);
       rtcReleaseGeometry(g);
@@ -433,7 +455,7 @@ class EmbreeBackend final : public TraceBackend {
 
   bool update_spheres(const SceneData& d, bool resized) {
     if (desc_.embree_spheres == EmbreeSpheres::kUserGeometry)
-      return update_user<false>(d, resized, d.sphere_count(), d.s_layer, kSpheresId, &spheres_);
+      return update_user<kUserSphere>(d, resized, d.sphere_count(), d.s_layer, kSpheresId, &spheres_);
     const uint32_t n = d.sphere_count();
     const bool rebuilt = resized || spheres_ == nullptr || desc_.dynamic_update != DynamicUpdate::kRefit;
     if (resized || spheres_ == nullptr) {
@@ -474,6 +496,8 @@ class EmbreeBackend final : public TraceBackend {
   RTCGeometry instance_ = nullptr;
   RTCGeometry spheres_ = nullptr;
   RTCGeometry capsules_ = nullptr;
+  RTCGeometry shapes_ = nullptr;
+  Buffer<uint32_t> shape_layers_;  // per object, for the geometry's mask
 #if IMPACT_HAVE_TBB
   std::unique_ptr<tbb::task_arena> arena_;
 #endif

@@ -1,6 +1,7 @@
 // LBVH tracing backend: one tree over all static triangles (built when meshes are
 // added), one over the dynamic spheres and capsules (refit or rebuilt per commit), each
-// with its primitives copied into sorted-leaf order. Deterministic: every pass chunks
+// with its primitives copied into sorted-leaf order, and one over the posed shapes
+// (refit or rebuilt the same way; leaves call host::shape_user_test). Deterministic: every pass chunks
 // by size only, and each ray is traced by one call.
 #include <string>
 
@@ -77,6 +78,19 @@ class LbvhBackend final : public TraceBackend {
         kernels::shape_records(shapes, leaves, rec, {b, e});
       });
     }
+    if (ch.shapes) {
+      const uint32_t n = d.shape_count();
+      const kernels::AabbSoA boxes{d.ob_min_x.data(), d.ob_min_y.data(), d.ob_min_z.data(),
+                                   d.ob_max_x.data(), d.ob_max_y.data(), d.ob_max_z.data()};
+      const bool resized = ch.shapes_resized || shape_tree_.size() != n;
+      if (resized || desc_.dynamic_update != DynamicUpdate::kRefit) {
+        shape_tree_.build(exec, boxes, n);
+        *dynamic_rebuilt = true;
+      } else {
+        shape_tree_.refit(exec, boxes);
+      }
+      data_ = &d;
+    }
     return Status();
   }
 
@@ -84,18 +98,23 @@ class LbvhBackend final : public TraceBackend {
     if (tri_tree_.size() != 0) kernels::ray_closest_triangles(tri_tree_.tree(), tri_rec_.data(), rays, best, {0, n});
     if (dyn_tree_.size() != 0)
       kernels::ray_closest_shapes(dyn_tree_.tree(), dyn_rec_.data(), first_capsule_, rays, best, {0, n});
+    if (shape_tree_.size() != 0)
+      kernels::ray_closest_user(shape_tree_.tree(), shape_user_test, data_, kernels::kRayHitShape, rays, best,
+                                {0, n});
   }
 
   void any(const kernels::RayQuery* rays, uint8_t* hit, uint32_t n) const override {
     if (tri_tree_.size() != 0) kernels::ray_any_triangles(tri_tree_.tree(), tri_rec_.data(), rays, hit, {0, n});
     if (dyn_tree_.size() != 0)
       kernels::ray_any_shapes(dyn_tree_.tree(), dyn_rec_.data(), first_capsule_, rays, hit, {0, n});
+    if (shape_tree_.size() != 0) kernels::ray_any_user(shape_tree_.tree(), shape_user_test, data_, rays, hit, {0, n});
   }
 
  private:
   RaySceneDesc desc_;
   Boxes boxes_;
-  RayLbvh tri_tree_, dyn_tree_;
+  RayLbvh tri_tree_, dyn_tree_, shape_tree_;
+  const SceneData* data_ = nullptr;
   Buffer<kernels::TriangleRecord> tri_rec_;
   Buffer<kernels::ShapeRecord> dyn_rec_;
   uint32_t first_capsule_ = 0;

@@ -13,6 +13,8 @@
 
 #include <Eigen/Geometry>
 
+#include "host/narrowphase/pose.h"
+#include "host/narrowphase/shape_ray.h"
 #include "host/raycast/embree_plain.h"
 #include "host/raycast/scene_data.h"
 #include "impact/world.h"
@@ -203,6 +205,21 @@ class RaySceneImpl {
           const double l2 = ab.squaredNorm();
           const double u = l2 > 0.0 ? std::clamp((p - a).dot(ab) / l2, 0.0, 1.0) : 0.0;
           n = p - (a + u * ab);
+        }
+        break;
+      }
+      case kernels::kRayHitShape: {
+        h.kind = HitKind::kShape;
+        h.id = b.prim;
+        // Re-trace the one object for its normal and child (the same deterministic
+        // test that found t, so the same hit).
+        const host::SceneData::ShapeObject& ob = s.objects[b.prim];
+        const ShapeRayHit sh = host::ray_posed_shape(
+            *s.shape_store, s.shape_store->shapes[ob.shape], ob.R, ob.p, Eigen::Vector3f(q.o[0], q.o[1], q.o[2]),
+            Eigen::Vector3f(q.d[0], q.d[1], q.d[2]), q.tmax);
+        if (sh.hit) {
+          h.prim = sh.child == kNoChild ? 0u : sh.child;
+          n = sh.normal.cast<double>();  // -d inside a solid; the triangle's for mesh shapes
         }
         break;
       }
@@ -436,6 +453,59 @@ Status RayScene::set_planes(const Eigen::Ref<const Eigen::Matrix3Xf>& normals, s
   return Status();
 }
 
+Status RayScene::set_shapes(const ShapeSet& shapes, std::span<const ShapeId> shape_of, std::span<const Pose> poses,
+                            std::span<const uint32_t> layer) {
+  const size_t n = shape_of.size();
+  if (poses.size() != n || (!layer.empty() && layer.size() != n))
+    return Status(StatusCode::kSizeMismatch, "set_shapes: shape_of, poses (and layer, when given) must have equal sizes, got " +
+                                                 std::to_string(n) + ", " + std::to_string(poses.size()) + ", " +
+                                                 std::to_string(layer.size()));
+  if (n >= (1u << 30)) return Status(StatusCode::kCapacityExceeded, "set_shapes: at most 2^30 - 1 objects");
+  const ShapeStore& store = shapes.store();
+  for (size_t i = 0; i < n; ++i) {
+    if (shape_of[i].index >= store.shapes.size())
+      return Status(StatusCode::kInvalidArgument, "set_shapes: object " + std::to_string(i) + ": unknown shape id " +
+                                                      std::to_string(shape_of[i].index) + " (" +
+                                                      std::to_string(store.shapes.size()) + " shapes)");
+    if (store.shapes[shape_of[i].index].type == ShapeType::kHalfSpace)
+      return Status(StatusCode::kInvalidArgument, "set_shapes: object " + std::to_string(i) +
+                                                      ": half-spaces are unbounded; add them with set_planes");
+    if (!host::pose_ok(poses[i])) {
+      const std::string who = "set_shapes: object " + std::to_string(i);
+      return host::check_pose(poses[i], who.c_str());
+    }
+  }
+  host::SceneData& d = impl_->data;
+  impl_->changes.shapes = true;
+  impl_->changes.shapes_resized |= d.shape_count() != n;
+  d.shape_store = &store;
+  d.objects.resize(n);
+  for (host::Buffer<float>* v : {&d.ob_min_x, &d.ob_min_y, &d.ob_min_z, &d.ob_max_x, &d.ob_max_y, &d.ob_max_z})
+    v->resize(n);
+  for (size_t i = 0; i < n; ++i) {
+    const ShapeRecord& rec = store.shapes[shape_of[i].index];
+    const Pose pose = host::normalized(poses[i]);
+    host::SceneData::ShapeObject& ob = d.objects[i];
+    ob.R = host::shape_rotation(rec, pose);
+    ob.p = pose.position;
+    ob.shape = shape_of[i].index;
+    ob.layer = layer.empty() ? 1u : layer[i];
+    Eigen::Vector3f lo, hi;
+    host::posed_bounds(rec, pose, store.hulls, &lo, &hi);
+    // Pad by a few ulps of the box's magnitude: the bounds and the ray test round
+    // differently, and a ray grazing the shape must not be culled by its box.
+    const float pad = 8.0f * std::numeric_limits<float>::epsilon() *
+                      std::max(lo.cwiseAbs().maxCoeff(), hi.cwiseAbs().maxCoeff());
+    d.ob_min_x[i] = lo.x() - pad;
+    d.ob_min_y[i] = lo.y() - pad;
+    d.ob_min_z[i] = lo.z() - pad;
+    d.ob_max_x[i] = hi.x() + pad;
+    d.ob_max_y[i] = hi.y() + pad;
+    d.ob_max_z[i] = hi.z() + pad;
+  }
+  return Status();
+}
+
 Status RayScene::commit() {
   const auto t0 = std::chrono::steady_clock::now();
   bool rebuilt = false;
@@ -451,6 +521,7 @@ Status RayScene::commit() {
   in.spheres = d.sphere_count();
   in.capsules = d.capsule_count();
   in.planes = static_cast<uint32_t>(d.planes.size());
+  in.shapes = d.shape_count();
   in.dynamic_rebuilt = rebuilt;
   in.commit_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
   return Status();
@@ -555,6 +626,19 @@ Status camera_rays(const Camera& camera, std::span<const Eigen::Vector2f> screen
 
 // ------------------------------------------------------------------------------------
 namespace host {
+
+float shape_ray_t(const SceneData& d, uint32_t i, const kernels::RayQuery& q) {
+  const SceneData::ShapeObject& ob = d.objects[i];
+  if ((ob.layer & q.mask) == 0) return -1.0f;
+  const ShapeRayHit h = ray_posed_shape(*d.shape_store, d.shape_store->shapes[ob.shape], ob.R, ob.p,
+                                        Eigen::Vector3f(q.o[0], q.o[1], q.o[2]),
+                                        Eigen::Vector3f(q.d[0], q.d[1], q.d[2]), q.tmax);
+  return h.hit ? h.t : -1.0f;
+}
+
+float shape_user_test(const void* ctx, uint32_t i, const kernels::RayQuery& q) {
+  return shape_ray_t(*static_cast<const SceneData*>(ctx), i, q);
+}
 
 uint64_t embree_plain_closest(const RayScene& scene, std::span<const Ray> rays) {
   const RaySceneImpl* impl = RaySceneImpl::of(scene);

@@ -7,9 +7,13 @@
 #include <memory>
 #include <vector>
 
+#include <Eigen/Core>
+
 #include "host/buffer.h"
+#include "host/narrowphase/shape_store.h"
 #include "host/parallel.h"
 #include "impact/raycast.h"
+#include "impact/shape_queries.h"
 #include "impact/status.h"
 #include "kernels/raycast/ray_bvh.h"
 
@@ -35,10 +39,24 @@ struct SceneData {
   // Static half-spaces (unit normals).
   Buffer<kernels::PlaneRecord> planes;
 
+  // Posed shapes (RayScene::set_shapes): the caller's ShapeSet storage (held, not
+  // copied), and per object its shape record, frame (world = R * local + p; R is the
+  // identity for AABB shapes) and layer; world bounds in ob_* (padded by a few ulps).
+  struct ShapeObject {
+    Eigen::Matrix3f R;
+    Eigen::Vector3f p;
+    uint32_t shape;
+    uint32_t layer;
+  };
+  const ShapeStore* shape_store = nullptr;
+  std::vector<ShapeObject> objects;
+  Buffer<float> ob_min_x, ob_min_y, ob_min_z, ob_max_x, ob_max_y, ob_max_z;
+
   uint32_t mesh_count() const { return static_cast<uint32_t>(mesh_layer.size()); }
   uint32_t triangle_count() const { return static_cast<uint32_t>(tri_layer.size()); }
   uint32_t sphere_count() const { return static_cast<uint32_t>(sr.size()); }
   uint32_t capsule_count() const { return static_cast<uint32_t>(cr.size()); }
+  uint32_t shape_count() const { return static_cast<uint32_t>(objects.size()); }
 };
 
 /// What changed since the last commit.
@@ -46,7 +64,8 @@ struct SceneChanges {
   uint32_t meshes_added = 0;      // meshes [mesh_count - meshes_added, mesh_count) are new
   bool spheres = false, spheres_resized = false;
   bool capsules = false, capsules_resized = false;
-  bool any() const { return meshes_added != 0 || spheres || capsules; }
+  bool shapes = false, shapes_resized = false;
+  bool any() const { return meshes_added != 0 || spheres || capsules || shapes; }
 };
 
 /// A tracing engine over SceneData. Queries take one chunk of validated rays (unit
@@ -62,6 +81,12 @@ class TraceBackend {
   /// Threads of the backend's own parallel work (Embree's builders).
   virtual void set_threads(uint32_t) {}
 };
+
+/// Posed shape object i against the ray (host/narrowphase/shape_ray.h), its layer
+/// checked against q.mask: the hit distance in [0, q.tmax], or -1.
+float shape_ray_t(const SceneData& d, uint32_t i, const kernels::RayQuery& q);
+/// The same as a kernels::RayUserTest (ctx = the SceneData).
+float shape_user_test(const void* ctx, uint32_t i, const kernels::RayQuery& q);
 
 std::unique_ptr<TraceBackend> make_lbvh_backend(const RaySceneDesc& desc);
 /// Null with *status set when Embree cannot start.

@@ -1,5 +1,6 @@
 // RayScene: batched ray queries (closest hit for picking, any hit for line of sight)
-// against static triangle meshes, dynamic spheres and capsules, and static half-spaces,
+// against static triangle meshes, dynamic spheres and capsules, posed shapes of a
+// ShapeSet (boxes, convex hulls, compounds, ...), and static half-spaces,
 // through Embree 3 or through impact's own LBVH (docs/raycast.md).
 //
 // Rules (the same for both backends; tests/host/raycast_test.cpp checks them against a
@@ -14,8 +15,10 @@
 //  - The normal is unit and faces the ray (dot(normal, direction) <= 0).
 //  - Layers: a primitive is seen by a ray iff (primitive layer & ray mask) != 0.
 //  - Segments (any hit) are closed: a primitive touching either end point occludes.
-// Not yet: boxes, convex polyhedra and compounds (they arrive with the narrow-phase
-// proxies); instancing of meshes.
+//  - Posed shapes (set_shapes) hit as impact::raycast_shapes does (the same per-shape
+//    code, include/impact/shape_queries.h): solids hit at t = 0 from inside, meshes
+//    used as shapes are two-sided triangles, compounds report the child hit.
+// Not yet: instancing of meshes.
 //
 // Thread safety: queries are const and may run concurrently; the setters and commit()
 // must not overlap any other call on the same scene.
@@ -28,6 +31,7 @@
 
 #include <Eigen/Core>
 
+#include "impact/shapes.h"
 #include "impact/status.h"
 #include "impact/types.h"
 
@@ -95,14 +99,16 @@ struct Segment {
 };
 
 /// What a ray hit.
-enum class HitKind : uint8_t { kNone = 0, kTriangle, kSphere, kCapsule, kPlane };
+enum class HitKind : uint8_t { kNone = 0, kTriangle, kSphere, kCapsule, kPlane, kShape };
 
 /// The closest hit of one ray.
 struct RayHit {
   HitKind kind = HitKind::kNone;
-  /// Mesh id (kTriangle), sphere index, capsule index or plane index.
+  /// Mesh id (kTriangle), sphere index, capsule index, plane index or shape object
+  /// index (kShape: the index into set_shapes' shape_of / poses).
   uint32_t id = 0xffffffffu;
-  /// Triangle index within the mesh (kTriangle); 0 otherwise.
+  /// Triangle index within the mesh (kTriangle); for kShape the compound child or the
+  /// triangle of a mesh shape (0 for other shapes); 0 otherwise.
   uint32_t prim = 0;
   /// The body of a sphere filled by sync_spheres(World); null otherwise.
   BodyHandle body;
@@ -124,7 +130,7 @@ struct Camera {
 
 /// Counters of the last commit() (for benchmarks).
 struct RaySceneInfo {
-  uint32_t meshes = 0, triangles = 0, spheres = 0, capsules = 0, planes = 0;
+  uint32_t meshes = 0, triangles = 0, spheres = 0, capsules = 0, planes = 0, shapes = 0;
   bool dynamic_rebuilt = false;  ///< the last commit rebuilt (not refitted) dynamic geometry
   double commit_ms = 0.0;        ///< wall time of the last commit()
 };
@@ -157,6 +163,17 @@ class RayScene {
   /// Replaces all static half-spaces {x : dot(normal, x) <= offset}; normals need not
   /// be unit but must be finite and non-zero. layer may be empty (all 1).
   Status set_planes(const Eigen::Ref<const Eigen::Matrix3Xf>& normals, std::span<const float> offsets,
+                    std::span<const uint32_t> layer = {});
+  /// Replaces all posed shapes: object i is shapes' shape shape_of[i] at poses[i]
+  /// (unit quaternion within 1e-3, renormalised), seen by rays whose mask meets
+  /// layer[i] (layer may be empty = all 1). Every shape type but the half-space (use
+  /// set_planes). The scene keeps a pointer to `shapes` (its storage, so moving the
+  /// ShapeSet is fine): the ShapeSet must outlive the scene, or stay alive until the
+  /// next set_shapes, and must not be changed (shapes added) while queries run. Poses
+  /// are copied. Same count as before: an update (refit or rebuild per DynamicUpdate);
+  /// else rebuild. Errors: kSizeMismatch, kInvalidArgument naming the object for an
+  /// unknown shape id, a half-space, a non-finite or non-unit pose.
+  Status set_shapes(const ShapeSet& shapes, std::span<const ShapeId> shape_of, std::span<const Pose> poses,
                     std::span<const uint32_t> layer = {});
   /// Builds or updates acceleration structures for everything set since the last commit.
   Status commit();

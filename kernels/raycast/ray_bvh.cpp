@@ -273,6 +273,45 @@ void ray_any_shapes(const RayTree& t, const ShapeRecord* rec, uint32_t first_cap
   }
 }
 
+void ray_closest_user(const RayTree& t, RayUserTest test, const void* ctx, uint32_t kind,
+                      const RayQuery* rays, RayBest* io_best, Range r) {
+  for (uint32_t i = r.begin; i < r.end; ++i) {
+    RayQuery q = rays[i];
+    RayBest best = io_best[i];
+    q.tmax = best.t;
+    traverse(
+        t, q,
+        [&](uint32_t s) {
+          const uint32_t idx = t.leaves[s].index;
+          const float th = test(ctx, idx, q);
+          if (th >= 0.0f && ray_best_better(th, kind, idx, best)) {
+            best = {th, kind, idx};
+            q.tmax = th;
+          }
+          return false;
+        },
+        [&] { return q.tmax; });
+    io_best[i] = best;
+  }
+}
+
+void ray_any_user(const RayTree& t, RayUserTest test, const void* ctx, const RayQuery* rays,
+                  uint8_t* io_hit, Range r) {
+  for (uint32_t i = r.begin; i < r.end; ++i) {
+    if (io_hit[i]) continue;
+    const RayQuery q = rays[i];
+    bool hit = false;
+    traverse(
+        t, q,
+        [&](uint32_t s) {
+          hit = test(ctx, t.leaves[s].index, q) >= 0.0f;
+          return hit;
+        },
+        [&] { return q.tmax; });
+    io_hit[i] = hit ? 1 : 0;
+  }
+}
+
 void ray_closest_planes(const PlaneRecord* planes, uint32_t count, const RayQuery* rays,
                         RayBest* io_best, Range r) {
   for (uint32_t i = r.begin; i < r.end; ++i) {

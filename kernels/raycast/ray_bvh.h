@@ -1,5 +1,6 @@
 // Ray queries over an LBVH (kernels/bvh/lbvh_build.h + lbvh_refit.h): closest hit
-// and any hit, one ray per index, for triangle trees and for sphere/capsule trees;
+// and any hit, one ray per index, for triangle trees, for sphere/capsule trees and for
+// trees of user primitives tested by a callback (RayScene's posed shapes);
 // plus the brute-force pass over the (few, unbounded) half-spaces.
 //
 // What: per ray i in r, rays[i] (unit direction, tmax, mask) is traced through the
@@ -103,6 +104,14 @@ void ray_closest_shapes(const RayTree& t, const ShapeRecord* rec, uint32_t first
                         const RayQuery* rays, RayBest* io_best, Range r);
 void ray_any_shapes(const RayTree& t, const ShapeRecord* rec, uint32_t first_capsule,
                     const RayQuery* rays, uint8_t* io_hit, Range r);
+/// User primitives (RayScene's posed shapes): test(ctx, index, q) is the hit distance
+/// in [0, q.tmax] of original primitive `index` (its layer checked against q.mask), or
+/// < 0 for a miss. Hits are reduced as (t, kind, index).
+using RayUserTest = float (*)(const void* ctx, uint32_t index, const RayQuery& q);
+void ray_closest_user(const RayTree& t, RayUserTest test, const void* ctx, uint32_t kind,
+                      const RayQuery* rays, RayBest* io_best, Range r);
+void ray_any_user(const RayTree& t, RayUserTest test, const void* ctx, const RayQuery* rays,
+                  uint8_t* io_hit, Range r);
 void ray_closest_planes(const PlaneRecord* planes, uint32_t count, const RayQuery* rays,
                         RayBest* io_best, Range r);
 void ray_any_planes(const PlaneRecord* planes, uint32_t count, const RayQuery* rays, uint8_t* io_hit,

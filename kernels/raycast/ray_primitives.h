@@ -57,6 +57,7 @@ enum : uint32_t {
   kRayHitSphere = 2,
   kRayHitCapsule = 3,
   kRayHitPlane = 4,
+  kRayHitShape = 5,  ///< a posed shape of RayScene::set_shapes (prim = object index)
 };
 
 /// The best hit of one ray so far. Reductions keep the smaller t; between equal t the
