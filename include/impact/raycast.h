@@ -156,6 +156,8 @@ class RayScene {
   Status set_spheres(std::span<const float> x, std::span<const float> y, std::span<const float> z,
                      std::span<const float> radius, std::span<const uint32_t> layer = {});
   /// Spheres from a World's bodies (slot i -> sphere i; hits report the body handle).
+  /// Bodies with shapes (BodyDesc::shape) appear as their bounding spheres
+  /// (BodyArrays::radius); give exact shapes with set_shapes.
   Status sync_spheres(const World& world);
   /// Replaces all capsules: segment end points a, b (3 x n), radii > 0, layers (may be empty).
   Status set_capsules(const Eigen::Ref<const Eigen::Matrix3Xf>& a, const Eigen::Ref<const Eigen::Matrix3Xf>& b,
