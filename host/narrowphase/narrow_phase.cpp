@@ -159,10 +159,8 @@ Box3 host::NarrowRunner::State::leaf_bounds(uint32_t obj, uint32_t child) const 
   if (r.type == ShapeType::kCompound && child != kNoChild) {
     const CompoundChild& c = store->children[store->child_begin[r.ref] + child];
     const ShapeRecord& cr = store->shapes[c.shape.index];
-    Pose w;
-    w.orientation = Eigen::Quaternionf(P.R) * c.local.orientation;
-    w.position = P.R * c.local.position + P.p;
-    host::posed_bounds(cr, w, store->hulls, &b.lo, &b.hi);
+    host::posed_bounds(cr, P.R * c.local.orientation.toRotationMatrix(), P.R * c.local.position + P.p,
+                       store->hulls, &b.lo, &b.hi);
     return b;
   }
   if (r.type == ShapeType::kMesh && child != kNoChild) {
@@ -176,10 +174,7 @@ Box3 host::NarrowRunner::State::leaf_bounds(uint32_t obj, uint32_t child) const 
     }
     return b;
   }
-  Pose w;
-  w.orientation = Eigen::Quaternionf(P.R);
-  w.position = P.p;
-  host::posed_bounds(r, w, store->hulls, &b.lo, &b.hi);
+  host::posed_bounds(r, P.R, P.p, store->hulls, &b.lo, &b.hi);
   return b;
 }
 

@@ -45,19 +45,10 @@ inline Pose normalized(const Pose& p) {
   return out;
 }
 
-/// a * b: the pose of b's frame (given in a's frame) in the world.
-inline Pose compose(const Pose& a, const Pose& b) {
-  Pose out;
-  out.orientation = a.orientation * b.orientation;
-  out.position = a.orientation * b.position + a.position;
-  return out;
-}
-
 /// World AABB of a (non-half-space) shape at a normalised pose.
-inline void posed_bounds(const ShapeRecord& r, const Pose& pose, const HullStore& hulls,
-                         Eigen::Vector3f* lo, Eigen::Vector3f* hi) {
-  const Eigen::Matrix3f R = pose.orientation.toRotationMatrix();
-  const Eigen::Vector3f& p = pose.position;
+/// The same with the pose as a rotation matrix R and a position p.
+inline void posed_bounds(const ShapeRecord& r, const Eigen::Matrix3f& R, const Eigen::Vector3f& p,
+                         const HullStore& hulls, Eigen::Vector3f* lo, Eigen::Vector3f* hi) {
   Eigen::Vector3f half = Eigen::Vector3f::Zero();
   switch (r.type) {
     case ShapeType::kSphere:
@@ -112,6 +103,11 @@ inline void posed_bounds(const ShapeRecord& r, const Pose& pose, const HullStore
   }
   *lo = p - half;
   *hi = p + half;
+}
+
+inline void posed_bounds(const ShapeRecord& r, const Pose& pose, const HullStore& hulls,
+                         Eigen::Vector3f* lo, Eigen::Vector3f* hi) {
+  posed_bounds(r, pose.orientation.toRotationMatrix(), pose.position, hulls, lo, hi);
 }
 
 }  // namespace impact::host

@@ -172,6 +172,25 @@ IMPACT_INLINE void for_each_block(const LeafSoA& a, const LeafSoA& b, const Mani
   }
 }
 
+/// Defines the PairKernel `name` over the lane template `block<F>(a, b, out, k)`
+/// writing P point slots: the one-lane scalar path for KernelPath::kScalar, the
+/// kSimdWidth-lane path otherwise.
+#define IMPACT_LANE_KERNEL(name, block, P)                                                           \
+  void name(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out, Range r,                   \
+            const NarrowConfig& cfg) {                                                              \
+    if (cfg.path == KernelPath::kScalar) {                                                          \
+      for_each_block<simd::Float1, P>(a, b, out, r, [](const LeafSoA& aa, const LeafSoA& bb,        \
+                                                       const ManifoldSoA& o, uint32_t k) {          \
+        block<simd::Float1>(aa, bb, o, k);                                                          \
+      });                                                                                           \
+    } else {                                                                                        \
+      for_each_block<simd::FloatW, P>(a, b, out, r, [](const LeafSoA& aa, const LeafSoA& bb,        \
+                                                       const ManifoldSoA& o, uint32_t k) {          \
+        block<simd::FloatW>(aa, bb, o, k);                                                          \
+      });                                                                                           \
+    }                                                                                               \
+  }
+
 // ---------------------------------------------------------------------------------------
 // Geometry
 // ---------------------------------------------------------------------------------------

@@ -488,22 +488,6 @@ IMPACT_INLINE void box_halfspace_block(const LeafSoA& a, const LeafSoA& b, const
   store(out, k, m, pa);
 }
 
-#define IMPACT_BOX_KERNEL(name, block)                                                              \
-  void name(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out, Range r,                   \
-            const NarrowConfig& cfg) {                                                              \
-    if (cfg.path == KernelPath::kScalar) {                                                          \
-      for_each_block<simd::Float1, 4>(a, b, out, r, [](const LeafSoA& aa, const LeafSoA& bb,        \
-                                                       const ManifoldSoA& o, uint32_t k) {          \
-        block<simd::Float1>(aa, bb, o, k);                                                          \
-      });                                                                                           \
-    } else {                                                                                        \
-      for_each_block<simd::FloatW, 4>(a, b, out, r, [](const LeafSoA& aa, const LeafSoA& bb,        \
-                                                       const ManifoldSoA& o, uint32_t k) {          \
-        block<simd::FloatW>(aa, bb, o, k);                                                          \
-      });                                                                                           \
-    }                                                                                               \
-  }
-
 }  // namespace
 
 void collide_box_box(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out, Range r, const NarrowConfig& cfg) {
@@ -514,6 +498,6 @@ void collide_box_box(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out,
     box_box_compact<simd::FloatW>(a, b, out, r);
   }
 }
-IMPACT_BOX_KERNEL(collide_box_halfspace, box_halfspace_block)
+IMPACT_LANE_KERNEL(collide_box_halfspace, box_halfspace_block, 4)
 
 }  // namespace impact::kernels

@@ -304,15 +304,6 @@ IMPACT_INLINE void box_triangle_block(const LeafSoA& a, const LeafSoA& b, const 
 
 }  // namespace
 
-void collide_box_triangle(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out, Range r,
-                          const NarrowConfig& cfg) {
-  if (cfg.path == KernelPath::kScalar) {
-    for_each_block<simd::Float1, 4>(a, b, out, r, [](const LeafSoA& aa, const LeafSoA& bb, const ManifoldSoA& o,
-                                                     uint32_t k) { box_triangle_block<simd::Float1>(aa, bb, o, k); });
-  } else {
-    for_each_block<simd::FloatW, 4>(a, b, out, r, [](const LeafSoA& aa, const LeafSoA& bb, const ManifoldSoA& o,
-                                                     uint32_t k) { box_triangle_block<simd::FloatW>(aa, bb, o, k); });
-  }
-}
+IMPACT_LANE_KERNEL(collide_box_triangle, box_triangle_block, 4)
 
 }  // namespace impact::kernels

@@ -510,27 +510,11 @@ IMPACT_INLINE void capsule_halfspace_block(const LeafSoA& a, const LeafSoA& b, c
   store(out, k, m, pa);
 }
 
-#define IMPACT_CAPSULE_KERNEL(name, block)                                                          \
-  void name(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out, Range r,                   \
-            const NarrowConfig& cfg) {                                                              \
-    if (cfg.path == KernelPath::kScalar) {                                                          \
-      for_each_block<simd::Float1, 2>(a, b, out, r, [](const LeafSoA& aa, const LeafSoA& bb,        \
-                                                       const ManifoldSoA& o, uint32_t k) {          \
-        block<simd::Float1>(aa, bb, o, k);                                                          \
-      });                                                                                           \
-    } else {                                                                                        \
-      for_each_block<simd::FloatW, 2>(a, b, out, r, [](const LeafSoA& aa, const LeafSoA& bb,        \
-                                                       const ManifoldSoA& o, uint32_t k) {          \
-        block<simd::FloatW>(aa, bb, o, k);                                                          \
-      });                                                                                           \
-    }                                                                                               \
-  }
-
 }  // namespace
 
-IMPACT_CAPSULE_KERNEL(collide_capsule_capsule, capsule_capsule_block)
-IMPACT_CAPSULE_KERNEL(collide_capsule_box, capsule_box_block)
-IMPACT_CAPSULE_KERNEL(collide_capsule_triangle, capsule_triangle_block)
-IMPACT_CAPSULE_KERNEL(collide_capsule_halfspace, capsule_halfspace_block)
+IMPACT_LANE_KERNEL(collide_capsule_capsule, capsule_capsule_block, 2)
+IMPACT_LANE_KERNEL(collide_capsule_box, capsule_box_block, 2)
+IMPACT_LANE_KERNEL(collide_capsule_triangle, capsule_triangle_block, 2)
+IMPACT_LANE_KERNEL(collide_capsule_halfspace, capsule_halfspace_block, 2)
 
 }  // namespace impact::kernels

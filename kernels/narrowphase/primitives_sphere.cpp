@@ -136,29 +136,12 @@ IMPACT_INLINE void sphere_halfspace_block(const LeafSoA& a, const LeafSoA& b, co
   store(out, k, one_point(n, ra - h, n * ra, n * h), pa);
 }
 
-template <class F, class Block>
-IMPACT_INLINE void run(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out, Range r, Block block) {
-  for_each_block<F, 1>(a, b, out, r, block);
-}
-
-#define IMPACT_SPHERE_KERNEL(name, block)                                                           \
-  void name(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out, Range r,                   \
-            const NarrowConfig& cfg) {                                                              \
-    if (cfg.path == KernelPath::kScalar) {                                                          \
-      run<simd::Float1>(a, b, out, r, [](const LeafSoA& aa, const LeafSoA& bb, const ManifoldSoA& o, \
-                                         uint32_t k) { block<simd::Float1>(aa, bb, o, k); });       \
-    } else {                                                                                        \
-      run<simd::FloatW>(a, b, out, r, [](const LeafSoA& aa, const LeafSoA& bb, const ManifoldSoA& o, \
-                                         uint32_t k) { block<simd::FloatW>(aa, bb, o, k); });       \
-    }                                                                                               \
-  }
-
 }  // namespace
 
-IMPACT_SPHERE_KERNEL(collide_sphere_sphere, sphere_sphere_block)
-IMPACT_SPHERE_KERNEL(collide_sphere_capsule, sphere_capsule_block)
-IMPACT_SPHERE_KERNEL(collide_sphere_box, sphere_box_block)
-IMPACT_SPHERE_KERNEL(collide_sphere_triangle, sphere_triangle_block)
-IMPACT_SPHERE_KERNEL(collide_sphere_halfspace, sphere_halfspace_block)
+IMPACT_LANE_KERNEL(collide_sphere_sphere, sphere_sphere_block, 1)
+IMPACT_LANE_KERNEL(collide_sphere_capsule, sphere_capsule_block, 1)
+IMPACT_LANE_KERNEL(collide_sphere_box, sphere_box_block, 1)
+IMPACT_LANE_KERNEL(collide_sphere_triangle, sphere_triangle_block, 1)
+IMPACT_LANE_KERNEL(collide_sphere_halfspace, sphere_halfspace_block, 1)
 
 }  // namespace impact::kernels
