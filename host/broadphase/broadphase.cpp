@@ -6,7 +6,6 @@
 
 #include "kernels/broadphase/bounds.h"
 #include "kernels/common/permute.h"
-#include "kernels/sort/segments.h"
 
 namespace impact::host {
 namespace {
@@ -116,30 +115,42 @@ void GridBroadPhase::build_grid(const Executor& exec, kernels::AabbSoA boxes, ke
   built_n_ = n;
   const kernels::GridParams g = choose_grid(sum, n, &info_);
 
-  // Keys plus packed boxes in input order, then the keys sorted on the bucket bits.
+  // Sort by bucket (kernels/broadphase/grid.h): count per block, scan, partition
+  // by block, then a counting sort inside each block that also fills the bucket ranges.
   const bool filtered = filter.layer != nullptr;
-  uint64_t* keys = scratch(keys_, n);
+  const kernels::GridBlocks blocks = kernels::grid_blocks(g);
+  const uint32_t chunks = chunk_count(n, kKeyGrain);
+  uint32_t* bucket = scratch(bucket_, n);
+  uint32_t* offsets = scratch(block_offsets_, static_cast<size_t>(chunks) * blocks.count);
+  exec.for_each_chunk(n, kKeyGrain, [&](uint32_t b, uint32_t e, uint32_t c) {
+    kernels::grid_bucket_count(g, blocks, boxes, bucket, offsets + static_cast<size_t>(c) * blocks.count,
+                               {b, e});
+  });
+  uint32_t* block_start = scratch(block_start_, static_cast<size_t>(blocks.count) + 1);
+  uint32_t running = 0;
+  for (uint32_t k = 0; k < blocks.count; ++k) {
+    block_start[k] = running;
+    for (uint32_t c = 0; c < chunks; ++c) {
+      uint32_t& slot = offsets[static_cast<size_t>(c) * blocks.count + k];
+      const uint32_t cnt = slot;
+      slot = running;
+      running += cnt;
+    }
+  }
+  block_start[blocks.count] = running;
   kernels::SortedBox* packed = scratch(packed_box_, n);
   kernels::FilterRecord* packed_filter = filtered ? scratch(packed_filter_, n) : nullptr;
-  exec.for_each_chunk(n, kKeyGrain, [&](uint32_t b, uint32_t e, uint32_t) {
-    kernels::grid_keys_pack(g, boxes, filter, original_index, keys, packed, packed_filter, {b, e});
+  exec.for_each_chunk(n, kKeyGrain, [&](uint32_t b, uint32_t e, uint32_t c) {
+    kernels::grid_scatter_blocks(blocks, boxes, filter, original_index, bucket,
+                                 offsets + static_cast<size_t>(c) * blocks.count, packed, packed_filter,
+                                 {b, e});
   });
-  sorter_.sort(exec, keys, n, 32, 32 + bits_for(g.bucket_count - 1));
-
-  // Gather into sorted order.
-  kernels::GridSorted sorted{scratch(sorted_box_, n),
-                             scratch(cell_, n),
-                             filtered ? scratch(layer_, n) : nullptr,
-                             filtered ? scratch(mask_, n) : nullptr,
+  kernels::GridSorted sorted{scratch(sorted_box_, n), g.dense ? nullptr : scratch(cell_, n),
+                             filtered ? scratch(layer_, n) : nullptr, filtered ? scratch(mask_, n) : nullptr,
                              filtered ? scratch(static_, n) : nullptr};
-  exec.for_each_chunk(n, kKeyGrain, [&](uint32_t b, uint32_t e, uint32_t) {
-    kernels::grid_gather_packed(g, keys, packed, packed_filter, sorted, {b, e});
-  });
-
-  // Bucket ranges.
   uint32_t* starts = scratch(bucket_start_, static_cast<size_t>(g.bucket_count) + 1);
-  exec.for_each_chunk(n, kKeyGrain, [&](uint32_t b, uint32_t e, uint32_t) {
-    kernels::segment_starts(keys, n, 32, g.bucket_count, starts, {b, e});
+  exec.for_each_chunk(blocks.count, kBlockGrain, [&](uint32_t b, uint32_t e, uint32_t) {
+    kernels::grid_sort_blocks(g, blocks, block_start, packed, packed_filter, sorted, starts, {b, e});
   });
   view_ = kernels::GridView{g, sorted.box, sorted.cell, sorted.layer, sorted.mask, sorted.is_static, starts};
 }
@@ -163,7 +174,11 @@ void GridBroadPhase::build(const Executor& exec, kernels::AabbSoA boxes, kernels
   if (n < 2) return;
   const kernels::BoundsSummary sum = summary ? *summary : summarize_bounds(exec, boxes, n, partial_bounds_);
 
-  if (level_fraction_ > 0 && sum.max_edge > 0.0f) {
+  // Levels need boxes 16x or more smaller than the largest (grid_levels' level 2
+  // and finer, the same float bound); when the summary's smallest box edge rules
+  // that out, skip counting the levels.
+  const float fine_bound = sum.max_edge * 0.25f * 0.25f;
+  if (level_fraction_ > 0 && sum.max_edge > 0.0f && !(sum.min_edge > fine_bound)) {
     // Size spread: count boxes per level (one count per chunk, summed in order).
     if (!levels_) levels_ = std::make_unique<Levels>();
     Levels& lv = *levels_;

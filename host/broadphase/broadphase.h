@@ -73,6 +73,7 @@ class GridBroadPhase {
   static constexpr uint32_t kKeyGrain = 1u << 14;   // boxes per chunk in streaming passes
   static constexpr uint32_t kPairGrain = 1u << 11;  // query slots per chunk in the pair pass
   static constexpr uint32_t kLevelFraction = 8;
+  static constexpr uint32_t kBlockGrain = 4;  // blocks per chunk in the block sort
 
  private:
   struct Levels;
@@ -83,10 +84,11 @@ class GridBroadPhase {
   void build_levels(const Executor& exec, kernels::AabbSoA boxes, kernels::PairFilter filter, uint32_t n);
   Status levels_pairs(const Executor& exec, Buffer<kernels::Pair>* out);
 
-  RadixSorter sorter_;
-  Buffer<uint64_t> keys_;
+  Buffer<uint32_t> bucket_;         // per box, input order
+  Buffer<uint32_t> block_offsets_;  // chunks x blocks: counts, then scatter offsets
+  Buffer<uint32_t> block_start_;    // blocks + 1
   Buffer<kernels::SortedBox> sorted_box_;
-  Buffer<kernels::SortedBox> packed_box_;
+  Buffer<kernels::SortedBox> packed_box_;  // partitioned by block
   Buffer<kernels::FilterRecord> packed_filter_;
   uint32_t last_n_ = 0;
   uint32_t built_n_ = 0;

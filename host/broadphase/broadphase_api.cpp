@@ -1,5 +1,8 @@
 // impact::BroadPhase: the stand-alone broad-phase stage over a caller's boxes.
+#include <algorithm>
 #include <cmath>
+#include <cstddef>
+#include <cstring>
 #include <string>
 
 #include "host/broadphase/query.h"
@@ -21,6 +24,7 @@ class BroadPhaseImpl {
   host::BroadPhaseStage stage;
   host::Buffer<kernels::Pair> pairs;
   host::Buffer<float> swept[6];
+  host::Buffer<uint8_t> chunk_ok;  // check_boxes: one validity flag per chunk
   host::Executor exec;
   Backend exec_backend = Backend::kDefault;
   uint32_t exec_threads = 0;
@@ -48,10 +52,12 @@ size_t BroadPhase::size() const { return impl_->stage.built() ? impl_->stage.siz
 
 namespace {
 
+constexpr uint32_t kPairCopyGrain = 1u << 16;  // pairs per chunk when copying out
+constexpr uint32_t kCheckGrain = 1u << 16;     // boxes per chunk when validating
+
 // Branch-free validity of all boxes (vectorised; the common case), the same rules
 // as the per-box messages below: finite, |v| <= 1e18, min <= max, moved box in range.
-bool boxes_valid(const AabbInput& in, bool swept) {
-  const size_t n = in.size();
+bool boxes_valid(const AabbInput& in, bool swept, size_t begin, size_t end) {
   const float* lo[3] = {in.min_x.data(), in.min_y.data(), in.min_z.data()};
   const float* hi[3] = {in.max_x.data(), in.max_y.data(), in.max_z.data()};
   const float* d[3] = {in.dx.data(), in.dy.data(), in.dz.data()};
@@ -62,7 +68,7 @@ bool boxes_valid(const AabbInput& in, bool swept) {
     const float* b = hi[k];
     int bad = 0;
 #pragma omp simd reduction(| : bad)
-    for (size_t i = 0; i < n; ++i) {
+    for (size_t i = begin; i < end; ++i) {
       // NaN fails every comparison, so !(x <= y) catches it; -1e18 <= a <= b <= 1e18.
       bad |= static_cast<int>(!(a[i] >= -kMax)) | static_cast<int>(!(a[i] <= b[i])) |
              static_cast<int>(!(b[i] <= kMax));
@@ -72,7 +78,7 @@ bool boxes_valid(const AabbInput& in, bool swept) {
       const float* m = d[k];
       int bad_d = 0;
 #pragma omp simd reduction(| : bad_d)
-      for (size_t i = 0; i < n; ++i) {
+      for (size_t i = begin; i < end; ++i) {
         const float l = a[i] + m[i], h = b[i] + m[i];
         bad_d |= static_cast<int>(!(l >= -kMax)) | static_cast<int>(!(h <= kMax)) |
                  static_cast<int>(!(m[i] - m[i] == 0.0f));
@@ -83,7 +89,7 @@ bool boxes_valid(const AabbInput& in, bool swept) {
   return ok;
 }
 
-Status check_boxes(const AabbInput& in) {
+Status check_boxes(const host::Executor& exec, const AabbInput& in, host::Buffer<uint8_t>& chunk_flags) {
   const size_t n = in.size();
   const std::span<const float>* f[6] = {&in.min_x, &in.min_y, &in.min_z, &in.max_x, &in.max_y, &in.max_z};
   const char* names[6] = {"min_x", "min_y", "min_z", "max_x", "max_y", "max_z"};
@@ -102,7 +108,13 @@ Status check_boxes(const AabbInput& in) {
                   "broad phase: dx, dy and dz must all be empty or all have one entry per box");
   if (n > 0xfffffff0ull)
     return Status(StatusCode::kCapacityExceeded, "broad phase: more than 2^32 - 16 boxes");
-  if (boxes_valid(in, swept)) return Status();
+  // One flag per chunk (each written by its chunk only), then all of them.
+  const uint32_t chunks = host::chunk_count(n, kCheckGrain);
+  uint8_t* chunk_ok = host::scratch(chunk_flags, chunks);
+  exec.for_each_chunk(n, kCheckGrain, [&](uint32_t b, uint32_t e, uint32_t c) {
+    chunk_ok[c] = boxes_valid(in, swept, b, e) ? 1 : 0;
+  });
+  if (std::all_of(chunk_ok, chunk_ok + chunks, [](uint8_t v) { return v != 0; })) return Status();
   // Something is wrong: find the first offending box for the message.
   for (size_t i = 0; i < n; ++i) {
     for (int k = 0; k < 6; ++k) {
@@ -169,7 +181,7 @@ Status BroadPhaseImpl::ready(const ExecConfig& e) {
 
 Status BroadPhaseImpl::ingest(const AabbInput& boxes, const ExecConfig& e, bool from_scratch) {
   if (Status s = ready(e); !s.ok()) return s;
-  if (Status s = check_boxes(boxes); !s.ok()) {
+  if (Status s = check_boxes(exec, boxes, chunk_ok); !s.ok()) {
     stage.invalidate();
     return s;
   }
@@ -207,8 +219,16 @@ Status BroadPhase::pairs(std::vector<BodyPair>* out, const ExecConfig& exec) {
   out->clear();
   if (Status s = b.ready(exec); !s.ok()) return s;
   if (Status s = b.stage.pairs(b.exec, &b.pairs); !s.ok()) return s;
+  // Same two uint32 fields (asserted below): copy the bytes, in parallel chunks.
+  static_assert(sizeof(BodyPair) == sizeof(kernels::Pair) &&
+                offsetof(BodyPair, a) == offsetof(kernels::Pair, a) &&
+                offsetof(BodyPair, b) == offsetof(kernels::Pair, b));
   out->resize(b.pairs.size());
-  for (size_t i = 0; i < b.pairs.size(); ++i) (*out)[i] = BodyPair{b.pairs[i].a, b.pairs[i].b};
+  BodyPair* dst = out->data();
+  const kernels::Pair* src = b.pairs.data();
+  b.exec.for_each_chunk(b.pairs.size(), kPairCopyGrain, [&](uint32_t lo, uint32_t hi, uint32_t) {
+    std::memcpy(static_cast<void*>(dst + lo), src + lo, sizeof(BodyPair) * (hi - lo));
+  });
   return Status();
 }
 

@@ -7,7 +7,7 @@ namespace impact::kernels {
 
 BoundsSummary empty_bounds_summary() {
   constexpr float inf = std::numeric_limits<float>::infinity();
-  return BoundsSummary{{inf, inf, inf}, {-inf, -inf, -inf}, 0.0f};
+  return BoundsSummary{{inf, inf, inf}, {-inf, -inf, -inf}, 0.0f, inf};
 }
 
 BoundsSummary combine(const BoundsSummary& a, const BoundsSummary& b) {
@@ -17,6 +17,7 @@ BoundsSummary combine(const BoundsSummary& a, const BoundsSummary& b) {
     s.hi[k] = std::max(a.hi[k], b.hi[k]);
   }
   s.max_edge = std::max(a.max_edge, b.max_edge);
+  s.min_edge = std::min(a.min_edge, b.min_edge);
   return s;
 }
 
@@ -96,8 +97,8 @@ void sweep_boxes(AabbSoA boxes, const float* IMPACT_RESTRICT dx, const float* IM
 
 BoundsSummary reduce_bounds(AabbSoA b, Range r) {
   constexpr float inf = std::numeric_limits<float>::infinity();
-  float lx = inf, ly = inf, lz = inf, hx = -inf, hy = -inf, hz = -inf, edge = 0.0f;
-#pragma omp simd reduction(min : lx, ly, lz) reduction(max : hx, hy, hz, edge)
+  float lx = inf, ly = inf, lz = inf, hx = -inf, hy = -inf, hz = -inf, edge = 0.0f, small = inf;
+#pragma omp simd reduction(min : lx, ly, lz, small) reduction(max : hx, hy, hz, edge)
   for (uint32_t i = r.begin; i < r.end; ++i) {
     lx = std::min(lx, b.min_x[i]);
     ly = std::min(ly, b.min_y[i]);
@@ -108,9 +109,11 @@ BoundsSummary reduce_bounds(AabbSoA b, Range r) {
     const float ex = b.max_x[i] - b.min_x[i];
     const float ey = b.max_y[i] - b.min_y[i];
     const float ez = b.max_z[i] - b.min_z[i];
-    edge = std::max(edge, std::max(ex, std::max(ey, ez)));
+    const float e = std::max(ex, std::max(ey, ez));
+    edge = std::max(edge, e);
+    small = std::min(small, e);
   }
-  return BoundsSummary{{lx, ly, lz}, {hx, hy, hz}, edge};
+  return BoundsSummary{{lx, ly, lz}, {hx, hy, hz}, edge, small};
 }
 
 }  // namespace impact::kernels

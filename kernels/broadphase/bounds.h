@@ -2,7 +2,8 @@
 //
 // sphere_bounds: per body, the AABB [p - r, p + r]. Streaming, vectorised.
 // reduce_bounds: over a range of boxes, the union box and the largest box edge
-//   (max over boxes and axes of max - min). The host combines one partial per
+//   (max over boxes and axes of max - min), and the min over boxes of each box's
+//   largest edge. The host combines one partial per
 //   chunk in chunk order, so the result does not depend on thread count (min/max
 //   are exact anyway).
 // swept_sphere_bounds: per body, the AABB of the sphere at p and at p + v dt (the
@@ -36,13 +37,16 @@ struct AabbSoAOut {
   float* max_z;
 };
 
-/// Union of a set of boxes plus the largest edge of any member.
+/// Union of a set of boxes plus the largest edge of any member, and the smallest
+/// "largest edge" of a member (each box's max over axes, then the min over boxes),
+/// which lets the grid see that no box is small enough for hierarchical levels
+/// without a pass over the boxes. 0 (the default) claims nothing.
 struct BoundsSummary {
   float lo[3];
   float hi[3];
   float max_edge;
+  float min_edge = 0.0f;
 };
-
 /// Identity element of combine(): an empty summary.
 BoundsSummary empty_bounds_summary();
 BoundsSummary combine(const BoundsSummary& a, const BoundsSummary& b);

@@ -42,7 +42,21 @@ IMPACT_INLINE void scan_row(const GridView& g, int64_t ny, int64_t nz, int64_t l
   }
 }
 
-// Calls emit(lo, hi) for every pair whose query slot is s, in the documented order.
+// Candidate slots of one query slot, in visiting order. Dense grids collect the
+// short slot ranges of the 5 rows into one list with fixed-width stores and test
+// them in one loop: one hard-to-predict loop exit per query instead of one per row
+// (uniform scenes hold about 1.4 candidates per row range). A range longer than
+// kRun is tested in place after the list so far, which keeps the order.
+struct CandidateList {
+  static constexpr uint32_t kRun = 8;
+  static constexpr uint32_t kCapacity = 6 * kRun;  // 5 rows plus slack, all of them short
+  uint32_t slot[kCapacity];
+  uint32_t count = 0;
+};
+
+// Calls emit(lo, hi, ok) for every candidate of query slot s, in the documented
+// order; ok says whether the pair is a result (emit stores it either way, so the
+// hot loop has no data-dependent branch; see grid_find_pairs).
 template <bool kFiltered, bool kDense, class Emit>
 IMPACT_INLINE void visit_slot(const GridView& g, uint32_t s, Emit&& emit) {
   const SortedBox A = g.box[s];
@@ -54,16 +68,15 @@ IMPACT_INLINE void visit_slot(const GridView& g, uint32_t s, Emit&& emit) {
     ma = g.mask[s];
     sa = g.is_static[s];
   }
-  const uint64_t cell = g.cell[s];
+  // Dense grids keep no cell array (their buckets are cells): recompute the cell.
+  const uint64_t cell = kDense ? box_cell(g.params, A.min_x, A.min_y, A.min_z) : g.cell[s];
 
   auto test = [&](uint32_t t) {
     const SortedBox& B = g.box[t];
-    if (!sorted_boxes_overlap(A, B)) return;
-    if constexpr (kFiltered) {
-      if (!pair_allowed(la, ma, sa, g.layer[t], g.mask[t], g.is_static[t])) return;
-    }
+    bool ok = sorted_boxes_overlap(A, B);
+    if constexpr (kFiltered) ok = ok && pair_allowed(la, ma, sa, g.layer[t], g.mask[t], g.is_static[t]);
     const uint32_t ib = B.index;
-    emit(ia < ib ? ia : ib, ia < ib ? ib : ia);
+    emit(ia < ib ? ia : ib, ia < ib ? ib : ia, ok);
   };
 
   const int64_t cx = static_cast<int64_t>(cell & kAxisMask);
@@ -72,16 +85,49 @@ IMPACT_INLINE void visit_slot(const GridView& g, uint32_t s, Emit&& emit) {
   const int64_t dimx = g.params.dims[0], dimy = g.params.dims[1], dimz = g.params.dims[2];
   const int64_t x_lo = cx > 0 ? cx - 1 : 0;
   const int64_t x_hi = cx + 1 < dimx ? cx + 1 : dimx - 1;
+  constexpr int8_t kRows[4][2] = {{1, 0}, {-1, 1}, {0, 1}, {1, 1}};
 
   // The half neighbourhood as 5 row ranges: the own row from slot s + 1 to the
   // end of cell x + 1 (slots before s in the own cell met s already), then rows
   // (dy, dz) = (1, 0), (-1, 1), (0, 1), (1, 1) over x - 1 .. x + 1.
-  scan_row<kDense>(g, cy, cz, cx, x_hi, s + 1, test);
-  constexpr int8_t kRows[4][2] = {{1, 0}, {-1, 1}, {0, 1}, {1, 1}};
-  for (const auto& r : kRows) {
-    const int64_t ny = cy + r[0], nz = cz + r[1];
-    if (ny < 0 || ny >= dimy || nz >= dimz) continue;
-    scan_row<kDense>(g, ny, nz, x_lo, x_hi, kInvalidBody, test);
+  if constexpr (kDense) {
+    // Dense buckets: a row's cells x_lo..x_hi are buckets base + x_lo .. base + x_hi,
+    // holding only those cells' boxes.
+    CandidateList list;
+    auto flush = [&] {
+      for (uint32_t i = 0; i < list.count; ++i) test(list.slot[i]);
+      list.count = 0;
+    };
+    auto add = [&](uint32_t t0, uint32_t t1) {
+      const uint32_t m = t1 - t0;
+      if (m <= CandidateList::kRun) {
+        uint32_t* dst = list.slot + list.count;
+        for (uint32_t j = 0; j < CandidateList::kRun; ++j) dst[j] = t0 + j;
+        list.count += m;
+      } else {
+        flush();
+        for (uint32_t t = t0; t < t1; ++t) test(t);
+      }
+    };
+    const uint32_t* start = g.bucket_start;
+    const uint64_t own =
+        static_cast<uint64_t>(dimx) * (static_cast<uint64_t>(cy) + static_cast<uint64_t>(dimy) * cz);
+    add(s + 1, start[own + static_cast<uint64_t>(x_hi) + 1]);
+    for (const auto& r : kRows) {
+      const int64_t ny = cy + r[0], nz = cz + r[1];
+      if (ny < 0 || ny >= dimy || nz >= dimz) continue;
+      const uint64_t base =
+          static_cast<uint64_t>(dimx) * (static_cast<uint64_t>(ny) + static_cast<uint64_t>(dimy) * nz);
+      add(start[base + static_cast<uint64_t>(x_lo)], start[base + static_cast<uint64_t>(x_hi) + 1]);
+    }
+    flush();
+  } else {
+    scan_row<false>(g, cy, cz, cx, x_hi, s + 1, test);
+    for (const auto& r : kRows) {
+      const int64_t ny = cy + r[0], nz = cz + r[1];
+      if (ny < 0 || ny >= dimy || nz >= dimz) continue;
+      scan_row<false>(g, ny, nz, x_lo, x_hi, kInvalidBody, test);
+    }
   }
 }
 
@@ -99,51 +145,104 @@ IMPACT_INLINE void dispatch(const GridView& g, Fn&& fn) {
 
 }  // namespace
 
-void grid_keys_pack(const GridParams& g, AabbSoA boxes, PairFilter filter, const uint32_t* original_index,
-                    uint64_t* IMPACT_RESTRICT out_keys, SortedBox* IMPACT_RESTRICT out_packed,
-                    FilterRecord* IMPACT_RESTRICT out_filter, Range r) {
-  for (uint32_t i = r.begin; i < r.end; ++i) {
-    const float x0 = boxes.min_x[i], y0 = boxes.min_y[i], z0 = boxes.min_z[i];
-    const uint64_t cell = box_cell(g, x0, y0, z0);
-    out_keys[i] = (static_cast<uint64_t>(bucket_of(g, cell)) << 32) | i;
-    const uint32_t id = original_index ? original_index[i] : i;
-    out_packed[i] = SortedBox{x0, y0, z0, id, boxes.max_x[i], boxes.max_y[i], boxes.max_z[i], 0u};
+GridBlocks grid_blocks(const GridParams& g) {
+  uint32_t bits = 0;  // bits of the largest bucket id
+  while (bits < 32 && ((g.bucket_count - 1) >> bits) != 0) ++bits;
+  const uint32_t low = bits > kGridMaxBlockBits ? bits - kGridMaxBlockBits : 0;
+  return GridBlocks{low, static_cast<uint32_t>(((static_cast<uint64_t>(g.bucket_count) - 1) >> low) + 1)};
+}
+
+void grid_bucket_count(const GridParams& g, GridBlocks blocks, AabbSoA boxes,
+                       uint32_t* IMPACT_RESTRICT out_bucket, uint32_t* IMPACT_RESTRICT out_block_count,
+                       Range r) {
+  for (uint32_t k = 0; k < blocks.count; ++k) out_block_count[k] = 0;
+  // Buckets first (a loop without the histogram's store-to-load chain vectorises),
+  // then the counts.
+  const float* IMPACT_RESTRICT x = boxes.min_x;
+  const float* IMPACT_RESTRICT y = boxes.min_y;
+  const float* IMPACT_RESTRICT z = boxes.min_z;
+  if (g.dense) {
+    // bucket_of(box_cell(..)) spelled out for dense grids (row-major cell index).
+    const double ox = g.origin[0], oy = g.origin[1], oz = g.origin[2], inv = g.inv_cell;
+    const int64_t dx = g.dims[0], dy = g.dims[1], dz = g.dims[2];
+#pragma omp simd
+    for (uint32_t i = r.begin; i < r.end; ++i) {
+      int64_t cx = static_cast<int64_t>((static_cast<double>(x[i]) - ox) * inv);
+      int64_t cy = static_cast<int64_t>((static_cast<double>(y[i]) - oy) * inv);
+      int64_t cz = static_cast<int64_t>((static_cast<double>(z[i]) - oz) * inv);
+      cx = std::clamp<int64_t>(cx, 0, dx - 1);
+      cy = std::clamp<int64_t>(cy, 0, dy - 1);
+      cz = std::clamp<int64_t>(cz, 0, dz - 1);
+      out_bucket[i] = static_cast<uint32_t>(cx + dx * (cy + dy * cz));
+    }
+  } else {
+    for (uint32_t i = r.begin; i < r.end; ++i) out_bucket[i] = bucket_of(g, box_cell(g, x[i], y[i], z[i]));
   }
-  if (out_filter) {
-    for (uint32_t i = r.begin; i < r.end; ++i)
-      out_filter[i] = FilterRecord{filter.layer[i], filter.mask[i], filter.is_static[i], 0u};
+  for (uint32_t i = r.begin; i < r.end; ++i) ++out_block_count[out_bucket[i] >> blocks.low_bits];
+}
+
+void grid_scatter_blocks(GridBlocks blocks, AabbSoA boxes, PairFilter filter, const uint32_t* original_index,
+                         const uint32_t* IMPACT_RESTRICT bucket, uint32_t* IMPACT_RESTRICT io_offsets,
+                         SortedBox* IMPACT_RESTRICT out_box, FilterRecord* IMPACT_RESTRICT out_filter,
+                         Range r) {
+  for (uint32_t i = r.begin; i < r.end; ++i) {
+    const uint32_t b = bucket[i];
+    const uint32_t slot = io_offsets[b >> blocks.low_bits]++;
+    const uint32_t id = original_index ? original_index[i] : i;
+    out_box[slot] = SortedBox{boxes.min_x[i], boxes.min_y[i], boxes.min_z[i], id,
+                              boxes.max_x[i], boxes.max_y[i], boxes.max_z[i], b};
+    if (out_filter) out_filter[slot] = FilterRecord{filter.layer[i], filter.mask[i], filter.is_static[i], 0u};
   }
 }
 
-void grid_gather_packed(const GridParams& g, const uint64_t* IMPACT_RESTRICT sorted_keys,
-                        const SortedBox* IMPACT_RESTRICT packed, const FilterRecord* IMPACT_RESTRICT packed_filter,
-                        GridSorted out, Range r) {
-  // The reads are random for an unordered input: prefetch a few slots ahead so
-  // several misses are in flight (the loop body alone keeps too few).
-  constexpr uint32_t kAhead = 16;
-  for (uint32_t s = r.begin; s < r.end; ++s) {
-    if (s + kAhead < r.end) __builtin_prefetch(&packed[static_cast<uint32_t>(sorted_keys[s + kAhead])]);
-    const SortedBox b = packed[static_cast<uint32_t>(sorted_keys[s])];
-    out.box[s] = b;
-    out.cell[s] = box_cell(g, b.min_x, b.min_y, b.min_z);
-  }
-  if (packed_filter) {
-    for (uint32_t s = r.begin; s < r.end; ++s) {
-      const FilterRecord f = packed_filter[static_cast<uint32_t>(sorted_keys[s])];
-      out.layer[s] = f.layer;
-      out.mask[s] = f.mask;
-      out.is_static[s] = static_cast<uint8_t>(f.is_static);
+void grid_sort_blocks(const GridParams& g, GridBlocks blocks, const uint32_t* IMPACT_RESTRICT block_start,
+                      const SortedBox* IMPACT_RESTRICT in_box, const FilterRecord* IMPACT_RESTRICT in_filter,
+                      GridSorted out, uint32_t* IMPACT_RESTRICT out_bucket_start, Range r) {
+  for (uint32_t k = r.begin; k < r.end; ++k) {
+    const uint32_t s0 = block_start[k], s1 = block_start[k + 1];
+    const uint32_t b0 = k << blocks.low_bits;
+    const uint32_t b1 = static_cast<uint32_t>(
+        std::min<uint64_t>(static_cast<uint64_t>(b0) + (1ull << blocks.low_bits), g.bucket_count));
+    // The block's slice of bucket_start holds the counts, then (inclusive scan) each
+    // bucket's end; filling slots from the back moves each end down to its start.
+    uint32_t* cursor = out_bucket_start + b0;
+    const uint32_t nb = b1 - b0;
+    for (uint32_t j = 0; j < nb; ++j) cursor[j] = 0;
+    for (uint32_t s = s0; s < s1; ++s) ++cursor[in_box[s].pad - b0];
+    uint32_t end = s0;
+    for (uint32_t j = 0; j < nb; ++j) {
+      end += cursor[j];
+      cursor[j] = end;
     }
+    for (uint32_t s = s1; s-- > s0;) {
+      SortedBox box = in_box[s];
+      const uint32_t t = --cursor[box.pad - b0];
+      box.pad = 0;
+      out.box[t] = box;
+      if (out.cell) out.cell[t] = box_cell(g, box.min_x, box.min_y, box.min_z);
+      if (in_filter) {
+        const FilterRecord f = in_filter[s];
+        out.layer[t] = f.layer;
+        out.mask[t] = f.mask;
+        out.is_static[t] = static_cast<uint8_t>(f.is_static);
+      }
+    }
+    if (b1 == g.bucket_count) out_bucket_start[b1] = s1;
   }
 }
 
 uint64_t grid_find_pairs(const GridView& g, Pair* IMPACT_RESTRICT out, uint64_t capacity, Range r) {
   uint64_t k = 0;
+  // Every candidate is stored, at out[k] while k < capacity and into `sink` after;
+  // only a result advances k. A store that is not a result is overwritten by the
+  // next one, so out[0, min(k, capacity)) holds exactly the results.
+  Pair sink;
   dispatch(g, [&]<bool kF, bool kD>() {
     for (uint32_t s = r.begin; s < r.end; ++s)
-      visit_slot<kF, kD>(g, s, [&](uint32_t a, uint32_t b) {
-        if (k < capacity) out[k] = Pair{a, b};
-        ++k;
+      visit_slot<kF, kD>(g, s, [&](uint32_t a, uint32_t b, bool ok) {
+        Pair* dst = k < capacity ? out + k : &sink;
+        *dst = Pair{a, b};
+        k += ok ? 1u : 0u;
       });
   });
   return k;

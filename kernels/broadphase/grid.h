@@ -1,19 +1,32 @@
-// Uniform-grid broad phase over axis-aligned boxes, in four passes:
+// Uniform-grid broad phase over axis-aligned boxes. Building sorts the boxes by
+// bucket (below) in three passes, a two-level counting sort whose second level
+// writes the bucket ranges as it goes:
 //
-//   grid_keys_pack per box: cell of its min corner -> key = bucket << 32 | box index,
-//                  and the box (and filter data) packed into one record in input
-//                  order (streaming)
-//   (radix sort of the keys on the bucket bits; stable, so ties keep index order)
-//   grid_gather_packed per sorted slot: copy the packed record and its cell into
-//                  sorted order, so the pair pass reads memory in sequence. The
-//                  packing makes this one random 32-byte read per box instead of
-//                  six scattered floats (1M boxes: 27% -> see docs/broadphase.md)
-//   segment_starts bucket -> [first slot, end slot)   (kernels/sort/segments.h)
+//   grid_bucket_count per box: bucket of its min corner's cell; per chunk, how many
+//                  boxes fall in each "block" (the bucket id's high bits, at most
+//                  kGridMaxBlocks blocks of 2^low_bits buckets)
+//   (exclusive scan, block-major then chunk: where each chunk writes each block)
+//   grid_scatter_blocks per box: the box packed as a 32-byte SortedBox (bucket in
+//                  its pad word) written at its chunk's next slot of its block:
+//                  a stable partition by block. Reads stream; writes go to at most
+//                  kGridMaxBlocks sequential streams, never to random slots
+//   grid_sort_blocks per block: a stable counting sort of the block's records
+//                  (about n / 256 for big grids: cache resident) on the low bucket
+//                  bits, using the block's own slice of bucket_start as the
+//                  counters, so it leaves bucket -> first slot behind; writes each
+//                  record (and, hashed grids only, its cell) in sorted-slot order
 //   grid_find_pairs per sorted slot s: test the boxes later in s's own cell, then
 //                  every box of the 13 "forward" neighbour cells (half of the 26,
 //                  so each pair is met once). The host gives each chunk of slots
 //                  its own output buffer, then concatenates them in chunk order
 //                  at exclusive-scanned offsets.
+// The sorted order is (bucket, input position), the order a stable sort of keys
+// bucket << 32 | i gives, for any chunking of the passes. Compared with a radix
+// sort of 64-bit keys followed by a gather of the packed boxes, this moves each
+// box twice in sequence instead of reading it once at random, and needs no
+// separate segment-starts pass (docs/broadphase.md has the timings).
+// Build cost: O(n + bucket_count + chunks * blocks), three streaming reads of the
+// boxes' data and two writes of the 32-byte records.
 //
 // Correctness: the cell edge exceeds the largest box edge, so the min corners of
 // two overlapping boxes are less than one cell apart on every axis and their
@@ -115,10 +128,10 @@ IMPACT_INLINE bool records_overlap(const A& a, const B& b) {
 
 IMPACT_INLINE bool sorted_boxes_overlap(const SortedBox& a, const SortedBox& b) { return records_overlap(a, b); }
 
-/// Arrays in sorted-slot order, produced by grid_gather_packed.
+/// Arrays in sorted-slot order, produced by grid_sort_blocks.
 struct GridSorted {
   SortedBox* box;
-  uint64_t* cell;
+  uint64_t* cell;       // hashed grids only (null when dense: a dense bucket is its cell)
   uint32_t* layer;      // null when unfiltered
   uint32_t* mask;
   uint8_t* is_static;
@@ -127,7 +140,7 @@ struct GridSorted {
 struct GridView {
   GridParams params;
   const SortedBox* box;
-  const uint64_t* cell;
+  const uint64_t* cell;   // hashed grids only, else null
   const uint32_t* layer;  // null when unfiltered
   const uint32_t* mask;
   const uint8_t* is_static;
@@ -142,19 +155,46 @@ struct alignas(16) FilterRecord {
   uint32_t pad;
 };
 
-/// Keys (bucket << 32 | i) of the boxes in r, and each box packed as a SortedBox
-/// in input order (index = original_index[i], or i when original_index is null:
-/// the hierarchical grid builds levels over subsets). out_filter (filtered only,
-/// else null) gets the packed filter data.
-void grid_keys_pack(const GridParams& g, AabbSoA boxes, PairFilter filter, const uint32_t* original_index,
-                    uint64_t* IMPACT_RESTRICT out_keys, SortedBox* IMPACT_RESTRICT out_packed,
-                    FilterRecord* IMPACT_RESTRICT out_filter, Range r);
+/// The build's blocks: a bucket id's high bits pick its block, its low `low_bits`
+/// bits its place within the block. At most kGridMaxBlocks blocks, so the per-chunk
+/// block counts stay small and the block scatter writes few streams.
+inline constexpr uint32_t kGridMaxBlockBits = 8;
+inline constexpr uint32_t kGridMaxBlocks = 1u << kGridMaxBlockBits;
 
-/// Sorted slot s in r gets the packed record of box sorted_keys[s] (low 32 bits),
-/// its cell, and its filter data when packed_filter is not null.
-void grid_gather_packed(const GridParams& g, const uint64_t* IMPACT_RESTRICT sorted_keys,
-                        const SortedBox* IMPACT_RESTRICT packed, const FilterRecord* IMPACT_RESTRICT packed_filter,
-                        GridSorted out, Range r);
+struct GridBlocks {
+  uint32_t low_bits;  ///< buckets per block = 2^low_bits
+  uint32_t count;     ///< blocks = ceil(bucket_count / 2^low_bits), in [1, kGridMaxBlocks]
+};
+
+/// The smallest low_bits that keeps the blocks of g within kGridMaxBlocks.
+GridBlocks grid_blocks(const GridParams& g);
+
+/// out_bucket[i] = bucket of box i for i in r, and out_block_count[k] (blocks.count
+/// entries, overwritten) = boxes of r in block k.
+void grid_bucket_count(const GridParams& g, GridBlocks blocks, AabbSoA boxes,
+                       uint32_t* IMPACT_RESTRICT out_bucket, uint32_t* IMPACT_RESTRICT out_block_count,
+                       Range r);
+
+/// Box i of r goes to slot io_offsets[block of bucket[i]]++ of out_box as a
+/// SortedBox with index original_index[i] (i when original_index is null: the
+/// hierarchical grid builds levels over subsets) and pad = bucket[i]; with
+/// out_filter (filtered only, else null), its filter data to the same slot.
+/// io_offsets: this chunk's first slot per block (blocks.count entries, advanced).
+void grid_scatter_blocks(GridBlocks blocks, AabbSoA boxes, PairFilter filter, const uint32_t* original_index,
+                         const uint32_t* IMPACT_RESTRICT bucket, uint32_t* IMPACT_RESTRICT io_offsets,
+                         SortedBox* IMPACT_RESTRICT out_box, FilterRecord* IMPACT_RESTRICT out_filter,
+                         Range r);
+
+/// For each block k in r (block indices): its slots [block_start[k], block_start[k+1])
+/// of in_box (and in_filter when not null), stably sorted on the bucket (pad) into
+/// the same slots of out (pad 0, cell of the min corner when out.cell is not null,
+/// filter data), and
+/// out_bucket_start[b] = first slot of bucket b for the block's buckets; the last
+/// block also sets out_bucket_start[bucket_count] = its end. Each block touches
+/// only its own slots and buckets. block_start: blocks.count + 1 entries.
+void grid_sort_blocks(const GridParams& g, GridBlocks blocks, const uint32_t* IMPACT_RESTRICT block_start,
+                      const SortedBox* IMPACT_RESTRICT in_box, const FilterRecord* IMPACT_RESTRICT in_filter,
+                      GridSorted out, uint32_t* IMPACT_RESTRICT out_bucket_start, Range r);
 
 /// Writes the pairs whose query slot lies in r to out[0, capacity) in the
 /// documented order and returns how many there are; when that exceeds capacity

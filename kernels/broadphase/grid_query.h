@@ -22,8 +22,8 @@
 //   over a sparse hashed world costs O(n), not O(cells).
 // Cost: O(rows + candidates) per query and grid, capped near O(n); plus k log k to
 //   sort k hits (insertion sort up to 16).
-// Inputs: finite queries (|v| <= 1e18); grids built by grid_keys_pack / grid_gather_packed
-//   / segment_starts.
+// Inputs: finite queries (|v| <= 1e18); grids built by grid_bucket_count / grid_scatter_blocks
+//   / grid_sort_blocks.
 // Method: the region query of a uniform (hashed) grid: visit the cells the query's
 //   bounds overlap, widened by one cell where boxes are stored by their min corner
 //   (Teschner et al. 2003; Ericson, "Real-Time Collision Detection", 7.1).
@@ -45,9 +45,9 @@ uint64_t grid_query(const GridView* grids, uint32_t grid_count, const QueryView&
                     uint32_t* IMPACT_RESTRICT out_count, uint32_t* IMPACT_RESTRICT out_hits, uint64_t capacity,
                     Range r);
 
-/// Bucket of the cell holding point (x, y, z) under g: the bucket grid_keys_pack gives a
+/// Bucket of the cell holding point (x, y, z) under g: the bucket grid_bucket_count gives a
 /// box whose min corner is that point. Exposed so tests can check that the queries
-/// use the same cell and bucket arithmetic as grid_keys_pack (grid_cells.h).
+/// use the same cell and bucket arithmetic as grid_bucket_count (grid_cells.h).
 uint32_t grid_query_bucket(const GridParams& g, float x, float y, float z);
 
 }  // namespace impact::kernels

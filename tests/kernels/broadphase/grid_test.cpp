@@ -7,13 +7,17 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <array>
 #include <cmath>
+#include <numeric>
 #include <random>
 #include <vector>
 
 #include "host/broadphase/broadphase.h"
 #include "host/parallel.h"
 #include "kernels/broadphase/bounds.h"
+#include "kernels/broadphase/grid_query.h"
 #include "support/aabb_reference.h"
 #include "support/test_support.h"
 
@@ -169,14 +173,17 @@ TEST(GridBroadPhase, BoundsReductionMatchesReference) {
   Boxes b;
   for (int i = 0; i < 1000; ++i) b.add(pos(rng), pos(rng), pos(rng), half(rng), half(rng), half(rng));
   // Any partition into ranges, combined in order, gives the exact union and max edge.
-  double lo[3] = {1e300, 1e300, 1e300}, hi[3] = {-1e300, -1e300, -1e300}, edge = 0;
+  double lo[3] = {1e300, 1e300, 1e300}, hi[3] = {-1e300, -1e300, -1e300}, edge = 0, min_edge = 1e300;
   for (size_t i = 0; i < b.size(); ++i) {
     const float mn[3] = {b.min_x[i], b.min_y[i], b.min_z[i]}, mx[3] = {b.max_x[i], b.max_y[i], b.max_z[i]};
+    double box_edge = 0;
     for (int k = 0; k < 3; ++k) {
       lo[k] = std::min<double>(lo[k], mn[k]);
       hi[k] = std::max<double>(hi[k], mx[k]);
       edge = std::max<double>(edge, mx[k] - mn[k]);  // float subtraction, as the kernel's edge
+      box_edge = std::max<double>(box_edge, mx[k] - mn[k]);
     }
+    min_edge = std::min(min_edge, box_edge);
   }
   for (uint32_t parts : {1u, 3u, 7u, 1000u}) {
     kernels::BoundsSummary s = kernels::empty_bounds_summary();
@@ -188,6 +195,227 @@ TEST(GridBroadPhase, BoundsReductionMatchesReference) {
       EXPECT_EQ(static_cast<double>(s.hi[k]), hi[k]);
     }
     EXPECT_EQ(static_cast<double>(s.max_edge), edge);
+    EXPECT_EQ(static_cast<double>(s.min_edge), min_edge);
+  }
+}
+
+// --- the block sort and the pair order ---------------------------------------------------------
+
+TEST(GridBroadPhase, BlocksCoverEveryBucketWithinTheLimit) {
+  for (uint32_t buckets :
+       {1u, 2u, 255u, 256u, 257u, 4096u, 30000u, 1u << 21, (1u << 21) + 1, 0x80000000u, 0xffffffffu}) {
+    kernels::GridParams g{};
+    g.bucket_count = buckets;
+    const kernels::GridBlocks blocks = kernels::grid_blocks(g);
+    SCOPED_TRACE(buckets);
+    EXPECT_GE(blocks.count, 1u);
+    EXPECT_LE(blocks.count, kernels::kGridMaxBlocks);
+    // The blocks tile [0, buckets): the last one starts inside, and they reach the end.
+    EXPECT_LT(static_cast<uint64_t>(blocks.count - 1) << blocks.low_bits, buckets);
+    EXPECT_GE(static_cast<uint64_t>(blocks.count) << blocks.low_bits, buckets);
+    if (buckets <= kernels::kGridMaxBlocks) {
+      EXPECT_EQ(blocks.low_bits, 0u);
+    }
+  }
+}
+
+// The sorted view against a std::stable_sort of the input positions by bucket
+// (bucket ids from grid_query_bucket, pinned to the build's by query_test.cpp):
+// slot order, bucket ranges, the per-slot filter data and (hashed) cells, on every
+// executor case.
+void expect_sorted_by_bucket(const Boxes& b, const char* what, bool want_dense, bool want_one_bucket_blocks) {
+  SCOPED_TRACE(what);
+  const uint32_t n = static_cast<uint32_t>(b.size());
+  for (const test::ExecCase& c : test::exec_cases()) {
+    SCOPED_TRACE(test::to_string(c));
+    host::Executor exec(c.backend, c.threads);
+    host::GridBroadPhase grid;
+    grid.set_level_fraction(0);
+    grid.build(exec, soa(b), filter(b), n);
+    const kernels::GridView* v = grid.level_view(0);
+    ASSERT_NE(v, nullptr);
+    ASSERT_EQ(v->params.dense != 0, want_dense);
+    ASSERT_EQ(kernels::grid_blocks(v->params).low_bits == 0, want_one_bucket_blocks);
+    std::vector<uint32_t> bucket(n), order(n);
+    for (uint32_t i = 0; i < n; ++i)
+      bucket[i] = kernels::grid_query_bucket(v->params, b.min_x[i], b.min_y[i], b.min_z[i]);
+    std::iota(order.begin(), order.end(), 0u);
+    std::stable_sort(order.begin(), order.end(),
+                     [&](uint32_t x, uint32_t y) { return bucket[x] < bucket[y]; });
+    const uint32_t buckets = v->params.bucket_count;
+    std::vector<uint32_t> start(static_cast<size_t>(buckets) + 1, 0);
+    for (uint32_t i = 0; i < n; ++i) ++start[bucket[i] + 1];
+    for (uint32_t k = 0; k < buckets; ++k) start[k + 1] += start[k];
+    for (uint32_t k = 0; k <= buckets; ++k) ASSERT_EQ(v->bucket_start[k], start[k]) << "bucket " << k;
+    EXPECT_EQ(v->cell == nullptr, want_dense);
+    for (uint32_t s = 0; s < n; ++s) {
+      const uint32_t i = order[s];
+      const kernels::SortedBox& box = v->box[s];
+      ASSERT_EQ(box.index, i) << "slot " << s;
+      ASSERT_EQ(box.pad, 0u);
+      ASSERT_EQ(box.min_x, b.min_x[i]);
+      ASSERT_EQ(box.min_y, b.min_y[i]);
+      ASSERT_EQ(box.min_z, b.min_z[i]);
+      ASSERT_EQ(box.max_x, b.max_x[i]);
+      ASSERT_EQ(box.max_y, b.max_y[i]);
+      ASSERT_EQ(box.max_z, b.max_z[i]);
+      if (b.filtered()) {
+        ASSERT_EQ(v->layer[s], b.layer[i]);
+        ASSERT_EQ(v->mask[s], b.mask[i]);
+        ASSERT_EQ(v->is_static[s], b.is_static[i]);
+      }
+      if (v->cell) {
+        // The cell's bucket is the slot's bucket; its axes are within the grid.
+        const uint64_t cell = v->cell[s];
+        const uint64_t axis = (1ull << kernels::kGridAxisBits) - 1;
+        ASSERT_LT(cell & axis, v->params.dims[0]);
+        ASSERT_LT((cell >> kernels::kGridAxisBits) & axis, v->params.dims[1]);
+        ASSERT_LT(cell >> (2 * kernels::kGridAxisBits), v->params.dims[2]);
+      }
+    }
+  }
+}
+
+TEST(GridBroadPhase, BlockSortEqualsStableSortByBucket) {
+  // More boxes than one chunk of the block passes (kKeyGrain), so chunk offsets matter.
+  const uint32_t n = test::scaled(3 * host::GridBroadPhase::kKeyGrain + 77);
+  std::mt19937 rng(11);
+  {
+    // A 3x3x3-cell world: 27 buckets, one per block (low_bits 0); crowded buckets.
+    std::uniform_real_distribution<float> pos(0.0f, 5.0f);
+    Boxes b;
+    for (uint32_t i = 0; i < n; ++i) b.add(pos(rng), pos(rng), pos(rng), 0.9f, 0.9f, 0.9f);
+    test::add_random_filter(b, 12, 0.2);
+    expect_sorted_by_bucket(b, "27 buckets", true, true);
+  }
+  {
+    // Dense with thousands of buckets: several buckets per block.
+    std::uniform_real_distribution<float> pos(0.0f, 30.0f);
+    Boxes b;
+    for (uint32_t i = 0; i < n; ++i) b.add(pos(rng), pos(rng), pos(rng), 0.25f, 0.25f, 0.25f);
+    expect_sorted_by_bucket(b, "dense, many buckets", true, false);
+  }
+  {
+    // Hashed: a huge sparse world.
+    std::uniform_real_distribution<float> pos(-1.0e5f, 1.0e5f);
+    Boxes b;
+    for (uint32_t i = 0; i < n; ++i) b.add(pos(rng), pos(rng), pos(rng), 1.0f, 1.0f, 1.0f);
+    test::add_random_filter(b, 13, 0.2);
+    expect_sorted_by_bucket(b, "hashed", false, false);
+  }
+}
+
+// The documented pair order (grid.h), written out plainly over the sorted view:
+// per query slot, its own row from the next slot over cells x..x+1, then rows
+// (dy, dz) = (1,0), (-1,1), (0,1), (1,1) over x-1..x+1, each in slot order.
+test::PairVec documented_order(const kernels::GridView& v, uint32_t n) {
+  const int64_t dims[3] = {v.params.dims[0], v.params.dims[1], v.params.dims[2]};
+  auto cell_of = [&](uint32_t t) {
+    const kernels::SortedBox& q = v.box[t];
+    const float p[3] = {q.min_x, q.min_y, q.min_z};
+    int64_t c[3];
+    for (int k = 0; k < 3; ++k) {
+      c[k] = static_cast<int64_t>((static_cast<double>(p[k]) - v.params.origin[k]) * v.params.inv_cell);
+      c[k] = std::clamp<int64_t>(c[k], 0, dims[k] - 1);
+    }
+    return std::array<int64_t, 3>{c[0], c[1], c[2]};
+  };
+  test::PairVec out;
+  for (uint32_t s = 0; s < n; ++s) {
+    const kernels::SortedBox& A = v.box[s];
+    const auto c = cell_of(s);
+    const int64_t rows[5][4] = {{0, 0, 0, 1}, {1, 0, -1, 1}, {-1, 1, -1, 1}, {0, 1, -1, 1}, {1, 1, -1, 1}};
+    for (int r = 0; r < 5; ++r) {
+      const int64_t y = c[1] + rows[r][0], z = c[2] + rows[r][1];
+      if (y < 0 || y >= dims[1] || z >= dims[2]) continue;
+      const int64_t x0 = std::max<int64_t>(c[0] + rows[r][2], 0),
+                    x1 = std::min<int64_t>(c[0] + rows[r][3], dims[0] - 1);
+      // Dense buckets are row-major cells, so the row's cells are one slot range.
+      const uint64_t base =
+          static_cast<uint64_t>(dims[0]) * (static_cast<uint64_t>(y) + static_cast<uint64_t>(dims[1]) * z);
+      const uint32_t t0 = r == 0 ? s + 1 : v.bucket_start[base + x0];
+      for (uint32_t t = t0; t < v.bucket_start[base + x1 + 1]; ++t) {
+        const kernels::SortedBox& B = v.box[t];
+        const auto cb = cell_of(t);
+        EXPECT_TRUE(cb[1] == y && cb[2] == z && cb[0] >= x0 && cb[0] <= x1)
+            << "slot " << t << " in the wrong bucket";
+        if (!kernels::boxes_overlap(A, B)) continue;
+        if (v.layer && !kernels::pair_allowed(v.layer[s], v.mask[s], v.is_static[s], v.layer[t], v.mask[t],
+                                              v.is_static[t]))
+          continue;
+        out.emplace_back(std::min(A.index, B.index), std::max(A.index, B.index));
+      }
+    }
+  }
+  return out;
+}
+
+TEST(GridBroadPhase, DensePairOrderIsTheDocumentedOrder) {
+  // Mostly sparse cells (short row ranges, collected into one candidate list) with
+  // dense clumps (row ranges longer than the list's run, tested in place): the two
+  // must interleave in the documented order.
+  std::mt19937 rng(21);
+  std::uniform_real_distribution<float> pos(0.0f, 40.0f);
+  std::uniform_real_distribution<float> jitter(-0.3f, 0.3f);
+  for (bool filtered : {false, true}) {
+    Boxes b;
+    for (uint32_t i = 0; i < test::scaled(8000); ++i) b.add(pos(rng), pos(rng), pos(rng), 0.5f, 0.5f, 0.5f);
+    for (int clump = 0; clump < 30; ++clump) {
+      const float x = pos(rng), y = pos(rng), z = pos(rng);
+      for (int k = 0; k < 1 + clump; ++k)
+        b.add(x + jitter(rng), y + jitter(rng), z + jitter(rng), 0.5f, 0.5f, 0.5f);
+    }
+    if (filtered) test::add_random_filter(b, 22, 0.2);
+    SCOPED_TRACE(filtered ? "filtered" : "unfiltered");
+    const uint32_t n = static_cast<uint32_t>(b.size());
+    host::GridBroadPhase grid;
+    grid.set_level_fraction(0);
+    host::Executor exec(Backend::kSerial, 1);
+    host::Buffer<kernels::Pair> pairs;
+    IMPACT_EXPECT_OK(grid.find_pairs(exec, soa(b), filter(b), n, &pairs));
+    const kernels::GridView* v = grid.level_view(0);
+    ASSERT_NE(v, nullptr);
+    ASSERT_TRUE(v->params.dense);
+    const test::PairVec want = documented_order(*v, n);
+    EXPECT_EQ(test::to_vec(pairs), want);
+    test::expect_same_set(pairs, test::reference_pairs(b), b.size(), "grid");
+    // A row range longer than the candidate list's run occurred.
+    uint32_t longest = 0;
+    for (uint32_t k = 0; k < v->params.bucket_count; ++k)
+      longest = std::max(longest, v->bucket_start[k + 1] - v->bucket_start[k]);
+    EXPECT_GT(longest, 8u);
+  }
+}
+
+TEST(GridBroadPhase, LevelDecisionSameWithOrWithoutSmallestEdge) {
+  // Boxes at the level bound: 1/8 of them with edge 1, exactly 16x smaller than
+  // the largest (grid_levels puts them on level 2), then with edge 1.0625 (level 1).
+  // The summary's min_edge may skip the level count only when no box is that
+  // small; a summary that claims nothing (min_edge 0) must decide the same way.
+  // Integer corners keep every edge exact in float.
+  std::mt19937 rng(31);
+  std::uniform_int_distribution<int> pos(0, 200);
+  for (float small_edge : {1.0f, 1.0625f}) {
+    Boxes b;
+    b.add_box(0.0f, 0.0f, 0.0f, 16.0f, 16.0f, 16.0f);
+    for (int i = 0; i < 799; ++i) {
+      const float e = i % 8 == 0 ? small_edge : 8.0f;
+      const float x = static_cast<float>(pos(rng)), y = static_cast<float>(pos(rng)),
+                  z = static_cast<float>(pos(rng));
+      b.add_box(x, y, z, x + e, y + e * 0.5f, z + e * 0.25f);
+    }
+    const uint32_t n = static_cast<uint32_t>(b.size());
+    host::Executor exec(Backend::kSerial, 1);
+    host::Buffer<kernels::BoundsSummary> partials;
+    kernels::BoundsSummary sum = host::summarize_bounds(exec, soa(b), n, partials);
+    EXPECT_EQ(sum.min_edge, small_edge);
+    host::GridBroadPhase with, without;
+    with.build(exec, soa(b), filter(b), n, &sum);
+    kernels::BoundsSummary blind = sum;
+    blind.min_edge = 0.0f;
+    without.build(exec, soa(b), filter(b), n, &blind);
+    EXPECT_EQ(with.hierarchical(), without.hierarchical()) << small_edge;
+    EXPECT_EQ(with.hierarchical(), small_edge == 1.0f) << small_edge;
   }
 }
 

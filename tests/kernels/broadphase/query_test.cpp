@@ -433,7 +433,8 @@ TEST(BroadPhaseQuery, SpatialProcessingOrderGivesTheSameBytes) {
 // --- the grid's cell arithmetic --------------------------------------------------------------
 
 TEST(BroadPhaseQuery, GridBucketArithmeticMatchesGridKeys) {
-  // grid_query.cpp and grid.cpp share kernels/broadphase/grid_cells.h; this pins the query side to grid_keys_pack.
+  // grid_query.cpp and grid.cpp share kernels/broadphase/grid_cells.h; this pins the query side to
+  // grid_bucket_count.
   std::mt19937 rng(17);
   std::uniform_real_distribution<float> pos(-5.0e5f, 5.0e5f);
   Boxes sparse;
@@ -446,14 +447,17 @@ TEST(BroadPhaseQuery, GridBucketArithmeticMatchesGridKeys) {
     const kernels::GridView* v = grid.level_view(0);
     ASSERT_NE(v, nullptr);
     EXPECT_EQ(v->params.dense != 0, b == &dense);
-    std::vector<uint64_t> keys(b->size());
-    std::vector<kernels::SortedBox> packed(b->size());
-    kernels::grid_keys_pack(v->params, soa(*b), kernels::PairFilter{nullptr, nullptr, nullptr}, nullptr,
-                            keys.data(), packed.data(), nullptr, {0, count(*b)});
+    const kernels::GridBlocks blocks = kernels::grid_blocks(v->params);
+    std::vector<uint32_t> bucket(b->size());
+    std::vector<uint32_t> block_count(blocks.count);
+    kernels::grid_bucket_count(v->params, blocks, soa(*b), bucket.data(), block_count.data(), {0, count(*b)});
     for (size_t i = 0; i < b->size(); ++i)
-      ASSERT_EQ(static_cast<uint32_t>(keys[i] >> 32),
-                kernels::grid_query_bucket(v->params, b->min_x[i], b->min_y[i], b->min_z[i]))
+      ASSERT_EQ(bucket[i], kernels::grid_query_bucket(v->params, b->min_x[i], b->min_y[i], b->min_z[i]))
           << "box " << i;
+    // The per-block counts are those of the buckets' high bits.
+    std::vector<uint32_t> want(blocks.count, 0);
+    for (uint32_t k : bucket) ++want[k >> blocks.low_bits];
+    EXPECT_EQ(block_count, want);
   }
 }
 
