@@ -21,6 +21,13 @@
 //     function over the unit sphere (up to 40 descent steps with a quadratic-model step
 //     and a two-subgradient bundle across kinks such as a cylinder's side), then runs a
 //     GJK on the pair moved just clear for the witnesses. Converged lanes skip this.
+//     Smooth pairs (sphere and ellipsoid cores: unique supports, a differentiable
+//     support function h) leave EPA once its gap is below 3e-3 of the scale: Newton's
+//     method on h over unit directions (forward-difference Hessian, two supports per
+//     step) converges quadratically where EPA gains a decade per ~5 expansions; it
+//     stops when its predicted decrease is below 0.1 cfg.epa_tolerance, and its answer
+//     stands only if every polytope face closer than it lies within ~25 degrees of its
+//     normal (no second minimum elsewhere); else EPA goes on unchanged.
 //     A flat core difference (crossing segments, coincident centres, coplanar
 //     triangles) has core depth 0 along a deterministic normal (towards B's centre,
 //     else +y).
@@ -43,16 +50,18 @@
 // Paths: GJK/EPA do not vectorise across lanes; cfg.path kSimd and kScalar run this same
 // per-lane code (bit-identical results). Within a lane, hull supports and the ray chord
 // through a hull's face planes run kSimdWidth vertices / faces per step; the EPA
-// polytope keeps only live faces, in SoA, compacted in order after each expansion, and
-// the closest face is tracked during that pass (no dead-face scans).
+// polytope keeps only live faces, in SoA (a removed face's slot takes the last live
+// face), and the closest face is found by a branch-free minimum over them.
 // Robustness: degenerate simplices fall back to their best sub-simplex, EPA aborts to
 // its last valid face on any topological inconsistency, no division without a guard:
 // no NaN for finite input. No allocation (the EPA polytope lives on the stack).
-// Cost: GJK ~5-15 iterations of 2 supports; EPA ~5-40 iterations (curved shapes take
-// the most: ellipsoid pairs average ~23 at the default tolerance, hull pairs ~6); hull
-// supports are O(vertices). impact_narrowbench (half the pairs overlapping, 24-point
-// hulls): ~1.1 us per box-hull pair, 1.4 us hull-hull, 1.5 us cylinder-cylinder, 2.3 us
-// ellipsoid-ellipsoid; a lane at the EPA cap ~25-35 us (the cap refinement ~6-10 us).
+// Cost: GJK ~3-15 iterations of 2 supports; EPA ~5-40 iterations (curved shapes take
+// the most: cylinder pairs average ~14 at the default tolerance, ellipsoid pairs ~12
+// with the Newton finish (~23 without), hull pairs ~5-6); hull supports are
+// O(vertices). impact_narrowbench (half the pairs overlapping, 24-point hulls, loaded
+// 2-core machine): ~1.2 us per box-hull pair, 1.5 us hull-hull, 1.5 us
+// cylinder-cylinder, 1.55 us ellipsoid-ellipsoid (2.5-2.7 us before the Newton finish);
+// a lane at the EPA cap ~25-35 us (the cap refinement ~6-10 us).
 // cfg.epa_tolerance trades depth error for time on curved pairs (polytope pairs converge
 // exactly and do not change): measured against the matrix test's double reference, the
 // worst |depth error| over its curved-pair scenarios is ~2e-5 L at 1e-5 (the default),
@@ -308,6 +317,20 @@ struct Polytope {
   }
 };
 
+/// The live face of least distance, the lowest index among ties (P.nf > 0). A plain
+/// compare-and-branch scan: the branch is rarely taken, so it predicts well, where a
+/// branch-free running minimum is one long chain of dependent min operations.
+uint32_t closest_face(const Polytope& P) {
+  double bd = P.fd[0];
+  uint32_t best = 0;
+  for (uint32_t k = 1; k < P.nf; ++k)
+    if (P.fd[k] < bd) {
+      bd = P.fd[k];
+      best = k;
+    }
+  return best;
+}
+
 /// Adds face (a, b, c), counter-clockwise seen from outside; false if degenerate/full.
 bool add_face(Polytope& P, uint32_t a, uint32_t b, uint32_t c) {
   if (P.nf >= kEpaMaxFaces) return false;  // P holds live faces only
@@ -487,6 +510,99 @@ void epa_finish(const Leaf& A, const Leaf& B, const Polytope& P, const EpaFace& 
   r->depth = static_cast<float>(h);
 }
 
+/// Leaf types whose core has a unique support point in every direction, so that the
+/// support function of a pair of them is differentiable: sphere (a point), ellipsoid.
+IMPACT_INLINE bool is_smooth(LeafType t) { return t == kLeafSphere || t == kLeafEllipsoid; }
+
+/// EPA hands a smooth pair to polish_smooth once its closest face's gap (upper minus
+/// lower bound of the depth) is below this fraction of the scale: the face normal is
+/// then within a few degrees of the minimum's. Reported depths stay upper bounds, and
+/// a Newton minimum that is not the global one (two local minima of h within this gap
+/// of each other) is off by less than the gap.
+constexpr double kPolishStart = 3e-3;
+constexpr int kPolishSteps = 8;
+
+/// Newton's method for the minimum of the support function h(n) = max_w n.w of the
+/// core difference over unit directions n, from n0 (van den Bergen's EPA computes the
+/// same minimum; for smooth h, Newton converges quadratically where EPA refines its
+/// polytope linearly, ~5 expansions per decade of the tolerance).
+/// In tangent coordinates t1, t2 at n: the gradient is g_j = w.t_j (w = support point),
+/// the Hessian H = J - h I with J_ij = d(w.t_j)/d(theta_i) by forward differences
+/// (two supports at 1e-3 rad), and the step solves H delta = -g. A step is taken only
+/// if H is positive definite, the step is local (< 0.3 rad) and it lowers h (else one
+/// halving); the method stops, converged, once the predicted decrease g.H^-1.g / 2 is
+/// below 0.1 tol. Returns false (r untouched) when it does not converge in kPolishSteps:
+/// the caller continues EPA. On success: r's normal, depth h (an upper bound: moving B
+/// by n * h separates) and witnesses (the supports, unique for these shapes).
+// Out of line: inlined, its frame and registers would burden every EPA lane, most of
+// which (polytopes, cylinders) never call it.
+__attribute__((noinline)) bool polish_smooth(const Leaf& A, const Leaf& B, D3 n0, double tol, EpaResult* r) {
+  auto unit_f = [](D3 d) {
+    V3 f = to_f(d);
+    return f * (1.0f / len(f));
+  };
+  V3 n = unit_f(n0);
+  SupportPoint w = support_diff(A, B, n);
+  double h = dot(to_d(n), w.w);
+  constexpr double kEps = 1e-3;
+  for (int step = 0; step < kPolishSteps; ++step) {
+    const D3 nd = to_d(n);
+    const D3 t1 = unit_perp(nd);
+    const D3 t2 = cross(nd, t1);
+    const double g1 = dot(w.w, t1), g2 = dot(w.w, t2);
+    const SupportPoint w1 = support_diff(A, B, to_f(nd + t1 * kEps));
+    const SupportPoint w2 = support_diff(A, B, to_f(nd + t2 * kEps));
+    const double j11 = (dot(w1.w, t1) - g1) / kEps, j12 = (dot(w1.w, t2) - g2) / kEps;
+    const double j21 = (dot(w2.w, t1) - g1) / kEps, j22 = (dot(w2.w, t2) - g2) / kEps;
+    const double h11 = j11 - h, h22 = j22 - h, h12 = 0.5 * (j12 + j21);
+    const double det = h11 * h22 - h12 * h12;
+    if (!(h11 > 0.0) || !(h22 > 0.0) || !(det > 0.0)) return false;
+    double d1 = -(h22 * g1 - h12 * g2) / det;
+    double d2 = -(h11 * g2 - h12 * g1) / det;
+    const double predicted = -0.5 * (g1 * d1 + g2 * d2);
+    if (!(predicted <= 0.1 * tol)) {
+      if (!(d1 * d1 + d2 * d2 < 0.09)) return false;
+    } else {
+      r->n = n;
+      r->depth = static_cast<float>(h);
+      r->pa = w.a;
+      r->pb = w.b;
+      r->status = 0;
+      return true;
+    }
+    bool accepted = false;
+    for (int half = 0; half < 2 && !accepted; ++half) {
+      const V3 m = unit_f(nd + t1 * d1 + t2 * d2);
+      const SupportPoint wm = support_diff(A, B, m);
+      const double hm = dot(to_d(m), wm.w);
+      if (hm < h) {
+        n = m;
+        w = wm;
+        h = hm;
+        accepted = true;
+      }
+      d1 *= 0.5;
+      d2 *= 0.5;
+    }
+    if (!accepted) return false;
+  }
+  return false;
+}
+
+/// Guards polish_smooth's answer (n, h) against a second local minimum of h elsewhere
+/// (nearly concentric pairs have two, in opposite directions): every polytope face
+/// whose distance (a lower bound of h over the directions it covers) is below h - tol
+/// must lie within ~25 degrees of n. False: EPA goes on.
+__attribute__((noinline)) bool single_basin(const Polytope& P, const EpaResult& pr, double tol) {
+  const D3 n = to_d(pr.n);
+  const double lim = static_cast<double>(pr.depth) - tol;
+  for (uint32_t k = 0; k < P.nf; ++k) {
+    if (!(P.fd[k] < lim)) continue;
+    if (!(P.fnx[k] * n.x + P.fny[k] * n.y + P.fnz[k] * n.z > 0.9)) return false;
+  }
+  return true;
+}
+
 }  // namespace
 
 // --- GJK ---------------------------------------------------------------------------------
@@ -659,15 +775,16 @@ EpaResult epa_cores(const Leaf& A, const Leaf& B, const Simplex& start, float sc
   uint32_t it = 0;
   bool converged = false;
   uint16_t horizon[kEpaMaxHorizon][2];
-  // Closest face (lowest index wins ties): found here, then kept up to date by the
-  // compaction pass and the new faces of every expansion (no separate scan).
-  double bd = INFINITY;
-  for (uint32_t k = 0; k < P.nf; ++k)
-    if (P.fd[k] < bd) {
-      bd = P.fd[k];
-      best = k;
-    }
+  // Closest face (lowest index wins ties): found here, then again after every expansion.
+  best = closest_face(P);
+  uint8_t starts[kEpaMaxVerts] = {}, ends[kEpaMaxVerts] = {};
   double sees[kEpaMaxFaces];
+  uint16_t visible[kEpaMaxFaces];
+  // Both supports unique in every direction (points and ellipsoids): h is smooth and
+  // its minimum, once EPA has bracketed it to kPolishStart of the scale, goes to Newton.
+  bool smooth = is_smooth(A.type) && is_smooth(B.type);
+  const double polish_start = kPolishStart * scale;
+  smooth = smooth && polish_start > tol;
   for (;;) {
     const EpaFace F = P.face(best);
     const SupportPoint w = support_diff(A, B, to_f(F.n));
@@ -676,29 +793,34 @@ EpaResult epa_cores(const Leaf& A, const Leaf& B, const Simplex& start, float sc
       converged = true;
       break;
     }
+    if (smooth && gap <= polish_start) {
+      // Near the minimum of a smooth support function: Newton finishes it (see
+      // polish_smooth); on failure EPA goes on as if it had not been tried.
+      smooth = false;
+      EpaResult pr;
+      if (polish_smooth(A, B, F.n, tol, &pr) && single_basin(P, pr, tol)) {
+        pr.iterations = it;
+        return pr;
+      }
+    }
     if (it >= max_iterations || P.nv >= kEpaMaxVerts) break;
     ++it;
-    // Faces that see w (a contiguous pass over the SoA normals), and their horizon
-    // (edges not shared by two visible faces). The faces that stay are compacted in
-    // order (dead faces never accumulate, so every scan touches only live ones).
+    // Faces that see w (a contiguous pass over the SoA normals), then their horizon
+    // (edges not shared by two visible faces), walked in index order. The visible
+    // faces are removed by moving the last live face into each hole (highest hole
+    // first), so the SoA holds only live faces and no pass moves the faces that stay.
     const uint32_t nf = P.nf;
     for (uint32_t k = 0; k < nf; ++k) sees[k] = P.fnx[k] * w.w.x + P.fny[k] * w.w.y + P.fnz[k] * w.w.z - P.fd[k];
     sees[best] = 1.0;  // the closest face always goes (w is beyond it: gap > tol)
+    uint32_t nvis = 0;
+    for (uint32_t k = 0; k < nf; ++k) {
+      visible[nvis] = static_cast<uint16_t>(k);
+      nvis += sees[k] > 0.0 ? 1u : 0u;
+    }
     uint32_t nh = 0;
     bool ok = true;
-    uint32_t kept = 0;
-    uint32_t next_best = 0;
-    bd = INFINITY;
-    for (uint32_t k = 0; k < nf; ++k) {
-      if (!ok || !(sees[k] > 0.0)) {
-        if (P.fd[k] < bd) {
-          bd = P.fd[k];
-          next_best = kept;
-        }
-        if (kept != k) P.move_face(kept, k);
-        ++kept;
-        continue;
-      }
+    for (uint32_t j = 0; j < nvis && ok; ++j) {
+      const uint32_t k = visible[j];
       const uint16_t gi[3] = {P.fi[k][0], P.fi[k][1], P.fi[k][2]};
       for (int e = 0; e < 3; ++e) {
         const uint16_t a = gi[e], b = gi[(e + 1) % 3];
@@ -723,29 +845,32 @@ EpaResult epa_cores(const Leaf& A, const Leaf& B, const Simplex& start, float sc
         }
       }
     }
-    P.nf = kept;
     // The horizon must be one simple loop: every vertex starts and ends one edge.
+    // Counted per vertex (the counters are zero between iterations).
     if (ok) {
-      for (uint32_t h = 0; h < nh && ok; ++h) {
-        uint32_t starts = 0, ends = 0;
-        for (uint32_t g = 0; g < nh; ++g) {
-          starts += horizon[g][0] == horizon[h][0];
-          ends += horizon[g][1] == horizon[h][0];
-        }
-        ok = starts == 1 && ends == 1;
+      for (uint32_t h = 0; h < nh; ++h) {
+        ++starts[horizon[h][0]];
+        ++ends[horizon[h][1]];
+      }
+      for (uint32_t h = 0; h < nh; ++h) ok = ok && starts[horizon[h][0]] == 1 && ends[horizon[h][0]] == 1;
+      for (uint32_t h = 0; h < nh; ++h) {
+        starts[horizon[h][0]] = 0;
+        ends[horizon[h][1]] = 0;
       }
       ok = ok && nh >= 3;
     }
     if (ok) {
+      uint32_t live = nf;
+      for (uint32_t j = nvis; j-- > 0;) {
+        const uint32_t k = visible[j];
+        --live;
+        if (k != live) P.move_face(k, live);
+      }
+      P.nf = live;
       const uint32_t wi = P.nv++;
       P.v[wi] = w;
       for (uint32_t h = 0; h < nh && ok; ++h) ok = add_face(P, horizon[h][0], horizon[h][1], wi);
-      for (uint32_t k = kept; k < P.nf; ++k)
-        if (P.fd[k] < bd) {
-          bd = P.fd[k];
-          next_best = k;
-        }
-      best = next_best;
+      if (ok) best = closest_face(P);
     }
     if (!ok) {
       // Inconsistent topology (rounding) or capacity: stop at the last good face. The
@@ -876,15 +1001,9 @@ bool supporting_face(const Leaf& l, V3 dir, Face* out) {
   if (l.type == kLeafConvex) {
     const HullView& h = *l.hulls;
     const float dx = dot(dir, l.ax[0]), dy = dot(dir, l.ax[1]), dz = dot(dir, l.ax[2]);
-    uint32_t bf = h.face_begin[l.hull];
-    float bs = -INFINITY;
-    for (uint32_t f = h.face_begin[l.hull]; f < h.face_begin[l.hull + 1]; ++f) {
-      const float s = dx * h.fnx[f] + dy * h.fny[f] + dz * h.fnz[f];
-      if (s > bs) {
-        bs = s;
-        bf = f;
-      }
-    }
+    // The face of largest n.dir, the first among ties, kSimdWidth faces per step.
+    const uint32_t bf = argmax_dot(h.fnx, h.fny, h.fnz, h.face_begin[l.hull], h.face_begin[l.hull + 1], dx, dy, dz);
+    const float bs = dx * h.fnx[bf] + dy * h.fny[bf] + dz * h.fnz[bf];
     const uint32_t vb = h.face_vert_begin[bf], ve = h.face_vert_begin[bf + 1];
     if (ve - vb > kMaxFaceVerts || ve - vb < 3) return false;
     out->n = ve - vb;

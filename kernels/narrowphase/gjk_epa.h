@@ -52,10 +52,12 @@ struct EpaResult {
   V3 n{0, 1, 0};       // unit, from A to B
   float depth = 0.0f;  // of the cores (may be slightly < 0 when they barely touch)
   V3 pa{0, 0, 0}, pb{0, 0, 0};  // witness points on the cores
-  uint32_t iterations = 0;
+  uint32_t iterations = 0;  // polytope expansions (a smooth pair's Newton steps not counted)
 };
 
-/// EPA on the cores, seeded with GJK's final simplex (the origin on or in it).
+/// EPA on the cores, seeded with GJK's final simplex (the origin on or in it). Pairs
+/// of smooth cores (sphere, ellipsoid) finish with Newton's method once EPA has
+/// bracketed the depth (gjk_epa.cpp, header block, step 3).
 EpaResult epa_cores(const Leaf& A, const Leaf& B, const Simplex& start, float scale,
                     uint32_t max_iterations, float tolerance);
 

@@ -95,11 +95,13 @@ IMPACT_INLINE V3 hull_vertex(const Leaf& l, uint32_t i) {
   return l.p + l.ax[0] * h.vx[i] + l.ax[1] * h.vy[i] + l.ax[2] * h.vz[i];
 }
 
-/// Index in [b, e) (b < e) of the hull vertex of largest projection on (dx, dy, dz),
-/// the lowest index among ties: kSimdWidth vertices per step, each lane keeping its
-/// first maximum (strict >), then the lanes merged by (score, lowest index); the tail
-/// is scalar with strict > (its indices are larger). Deterministic for given bytes.
-IMPACT_INLINE uint32_t hull_support_index(const HullView& h, uint32_t b, uint32_t e, float dx, float dy, float dz) {
+/// Index in [b, e) (b < e) of the point (vx, vy, vz)[i] of largest projection on
+/// (dx, dy, dz) (hull vertices, face normals), the lowest index among ties:
+/// kSimdWidth points per step, each lane keeping its first maximum (strict >), then
+/// the lanes merged by (score, lowest index); the tail is scalar with strict > (its
+/// indices are larger). Deterministic for given bytes.
+IMPACT_INLINE uint32_t argmax_dot(const float* vx, const float* vy, const float* vz, uint32_t b, uint32_t e, float dx,
+                                  float dy, float dz) {
   using F = simd::FloatN<simd::kSimdWidth>;
   constexpr uint32_t kW = simd::kSimdWidth;
   uint32_t best = b;
@@ -111,30 +113,35 @@ IMPACT_INLINE uint32_t hull_support_index(const HullView& h, uint32_t b, uint32_
     const F lane = F::load(iota), X(dx), Y(dy), Z(dz);
     F m(-INFINITY), idx(0.0f);
     for (; i + kW <= e; i += kW) {
-      const F s = X * F::load(h.vx + i) + Y * F::load(h.vy + i) + Z * F::load(h.vz + i);
+      const F s = X * F::load(vx + i) + Y * F::load(vy + i) + Z * F::load(vz + i);
       const auto gt = s > m;
       m = select(gt, s, m);
       idx = select(gt, lane + F(static_cast<float>(i - b)), idx);
     }
-    float bi = idx.lane(0);
+    // Merge without data-dependent branches (they mispredict about half the time):
+    // the largest score, then the lowest index among the lanes that hold it.
     best_s = m.lane(0);
-    for (uint32_t k = 1; k < kW; ++k) {
-      const float s = m.lane(k), j = idx.lane(k);
-      if (s > best_s || (s == best_s && j < bi)) {
-        best_s = s;
-        bi = j;
-      }
+    for (uint32_t k = 1; k < kW; ++k) best_s = m.lane(k) > best_s ? m.lane(k) : best_s;
+    float bi = static_cast<float>(e - b);
+    for (uint32_t k = 0; k < kW; ++k) {
+      const float j = idx.lane(k);
+      bi = (m.lane(k) == best_s && j < bi) ? j : bi;
     }
     best = b + static_cast<uint32_t>(bi);
   }
   for (; i < e; ++i) {
-    const float s = dx * h.vx[i] + dy * h.vy[i] + dz * h.vz[i];
+    const float s = dx * vx[i] + dy * vy[i] + dz * vz[i];
     if (s > best_s) {
       best_s = s;
       best = i;
     }
   }
   return best;
+}
+
+/// Index in [b, e) of the hull vertex of largest projection on (dx, dy, dz) (argmax_dot).
+IMPACT_INLINE uint32_t hull_support_index(const HullView& h, uint32_t b, uint32_t e, float dx, float dy, float dz) {
+  return argmax_dot(h.vx, h.vy, h.vz, b, e, dx, dy, dz);
 }
 
 /// Support point of the core (no margin) along d.
@@ -209,9 +216,20 @@ inline float leaf_size(const Leaf& l) {
       return std::sqrt(std::fmax(len2(l.p - c), std::fmax(len2(l.v1 - c), len2(l.v2 - c))));
     }
     case kLeafConvex: {
+      // kSimdWidth vertices per step (max is exact: the order does not matter).
+      using F = simd::FloatN<simd::kSimdWidth>;
+      constexpr uint32_t kW = simd::kSimdWidth;
       const HullView& h = *l.hulls;
+      const uint32_t e = h.vert_begin[l.hull + 1];
+      uint32_t i = h.vert_begin[l.hull];
       float m = 0.0f;
-      for (uint32_t i = h.vert_begin[l.hull]; i < h.vert_begin[l.hull + 1]; ++i) {
+      if (e - i >= kW) {
+        F mw(0.0f);
+        for (; i + kW <= e; i += kW)
+          mw = simd::max(mw, simd::abs(F::load(h.vx + i)) + simd::abs(F::load(h.vy + i)) + simd::abs(F::load(h.vz + i)));
+        for (uint32_t k = 0; k < kW; ++k) m = mw.lane(k) > m ? mw.lane(k) : m;
+      }
+      for (; i < e; ++i) {
         const float s = std::fabs(h.vx[i]) + std::fabs(h.vy[i]) + std::fabs(h.vz[i]);
         m = s > m ? s : m;  // not std::fmax: that is a libm call here
       }

@@ -15,7 +15,10 @@
 // the origin) and shifted back on output.
 // Inputs: posed leaves per leaf.h (finite, unit nh). Deterministic (fixed loop order,
 // first index wins ties). cfg.path kSimd and kScalar run the same per-lane code.
-// Cost: O(1) per lane, O(vertex count) for convex hulls. No allocation.
+// Cost: O(1) per lane, O(vertex count) for convex hulls: one kSimdWidth-wide pass in
+// the hull's frame lists the vertices below the plane (at most 64; more fall back to
+// scanning all vertices), and the selection passes run over that list only. No
+// allocation.
 #include <cmath>
 
 #include "kernels/narrowphase/pair_kernels.h"
@@ -108,6 +111,47 @@ uint32_t pick_below(uint32_t n, Get get, V3 nh, float off, V3* pts, float* pd) {
   return k;
 }
 
+/// Most hull vertices below the plane that the candidate list holds; a hull sunk
+/// deeper falls back to scanning all its vertices.
+constexpr uint32_t kMaxCandidates = 64;
+
+/// Hull vertices [vb, ve) that may lie below the plane nh.x = off, in index order:
+/// one pass in the hull's frame (the plane moved into it: nl = R^T nh, offl = off -
+/// nh.p), kSimdWidth vertices per step. The slack admits the vertices whose local and
+/// world depths differ in sign by rounding; pick_below re-tests every candidate in the
+/// world frame, so the result equals a scan of all vertices. Returns the count, or
+/// kMaxCandidates + 1 when more would be needed.
+uint32_t hull_candidates(const HullView& h, uint32_t vb, uint32_t ve, const cvx::Leaf& A, V3 nh, float off,
+                         uint32_t* cand) {
+  using F = simd::FloatN<simd::kSimdWidth>;
+  constexpr uint32_t kW = simd::kSimdWidth;
+  const float nx = cvx::dot(nh, A.ax[0]), ny = cvx::dot(nh, A.ax[1]), nz = cvx::dot(nh, A.ax[2]);
+  const float offl = off - cvx::dot(nh, A.p);
+  // Rounding of the two frames' dot products: relative to the terms' magnitudes.
+  const float reach = std::fabs(off) + cvx::len(A.p);
+  const float slack = 1e-5f * reach + 1e-30f;
+  const float lim = offl + slack;  // below: nl.v < lim
+  uint32_t nc = 0;
+  uint32_t i = vb;
+  const F X(nx), Y(ny), Z(nz), L(lim);
+  for (; i + kW <= ve; i += kW) {
+    const F s = X * F::load(h.vx + i) + Y * F::load(h.vy + i) + Z * F::load(h.vz + i);
+    const auto below = s < L;
+    if (simd::none(below)) continue;
+    for (uint32_t k = 0; k < kW; ++k) {
+      if (!below.lane(k)) continue;
+      if (nc == kMaxCandidates) return kMaxCandidates + 1;
+      cand[nc++] = i + k;
+    }
+  }
+  for (; i < ve; ++i) {
+    if (!(nx * h.vx[i] + ny * h.vy[i] + nz * h.vz[i] < lim)) continue;
+    if (nc == kMaxCandidates) return kMaxCandidates + 1;
+    cand[nc++] = i;
+  }
+  return nc;
+}
+
 }  // namespace
 
 void collide_support_halfspace(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out, Range r,
@@ -140,7 +184,13 @@ void collide_support_halfspace(const LeafSoA& a, const LeafSoA& b, const Manifol
       case kLeafConvex: {
         const uint32_t vb = cfg.hulls.vert_begin[A.hull];
         const uint32_t ve = cfg.hulls.vert_begin[A.hull + 1];
-        m = pick_below(ve - vb, [&](uint32_t i) { return cvx::hull_vertex(A, vb + i); }, nh, off, pts, pd);
+        uint32_t cand[kMaxCandidates];
+        const uint32_t nc = hull_candidates(cfg.hulls, vb, ve, A, nh, off, cand);
+        if (nc <= kMaxCandidates) {
+          m = pick_below(nc, [&](uint32_t i) { return cvx::hull_vertex(A, cand[i]); }, nh, off, pts, pd);
+        } else {
+          m = pick_below(ve - vb, [&](uint32_t i) { return cvx::hull_vertex(A, vb + i); }, nh, off, pts, pd);
+        }
         break;
       }
       case kLeafTriangle:

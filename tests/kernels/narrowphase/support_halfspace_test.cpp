@@ -362,5 +362,86 @@ TEST(SupportHalfspaceManifold, SunkHullKeepsDeepestAndSpreadPoints) {
   EXPECT_GT((r.pt[1] - r.pt[0]).norm(), 1.0);
 }
 
+/// A hull of ~400 vertices (points on an ellipsoid) sunk from barely to entirely below
+/// the plane, so that the vertices below range from one to all of them: both the
+/// candidate list of the kernel (up to 64 vertices below) and its fallback over all
+/// vertices. Against a brute force over the vertices in double: depth = the deepest
+/// vertex's, pd[0] is it, count = min(4, vertices below) where they span an area,
+/// every point is a vertex below moved up by pd/2, and point 1 is the vertex below
+/// farthest from point 0.
+TEST(SupportHalfspaceManifold, ManyVertexHullAtEverySinking) {
+  static const uint32_t big = [] {
+    std::mt19937 g(8);
+    std::normal_distribution<float> n;
+    std::vector<Eigen::Vector3f> pts;
+    for (int i = 0; i < 400; ++i) {
+      Eigen::Vector3f u(n(g), n(g), n(g));
+      u.normalize();
+      pts.emplace_back(u.x(), 0.6f * u.y(), 0.8f * u.z());
+    }
+    HullData h;
+    EXPECT_TRUE(test::IsOk(build_convex_hull(pts, &h)));
+    hull_data().push_back(h);
+    return store().add(h);
+  }();
+  const HullData& hd = hull_data()[big];
+  ASSERT_GT(hd.vertices.size(), 200u);
+  std::mt19937 rng(9);
+  std::uniform_real_distribution<double> v(-1, 1), sink(0.0, 2.2);
+  int few = 0, many = 0;
+  for (int k = 0; k < 200; ++k) {
+    Leaf1 l;
+    l.type = kLeafConvex;
+    l.hull = big;
+    l.R = random_rotation(rng);
+    l.p = Vec3d(v(rng), v(rng), v(rng)) * (k % 2 == 0 ? 1.0 : 1e5);
+    l = rounded(l);
+    Plane pl;
+    pl.n = Vec3d(v(rng), v(rng), v(rng)).normalized().cast<float>().cast<double>();
+    // The lowest vertex, then the plane `sink` above it.
+    std::vector<Vec3d> w;
+    double lo = INFINITY;
+    for (const auto& x : hd.vertices) {
+      w.push_back(l.p + l.R * x.cast<double>());
+      lo = std::min(lo, pl.n.dot(w.back()));
+    }
+    pl.p = (l.p + pl.n * (lo - pl.n.dot(l.p) + sink(rng))).cast<float>().cast<double>();
+    const double off = pl.n.dot(pl.p);
+    // Float rounding: the hull's (size 1) and the world coordinates' (ulp of |p|).
+    const double tol = 1e-5 + 1e-7 * l.p.norm();
+    std::vector<Vec3d> below;
+    double depth = 0;
+    for (const Vec3d& x : w) {
+      const double d = off - pl.n.dot(x);
+      if (d > tol) below.push_back(x);
+      depth = std::max(depth, d);
+    }
+    if (below.size() < 5) continue;  // few points: ties at the threshold
+    (below.size() <= 64 ? few : many)++;
+    const Result r = run(l, pl);
+    ASSERT_EQ(r.count, 4u) << k << " below " << below.size();
+    EXPECT_NEAR(r.depth, depth, tol) << k;
+    EXPECT_NEAR(r.pd[0], depth, tol) << k;
+    Vec3d x[4];
+    for (uint32_t j = 0; j < 4; ++j) {
+      x[j] = r.pt[j] - pl.n * (0.5 * r.pd[j]);
+      double best = INFINITY;
+      for (const Vec3d& y : w) best = std::min(best, (y - x[j]).norm());
+      EXPECT_LT(best, 4 * tol) << k << " point " << j << " is no vertex";
+      EXPECT_NEAR(off - pl.n.dot(x[j]), r.pd[j], 4 * tol) << k;
+    }
+    // Vertices within rounding of the plane may count either way: the farthest of
+    // those surely below bounds it from below, of those possibly below from above.
+    double far_in = 0, far_maybe = 0;
+    for (const Vec3d& y : below) far_in = std::max(far_in, (y - x[0]).norm());
+    for (const Vec3d& y : w)
+      if (off - pl.n.dot(y) > -tol) far_maybe = std::max(far_maybe, (y - x[0]).norm());
+    EXPECT_GE((x[1] - x[0]).norm(), far_in - 8 * tol) << k;
+    EXPECT_LE((x[1] - x[0]).norm(), far_maybe + 8 * tol) << k;
+  }
+  EXPECT_GT(few, 10);
+  EXPECT_GT(many, 10);
+}
+
 }  // namespace
 }  // namespace impact::kernels
