@@ -428,7 +428,12 @@ BodyArrays World::bodies() const {
   return BodyArrays{{b.pos_x.data(), n},    {b.pos_y.data(), n},  {b.pos_z.data(), n},
                     {b.vel_x.data(), n},    {b.vel_y.data(), n},  {b.vel_z.data(), n},
                     {b.inv_mass.data(), n}, {b.radius.data(), n}, {b.restitution.data(), n},
-                    {b.layer.data(), n},    {b.mask.data(), n},   {b.handle.data(), n}};
+                    {b.layer.data(), n},    {b.mask.data(), n},   {b.handle.data(), n},
+                    {b.shape.data(), b.shape.size()},
+                    {b.qx.data(), b.qx.size()},
+                    {b.qy.data(), b.qy.size()},
+                    {b.qz.data(), b.qz.size()},
+                    {b.qw.data(), b.qw.size()}};
 }
 
 // --- planes -----------------------------------------------------------------------------
@@ -505,6 +510,11 @@ Status World::destroy_planes(std::span<const PlaneHandle> handles) {
 }
 
 size_t World::plane_count() const { return impl_->planes.size(); }
+
+PlaneArrays World::planes() const {
+  const PlaneStore& p = impl_->planes;
+  return PlaneArrays{p.normal_x, p.normal_y, p.normal_z, p.offset, p.restitution, p.layer, p.mask, p.handle};
+}
 
 // --- time -------------------------------------------------------------------------------
 

@@ -92,6 +92,23 @@ struct BodyArrays {
   std::span<const float> inv_mass, radius, restitution;
   std::span<const uint32_t> layer, mask;
   std::span<const BodyHandle> handles;
+  /// Per body: the index of its shape in World::shapes() (ShapeId::index), or
+  /// kSphereBody for a plain sphere of `radius`; and its orientation, a unit
+  /// quaternion (qx, qy, qz, qw). All five are empty while no body has a shape (every
+  /// body is then a sphere at the identity orientation).
+  std::span<const uint32_t> shape;
+  std::span<const float> qx, qy, qz, qw;
+  static constexpr uint32_t kSphereBody = 0xffffffffu;
+  size_t size() const { return handles.size(); }
+};
+
+/// Read-only SoA view of the static planes (half-spaces {x : dot(normal, x) <= offset},
+/// unit normals) in dense storage order. Valid until planes are created or destroyed.
+/// Slot i belongs to handles[i]; it is the plane index of ContactArrays::b.
+struct PlaneArrays {
+  std::span<const float> normal_x, normal_y, normal_z, offset, restitution;
+  std::span<const uint32_t> layer, mask;
+  std::span<const PlaneHandle> handles;
   size_t size() const { return handles.size(); }
 };
 
@@ -165,6 +182,7 @@ class World {
   Status create_planes(std::span<const PlaneDesc> descs, std::span<PlaneHandle> out);
   Status destroy_planes(std::span<const PlaneHandle> handles);
   size_t plane_count() const;
+  PlaneArrays planes() const;
 
   // --- time --------------------------------------------------------------------
   /// Runs exactly one fixed step of desc().fixed_dt; last_step() then describes it.
