@@ -84,7 +84,9 @@ Status check_shape(const std::string& who, const WorldImpl& w, const BodyDesc& d
   Pose pose;
   pose.orientation = d.orientation;
   if (!host::pose_ok(pose)) return host::check_pose(pose, who.c_str());
-  const float rr = std::sqrt(std::max(r.local_min.squaredNorm(), r.local_max.squaredNorm()));
+  // The farthest corner of the local box: per axis the larger magnitude (hulls and
+  // compounds need not be centred on the body's origin).
+  const float rr = r.local_min.cwiseAbs().cwiseMax(r.local_max.cwiseAbs()).norm();
   *bounding_radius = rr;
   if (!(rr > 0.0f && rr <= kMaxCoordinate)) return invalid(who, "shape bounds out of range");
   return Status();

@@ -287,6 +287,32 @@ TEST(WorldShapes, SpheresGiveTheSameContactsThroughTheGeneralPath) {
   }
 }
 
+// The stored bounding radius covers shapes that are not centred on the body's origin
+// (its farthest local corner mixes min and max coordinates), and the body-plane cull
+// that uses it keeps the contact of such a shape's far corner.
+TEST(WorldShapes, OffCentreShapeKeepsItsFarCornerContact) {
+  auto w = make_world();
+  add_floor(*w, 0.0f);
+  ShapeId slab, compound;
+  ASSERT_TRUE(IsOk(w->shapes().add_box(Eigen::Vector3f(1.5f, 1.5f, 0.1f), &slab)));
+  const CompoundChild child{slab, Pose{Eigen::Vector3f(-1.5f, 1.5f, 0.0f), Eigen::Quaternionf::Identity()}};
+  ASSERT_TRUE(IsOk(w->shapes().add_compound({&child, 1}, &compound)));
+  // Local box [-3, 0] x [0, 3] x [-0.1, 0.1]: the far corner (-3, 3, +-0.1) is 4.244 m
+  // out. Turned by 135 degrees about z it points straight down.
+  BodyDesc d;
+  d.shape = compound;
+  d.orientation = Eigen::Quaternionf(Eigen::AngleAxisf(0.75f * 3.14159265f, Eigen::Vector3f::UnitZ()));
+  d.position = Eigen::Vector3f(0.0f, 4.2f, 0.0f);  // the corner 0.044 m below the floor
+  BodyHandle h;
+  ASSERT_TRUE(IsOk(w->create_bodies({&d, 1}, {&h, 1})));
+  EXPECT_GE(w->bodies().radius[0], 4.2438f);
+  ASSERT_TRUE(IsOk(w->step()));
+  EXPECT_GT(w->last_step().plane_contacts, 0u);
+  float depth = 0.0f;
+  for (float v : w->contacts().depth) depth = std::max(depth, v);
+  EXPECT_NEAR(depth, 0.044f, 0.01f);  // gravity moved it a little within the step
+}
+
 TEST(WorldShapes, DestroyingTheShapedBodiesReturnsToTheSpherePath) {
   auto w = make_world();
   add_floor(*w);
