@@ -122,6 +122,9 @@ Status check_desc(const WorldDesc& d) {
   if (!(std::isfinite(d.lbvh_refit_sah_limit) && d.lbvh_refit_sah_limit >= 1.0))
     return invalid(w, "lbvh_refit_sah_limit must be finite and >= 1, got " +
                           std::to_string(d.lbvh_refit_sah_limit));
+  NarrowPhaseOptions narrow = d.narrow_phase;
+  narrow.exec = {};  // ignored: the world's backend runs the passes
+  if (Status st = host::validate_options(narrow); !st.ok()) return invalid(w, "narrow_phase." + st.message());
   Backend b;
   if (!host::resolve_backend(d.backend, &b))
     return Status(StatusCode::kUnsupported,

@@ -121,7 +121,7 @@ Status WorldImpl::general_narrow_phase() {
             if (plane_candidate(i, j)) narrow_pairs[at++] = ShapePair{i, n + j};
     });
   }
-  const kernels::NarrowConfig cfg{};
+  const kernels::NarrowConfig cfg = host::config_of(desc.narrow_phase);
   if (Status r = narrow.run(exec, st, narrow_rec, narrow_pose, narrow_pairs, cfg, &manifolds); !r.ok()) return r;
 
   // Manifold points -> contacts, in manifold order: points counted per chunk, scanned,

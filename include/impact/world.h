@@ -11,6 +11,7 @@
 
 #include <Eigen/Core>
 
+#include "impact/narrowphase.h"
 #include "impact/status.h"
 #include "impact/types.h"
 
@@ -58,6 +59,11 @@ struct WorldDesc {
   /// that meet within the step become candidate pairs even when fast. More pairs
   /// for slow scenes; the input continuous collision needs.
   bool swept_bounds = false;
+  /// Accuracy knobs of the general narrow phase that runs once a body has a shape
+  /// (BodyDesc::shape): GJK / EPA iteration caps and tolerances, SIMD or scalar
+  /// kernels (docs/narrowphase.md has their cost and error). Its `exec` is ignored:
+  /// the world's backend and threads run every pass.
+  NarrowPhaseOptions narrow_phase{};
   Backend backend = Backend::kDefault;
   /// Worker threads; 0 = all hardware threads. Results do not depend on it.
   uint32_t threads = 0;
@@ -127,13 +133,6 @@ struct ContactArrays {
   std::span<const float> point_x, point_y, point_z;
   std::span<const float> impulse;     ///< accumulated normal impulse, N*s
   size_t size() const { return a.size(); }
-};
-
-/// A broad-phase candidate pair of body slots, a < b.
-struct BodyPair {
-  uint32_t a;
-  uint32_t b;
-  friend bool operator==(const BodyPair&, const BodyPair&) = default;
 };
 
 class WorldImpl;
