@@ -3,6 +3,9 @@
 //     grid (closest hit) and incoherent visibility segments (any hit);
 //   - 100k dynamic spheres and 100k dynamic capsules: incoherent closest-hit rays,
 //     camera picking, and the per-frame update (set + commit: refit vs rebuild);
+//   - 100k dynamic posed shapes (boxes, convex hulls, cylinders; set_shapes): the same
+//     queries and update;
+//   - a World of 100k bodies (half spheres, half boxes): sync_world + commit per frame;
 //   - peers on the same rays and scenes: a plain rtcIntersect1 / rtcOccluded1 loop on
 //     the scene's own Embree scene (the batching overhead), and, when libbullet-dev is
 //     present, Bullet's btCollisionWorld::rayTest and its per-frame AABB update
@@ -104,6 +107,53 @@ const Bodies& bodies() {
   return bd;
 }
 
+// Posed shapes (the Shapes100k scene): the centres and sizes of bodies(), as boxes
+// (half), 16-vertex convex hulls and cylinders (a quarter each), randomly oriented.
+struct Shapes {
+  ShapeSet set;
+  std::vector<ShapeId> shape_of;
+  std::vector<Pose> poses;
+};
+
+const Shapes& shapes() {
+  static Shapes sh = [] {
+    Shapes g;
+    const Bodies& b = bodies();
+    std::mt19937 rng(43);
+    std::uniform_real_distribution<float> u(-1.0f, 1.0f);
+    auto unit = [&] {
+      for (;;) {
+        const Eigen::Vector3f v(u(rng), u(rng), u(rng));
+        if (v.norm() > 0.1f && v.norm() <= 1.0f) return Eigen::Vector3f(v.normalized());
+      }
+    };
+    // A few sizes of each kind, scaled like the spheres (radius 0.2 to 0.6).
+    std::vector<ShapeId> kinds;
+    for (float r : {0.25f, 0.4f, 0.55f}) {
+      ShapeId id;
+      (void)g.set.add_box(Eigen::Vector3f(r, 0.7f * r, 0.5f * r), &id);
+      kinds.push_back(id);
+      kinds.push_back(id);
+      std::vector<Eigen::Vector3f> cloud;
+      for (int k = 0; k < 16; ++k) cloud.push_back(r * unit());
+      (void)g.set.add_convex_hull(cloud, &id);
+      kinds.push_back(id);
+      (void)g.set.add_cylinder(0.7f * r, 0.6f * r, &id);
+      kinds.push_back(id);
+    }
+    for (size_t i = 0; i < b.x.size(); ++i) {
+      g.shape_of.push_back(kinds[i % kinds.size()]);
+      const Eigen::Vector4f c(u(rng), u(rng), u(rng), u(rng));
+      Pose p;
+      p.position = Eigen::Vector3f(b.x[i], b.y[i], b.z[i]);
+      p.orientation = Eigen::Quaternionf(c[0], c[1], c[2], c[3]).normalized();
+      g.poses.push_back(p);
+    }
+    return g;
+  }();
+  return sh;
+}
+
 // Incoherent rays: from random points on the box's faces towards random interior points.
 std::vector<Ray> incoherent_rays(float side, float y_lo, float y_hi, uint32_t n, uint32_t seed) {
   std::mt19937 rng(seed);
@@ -176,7 +226,7 @@ void check(const Status& s, benchmark::State& state) {
 }
 
 // Scenes are built once per (scene kind, variant) and kept for the process.
-enum class SceneKind { kTerrain, kSpheres, kCapsules };
+enum class SceneKind { kTerrain, kSpheres, kCapsules, kShapes };
 
 RayScene* get_scene(SceneKind kind, const Variant& v) {
   static std::vector<std::pair<std::string, std::unique_ptr<RayScene>>> cache;
@@ -192,6 +242,8 @@ RayScene* get_scene(SceneKind kind, const Variant& v) {
   } else if (kind == SceneKind::kSpheres) {
     const Bodies& b = bodies();
     st = s->set_spheres(b.x, b.y, b.z, b.r);
+  } else if (kind == SceneKind::kShapes) {
+    st = s->set_shapes(shapes().set, shapes().shape_of, shapes().poses);
   } else {
     const Bodies& b = bodies();
     st = s->set_capsules(b.a, b.b, b.cr);
@@ -264,7 +316,9 @@ void update_bench(benchmark::State& state, SceneKind kind, RaySceneDesc desc, ui
   check(RayScene::create(desc, &s), state);
   if (!s) return;
   Bodies b = bodies();
+  std::vector<Pose> poses = kind == SceneKind::kShapes ? shapes().poses : std::vector<Pose>{};
   auto set = [&] {
+    if (kind == SceneKind::kShapes) return s->set_shapes(shapes().set, shapes().shape_of, poses);
     return kind == SceneKind::kSpheres ? s->set_spheres(b.x, b.y, b.z, b.r) : s->set_capsules(b.a, b.b, b.cr);
   };
   check(set(), state);
@@ -281,11 +335,72 @@ void update_bench(benchmark::State& state, SceneKind kind, RaySceneDesc desc, ui
     }
     b.a.row(0).array() += dx;
     b.b.row(0).array() += dx;
+    for (Pose& p : poses) p.position.x() += dx;
     check(set(), state);
     check(s->commit(), state);
     commit_ms += s->info().commit_ms;
   }
   state.counters["commit_ms"] = commit_ms / static_cast<double>(state.iterations());
+  state.counters["rebuilt"] = s->info().dynamic_rebuilt ? 1 : 0;
+}
+
+// A World of bodies() (even slots spheres, odd slots boxes of the same size, randomly
+// oriented): the per-frame cost of bringing a RayScene up to the world, sync_world +
+// commit, with the bodies moved by the world's own set_positions between frames
+// (not timed). Then closest-hit rays on the synced scene.
+struct WorldScene {
+  std::unique_ptr<World> world;
+  std::vector<BodyHandle> handles;
+};
+
+WorldScene make_world_scene() {
+  WorldScene ws;
+  if (!World::create(WorldDesc{}, &ws.world).ok()) return ws;
+  const Bodies& b = bodies();
+  std::vector<ShapeId> boxes;
+  for (float r : {0.25f, 0.4f, 0.55f}) {
+    ShapeId id;
+    (void)ws.world->shapes().add_box(Eigen::Vector3f(r, 0.7f * r, 0.5f * r), &id);
+    boxes.push_back(id);
+  }
+  std::mt19937 rng(44);
+  std::uniform_real_distribution<float> u(-1.0f, 1.0f);
+  std::vector<BodyDesc> descs(b.x.size());
+  for (size_t i = 0; i < descs.size(); ++i) {
+    descs[i].position = Eigen::Vector3f(b.x[i], b.y[i], b.z[i]);
+    descs[i].radius = b.r[i];
+    if (i % 2 == 1) {
+      descs[i].shape = boxes[i % 3];
+      descs[i].orientation = Eigen::Quaternionf(Eigen::Vector4f(u(rng), u(rng), u(rng), u(rng)).normalized());
+    }
+  }
+  ws.handles.resize(descs.size());
+  if (!ws.world->create_bodies(descs, ws.handles).ok()) ws.world.reset();
+  return ws;
+}
+
+void world_sync_bench(benchmark::State& state, RaySceneDesc desc, uint32_t threads) {
+  desc.threads = threads;
+  desc.backend_threads = Backend::kTbb;
+  WorldScene ws = make_world_scene();
+  if (!ws.world) return state.SkipWithError("world creation failed");
+  std::unique_ptr<RayScene> s;
+  check(RayScene::create(desc, &s), state);
+  if (!s) return;
+  check(s->sync_world(*ws.world), state);
+  check(s->commit(), state);
+  std::vector<Eigen::Vector3f> pos(ws.handles.size());
+  check(ws.world->get_positions(ws.handles, pos), state);
+  float dx = 0.05f;
+  for (auto _ : state) {
+    state.PauseTiming();
+    dx = -dx;
+    for (auto& p : pos) p.x() += dx;
+    check(ws.world->set_positions(ws.handles, pos), state);
+    state.ResumeTiming();
+    check(s->sync_world(*ws.world), state);
+    check(s->commit(), state);
+  }
   state.counters["rebuilt"] = s->info().dynamic_rebuilt ? 1 : 0;
 }
 
@@ -397,6 +512,26 @@ void register_all() {
           }
         }
   }
+
+  // Posed shapes: queries on Embree (user geometry, packets) and the LBVH, and the update.
+  for (const Variant& v : variants(false)) {
+    if (v.desc.packet_width == 16) continue;
+    for (uint32_t t : thread_counts) {
+      reg(name("Shapes100k", "closest", v.name, t), [v, t](benchmark::State& s) { closest_bench(s, SceneKind::kShapes, v, t, body_rays); });
+      reg(name("Shapes100k", "pick", v.name, t), [v, t](benchmark::State& s) { pick_bench(s, SceneKind::kShapes, v, t, bodies_camera()); });
+      reg(name("Shapes100k", "visibility", v.name, t), [v, t](benchmark::State& s) { any_bench(s, SceneKind::kShapes, v, t, body_segs); });
+    }
+  }
+  for (RayBackend b : {RayBackend::kEmbree, RayBackend::kLbvh})
+    for (DynamicUpdate u : {DynamicUpdate::kRefit, DynamicUpdate::kRebuildLow})
+      for (uint32_t t : thread_counts) {
+        RaySceneDesc d;
+        d.backend = b;
+        d.dynamic_update = u;
+        const std::string bn = std::string(b == RayBackend::kEmbree ? "embree" : "lbvh") + (u == DynamicUpdate::kRefit ? "_refit" : "_rebuild_low");
+        reg(name("Shapes100k", "update", bn, t), [d, t](benchmark::State& s) { update_bench(s, SceneKind::kShapes, d, t); });
+        reg(name("World100k", "sync_world", bn, t), [d, t](benchmark::State& s) { world_sync_bench(s, d, t); });
+      }
 
   // Bullet on the same spheres and rays.
   if (bench::bullet_available()) {

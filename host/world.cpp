@@ -84,7 +84,9 @@ Status check_shape(const std::string& who, const WorldImpl& w, const BodyDesc& d
   Pose pose;
   pose.orientation = d.orientation;
   if (!host::pose_ok(pose)) return host::check_pose(pose, who.c_str());
-  const float rr = std::sqrt(std::max(r.local_min.squaredNorm(), r.local_max.squaredNorm()));
+  // The farthest corner of the local box: per axis the larger magnitude (hulls and
+  // compounds need not be centred on the body's origin).
+  const float rr = r.local_min.cwiseAbs().cwiseMax(r.local_max.cwiseAbs()).norm();
   *bounding_radius = rr;
   if (!(rr > 0.0f && rr <= kMaxCoordinate)) return invalid(who, "shape bounds out of range");
   return Status();
@@ -120,6 +122,9 @@ Status check_desc(const WorldDesc& d) {
   if (!(std::isfinite(d.lbvh_refit_sah_limit) && d.lbvh_refit_sah_limit >= 1.0))
     return invalid(w, "lbvh_refit_sah_limit must be finite and >= 1, got " +
                           std::to_string(d.lbvh_refit_sah_limit));
+  NarrowPhaseOptions narrow = d.narrow_phase;
+  narrow.exec = {};  // ignored: the world's backend runs the passes
+  if (Status st = host::validate_options(narrow); !st.ok()) return invalid(w, "narrow_phase." + st.message());
   Backend b;
   if (!host::resolve_backend(d.backend, &b))
     return Status(StatusCode::kUnsupported,
@@ -428,7 +433,12 @@ BodyArrays World::bodies() const {
   return BodyArrays{{b.pos_x.data(), n},    {b.pos_y.data(), n},  {b.pos_z.data(), n},
                     {b.vel_x.data(), n},    {b.vel_y.data(), n},  {b.vel_z.data(), n},
                     {b.inv_mass.data(), n}, {b.radius.data(), n}, {b.restitution.data(), n},
-                    {b.layer.data(), n},    {b.mask.data(), n},   {b.handle.data(), n}};
+                    {b.layer.data(), n},    {b.mask.data(), n},   {b.handle.data(), n},
+                    {b.shape.data(), b.shape.size()},
+                    {b.qx.data(), b.qx.size()},
+                    {b.qy.data(), b.qy.size()},
+                    {b.qz.data(), b.qz.size()},
+                    {b.qw.data(), b.qw.size()}};
 }
 
 // --- planes -----------------------------------------------------------------------------
@@ -505,6 +515,11 @@ Status World::destroy_planes(std::span<const PlaneHandle> handles) {
 }
 
 size_t World::plane_count() const { return impl_->planes.size(); }
+
+PlaneArrays World::planes() const {
+  const PlaneStore& p = impl_->planes;
+  return PlaneArrays{p.normal_x, p.normal_y, p.normal_z, p.offset, p.restitution, p.layer, p.mask, p.handle};
+}
 
 // --- time -------------------------------------------------------------------------------
 

@@ -641,18 +641,21 @@ Status NarrowPhase::Impl::collide(const ShapeSet& shapes, std::span<const ShapeI
     }
   });
 
+  return runner.run(exec, *store, rec, posed, pairs_in, host::config_of(options), result);
+}
+
+kernels::NarrowConfig host::config_of(const NarrowPhaseOptions& o) {
   kernels::NarrowConfig cfg;
-  cfg.path = options.simd ? kernels::KernelPath::kSimd : kernels::KernelPath::kScalar;
-  cfg.gjk_max_iterations = options.gjk_max_iterations;
-  cfg.gjk_tolerance = options.gjk_tolerance;
-  cfg.epa_max_iterations = options.epa_max_iterations;
-  cfg.epa_tolerance = options.epa_tolerance;
-  return runner.run(exec, *store, rec, posed, pairs_in, cfg, result);
+  cfg.path = o.simd ? kernels::KernelPath::kSimd : kernels::KernelPath::kScalar;
+  cfg.gjk_max_iterations = o.gjk_max_iterations;
+  cfg.gjk_tolerance = o.gjk_tolerance;
+  cfg.epa_max_iterations = o.epa_max_iterations;
+  cfg.epa_tolerance = o.epa_tolerance;
+  return cfg;
 }
 
 
-namespace {
-Status validate(const NarrowPhaseOptions& o) {
+Status host::validate_options(const NarrowPhaseOptions& o) {
   auto bad = [](const std::string& m) { return Status(StatusCode::kInvalidArgument, m); };
   if (o.gjk_max_iterations == 0) return bad("gjk_max_iterations must be >= 1");
   if (o.epa_max_iterations == 0) return bad("epa_max_iterations must be >= 1");
@@ -669,10 +672,9 @@ Status validate(const NarrowPhaseOptions& o) {
   }
   return {};
 }
-}  // namespace
 
 NarrowPhase::NarrowPhase(const NarrowPhaseOptions& options) : impl_(std::make_unique<Impl>()) {
-  impl_->options_status = validate(options);
+  impl_->options_status = host::validate_options(options);
   if (impl_->options_status.ok()) {
     impl_->options = options;
     impl_->exec = host::Executor(options.exec.backend, options.exec.threads);
@@ -683,7 +685,7 @@ NarrowPhase::NarrowPhase(NarrowPhase&&) noexcept = default;
 NarrowPhase& NarrowPhase::operator=(NarrowPhase&&) noexcept = default;
 
 Status NarrowPhase::set_options(const NarrowPhaseOptions& options) {
-  if (Status st = validate(options); !st.ok()) return st;
+  if (Status st = host::validate_options(options); !st.ok()) return st;
   const bool exec_changed = options.exec.backend != impl_->options.exec.backend ||
                             options.exec.threads != impl_->options.exec.threads;
   impl_->options = options;

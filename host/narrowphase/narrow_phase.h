@@ -16,6 +16,12 @@
 
 namespace impact::host {
 
+/// kInvalidArgument naming the field when a knob is out of range (iteration caps 0,
+/// tolerances outside (0, 1)); kUnsupported for a thread backend not built in.
+Status validate_options(const NarrowPhaseOptions& options);
+/// The kernels' configuration for the options' knobs (the hull view is set by the run).
+kernels::NarrowConfig config_of(const NarrowPhaseOptions& options);
+
 /// An object's placement: world = R * local + p, R a rotation.
 struct PosedObject {
   Eigen::Matrix3f R;

@@ -58,6 +58,11 @@ kernels::RayQuery query_of(RTCRayN* ray, unsigned N, unsigned i) {
 template <int K>
 float user_hit(const SceneData& d, unsigned prim, const kernels::RayQuery& q) {
   if constexpr (K == kUserShape) {
+    // Embree hands every primitive of a leaf to the callback without testing its own
+    // box; the full shape test is costly, so cull by the object's box first.
+    const float lo[3] = {d.ob_min_x[prim], d.ob_min_y[prim], d.ob_min_z[prim]};
+    const float hi[3] = {d.ob_max_x[prim], d.ob_max_y[prim], d.ob_max_z[prim]};
+    if (!kernels::ray_meets_box(q, lo, hi)) return -1.0f;
     return shape_ray_t(d, prim, q);
   } else if constexpr (K == kUserCapsule) {
     if ((d.c_layer[prim] & q.mask) == 0) return -1.0f;

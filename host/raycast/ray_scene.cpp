@@ -217,6 +217,7 @@ class RaySceneImpl {
         const ShapeRayHit sh = host::ray_posed_shape(
             *s.shape_store, s.shape_store->shapes[ob.shape], ob.R, ob.p, Eigen::Vector3f(q.o[0], q.o[1], q.o[2]),
             Eigen::Vector3f(q.d[0], q.d[1], q.d[2]), q.tmax);
+        if (b.prim < s.o_body.size()) h.body = s.o_body[b.prim];
         if (sh.hit) {
           h.prim = sh.child == kNoChild ? 0u : sh.child;
           n = sh.normal.cast<double>();  // -d inside a solid; the triangle's for mesh shapes
@@ -226,6 +227,7 @@ class RaySceneImpl {
       case kernels::kRayHitPlane: {
         h.kind = HitKind::kPlane;
         h.id = b.prim;
+        if (b.prim < s.p_handle.size()) h.plane = s.p_handle[b.prim];
         const kernels::PlaneRecord& pl = s.planes[b.prim];
         if (b.t > 0.0f) n = Eigen::Vector3d(pl.n[0], pl.n[1], pl.n[2]);
         break;
@@ -450,6 +452,7 @@ Status RayScene::set_planes(const Eigen::Ref<const Eigen::Matrix3Xf>& normals, s
     planes[i] = {{u[0], u[1], u[2]}, static_cast<float>(offsets[i] / len), layer.empty() ? 1u : layer[i]};
   }
   impl_->data.planes = std::move(planes);
+  impl_->data.p_handle.clear();
   return Status();
 }
 
@@ -480,29 +483,87 @@ Status RayScene::set_shapes(const ShapeSet& shapes, std::span<const ShapeId> sha
   impl_->changes.shapes_resized |= d.shape_count() != n;
   d.shape_store = &store;
   d.objects.resize(n);
-  for (host::Buffer<float>* v : {&d.ob_min_x, &d.ob_min_y, &d.ob_min_z, &d.ob_max_x, &d.ob_max_y, &d.ob_max_z})
+  d.o_body.clear();
+  for (host::Buffer<float>* v :
+       {&d.ob_min_x, &d.ob_min_y, &d.ob_min_z, &d.ob_max_x, &d.ob_max_y, &d.ob_max_z})
     v->resize(n);
+  impl_->exec.for_each_chunk(n, 1024, [&](uint32_t first, uint32_t end, uint32_t) {
+    for (uint32_t i = first; i < end; ++i) {
+      const ShapeRecord& rec = store.shapes[shape_of[i].index];
+      const Pose pose = host::normalized(poses[i]);
+      host::SceneData::ShapeObject& ob = d.objects[i];
+      ob.R = host::shape_rotation(rec, pose);
+      ob.p = pose.position;
+      ob.shape = shape_of[i].index;
+      ob.layer = layer.empty() ? 1u : layer[i];
+      Eigen::Vector3f lo, hi;
+      host::posed_bounds(rec, pose, store.hulls, &lo, &hi);
+      // Pad by a few ulps of the box's magnitude: the bounds and the ray test round
+      // differently, and a ray grazing the shape must not be culled by its box.
+      const float pad = 8.0f * std::numeric_limits<float>::epsilon() *
+                        std::max(lo.cwiseAbs().maxCoeff(), hi.cwiseAbs().maxCoeff());
+      d.ob_min_x[i] = lo.x() - pad;
+      d.ob_min_y[i] = lo.y() - pad;
+      d.ob_min_z[i] = lo.z() - pad;
+      d.ob_max_x[i] = hi.x() + pad;
+      d.ob_max_y[i] = hi.y() + pad;
+      d.ob_max_z[i] = hi.z() + pad;
+    }
+  });
+  return Status();
+}
+
+Status RayScene::sync_world(const World& world) {
+  const BodyArrays b = world.bodies();
+  const size_t n = b.size();
+  // Split the bodies: plain spheres keep their slot order, shaped bodies theirs.
+  std::vector<float> x, y, z, r;
+  std::vector<uint32_t> s_layer, o_layer;
+  std::vector<BodyHandle> s_body, o_body;
+  std::vector<ShapeId> shape_of;
+  std::vector<Pose> poses;
+  const size_t shaped =
+      b.shape.empty() ? 0 : static_cast<size_t>(std::count_if(b.shape.begin(), b.shape.end(), [](uint32_t v) {
+        return v != BodyArrays::kSphereBody;
+      }));
+  for (auto* v : {&x, &y, &z, &r}) v->reserve(n - shaped);
+  s_layer.reserve(n - shaped);
+  s_body.reserve(n - shaped);
+  shape_of.reserve(shaped);
+  poses.reserve(shaped);
+  o_layer.reserve(shaped);
+  o_body.reserve(shaped);
   for (size_t i = 0; i < n; ++i) {
-    const ShapeRecord& rec = store.shapes[shape_of[i].index];
-    const Pose pose = host::normalized(poses[i]);
-    host::SceneData::ShapeObject& ob = d.objects[i];
-    ob.R = host::shape_rotation(rec, pose);
-    ob.p = pose.position;
-    ob.shape = shape_of[i].index;
-    ob.layer = layer.empty() ? 1u : layer[i];
-    Eigen::Vector3f lo, hi;
-    host::posed_bounds(rec, pose, store.hulls, &lo, &hi);
-    // Pad by a few ulps of the box's magnitude: the bounds and the ray test round
-    // differently, and a ray grazing the shape must not be culled by its box.
-    const float pad = 8.0f * std::numeric_limits<float>::epsilon() *
-                      std::max(lo.cwiseAbs().maxCoeff(), hi.cwiseAbs().maxCoeff());
-    d.ob_min_x[i] = lo.x() - pad;
-    d.ob_min_y[i] = lo.y() - pad;
-    d.ob_min_z[i] = lo.z() - pad;
-    d.ob_max_x[i] = hi.x() + pad;
-    d.ob_max_y[i] = hi.y() + pad;
-    d.ob_max_z[i] = hi.z() + pad;
+    if (shaped != 0 && b.shape[i] != BodyArrays::kSphereBody) {
+      shape_of.push_back(ShapeId{b.shape[i]});
+      Pose p;
+      p.position = Eigen::Vector3f(b.pos_x[i], b.pos_y[i], b.pos_z[i]);
+      p.orientation = Eigen::Quaternionf(b.qw[i], b.qx[i], b.qy[i], b.qz[i]);
+      poses.push_back(p);
+      o_layer.push_back(b.layer[i]);
+      o_body.push_back(b.handles[i]);
+    } else {
+      x.push_back(b.pos_x[i]);
+      y.push_back(b.pos_y[i]);
+      z.push_back(b.pos_z[i]);
+      r.push_back(b.radius[i]);
+      s_layer.push_back(b.layer[i]);
+      s_body.push_back(b.handles[i]);
+    }
   }
+  const PlaneArrays pl = world.planes();
+  Eigen::Matrix3Xf normals(3, static_cast<Eigen::Index>(pl.size()));
+  for (size_t i = 0; i < pl.size(); ++i)
+    normals.col(static_cast<Eigen::Index>(i)) =
+        Eigen::Vector3f(pl.normal_x[i], pl.normal_y[i], pl.normal_z[i]);
+  // The world validated all of this; the setters check again (cheap) and say what is wrong.
+  Status s = set_spheres(x, y, z, r, s_layer);
+  if (s.ok()) s = set_shapes(world.shapes(), shape_of, poses, o_layer);
+  if (s.ok()) s = set_planes(normals, pl.offset, pl.layer);
+  if (!s.ok()) return Status(s.code(), "sync_world: " + s.message());
+  impl_->data.s_body = std::move(s_body);
+  impl_->data.o_body = std::move(o_body);
+  impl_->data.p_handle.assign(pl.handles.begin(), pl.handles.end());
   return Status();
 }
 

@@ -38,6 +38,7 @@ struct SceneData {
 
   // Static half-spaces (unit normals).
   Buffer<kernels::PlaneRecord> planes;
+  std::vector<PlaneHandle> p_handle;  // empty unless synced from a World
 
   // Posed shapes (RayScene::set_shapes): the caller's ShapeSet storage (held, not
   // copied), and per object its shape record, frame (world = R * local + p; R is the
@@ -50,6 +51,7 @@ struct SceneData {
   };
   const ShapeStore* shape_store = nullptr;
   std::vector<ShapeObject> objects;
+  std::vector<BodyHandle> o_body;  // empty unless synced from a World
   Buffer<float> ob_min_x, ob_min_y, ob_min_z, ob_max_x, ob_max_y, ob_max_z;
 
   uint32_t mesh_count() const { return static_cast<uint32_t>(mesh_layer.size()); }

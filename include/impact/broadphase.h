@@ -10,7 +10,6 @@
 
 #include "impact/status.h"
 #include "impact/types.h"
-#include "impact/world.h"
 
 namespace impact {
 

@@ -110,8 +110,10 @@ struct RayHit {
   /// Triangle index within the mesh (kTriangle); for kShape the compound child or the
   /// triangle of a mesh shape (0 for other shapes); 0 otherwise.
   uint32_t prim = 0;
-  /// The body of a sphere filled by sync_spheres(World); null otherwise.
+  /// The body hit, for spheres and shapes filled by sync_spheres / sync_world; null otherwise.
   BodyHandle body;
+  /// The plane hit, for planes filled by sync_world; null otherwise.
+  PlaneHandle plane;
   float t = std::numeric_limits<float>::infinity();  ///< m along the normalised direction
   Eigen::Vector3f point = Eigen::Vector3f::Zero();    ///< origin + t * unit direction
   Eigen::Vector3f normal = Eigen::Vector3f::Zero();   ///< unit, facing the ray
@@ -157,8 +159,18 @@ class RayScene {
                      std::span<const float> radius, std::span<const uint32_t> layer = {});
   /// Spheres from a World's bodies (slot i -> sphere i; hits report the body handle).
   /// Bodies with shapes (BodyDesc::shape) appear as their bounding spheres
-  /// (BodyArrays::radius); give exact shapes with set_shapes.
+  /// (BodyArrays::radius); sync_world gives them their exact shapes.
   Status sync_spheres(const World& world);
+  /// Everything a World holds that rays can hit, as its step sees it: bodies without a
+  /// shape become spheres, bodies with a shape become posed shapes (World::shapes() at
+  /// the body's position and orientation; meshes too), the world's planes become
+  /// half-spaces, each with its layer. Hits report the body's handle (RayHit::body) or
+  /// the plane's (RayHit::plane); RayHit::id indexes the scene's own spheres, shapes
+  /// or planes, in body / plane slot order. Replaces what set_spheres, set_shapes and
+  /// set_planes gave (meshes and capsules stay). As with set_shapes, the scene keeps a
+  /// pointer to the world's ShapeSet storage: the World must outlive the scene or the
+  /// next sync. Call it again after the world steps, then commit().
+  Status sync_world(const World& world);
   /// Replaces all capsules: segment end points a, b (3 x n), radii > 0, layers (may be empty).
   Status set_capsules(const Eigen::Ref<const Eigen::Matrix3Xf>& a, const Eigen::Ref<const Eigen::Matrix3Xf>& b,
                       std::span<const float> radius, std::span<const uint32_t> layer = {});

@@ -88,6 +88,13 @@ enum class LbvhUpdate : int {
   kAuto = 2,
 };
 
+/// A broad-phase candidate pair of body slots (or box indices), a < b.
+struct BodyPair {
+  uint32_t a;
+  uint32_t b;
+  friend bool operator==(const BodyPair&, const BodyPair&) = default;
+};
+
 const char* to_string(Backend backend);
 const char* to_string(BroadPhaseKind kind);
 const char* to_string(LbvhUpdate update);

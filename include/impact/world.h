@@ -11,6 +11,7 @@
 
 #include <Eigen/Core>
 
+#include "impact/narrowphase.h"
 #include "impact/status.h"
 #include "impact/types.h"
 
@@ -58,6 +59,11 @@ struct WorldDesc {
   /// that meet within the step become candidate pairs even when fast. More pairs
   /// for slow scenes; the input continuous collision needs.
   bool swept_bounds = false;
+  /// Accuracy knobs of the general narrow phase that runs once a body has a shape
+  /// (BodyDesc::shape): GJK / EPA iteration caps and tolerances, SIMD or scalar
+  /// kernels (docs/narrowphase.md has their cost and error). Its `exec` is ignored:
+  /// the world's backend and threads run every pass.
+  NarrowPhaseOptions narrow_phase{};
   Backend backend = Backend::kDefault;
   /// Worker threads; 0 = all hardware threads. Results do not depend on it.
   uint32_t threads = 0;
@@ -92,6 +98,23 @@ struct BodyArrays {
   std::span<const float> inv_mass, radius, restitution;
   std::span<const uint32_t> layer, mask;
   std::span<const BodyHandle> handles;
+  /// Per body: the index of its shape in World::shapes() (ShapeId::index), or
+  /// kSphereBody for a plain sphere of `radius`; and its orientation, a unit
+  /// quaternion (qx, qy, qz, qw). All five are empty while no body has a shape (every
+  /// body is then a sphere at the identity orientation).
+  std::span<const uint32_t> shape;
+  std::span<const float> qx, qy, qz, qw;
+  static constexpr uint32_t kSphereBody = 0xffffffffu;
+  size_t size() const { return handles.size(); }
+};
+
+/// Read-only SoA view of the static planes (half-spaces {x : dot(normal, x) <= offset},
+/// unit normals) in dense storage order. Valid until planes are created or destroyed.
+/// Slot i belongs to handles[i]; it is the plane index of ContactArrays::b.
+struct PlaneArrays {
+  std::span<const float> normal_x, normal_y, normal_z, offset, restitution;
+  std::span<const uint32_t> layer, mask;
+  std::span<const PlaneHandle> handles;
   size_t size() const { return handles.size(); }
 };
 
@@ -110,13 +133,6 @@ struct ContactArrays {
   std::span<const float> point_x, point_y, point_z;
   std::span<const float> impulse;     ///< accumulated normal impulse, N*s
   size_t size() const { return a.size(); }
-};
-
-/// A broad-phase candidate pair of body slots, a < b.
-struct BodyPair {
-  uint32_t a;
-  uint32_t b;
-  friend bool operator==(const BodyPair&, const BodyPair&) = default;
 };
 
 class WorldImpl;
@@ -165,6 +181,7 @@ class World {
   Status create_planes(std::span<const PlaneDesc> descs, std::span<PlaneHandle> out);
   Status destroy_planes(std::span<const PlaneHandle> handles);
   size_t plane_count() const;
+  PlaneArrays planes() const;
 
   // --- time --------------------------------------------------------------------
   /// Runs exactly one fixed step of desc().fixed_dt; last_step() then describes it.

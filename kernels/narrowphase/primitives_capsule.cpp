@@ -72,6 +72,35 @@ IMPACT_INLINE F capsule_exit(F t, F s, F r, F h) {
   return select(over | under, lcap, lc);
 }
 
+/// Where the line o + n * lambda (unit n, travelling along +n) enters the capsule with
+/// core cb + ub * t (|t| <= hb, unit ub) and radius rb: the smallest lambda on its
+/// surface (cylinder or cap); `met` is false in lanes where the line misses it.
+template <class F>
+IMPACT_INLINE F capsule_entry(const V3<F>& o, const V3<F>& n, const V3<F>& cb, const V3<F>& ub, F hb, F rb,
+                              typename F::Mask& met) {
+  const F zero(0.0f), one(1.0f), far(3.0e38f);
+  const V3<F> w = o - cb;
+  const F wu = dot(w, ub), nu = dot(n, ub);
+  const V3<F> wp = madd(w, -wu, ub), np = madd(n, -nu, ub);  // across the axis
+  const F a = length_sq(np), b = dot(wp, np), c = length_sq(wp) - rb * rb;
+  const F disc = b * b - a * c;
+  const auto across = (a > F(1e-12f)) & (disc >= zero);
+  const F lc = (-b - sqrt(max(disc, zero))) / select(a > F(1e-12f), a, one);
+  const auto cyl = across & (abs(mul_add(nu, lc, wu)) <= hb);
+  F best = select(cyl, lc, far);
+  met = cyl;
+  for (int sgn = -1; sgn <= 1; sgn += 2) {
+    const V3<F> m = madd(w, F(static_cast<float>(-sgn)) * hb, ub);  // from the cap's centre
+    const F mn = dot(m, n);
+    const F d2 = mn * mn - (length_sq(m) - rb * rb);
+    const auto ok = d2 >= zero;
+    const F ls = -mn - sqrt(max(d2, zero));
+    best = select(ok & (ls < best), ls, best);
+    met = met | ok;
+  }
+  return best;
+}
+
 /// Two candidate points p0 (depth d0) and p1 (d1) and a single fallback point pf (df):
 /// the result holds both where `two`, else the fallback alone.
 template <class F>
@@ -127,8 +156,13 @@ IMPACT_INLINE void capsule_capsule_block(const LeafSoA& a, const LeafSoA& b, con
     const F tb = closest_on_segment(cb, ub, hb, xa);
     const V3<F> xb = madd(cb, tb, ub);
     // the surfaces along n from the two core points
+    // B's surface on the same line along n (where it enters B from A's side), so both
+    // surface points lie on one line along n even when the axes are not exactly
+    // parallel; from B's closest core point where that line misses B.
     const V3<F> on_a = madd(xa, capsule_exit(sa, sna, ra, ha), n);
-    const V3<F> on_b = madd(xb, -capsule_exit(tb, snb, rb, hb), n);
+    typename F::Mask met;
+    const F lb = capsule_entry(xa, n, cb, ub, hb, rb, met);
+    const V3<F> on_b = select(met, madd(xa, lb, n), madd(xb, -capsule_exit(tb, snb, rb, hb), n));
     d = dot(n, on_a - on_b);
     p = (on_a + on_b) * half;
   };
@@ -257,18 +291,25 @@ IMPACT_INLINE void capsule_box_block(const LeafSoA& a, const LeafSoA& b, const M
   const F nk = select(kx, nl.x, select(ky, nl.y, nl.z));
   const Mask face_normal = abs(nk) > F(0.99999f);
   const Mask parallel_enough = abs(select(kx, u.x, select(ky, u.y, u.z))) < F(kParallelSin);
+  const F snu = dot(nl, u);
+  const F ek = select(kx, e.x, select(ky, e.y, e.z));
   F lo = -ha, hi = ha;
   {
+    // Clip where the face points below meet the face, not the core: core point x(t)
+    // moved along nl to the face plane x_k = -sign(n_k) e_k, a line in t. So those
+    // points stay on the face even when nl leans a little off the face normal.
+    const F nks = select(abs(nk) > half, nk, one);
+    const F ck = select(kx, c.x, select(ky, c.y, c.z)), uk = select(kx, u.x, select(ky, u.y, u.z));
+    const V3<F> cs = madd(c, (-simd::sign_nonneg(nk) * ek - ck) / nks, nl);
+    const V3<F> us = madd(u, -uk / nks, nl);
     F lo_x = lo, hi_x = hi, lo_y = lo, hi_y = hi, lo_z = lo, hi_z = hi;
-    clip_slab(c.x, u.x, e.x, lo_x, hi_x);
-    clip_slab(c.y, u.y, e.y, lo_y, hi_y);
-    clip_slab(c.z, u.z, e.z, lo_z, hi_z);
+    clip_slab(cs.x, us.x, e.x, lo_x, hi_x);
+    clip_slab(cs.y, us.y, e.y, lo_y, hi_y);
+    clip_slab(cs.z, us.z, e.z, lo_z, hi_z);
     lo = select(kx, max(lo_y, lo_z), select(ky, max(lo_x, lo_z), max(lo_x, lo_y)));
     hi = select(kx, min(hi_y, hi_z), select(ky, min(hi_x, hi_z), min(hi_x, hi_y)));
   }
   // Face plane: x_k = -sign(n_k) e_k (the face of B that looks at the capsule).
-  const F ek = select(kx, e.x, select(ky, e.y, e.z));
-  const F snu = dot(nl, u);
   auto face_point = [&](F t, V3<F>& p, F& d) {
     // the capsule's surface along nl from core point x, then along -nl to the face
     // plane x_k = -sign(n_k) e_k
@@ -425,12 +466,18 @@ IMPACT_INLINE void capsule_triangle_block(const LeafSoA& a, const LeafSoA& b, co
   // --- face manifold: clip the core to the triangle's prism ---
   const F nn = dot(n, nf);
   const Mask face_normal = abs(nn) > F(0.99999f);
+  // Clip where the face points below meet the triangle's plane, not the core: core
+  // point u t moved along n to the plane, a line in t. So those points stay inside the
+  // triangle even when n leans a little off the face normal.
+  const F nns = select(abs(nn) > F(0.5f), nn, one);
+  const V3<F> cs = madd(c, dot(nf, v[0] - c) / nns, n);
+  const V3<F> us = madd(u, -dot(nf, u) / nns, n);
   F lo = -ha, hi = ha;
   for (int i = 0; i < 3; ++i) {
     // inward edge normal m: m.(x - v_i) >= 0 inside
     const V3<F> mi = cross(nf, ed[i]);
-    const F a0 = dot(mi, c - v[i]);  // at t = 0
-    const F a1 = dot(mi, u);         // per unit t
+    const F a0 = dot(mi, cs - v[i]);  // at t = 0
+    const F a1 = dot(mi, us);        // per unit t
     const Mask flat = abs(a1) < F(1e-20f);
     const F tcut = -a0 / select(flat, one, a1);
     lo = select(flat, select(a0 >= zero, lo, F(1e30f)), select(a1 > zero, max(lo, tcut), lo));

@@ -312,6 +312,15 @@ void ray_any_user(const RayTree& t, RayUserTest test, const void* ctx, const Ray
   }
 }
 
+bool ray_meets_box(const RayQuery& q, const float lo[3], const float hi[3]) {
+  struct Box {
+    float min_x, min_y, min_z, max_x, max_y, max_z;
+  };
+  const Box b{lo[0], lo[1], lo[2], hi[0], hi[1], hi[2]};
+  float tn;
+  return slab(b, slab_ray(q), q.tmax, &tn);
+}
+
 void ray_closest_planes(const PlaneRecord* planes, uint32_t count, const RayQuery* rays,
                         RayBest* io_best, Range r) {
   for (uint32_t i = r.begin; i < r.end; ++i) {

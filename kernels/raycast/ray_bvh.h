@@ -112,6 +112,10 @@ void ray_closest_user(const RayTree& t, RayUserTest test, const void* ctx, uint3
                       const RayQuery* rays, RayBest* io_best, Range r);
 void ray_any_user(const RayTree& t, RayUserTest test, const void* ctx, const RayQuery* rays,
                   uint8_t* io_hit, Range r);
+/// The conservative slab test the traversal uses on its boxes (far distance widened by
+/// 1 + 2 gamma_3): false only when the ray misses the closed box [lo, hi] within
+/// [0, q.tmax]. For engines that hand several primitives to one callback (Embree leaves).
+bool ray_meets_box(const RayQuery& q, const float lo[3], const float hi[3]);
 void ray_closest_planes(const PlaneRecord* planes, uint32_t count, const RayQuery* rays,
                         RayBest* io_best, Range r);
 void ray_any_planes(const PlaneRecord* planes, uint32_t count, const RayQuery* rays, uint8_t* io_hit,

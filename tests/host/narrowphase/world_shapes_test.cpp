@@ -287,6 +287,94 @@ TEST(WorldShapes, SpheresGiveTheSameContactsThroughTheGeneralPath) {
   }
 }
 
+// The stored bounding radius covers shapes that are not centred on the body's origin
+// (its farthest local corner mixes min and max coordinates), and the body-plane cull
+// that uses it keeps the contact of such a shape's far corner.
+TEST(WorldShapes, OffCentreShapeKeepsItsFarCornerContact) {
+  auto w = make_world();
+  add_floor(*w, 0.0f);
+  ShapeId slab, compound;
+  ASSERT_TRUE(IsOk(w->shapes().add_box(Eigen::Vector3f(1.5f, 1.5f, 0.1f), &slab)));
+  const CompoundChild child{slab, Pose{Eigen::Vector3f(-1.5f, 1.5f, 0.0f), Eigen::Quaternionf::Identity()}};
+  ASSERT_TRUE(IsOk(w->shapes().add_compound({&child, 1}, &compound)));
+  // Local box [-3, 0] x [0, 3] x [-0.1, 0.1]: the far corner (-3, 3, +-0.1) is 4.244 m
+  // out. Turned by 135 degrees about z it points straight down.
+  BodyDesc d;
+  d.shape = compound;
+  d.orientation = Eigen::Quaternionf(Eigen::AngleAxisf(0.75f * 3.14159265f, Eigen::Vector3f::UnitZ()));
+  d.position = Eigen::Vector3f(0.0f, 4.2f, 0.0f);  // the corner 0.044 m below the floor
+  BodyHandle h;
+  ASSERT_TRUE(IsOk(w->create_bodies({&d, 1}, {&h, 1})));
+  EXPECT_GE(w->bodies().radius[0], 4.2438f);
+  ASSERT_TRUE(IsOk(w->step()));
+  EXPECT_GT(w->last_step().plane_contacts, 0u);
+  float depth = 0.0f;
+  for (float v : w->contacts().depth) depth = std::max(depth, v);
+  EXPECT_NEAR(depth, 0.044f, 0.01f);  // gravity moved it a little within the step
+}
+
+// WorldDesc::narrow_phase reaches the step: bad knobs are refused at creation, the
+// scalar kernels agree with the SIMD ones to rounding, and a one-iteration EPA changes
+// the contacts of curved pairs (so the caps are wired, not ignored).
+TEST(WorldShapes, NarrowPhaseKnobsReachTheStep) {
+  {
+    WorldDesc d;
+    d.narrow_phase.epa_tolerance = 0.0f;
+    std::unique_ptr<World> w;
+    EXPECT_TRUE(IsError(World::create(d, &w), StatusCode::kInvalidArgument, {"narrow_phase", "epa_tolerance"}));
+    d.narrow_phase.epa_tolerance = 1e-5f;
+    d.narrow_phase.gjk_max_iterations = 0;
+    EXPECT_TRUE(IsError(World::create(d, &w), StatusCode::kInvalidArgument, {"narrow_phase", "gjk_max_iterations"}));
+  }
+  // An ellipsoid on a cylinder (general path), a box on a box (SIMD kernel) and a
+  // capsule on the floor, all slightly overlapping.
+  auto run = [](const NarrowPhaseOptions& o) {
+    WorldDesc d;
+    d.narrow_phase = o;
+    d.gravity = Eigen::Vector3f::Zero();
+    auto w = make_world(d);
+    add_floor(*w, 0.0f);
+    ShapeId ell, cyl, box, cap;
+    EXPECT_TRUE(IsOk(w->shapes().add_ellipsoid(Eigen::Vector3f(0.6f, 0.4f, 0.5f), &ell)));
+    EXPECT_TRUE(IsOk(w->shapes().add_cylinder(0.5f, 0.5f, &cyl)));
+    EXPECT_TRUE(IsOk(w->shapes().add_box(Eigen::Vector3f(0.5f, 0.5f, 0.5f), &box)));
+    EXPECT_TRUE(IsOk(w->shapes().add_capsule(0.3f, 0.4f, &cap)));
+    std::vector<BodyDesc> b(5);
+    b[0].shape = cyl;  // axis z: turned upright about x
+    b[0].orientation = Eigen::Quaternionf(Eigen::AngleAxisf(1.5707963f, Eigen::Vector3f::UnitX()));
+    b[0].position = Eigen::Vector3f(0, 0.5f, 0);
+    b[0].inv_mass = 0.0f;
+    b[1].shape = ell;
+    b[1].orientation = Eigen::Quaternionf(Eigen::AngleAxisf(0.3f, Eigen::Vector3f(1, 1, 0).normalized()));
+    b[1].position = Eigen::Vector3f(0.05f, 1.35f, 0.02f);
+    b[2].shape = box;
+    b[2].position = Eigen::Vector3f(3, 0.5f, 0);
+    b[2].inv_mass = 0.0f;
+    b[3].shape = box;
+    b[3].orientation = Eigen::Quaternionf(Eigen::AngleAxisf(0.2f, Eigen::Vector3f::UnitY()));
+    b[3].position = Eigen::Vector3f(3.1f, 1.45f, 0);
+    b[4].shape = cap;
+    b[4].position = Eigen::Vector3f(-3, 0.2f, 0);
+    std::vector<BodyHandle> h(b.size());
+    EXPECT_TRUE(IsOk(w->create_bodies(b, h)));
+    EXPECT_TRUE(IsOk(w->step()));
+    std::vector<float> depth(w->contacts().depth.begin(), w->contacts().depth.end());
+    return depth;
+  };
+  const NarrowPhaseOptions simd;
+  NarrowPhaseOptions scalar;
+  scalar.simd = false;
+  NarrowPhaseOptions coarse;
+  coarse.epa_max_iterations = 1;
+  const std::vector<float> a = run(simd), s = run(scalar), c = run(coarse);
+  ASSERT_GE(a.size(), 3u);
+  ASSERT_EQ(a.size(), s.size());
+  for (size_t i = 0; i < a.size(); ++i) EXPECT_NEAR(a[i], s[i], 1e-5f) << i;
+  bool differs = a.size() != c.size();
+  for (size_t i = 0; !differs && i < a.size(); ++i) differs = a[i] != c[i];
+  EXPECT_TRUE(differs) << "a one-iteration EPA left every contact unchanged";
+}
+
 TEST(WorldShapes, DestroyingTheShapedBodiesReturnsToTheSpherePath) {
   auto w = make_world();
   add_floor(*w);
