@@ -391,6 +391,18 @@ V3 flat_normal(const Leaf& A, const Leaf& B, const Simplex& s, uint32_t dim) {
 /// on the support function h(n) = max_w n.w over the unit sphere (its gradient is the
 /// support point w; the minimum of h is the penetration depth), each accepted only if
 /// it lowers h, so the answer only improves.
+// The support value h = m . w of A - B in unit direction m: where it is below *h, m
+// becomes the direction (*n, its support point *w, *h) and the result is true.
+bool lower_support(const Leaf& A, const Leaf& B, const V3& m, V3* n, SupportPoint* w, double* h) {
+  const SupportPoint wm = support_diff(A, B, m);
+  const double hm = dot(to_d(m), wm.w);
+  if (!(hm < *h)) return false;
+  *n = m;
+  *w = wm;
+  *h = hm;
+  return true;
+}
+
 void epa_finish(const Leaf& A, const Leaf& B, const Polytope& P, const EpaFace& F, bool converged,
                 double tol, float scale, EpaResult* r) {
   V3 n = to_f(F.n);
@@ -428,15 +440,8 @@ void epa_finish(const Leaf& A, const Leaf& B, const Polytope& P, const EpaFace& 
     // its closest face may lie in the wrong basin of h. Lowest index wins ties.
     for (uint32_t k = 0; k < P.nf; ++k) {
       const EpaFace G = P.face(k);
-      V3 m = to_f(G.n);
-      m = m * (1.0f / len(m));
-      const SupportPoint wm = support_diff(A, B, m);
-      const double hm = dot(to_d(m), wm.w);
-      if (hm < h) {
-        n = m;
-        w = wm;
-        h = hm;
-      }
+      const V3 m = to_f(G.n);
+      lower_support(A, B, m * (1.0f / len(m)), &n, &w, &h);
     }
     // Descent on the sphere of directions. The (sub)gradient of h at n is the support
     // point w; its tangential part g is the descent direction where h is smooth. At a
@@ -572,15 +577,7 @@ __attribute__((noinline)) bool polish_smooth(const Leaf& A, const Leaf& B, D3 n0
     }
     bool accepted = false;
     for (int half = 0; half < 2 && !accepted; ++half) {
-      const V3 m = unit_f(nd + t1 * d1 + t2 * d2);
-      const SupportPoint wm = support_diff(A, B, m);
-      const double hm = dot(to_d(m), wm.w);
-      if (hm < h) {
-        n = m;
-        w = wm;
-        h = hm;
-        accepted = true;
-      }
+      accepted = lower_support(A, B, unit_f(nd + t1 * d1 + t2 * d2), &n, &w, &h);
       d1 *= 0.5;
       d2 *= 0.5;
     }

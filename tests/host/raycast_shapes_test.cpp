@@ -11,12 +11,12 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <random>
 #include <string>
 #include <vector>
 
 #include "impact/impact.h"
 #include "impact/shape_queries.h"
+#include "support/random_input.h"
 #include "support/test_support.h"
 
 namespace impact::test {
@@ -25,23 +25,8 @@ namespace {
 using Eigen::Vector3f;
 constexpr float kInf = std::numeric_limits<float>::infinity();
 
-struct Rng {
-  std::mt19937 g{12345u};
-  float uni(float a, float b) { return std::uniform_real_distribution<float>(a, b)(g); }
-  uint32_t pick(uint32_t n) { return std::uniform_int_distribution<uint32_t>(0, n - 1)(g); }
-  Vector3f vec(float a, float b) { return {uni(a, b), uni(a, b), uni(a, b)}; }
-  Vector3f unit() {
-    for (;;) {
-      const Vector3f v = vec(-1, 1);
-      const float n = v.norm();
-      if (n > 0.1f && n <= 1.0f) return v / n;
-    }
-  }
-  Eigen::Quaternionf quat() {
-    Eigen::Vector4f c(uni(-1, 1), uni(-1, 1), uni(-1, 1), uni(-1, 1));
-    c.normalize();
-    return Eigen::Quaternionf(c[0], c[1], c[2], c[3]);
-  }
+struct Rng : TestRng {
+  Rng() : TestRng(12345u) {}
 };
 
 // One shape of every type (and a half-space for the error test).
@@ -73,15 +58,7 @@ struct Library {
     // A bumpy 6 x 6 cell mesh (two-sided triangles).
     std::vector<Vector3f> v;
     std::vector<uint32_t> idx;
-    const int g = 6;
-    for (int j = 0; j <= g; ++j)
-      for (int i = 0; i <= g; ++i)
-        v.emplace_back(0.3f * static_cast<float>(i - g / 2), r.uni(-0.2f, 0.2f), 0.3f * static_cast<float>(j - g / 2));
-    for (int j = 0; j < g; ++j)
-      for (int i = 0; i < g; ++i) {
-        const uint32_t a = static_cast<uint32_t>(j * (g + 1) + i), c = a + 1, d = a + (g + 1), e = d + 1;
-        idx.insert(idx.end(), {a, d, c, c, d, e});
-      }
+    bumpy_grid(r, 6, 0.3f, 0.2f, &v, &idx);
     add(set.add_mesh(v, idx, &id));
     std::vector<CompoundChild> kids = {
         {box, Pose{Vector3f(0.8f, 0, 0), r.quat()}},

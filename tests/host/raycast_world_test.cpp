@@ -11,13 +11,13 @@
 #include <cmath>
 #include <cstring>
 #include <limits>
-#include <random>
 #include <vector>
 
 #include <Eigen/Geometry>
 
 #include "impact/impact.h"
 #include "impact/shape_queries.h"
+#include "support/random_input.h"
 #include "support/test_support.h"
 
 namespace impact::test {
@@ -27,23 +27,8 @@ using Eigen::Vector3d;
 using Eigen::Vector3f;
 constexpr float kInf = std::numeric_limits<float>::infinity();
 
-struct Rng {
-  std::mt19937 g{20261121u};
-  float uni(float a, float b) { return std::uniform_real_distribution<float>(a, b)(g); }
-  uint32_t pick(uint32_t n) { return std::uniform_int_distribution<uint32_t>(0, n - 1)(g); }
-  Vector3f vec(float a, float b) { return {uni(a, b), uni(a, b), uni(a, b)}; }
-  Vector3f unit() {
-    for (;;) {
-      const Vector3f v = vec(-1, 1);
-      const float n = v.norm();
-      if (n > 0.1f && n <= 1.0f) return v / n;
-    }
-  }
-  Eigen::Quaternionf quat() {
-    Eigen::Vector4f c(uni(-1, 1), uni(-1, 1), uni(-1, 1), uni(-1, 1));
-    c.normalize();
-    return Eigen::Quaternionf(c[0], c[1], c[2], c[3]);
-  }
+struct Rng : TestRng {
+  Rng() : TestRng(20261121u) {}
 };
 
 struct TestWorld {
@@ -84,15 +69,7 @@ TestWorld make_world(Rng& r, const Vector3f& origin) {
   // A static bumpy mesh floor, 12 x 12 m.
   std::vector<Vector3f> v;
   std::vector<uint32_t> idx;
-  const int g = 8;
-  for (int j = 0; j <= g; ++j)
-    for (int i = 0; i <= g; ++i)
-      v.emplace_back(1.5f * static_cast<float>(i - g / 2), r.uni(-0.2f, 0.2f), 1.5f * static_cast<float>(j - g / 2));
-  for (int j = 0; j < g; ++j)
-    for (int i = 0; i < g; ++i) {
-      const uint32_t a = static_cast<uint32_t>(j * (g + 1) + i), c = a + 1, d = a + (g + 1), e = d + 1;
-      idx.insert(idx.end(), {a, d, c, c, d, e});
-    }
+  bumpy_grid(r, 8, 1.5f, 0.2f, &v, &idx);
   ShapeId mesh;
   EXPECT_TRUE(IsOk(set.add_mesh(v, idx, &mesh)));
 
