@@ -1,6 +1,7 @@
 // impact_raybench: ray throughput of RayScene (Embree and LBVH paths) on
 //   - a 1M-triangle procedural terrain (static): coherent picking rays from a camera
-//     grid (closest hit) and incoherent visibility segments (any hit);
+//     grid (pick, and closest_hit on the same rays) and incoherent visibility
+//     segments (any hit);
 //   - 100k dynamic spheres and 100k dynamic capsules: incoherent closest-hit rays,
 //     camera picking, and the per-frame update (set + commit: refit vs rebuild);
 //   - 100k dynamic posed shapes (boxes, convex hulls, cylinders; set_shapes): the same
@@ -472,6 +473,10 @@ void register_all() {
   for (const Variant& v : variants(false))
     for (uint32_t t : thread_counts) {
       reg(name("Terrain1M", "pick", v.name, t), [v, t](benchmark::State& s) { pick_bench(s, SceneKind::kTerrain, v, t, terrain_camera()); });
+      // The same camera rays through closest_hit: the batching overhead against the
+      // plain loop below on identical input (pick adds making the rays).
+      reg(name("Terrain1M", "closest", v.name, t),
+          [v, t](benchmark::State& s) { closest_bench(s, SceneKind::kTerrain, v, t, terrain_rays); });
       reg(name("Terrain1M", "visibility", v.name, t),
           [v, t](benchmark::State& s) { any_bench(s, SceneKind::kTerrain, v, t, terrain_segs); });
     }

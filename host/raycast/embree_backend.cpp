@@ -288,11 +288,12 @@ class EmbreeBackend final : public TraceBackend {
     return check();
   }
 
-  void closest(const kernels::RayQuery* rays, kernels::RayBest* best, uint32_t n) const override {
+  bool closest(const kernels::RayQuery* rays, kernels::RayBest* best, float* tri_normal,
+               uint32_t n) const override {
     switch (desc_.packet_width) {
-      case 4: closest_packets<4>(rays, best, n); return;
-      case 8: closest_packets<8>(rays, best, n); return;
-      case 16: closest_packets<16>(rays, best, n); return;
+      case 4: closest_packets<4>(rays, best, tri_normal, n); return tri_normal != nullptr;
+      case 8: closest_packets<8>(rays, best, tri_normal, n); return tri_normal != nullptr;
+      case 16: closest_packets<16>(rays, best, tri_normal, n); return tri_normal != nullptr;
       default: break;
     }
     RTCIntersectContext ctx;
@@ -303,9 +304,14 @@ class EmbreeBackend final : public TraceBackend {
       rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
       rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
       rtcIntersect1(top_, &ctx, &rh);
-      if (rh.hit.geomID != RTC_INVALID_GEOMETRY_ID)
-        reduce(rh.ray.tfar, rh.hit.geomID, rh.hit.primID, rh.hit.instID[0], best[i]);
+      if (rh.hit.geomID != RTC_INVALID_GEOMETRY_ID &&
+          reduce(rh.ray.tfar, rh.hit.geomID, rh.hit.primID, rh.hit.instID[0], best[i]) && tri_normal) {
+        tri_normal[3 * i] = rh.hit.Ng_x;
+        tri_normal[3 * i + 1] = rh.hit.Ng_y;
+        tri_normal[3 * i + 2] = rh.hit.Ng_z;
+      }
     }
+    return tri_normal != nullptr;
   }
 
   void any(const kernels::RayQuery* rays, uint8_t* hit, uint32_t n) const override {
@@ -336,8 +342,9 @@ class EmbreeBackend final : public TraceBackend {
   }
 
  private:
-  // Hit (t, geomID, primID, instID) into the chunk's best record.
-  void reduce(float t, unsigned geom, unsigned prim, unsigned inst, kernels::RayBest& best) const {
+  // Hit (t, geomID, primID, instID) into the chunk's best record; true when it became
+  // the best and is a triangle (the caller then keeps Embree's Ng).
+  bool reduce(float t, unsigned geom, unsigned prim, unsigned inst, kernels::RayBest& best) const {
     uint32_t kind, index;
     if (inst != RTC_INVALID_GEOMETRY_ID) {
       kind = kernels::kRayHitTriangle;
@@ -352,11 +359,14 @@ class EmbreeBackend final : public TraceBackend {
       kind = kernels::kRayHitCapsule;
       index = prim;
     }
-    if (kernels::ray_best_better(t, kind, index, best)) best = {t, kind, index};
+    if (!kernels::ray_best_better(t, kind, index, best)) return false;
+    best = {t, kind, index};
+    return kind == kernels::kRayHitTriangle;
   }
 
   template <int W>
-  void closest_packets(const kernels::RayQuery* rays, kernels::RayBest* best, uint32_t n) const {
+  void closest_packets(const kernels::RayQuery* rays, kernels::RayBest* best, float* tri_normal,
+                       uint32_t n) const {
     RTCIntersectContext ctx;
     rtcInitIntersectContext(&ctx);
     ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
@@ -372,8 +382,14 @@ class EmbreeBackend final : public TraceBackend {
       }
       Packet<W>::intersect(valid, top_, &ctx, &rh);
       for (int k = 0; k < W && base + static_cast<uint32_t>(k) < n; ++k)
-        if (rh.hit.geomID[k] != RTC_INVALID_GEOMETRY_ID)
-          reduce(rh.ray.tfar[k], rh.hit.geomID[k], rh.hit.primID[k], rh.hit.instID[0][k], best[base + k]);
+        if (rh.hit.geomID[k] != RTC_INVALID_GEOMETRY_ID &&
+            reduce(rh.ray.tfar[k], rh.hit.geomID[k], rh.hit.primID[k], rh.hit.instID[0][k], best[base + k]) &&
+            tri_normal) {
+          float* ng = tri_normal + 3 * (base + static_cast<uint32_t>(k));
+          ng[0] = rh.hit.Ng_x[k];
+          ng[1] = rh.hit.Ng_y[k];
+          ng[2] = rh.hit.Ng_z[k];
+        }
     }
   }
 

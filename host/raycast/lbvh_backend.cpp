@@ -94,13 +94,14 @@ class LbvhBackend final : public TraceBackend {
     return Status();
   }
 
-  void closest(const kernels::RayQuery* rays, kernels::RayBest* best, uint32_t n) const override {
+  bool closest(const kernels::RayQuery* rays, kernels::RayBest* best, float*, uint32_t n) const override {
     if (tri_tree_.size() != 0) kernels::ray_closest_triangles(tri_tree_.tree(), tri_rec_.data(), rays, best, {0, n});
     if (dyn_tree_.size() != 0)
       kernels::ray_closest_shapes(dyn_tree_.tree(), dyn_rec_.data(), first_capsule_, rays, best, {0, n});
     if (shape_tree_.size() != 0)
       kernels::ray_closest_user(shape_tree_.tree(), shape_user_test, data_, kernels::kRayHitShape, rays, best,
                                 {0, n});
+    return false;
   }
 
   void any(const kernels::RayQuery* rays, uint8_t* hit, uint32_t n) const override {

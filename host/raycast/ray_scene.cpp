@@ -107,7 +107,8 @@ bool convert(const Segment& s, kernels::RayQuery* q) {
 
 // Camera basis; empty string on success.
 struct CameraBasis {
-  Eigen::Vector3d pos, f, r, u;
+  Eigen::Vector3f pos;
+  Eigen::Vector3d f, r, u;
   double h, aspect;
 };
 
@@ -119,7 +120,7 @@ std::string camera_basis(const Camera& c, CameraBasis* b) {
   if (!(c.vertical_fov > 0.0f && c.vertical_fov < 3.14159265f))
     return "camera vertical_fov must be in (0, pi) radians, got " + fmt(c.vertical_fov);
   if (!(c.aspect > 0.0f) || !std::isfinite(c.aspect)) return "camera aspect must be finite and > 0, got " + fmt(c.aspect);
-  b->pos = c.position.cast<double>();
+  b->pos = c.position;
   b->f = c.forward.cast<double>().normalized();
   const Eigen::Vector3d right = b->f.cross(c.up.cast<double>());
   if (!(right.norm() > 1e-9 * c.up.cast<double>().norm()) || c.up.squaredNorm() == 0.0f)
@@ -131,16 +132,37 @@ std::string camera_basis(const Camera& c, CameraBasis* b) {
   return {};
 }
 
-Ray camera_ray(const CameraBasis& b, const Eigen::Vector2f& s, uint32_t mask) {
-  const double x = (2.0 * s.x() - 1.0) * b.h * b.aspect;
-  const double y = (1.0 - 2.0 * s.y()) * b.h;
-  Ray r;
-  r.origin = b.pos.cast<float>();
-  r.direction = (b.f + x * b.r + y * b.u).normalized().cast<float>();
-  r.tmax = std::numeric_limits<float>::infinity();
-  r.mask = mask;
-  return r;
+// Unit directions of the camera rays through the finite screen points s[0, m), 3 floats
+// per point, in one plain loop over the points (vectorised: the double square roots
+// and divisions of a chunk overlap). camera_rays and pick both call it, so pick's rays
+// are camera_rays' bit for bit. The direction is forward + x right + y up with
+// forward, right, up orthonormal, so its length is >= 1: never zero, and finite in
+// double for any finite float screen point.
+void camera_directions(const CameraBasis& b, const Eigen::Vector2f* s, uint32_t m, float* IMPACT_RESTRICT dir) {
+  IMPACT_ASSERT(m <= kRayGrain);
+  const double hx = b.h * b.aspect, hy = b.h;
+  const double f0 = b.f.x(), f1 = b.f.y(), f2 = b.f.z();
+  const double r0 = b.r.x(), r1 = b.r.y(), r2 = b.r.z();
+  const double u0 = b.u.x(), u1 = b.u.y(), u2 = b.u.z();
+  double sx[kRayGrain], sy[kRayGrain];  // widened first: GCC 12 vectorises no loop mixing the two
+  for (uint32_t k = 0; k < m; ++k) {
+    sx[k] = static_cast<double>(s[k].x());
+    sy[k] = static_cast<double>(s[k].y());
+  }
+  for (uint32_t k = 0; k < m; ++k) {
+    const double x = (2.0 * sx[k] - 1.0) * hx;
+    const double y = (1.0 - 2.0 * sy[k]) * hy;
+    const double dx = f0 + x * r0 + y * u0;
+    const double dy = f1 + x * r1 + y * u1;
+    const double dz = f2 + x * r2 + y * u2;
+    const double inv = 1.0 / std::sqrt(dx * dx + dy * dy + dz * dz);
+    dir[3 * k] = static_cast<float>(dx * inv);
+    dir[3 * k + 1] = static_cast<float>(dy * inv);
+    dir[3 * k + 2] = static_cast<float>(dz * inv);
+  }
 }
+
+bool finite2(const Eigen::Vector2f& s) { return std::isfinite(s.x()) && std::isfinite(s.y()); }
 
 Status api_error(StatusCode code, const std::string& msg) { return Status(code, msg); }
 
@@ -161,8 +183,9 @@ class RaySceneImpl {
   bool pending() const { return changes.any(); }
   static const RaySceneImpl* of(const RayScene& s) { return s.impl_.get(); }
 
-  // Finalises best into a RayHit (point, normal from the stored primitives).
-  void finish(const kernels::RayQuery& q, const kernels::RayBest& b, RayHit* out) const {
+  // Finalises best into a RayHit (point, normal from the stored primitives). ng: the
+  // backend's unnormalised geometric normal of a triangle hit, or null.
+  void finish(const kernels::RayQuery& q, const kernels::RayBest& b, const float* ng, RayHit* out) const {
     RayHit h;
     if (b.kind == kernels::kRayHitNone || q.tmax == 0.0f) {
       *out = h;
@@ -180,6 +203,12 @@ class RaySceneImpl {
         const uint32_t mesh = static_cast<uint32_t>(it - s.mesh_first_tri.begin()) - 1;
         h.id = mesh;
         h.prim = b.prim - s.mesh_first_tri[mesh];
+        if (ng != nullptr) {
+          // Embree's Ng: the same cross product in float, from vertices it already read.
+          n = Eigen::Vector3d(ng[0], ng[1], ng[2]);
+          const double l2 = n.squaredNorm();
+          if (l2 > 0.0 && l2 < std::numeric_limits<double>::infinity()) break;
+        }
         auto vert = [&](int k) {
           const float* v = s.vertices.data() + 3 * size_t{s.indices[3 * size_t{b.prim} + k]};
           return Eigen::Vector3d(v[0], v[1], v[2]);
@@ -247,10 +276,12 @@ class RaySceneImpl {
     *out = h;
   }
 
-  // Chunked closest-hit over rays produced by source(i, &query) -> false when invalid;
-  // describe(i) then gives the message of the first invalid one (off the hot path).
-  template <class Source, class Describe>
-  Status closest(size_t n, const char* what, Source&& source, Describe&& describe, RayHit* out) const {
+  // Chunked closest-hit over rays produced by fill(b, m, q), which writes queries
+  // b .. b + m - 1 into q[0, m) and returns m, or the position k < m of the first
+  // invalid one; describe(i) then gives the message of the first invalid one (off the
+  // hot path).
+  template <class Fill, class Describe>
+  Status closest(size_t n, const char* what, Fill&& fill, Describe&& describe, RayHit* out) const {
     if (pending()) return api_error(StatusCode::kInvalidArgument, "RayScene: geometry changed since the last commit(); call commit() before querying");
     if (n > 0xffffffffu) return api_error(StatusCode::kInvalidArgument, std::string("too many ") + what + "s in one call (at most 2^32 - 1)");
     const uint32_t chunks = host::chunk_count(n, kRayGrain);
@@ -258,17 +289,16 @@ class RaySceneImpl {
     exec.for_each_chunk(n, kRayGrain, [&](uint32_t b, uint32_t e, uint32_t c) {
       kernels::RayQuery q[kRayGrain] = {};
       kernels::RayBest best[kRayGrain];
+      float ng[3 * kRayGrain];  // triangle normals from the backend, when it has them
       const uint32_t m = e - b;
-      for (uint32_t k = 0; k < m; ++k) {
-        if (!source(b + k, &q[k])) {
-          bad[c] = b + k;
-          return;
-        }
-        best[k] = {q[k].tmax, kernels::kRayHitNone, 0};
+      if (const uint32_t k = fill(b, m, q); k != m) {
+        bad[c] = b + k;
+        return;
       }
-      if (backend) backend->closest(q, best, m);
+      for (uint32_t k = 0; k < m; ++k) best[k] = {q[k].tmax, kernels::kRayHitNone, 0};
+      const bool have_ng = backend && backend->closest(q, best, ng, m);
       kernels::ray_closest_planes(data.planes.data(), static_cast<uint32_t>(data.planes.size()), q, best, {0, m});
-      for (uint32_t k = 0; k < m; ++k) finish(q[k], best[k], &out[b + k]);
+      for (uint32_t k = 0; k < m; ++k) finish(q[k], best[k], have_ng ? ng + 3 * k : nullptr, &out[b + k]);
     });
     for (uint32_t c = 0; c < chunks; ++c)
       if (bad[c] != 0xffffffffu)
@@ -593,7 +623,12 @@ Status RayScene::closest_hit(std::span<const Ray> rays, std::span<RayHit> out) c
     return Status(StatusCode::kSizeMismatch, "closest_hit: out has " + std::to_string(out.size()) + " entries for " +
                                                  std::to_string(rays.size()) + " rays");
   return impl_->closest(
-      rays.size(), "ray", [&](uint32_t i, kernels::RayQuery* q) { return convert(rays[i], q); },
+      rays.size(), "ray",
+      [&](uint32_t b, uint32_t m, kernels::RayQuery* q) {
+        for (uint32_t k = 0; k < m; ++k)
+          if (!convert(rays[b + k], &q[k])) return k;
+        return m;
+      },
       [&](uint32_t i) {
         kernels::RayQuery q;
         return to_query(rays[i], &q);
@@ -643,17 +678,29 @@ Status RayScene::pick(const Camera& camera, std::span<const Eigen::Vector2f> scr
                                                  std::to_string(screen.size()) + " screen points");
   CameraBasis basis;
   if (std::string e = camera_basis(camera, &basis); !e.empty()) return Status(StatusCode::kInvalidArgument, "pick: " + e);
-  auto ray_of = [&](uint32_t i) { return camera_ray(basis, screen[i], mask); };
   return impl_->closest(
       screen.size(), "screen point",
-      [&](uint32_t i, kernels::RayQuery* q) {
-        return std::isfinite(screen[i].x()) && std::isfinite(screen[i].y()) && convert(ray_of(i), q);
+      [&](uint32_t b, uint32_t m, kernels::RayQuery* q) {
+        for (uint32_t k = 0; k < m; ++k)
+          if (!finite2(screen[b + k])) return k;
+        float dir[3 * kRayGrain];
+        camera_directions(basis, screen.data() + b, m, dir);
+        // What closest_hit does with camera_rays' rays (convert), without the checks
+        // that cannot fail here: a finite origin, tmax = +inf, a finite unit direction.
+        for (uint32_t k = 0; k < m; ++k) {
+          double len = 0.0;
+          (void)unit_direction(Eigen::Vector3f(dir[3 * k], dir[3 * k + 1], dir[3 * k + 2]), q[k].d, &len);
+          q[k].o[0] = basis.pos.x();
+          q[k].o[1] = basis.pos.y();
+          q[k].o[2] = basis.pos.z();
+          q[k].tmax = kFloatMax;
+          q[k].mask = mask;
+        }
+        return m;
       },
       [&](uint32_t i) -> std::string {
         const Eigen::Vector2f& s = screen[i];
-        if (!std::isfinite(s.x()) || !std::isfinite(s.y())) return "must be finite, got (" + fmt(s.x()) + ", " + fmt(s.y()) + ")";
-        kernels::RayQuery q;
-        return "camera ray: " + to_query(ray_of(i), &q);
+        return "must be finite, got (" + fmt(s.x()) + ", " + fmt(s.y()) + ")";
       },
       out.data());
 }
@@ -677,10 +724,20 @@ Status camera_rays(const Camera& camera, std::span<const Eigen::Vector2f> screen
                                                  std::to_string(screen.size()) + " screen points");
   CameraBasis basis;
   if (std::string e = camera_basis(camera, &basis); !e.empty()) return Status(StatusCode::kInvalidArgument, "camera_rays: " + e);
-  for (size_t i = 0; i < screen.size(); ++i) {
-    if (!std::isfinite(screen[i].x()) || !std::isfinite(screen[i].y()))
+  for (size_t i = 0; i < screen.size(); ++i)
+    if (!finite2(screen[i]))
       return Status(StatusCode::kInvalidArgument, "camera_rays: screen point " + std::to_string(i) + " must be finite");
-    out[i] = camera_ray(basis, screen[i], mask);
+  float dir[3 * kRayGrain];
+  for (size_t b = 0; b < screen.size(); b += kRayGrain) {
+    const uint32_t m = static_cast<uint32_t>(std::min<size_t>(kRayGrain, screen.size() - b));
+    camera_directions(basis, screen.data() + b, m, dir);
+    for (uint32_t k = 0; k < m; ++k) {
+      Ray& r = out[b + k];
+      r.origin = basis.pos;
+      r.direction = Eigen::Vector3f(dir[3 * k], dir[3 * k + 1], dir[3 * k + 2]);
+      r.tmax = std::numeric_limits<float>::infinity();
+      r.mask = mask;
+    }
   }
   return Status();
 }
