@@ -561,6 +561,35 @@ uint64_t embree_plain_closest_raw(void* rtc_scene, std::span<const Ray> rays) {
   return hits;
 }
 
+uint64_t embree_plain_closest_store_raw(void* rtc_scene, std::span<const Ray> rays, std::span<PlainHit> out) {
+  RTCScene scene = static_cast<RTCScene>(rtc_scene);
+  RTCIntersectContext ctx;
+  rtcInitIntersectContext(&ctx);
+  uint64_t hits = 0;
+  for (size_t i = 0; i < rays.size(); ++i) {
+    const Ray& r = rays[i];
+    RTCRayHit rh;
+    rh.ray.org_x = r.origin.x();
+    rh.ray.org_y = r.origin.y();
+    rh.ray.org_z = r.origin.z();
+    rh.ray.dir_x = r.direction.x();
+    rh.ray.dir_y = r.direction.y();
+    rh.ray.dir_z = r.direction.z();
+    rh.ray.tnear = 0.0f;
+    rh.ray.tfar = r.tmax;
+    rh.ray.time = 0.0f;
+    rh.ray.mask = r.mask;
+    rh.ray.id = 0;
+    rh.ray.flags = 0;
+    rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+    rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+    rtcIntersect1(scene, &ctx, &rh);
+    out[i] = PlainHit{rh.ray.tfar, rh.hit.geomID, rh.hit.primID, rh.hit.instID[0], {rh.hit.Ng_x, rh.hit.Ng_y, rh.hit.Ng_z}};
+    hits += rh.hit.geomID != RTC_INVALID_GEOMETRY_ID;
+  }
+  return hits;
+}
+
 uint64_t embree_plain_any_raw(void* rtc_scene, std::span<const Segment> segments) {
   RTCScene scene = static_cast<RTCScene>(rtc_scene);
   RTCIntersectContext ctx;

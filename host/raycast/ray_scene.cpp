@@ -765,6 +765,13 @@ uint64_t embree_plain_closest(const RayScene& scene, std::span<const Ray> rays) 
   return embree_plain_closest_raw(top, rays);
 }
 
+uint64_t embree_plain_closest_store(const RayScene& scene, std::span<const Ray> rays, std::span<PlainHit> out) {
+  const RaySceneImpl* impl = RaySceneImpl::of(scene);
+  void* top = embree_top_scene(impl->backend.get());
+  if (top == nullptr || impl->pending() || out.size() != rays.size()) return UINT64_MAX;
+  return embree_plain_closest_store_raw(top, rays, out);
+}
+
 uint64_t embree_plain_any(const RayScene& scene, std::span<const Segment> segments) {
   const RaySceneImpl* impl = RaySceneImpl::of(scene);
   void* top = embree_top_scene(impl->backend.get());
