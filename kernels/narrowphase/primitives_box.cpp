@@ -42,6 +42,8 @@
 // back), so separated and edge lanes cost no clipping; a lane's arithmetic is the
 // same wherever it lands, so the output bytes do not depend on its neighbours.
 // reduce4 picks by max/min trees over index-tagged keys (no select chain).
+#include <algorithm>
+#include <cmath>
 #include <cstdint>
 
 #include "kernels/narrowphase/pair_kernels.h"
@@ -85,6 +87,149 @@ struct FaceQueue {
 // ---------------------------------------------------------------------------------------
 // box - box
 // ---------------------------------------------------------------------------------------
+
+/// Step 1's result for one lane.
+struct BoxSat {
+  float best, min_all, axis;
+  float edge_l[3];  // the winning edge axis in A's frame, unit
+  float point[3];   // edge axis: step 4's contact point, relative to A's centre
+};
+
+/// closest_segment_segment (primitives.h) in double.
+void closest_segments_double(const double pa[3], const double ua[3], double ha, const double pb[3],
+                             const double ub[3], double hb, double* s_out, double* t_out) {
+  const double r[3] = {pa[0] - pb[0], pa[1] - pb[1], pa[2] - pb[2]};
+  const double b = ua[0] * ub[0] + ua[1] * ub[1] + ua[2] * ub[2];
+  const double c = ua[0] * r[0] + ua[1] * r[1] + ua[2] * r[2];
+  const double f = ub[0] * r[0] + ub[1] * r[1] + ub[2] * r[2];
+  const double x[3] = {ua[1] * ub[2] - ua[2] * ub[1], ua[2] * ub[0] - ua[0] * ub[2], ua[0] * ub[1] - ua[1] * ub[0]};
+  const double denom = x[0] * x[0] + x[1] * x[1] + x[2] * x[2];
+  double s;
+  if (denom < 1e-20) {
+    const double ext = std::fabs(b) * hb;
+    const double lo = std::max(-ha, -c - ext), hi = std::min(ha, -c + ext);
+    s = std::clamp(0.5 * (lo + hi), -ha, ha);
+  } else {
+    s = std::clamp((b * f - c) / denom, -ha, ha);
+  }
+  const double t_raw = b * s + f;
+  const double t = std::clamp(t_raw, -hb, hb);
+  if (t != t_raw) s = std::clamp(b * t - c, -ha, ha);
+  *s_out = s;
+  *t_out = t;
+}
+
+/// Steps 1 and 4 for one pair in double, from its float inputs (world frame: columns
+/// a_i, b_j of the rotations, t = B's centre - A's). Run on the lanes where the float SAT
+/// could not decide (see box_box_block): near-parallel edges of long boxes, where the
+/// float overlap of the edge axis is off by up to ~(longest extent) * 1e-7 / |a_i x b_j|
+/// and the true minimum can be that edge. In double the axes a_i x b_j carry ~1e-16
+/// relative error; the same tie rules apply, with a band for the inputs' own precision.
+/// Products of floats are exact in double, so the result depends only on the inputs.
+__attribute__((noinline)) BoxSat box_box_sat_double(const double t[3], const double A[3][3], const double B[3][3],
+                                            const double eA[3], const double eB[3]) {
+  auto dot3 = [](const double* u, const double* v) { return u[0] * v[0] + u[1] * v[1] + u[2] * v[2]; };
+  double AB[3][3];
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) AB[i][j] = std::fabs(dot3(A[i], B[j]));
+  double best = 3.0e38, min_all = 3.0e38;
+  int axis = 0;
+  for (int i = 0; i < 3; ++i) {
+    const double o = eA[i] + eB[0] * AB[i][0] + eB[1] * AB[i][1] + eB[2] * AB[i][2] - std::fabs(dot3(t, A[i]));
+    if (o < best) best = o, axis = i;
+  }
+  min_all = best;
+  const double size = eA[0] + eA[1] + eA[2] + eB[0] + eB[1] + eB[2];
+  const double tie_floor = double(kTieSize) * size;
+  const double lim_a = best - (double(kTieRel) * std::fabs(best) + tie_floor);
+  for (int j = 0; j < 3; ++j) {
+    const double o = eB[j] + eA[0] * AB[0][j] + eA[1] * AB[1][j] + eA[2] * AB[2][j] - std::fabs(dot3(t, B[j]));
+    min_all = std::min(min_all, o);
+    if (o < lim_a && o < best) best = o, axis = 3 + j;
+  }
+  const double lim_face = best - (double(kTieRel) * std::fabs(best) + tie_floor);
+  // The axes are exact to ~1e-16 here, but the boxes themselves are only known to the
+  // inputs' float precision (unit columns rounded to ~6e-8: corners move by that times
+  // the extents), so an edge must still beat the faces by more than that to win.
+  const double edge_round = double(kEdgeRound) * (size + std::fabs(t[0]) + std::fabs(t[1]) + std::fabs(t[2]));
+  double el[3] = {0.0, 0.0, 0.0}, lw[3] = {0.0, 0.0, 0.0};
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) {
+      const double l[3] = {A[i][1] * B[j][2] - A[i][2] * B[j][1], A[i][2] * B[j][0] - A[i][0] * B[j][2],
+                           A[i][0] * B[j][1] - A[i][1] * B[j][0]};
+      const double l2 = dot3(l, l);
+      if (!(l2 > double(kEdgeSkipSq))) continue;
+      const double len = std::sqrt(l2);
+      double r = 0.0;
+      for (int m = 0; m < 3; ++m) r += eA[m] * std::fabs(dot3(A[m], l)) + eB[m] * std::fabs(dot3(B[m], l));
+      const double o = (r - std::fabs(dot3(t, l))) / len;
+      min_all = std::min(min_all, o);
+      if (o < lim_face - edge_round && o < best) {
+        best = o, axis = 6 + 3 * i + j;
+        for (int m = 0; m < 3; ++m) el[m] = dot3(A[m], l) / len, lw[m] = l[m] / len;
+      }
+    }
+  double x[3] = {0.0, 0.0, 0.0};
+  if (axis >= 6) {
+    // Step 4 in double: the edges' closest points are as ill-conditioned as the axis
+    // (the crossing of near-parallel edges moves by |t| * 1e-7 / |a_i x b_j| in float).
+    const int ei = (axis - 6) / 3, ej = (axis - 6) % 3;
+    const double sg = dot3(lw, t) >= 0.0 ? 1.0 : -1.0;
+    const double n[3] = {sg * lw[0], sg * lw[1], sg * lw[2]};
+    double va[3] = {0.0, 0.0, 0.0}, vb[3] = {t[0], t[1], t[2]};
+    for (int m = 0; m < 3; ++m) {
+      const double sa = m == ei ? 0.0 : (dot3(n, A[m]) >= 0.0 ? eA[m] : -eA[m]);
+      const double sb = m == ej ? 0.0 : (dot3(n, B[m]) >= 0.0 ? -eB[m] : eB[m]);
+      for (int c = 0; c < 3; ++c) va[c] += A[m][c] * sa, vb[c] += B[m][c] * sb;
+    }
+    double s, u;
+    closest_segments_double(va, A[ei], eA[ei], vb, B[ej], eB[ej], &s, &u);
+    for (int c = 0; c < 3; ++c) x[c] = 0.5 * (va[c] + s * A[ei][c] + vb[c] + u * B[ej][c]);
+  }
+  return BoxSat{static_cast<float>(best),
+                static_cast<float>(min_all),
+                static_cast<float>(axis),
+                {static_cast<float>(el[0]), static_cast<float>(el[1]), static_cast<float>(el[2])},
+                {static_cast<float>(x[0]), static_cast<float>(x[1]), static_cast<float>(x[2])}};
+}
+
+/// Step 1's state of a block.
+template <class F>
+struct BoxSatLanes {
+  F best, min_all, axis;
+  V3<F> edge_l;
+  V3<F> point;  // redone lanes with an edge axis: the contact point
+};
+
+/// box_box_sat_double on the lanes in `redo`, the others kept. Inputs by value and the
+/// state through a copy (*io): references to the caller's lanes would make them escape
+/// and live in memory on the hot path.
+template <class F>
+__attribute__((noinline)) void box_box_redo_lanes(typename F::Mask redo, V3<F> t, M3<F> ra, M3<F> rb, V3<F> ea,
+                                                  V3<F> eb, BoxSatLanes<F>* io) {
+  BoxSatLanes<F>& s = *io;
+  constexpr uint32_t W = F::kWidth;
+  float b[W], mn[W], ax[W], lx[W], ly[W], lz[W], px[W] = {}, py[W] = {}, pz[W] = {};
+  s.best.store(b), s.min_all.store(mn), s.axis.store(ax);
+  s.edge_l.x.store(lx), s.edge_l.y.store(ly), s.edge_l.z.store(lz);
+  for (uint32_t i = 0; i < W; ++i) {
+    if (!redo.lane(i)) continue;
+    const double tt[3] = {t.x.lane(i), t.y.lane(i), t.z.lane(i)};
+    const double e1[3] = {ea.x.lane(i), ea.y.lane(i), ea.z.lane(i)};
+    const double e2[3] = {eb.x.lane(i), eb.y.lane(i), eb.z.lane(i)};
+    double A[3][3], B[3][3];
+    for (int c = 0; c < 3; ++c) {
+      A[c][0] = ra.c[c].x.lane(i), A[c][1] = ra.c[c].y.lane(i), A[c][2] = ra.c[c].z.lane(i);
+      B[c][0] = rb.c[c].x.lane(i), B[c][1] = rb.c[c].y.lane(i), B[c][2] = rb.c[c].z.lane(i);
+    }
+    const BoxSat r = box_box_sat_double(tt, A, B, e1, e2);
+    b[i] = r.best, mn[i] = r.min_all, ax[i] = r.axis;
+    lx[i] = r.edge_l[0], ly[i] = r.edge_l[1], lz[i] = r.edge_l[2];
+    px[i] = r.point[0], py[i] = r.point[1], pz[i] = r.point[2];
+  }
+  s = BoxSatLanes<F>{F::load(b), F::load(mn), F::load(ax), V3<F>{F::load(lx), F::load(ly), F::load(lz)},
+                     V3<F>{F::load(px), F::load(py), F::load(pz)}};
+}
 
 /// Step 3 of box-box for the lanes in `face` (a face axis won): the clipped manifold
 /// into m's points (relative to A's centre), pdepth and count. t = B's centre - A's.
@@ -258,8 +403,9 @@ IMPACT_INLINE void box_box_block(const LeafSoA& a, const LeafSoA& b, const Manif
   const F best_face = best;
   const F lim_face = best_face - mul_add(F(kTieRel), abs(best_face), tie_floor);
   const F edge_round = F(kEdgeRound) * (size + abs(ta.x) + abs(ta.y) + abs(ta.z));
-  F edge_len(1.0f);
   V3<F> edge_l{zero, zero, zero};  // the winning edge axis in A's frame (normalised)
+  F min_edge(3.0e38f);              // the smallest edge overlap, rounding band ignored
+  F edge_len(1.0f);                 // |a_i x b_j| of the winning edge axis
   for (int i = 0; i < 3; ++i) {
     const int i1 = (i + 1) % 3, i2 = (i + 2) % 3;
     for (int j = 0; j < 3; ++j) {
@@ -277,6 +423,7 @@ IMPACT_INLINE void box_box_block(const LeafSoA& a, const LeafSoA& b, const Manif
       const F tl = l[0] * tA[0] + l[1] * tA[1] + l[2] * tA[2];
       const F o = (ra_ + rb_ - abs(tl)) / len;
       min_all = select(ok, min(min_all, o), min_all);
+      min_edge = select(ok, min(min_edge, o), min_edge);
       const Mask take = ok & (o < lim_face - edge_round / len) & (o < best);
       best = select(take, o, best);
       axis = select(take, F(static_cast<float>(6 + 3 * i + j)), axis);
@@ -284,6 +431,18 @@ IMPACT_INLINE void box_box_block(const LeafSoA& a, const LeafSoA& b, const Manif
       edge_l = select(take, V3<F>{l[0] * inv, l[1] * inv, l[2] * inv}, edge_l);
       edge_len = select(take, len, edge_len);
     }
+  }
+  // Lanes float cannot settle, redone in double: a face won, but an edge axis came under
+  // the face limit and lost only to its rounding band; or an edge axis won whose
+  // rounding (and that of its contact point: the edges' crossing slides by ~1/3 of it)
+  // exceeds the tie tolerance - nearly parallel edges of long boxes.
+  const Mask redo = ((min_edge < lim_face) & (axis < F(6.0f))) |
+                    ((axis >= F(6.0f)) & (edge_round > edge_len * mul_add(F(kTieRel), abs(best), tie_floor)));
+  V3<F> redo_point{zero, zero, zero};
+  if (simd::any(redo)) {
+    BoxSatLanes<F> r{best, min_all, axis, edge_l, redo_point};
+    box_box_redo_lanes(redo, t, ra, rb, ea, eb, &r);
+    best = r.best, min_all = r.min_all, axis = r.axis, edge_l = r.edge_l, redo_point = r.point;
   }
   const Mask hit = min_all > zero;
   const Mask face_a = axis < F(3.0f);
@@ -334,7 +493,7 @@ IMPACT_INLINE void box_box_block(const LeafSoA& a, const LeafSoA& b, const Manif
     closest_segment_segment(va, da, ha, vb, db, hb, s, u);
     const V3<F> xa = madd(va, s, da), xb = madd(vb, u, db);
     const Mask e = hit & is_edge;
-    m.point[0] = select(e, (xa + xb) * half, m.point[0]);
+    m.point[0] = select(e, select(redo, redo_point, (xa + xb) * half), m.point[0]);
     m.pdepth[0] = select(e, best, m.pdepth[0]);
     m.count = select(e, Int(1), m.count);
   }
