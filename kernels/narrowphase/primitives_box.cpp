@@ -17,7 +17,11 @@
 //      shallower by more than tie = 1e-5 * overlap + 1e-6 * (sum of all extents);
 //      an edge axis also by its own rounding error, ~2e-7 * (extents + |t|) / |a_i x
 //      b_j| (its components lose relative precision as the edges become parallel).
-//      So the depth is the true minimum to ~1e-5 relative.
+//      So the depth is the true minimum to ~1e-5 relative. Lanes where that band
+//      decided (an edge under the face limit lost only to it), or where a winning edge
+//      axis's band exceeds the tie tolerance, are redone in double (box_box_sat_double:
+//      near-parallel edges of long boxes, where float cannot rank the axes or place the
+//      edges' crossing); rare, and a lane's result still depends only on its inputs.
 //   3. Face axis: the reference face (on the box owning the axis) and the incident
 //      face (the other box's face most anti-parallel to it). Their intersection in
 //      the reference face's frame is found without a variable-length polygon: its
