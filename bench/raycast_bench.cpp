@@ -211,8 +211,11 @@ std::vector<Variant> variants(bool with_builtin) {
   v.push_back({"embree_packet8", d});
   d.packet_width = 16;
   v.push_back({"embree_packet16", d});
+  d.packet_width = 1;
+  d.embree_streams = EmbreeStreams::kAlways;  // "embree" is kAuto: streams for pick on meshes only
+  v.push_back({"embree_stream", d});
+  d.embree_streams = EmbreeStreams::kAuto;
   if (with_builtin) {
-    d.packet_width = 1;
     d.embree_spheres = EmbreeSpheres::kBuiltin;
     v.push_back({"embree_builtin", d});
   }
@@ -513,7 +516,9 @@ void register_all() {
         reg(name(sc, "visibility", v.name, t), [kind, v, t](benchmark::State& s) { any_bench(s, kind, v, t, body_segs); });
       }
     for (const Variant& v : variants(kind == SceneKind::kSpheres)) {
-      if (v.desc.packet_width != 1 || v.desc.backend != RayBackend::kEmbree) continue;
+      if (v.desc.packet_width != 1 || v.desc.backend != RayBackend::kEmbree ||
+          v.desc.embree_streams == EmbreeStreams::kAlways)
+        continue;
       reg(name(sc, "closest", std::string("plain_rtcIntersect1_") + v.name, 1),
           [kind, v](benchmark::State& s) { plain_closest_bench(s, kind, v, body_rays); });
     }

@@ -20,6 +20,7 @@
 // internal builders use that many threads.
 #include <embree3/rtcore.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -228,6 +229,9 @@ void fill_ray(RTCRay& r, const kernels::RayQuery& q, float tfar) {
   r.flags = 0;
 }
 
+// Rays per rtcIntersect1M / rtcOccluded1M stream (RTCRayHit blocks on the stack).
+constexpr uint32_t kStream = 64;
+
 class EmbreeBackend final : public TraceBackend {
  public:
   EmbreeBackend(const RaySceneDesc& desc, const SceneData& data, uint32_t threads)
@@ -288,27 +292,40 @@ class EmbreeBackend final : public TraceBackend {
     return check();
   }
 
-  bool closest(const kernels::RayQuery* rays, kernels::RayBest* best, float* tri_normal,
-               uint32_t n) const override {
+  bool closest(const kernels::RayQuery* rays, kernels::RayBest* best, float* tri_normal, uint32_t n,
+               bool coherent) const override {
     switch (desc_.packet_width) {
       case 4: closest_packets<4>(rays, best, tri_normal, n); return tri_normal != nullptr;
       case 8: closest_packets<8>(rays, best, tri_normal, n); return tri_normal != nullptr;
       case 16: closest_packets<16>(rays, best, tri_normal, n); return tri_normal != nullptr;
       default: break;
     }
+    const bool stream = desc_.embree_streams == EmbreeStreams::kAlways ||
+                        (desc_.embree_streams == EmbreeStreams::kAuto && coherent && data_.sphere_count() == 0 &&
+                         data_.capsule_count() == 0 && data_.shape_count() == 0);
     RTCIntersectContext ctx;
     rtcInitIntersectContext(&ctx);
-    for (uint32_t i = 0; i < n; ++i) {
-      RTCRayHit rh;
-      fill_ray(rh.ray, rays[i], best[i].t);
-      rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-      rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
-      rtcIntersect1(top_, &ctx, &rh);
-      if (rh.hit.geomID != RTC_INVALID_GEOMETRY_ID &&
-          reduce(rh.ray.tfar, rh.hit.geomID, rh.hit.primID, rh.hit.instID[0], best[i]) && tri_normal) {
-        tri_normal[3 * i] = rh.hit.Ng_x;
-        tri_normal[3 * i + 1] = rh.hit.Ng_y;
-        tri_normal[3 * i + 2] = rh.hit.Ng_z;
+    if (stream) ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+    // Blocks of kStream rays: one rtcIntersect1M per block, or one rtcIntersect1 per ray.
+    RTCRayHit rh[kStream];
+    for (uint32_t base = 0; base < n; base += kStream) {
+      const uint32_t m = std::min(kStream, n - base);
+      for (uint32_t k = 0; k < m; ++k) {
+        fill_ray(rh[k].ray, rays[base + k], best[base + k].t);
+        rh[k].hit.geomID = RTC_INVALID_GEOMETRY_ID;
+        rh[k].hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+        if (!stream) rtcIntersect1(top_, &ctx, &rh[k]);
+      }
+      if (stream) rtcIntersect1M(top_, &ctx, rh, m, sizeof(RTCRayHit));
+      for (uint32_t k = 0; k < m; ++k) {
+        const uint32_t i = base + k;
+        if (rh[k].hit.geomID != RTC_INVALID_GEOMETRY_ID &&
+            reduce(rh[k].ray.tfar, rh[k].hit.geomID, rh[k].hit.primID, rh[k].hit.instID[0], best[i]) &&
+            tri_normal) {
+          tri_normal[3 * i] = rh[k].hit.Ng_x;
+          tri_normal[3 * i + 1] = rh[k].hit.Ng_y;
+          tri_normal[3 * i + 2] = rh[k].hit.Ng_z;
+        }
       }
     }
     return tri_normal != nullptr;
@@ -323,6 +340,23 @@ class EmbreeBackend final : public TraceBackend {
     }
     RTCIntersectContext ctx;
     rtcInitIntersectContext(&ctx);
+    if (desc_.embree_streams == EmbreeStreams::kAlways) {
+      // One rtcOccluded1M per block over the rays not yet occluded. No coherent flag
+      // here (see any_packets).
+      RTCRay r[kStream];
+      uint32_t idx[kStream];
+      for (uint32_t base = 0; base < n; base += kStream) {
+        const uint32_t e = std::min(base + kStream, n);
+        uint32_t m = 0;
+        for (uint32_t i = base; i < e; ++i)
+          if (!hit[i]) fill_ray(r[m], rays[i], rays[i].tmax), idx[m++] = i;
+        if (m == 0) continue;
+        rtcOccluded1M(top_, &ctx, r, m, sizeof(RTCRay));
+        for (uint32_t k = 0; k < m; ++k)
+          if (r[k].tfar < 0.0f) hit[idx[k]] = 1;
+      }
+      return;
+    }
     for (uint32_t i = 0; i < n; ++i) {
       if (hit[i]) continue;
       RTCRay r;

@@ -94,7 +94,7 @@ class LbvhBackend final : public TraceBackend {
     return Status();
   }
 
-  bool closest(const kernels::RayQuery* rays, kernels::RayBest* best, float*, uint32_t n) const override {
+  bool closest(const kernels::RayQuery* rays, kernels::RayBest* best, float*, uint32_t n, bool) const override {
     if (tri_tree_.size() != 0) kernels::ray_closest_triangles(tri_tree_.tree(), tri_rec_.data(), rays, best, {0, n});
     if (dyn_tree_.size() != 0)
       kernels::ray_closest_shapes(dyn_tree_.tree(), dyn_rec_.data(), first_capsule_, rays, best, {0, n});

@@ -281,7 +281,7 @@ class RaySceneImpl {
   // invalid one; describe(i) then gives the message of the first invalid one (off the
   // hot path).
   template <class Fill, class Describe>
-  Status closest(size_t n, const char* what, Fill&& fill, Describe&& describe, RayHit* out) const {
+  Status closest(size_t n, const char* what, bool coherent, Fill&& fill, Describe&& describe, RayHit* out) const {
     if (pending()) return api_error(StatusCode::kInvalidArgument, "RayScene: geometry changed since the last commit(); call commit() before querying");
     if (n > 0xffffffffu) return api_error(StatusCode::kInvalidArgument, std::string("too many ") + what + "s in one call (at most 2^32 - 1)");
     const uint32_t chunks = host::chunk_count(n, kRayGrain);
@@ -296,7 +296,7 @@ class RaySceneImpl {
         return;
       }
       for (uint32_t k = 0; k < m; ++k) best[k] = {q[k].tmax, kernels::kRayHitNone, 0};
-      const bool have_ng = backend && backend->closest(q, best, ng, m);
+      const bool have_ng = backend && backend->closest(q, best, ng, m, coherent);
       kernels::ray_closest_planes(data.planes.data(), static_cast<uint32_t>(data.planes.size()), q, best, {0, m});
       for (uint32_t k = 0; k < m; ++k) finish(q[k], best[k], have_ng ? ng + 3 * k : nullptr, &out[b + k]);
     });
@@ -317,6 +317,13 @@ Status RayScene::create(const RaySceneDesc& desc, std::unique_ptr<RayScene>* out
   if (desc.packet_width != 1 && desc.packet_width != 4 && desc.packet_width != 8 && desc.packet_width != 16)
     return Status(StatusCode::kInvalidArgument,
                   "RaySceneDesc: packet_width must be 1, 4, 8 or 16, got " + std::to_string(desc.packet_width));
+  if (desc.embree_streams != EmbreeStreams::kAuto && desc.embree_streams != EmbreeStreams::kNever &&
+      desc.embree_streams != EmbreeStreams::kAlways)
+    return Status(StatusCode::kInvalidArgument, "RaySceneDesc: embree_streams must be kAuto, kNever or kAlways, got " +
+                                                    std::to_string(static_cast<int>(desc.embree_streams)));
+  if (desc.embree_streams == EmbreeStreams::kAlways && desc.packet_width != 1)
+    return Status(StatusCode::kInvalidArgument, "RaySceneDesc: embree_streams kAlways needs packet_width 1, got " +
+                                                    std::to_string(desc.packet_width));
   if (!backend_available(desc.backend_threads))
     return Status(StatusCode::kUnsupported, std::string("RaySceneDesc: thread backend ") +
                                                 to_string(desc.backend_threads) + " is not built in");
@@ -623,7 +630,7 @@ Status RayScene::closest_hit(std::span<const Ray> rays, std::span<RayHit> out) c
     return Status(StatusCode::kSizeMismatch, "closest_hit: out has " + std::to_string(out.size()) + " entries for " +
                                                  std::to_string(rays.size()) + " rays");
   return impl_->closest(
-      rays.size(), "ray",
+      rays.size(), "ray", false,
       [&](uint32_t b, uint32_t m, kernels::RayQuery* q) {
         for (uint32_t k = 0; k < m; ++k)
           if (!convert(rays[b + k], &q[k])) return k;
@@ -679,7 +686,7 @@ Status RayScene::pick(const Camera& camera, std::span<const Eigen::Vector2f> scr
   CameraBasis basis;
   if (std::string e = camera_basis(camera, &basis); !e.empty()) return Status(StatusCode::kInvalidArgument, "pick: " + e);
   return impl_->closest(
-      screen.size(), "screen point",
+      screen.size(), "screen point", true,
       [&](uint32_t b, uint32_t m, kernels::RayQuery* q) {
         for (uint32_t k = 0; k < m; ++k)
           if (!finite2(screen[b + k])) return k;

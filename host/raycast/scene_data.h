@@ -82,8 +82,9 @@ class TraceBackend {
   /// geometric normal of the triangles it hits (Embree's Ng) may store it, unnormalised,
   /// at tri_normal[3 * i] for each ray i whose best it set to a triangle, and returns
   /// true; false means the caller computes triangle normals from the vertices.
-  virtual bool closest(const kernels::RayQuery* rays, kernels::RayBest* best, float* tri_normal,
-                       uint32_t n) const = 0;
+  /// coherent: the rays are known to be coherent (a camera's), a hint.
+  virtual bool closest(const kernels::RayQuery* rays, kernels::RayBest* best, float* tri_normal, uint32_t n,
+                       bool coherent) const = 0;
   virtual void any(const kernels::RayQuery* rays, uint8_t* hit, uint32_t n) const = 0;
   /// Threads of the backend's own parallel work (Embree's builders).
   virtual void set_threads(uint32_t) {}

@@ -63,6 +63,16 @@ enum class EmbreeSpheres : int {
   kBuiltin = 1,
 };
 
+/// Whether Embree traces each chunk of rays as one stream (rtcIntersect1M /
+/// rtcOccluded1M, coherent flag) instead of one rtcIntersect1 / rtcOccluded1 per ray.
+/// Streams pay for coherent rays on triangle meshes (camera picking on a level) and
+/// lose badly with user geometry (spheres, capsules, posed shapes); docs/raycast.md.
+enum class EmbreeStreams : int {
+  kAuto = 0,    ///< pick() when the scene's Embree geometry is triangle meshes only
+  kNever = 1,   ///< one call per ray (or per packet)
+  kAlways = 2,  ///< every query: for coherent rays of your own
+};
+
 /// Settings of a RayScene.
 struct RaySceneDesc {
   RayBackend backend = RayBackend::kEmbree;
@@ -71,6 +81,9 @@ struct RaySceneDesc {
   /// Embree: rays per rtcIntersectN/rtcOccludedN call: 1, 4, 8 or 16 (packets help
   /// coherent rays such as a camera grid; measured in docs/raycast.md).
   uint32_t packet_width = 1;
+  /// Embree: streams of rays (see EmbreeStreams); only with packet_width 1 (kAuto
+  /// defers to packets, kAlways with packets is an error).
+  EmbreeStreams embree_streams = EmbreeStreams::kAuto;
   /// Embree RTC_SCENE_FLAG_ROBUST on the static meshes: watertight edges, a bit slower.
   bool robust = true;
   Backend backend_threads = Backend::kDefault;  ///< thread runtime of the batched queries

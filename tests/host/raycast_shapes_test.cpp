@@ -258,6 +258,8 @@ std::vector<Config> configs() {
   d.packet_width = 1;
   d.dynamic_update = DynamicUpdate::kRebuildMedium;
   c.push_back({"embree_rebuild", d});
+  d.embree_streams = EmbreeStreams::kAlways;  // user geometry through streams
+  c.push_back({"embree_stream", d});
   return c;
 }
 

@@ -40,6 +40,9 @@ std::vector<Config> configs() {
   c.push_back({"embree_packet8_fast", d});
   d.packet_width = 1;
   c.push_back({"embree_fast", d});
+  d.robust = true;
+  d.embree_streams = EmbreeStreams::kAlways;  // streams of 64 rays for every query
+  c.push_back({"embree_stream", d});
   return c;
 }
 
@@ -548,6 +551,39 @@ TEST(Raycast, PickMatchesCameraRays) {
   }
 }
 
+TEST(Raycast, PickStreamsOnMeshOnlyScenes) {
+  // kAuto traces pick() as streams when the Embree geometry is meshes only: the hits
+  // still follow the reference and name the same triangles as one call per ray.
+  TestGeometry g = random_geometry(43, 0.0f, 0, 0);
+  RaySceneDesc d;
+  auto streamed = make_scene(d);
+  d.embree_streams = EmbreeStreams::kNever;
+  auto single = make_scene(d);
+  g.load(*streamed);
+  g.load(*single);
+  Camera cam;
+  cam.position = Eigen::Vector3f(-3, 6, 20);
+  cam.forward = Eigen::Vector3f(0.1f, -0.3f, -1);
+  std::vector<Eigen::Vector2f> screen;
+  for (int j = 0; j < 48; ++j)
+    for (int i = 0; i < 64; ++i) screen.emplace_back((static_cast<float>(i) + 0.5f) / 64.0f, (static_cast<float>(j) + 0.5f) / 48.0f);
+  std::vector<RayHit> a(screen.size()), b(screen.size());
+  IMPACT_ASSERT_OK(streamed->pick(cam, screen, ~0u, a));
+  IMPACT_ASSERT_OK(single->pick(cam, screen, ~0u, b));
+  std::vector<Ray> rays(screen.size());
+  IMPACT_ASSERT_OK(camera_rays(cam, screen, ~0u, rays));
+  expect_matches_reference(g, rays, a, "streamed pick");
+  size_t hits = 0;
+  for (size_t i = 0; i < a.size(); ++i) {
+    hits += a[i].hit();
+    ASSERT_EQ(a[i].kind, b[i].kind) << i;
+    if (!a[i].hit()) continue;
+    EXPECT_EQ(a[i].id, b[i].id) << i;
+    EXPECT_NEAR(a[i].t, b[i].t, 1e-5f * b[i].t) << i;
+  }
+  EXPECT_GT(hits, screen.size() / 2);
+}
+
 TEST(Raycast, SyncSpheresFromWorldReportsBodies) {
   for (const Config& c : configs()) {
     auto world = make_world(zero_gravity_desc());
@@ -654,6 +690,12 @@ TEST(Raycast, BadInputIsRejectedNamingIndexAndField) {
   d.packet_width = 3;
   std::unique_ptr<RayScene> s;
   EXPECT_TRUE(IsError(RayScene::create(d, &s), StatusCode::kInvalidArgument, {"packet_width"}));
+  d.packet_width = 8;
+  d.embree_streams = EmbreeStreams::kAlways;
+  EXPECT_TRUE(IsError(RayScene::create(d, &s), StatusCode::kInvalidArgument, {"embree_streams", "packet_width 1"}));
+  d.packet_width = 1;
+  d.embree_streams = static_cast<EmbreeStreams>(7);
+  EXPECT_TRUE(IsError(RayScene::create(d, &s), StatusCode::kInvalidArgument, {"embree_streams"}));
 }
 
 }  // namespace
