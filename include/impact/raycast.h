@@ -211,7 +211,8 @@ class RayScene {
   /// 1 per segment that something blocks, else 0; out.size() == segments.size().
   Status any_hit(std::span<const Segment> segments, std::span<uint8_t> out) const;
   /// Picking: rays from the camera through screen points in [0,1]^2 ((0,0) top left,
-  /// x right, y down), then closest hits.
+  /// x right, y down; exactly camera_rays' rays), then closest hits (as Embree streams
+  /// under EmbreeStreams::kAuto on mesh-only scenes).
   Status pick(const Camera& camera, std::span<const Eigen::Vector2f> screen, uint32_t mask,
               std::span<RayHit> out) const;
 
