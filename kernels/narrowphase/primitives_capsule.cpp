@@ -7,9 +7,12 @@
 //  capsule-capsule  closest points of the two core segments (Ericson 5.1.9, with a
 //                   parallel rule: middle of the overlap); near-parallel axes whose
 //                   projections overlap give the 2 ends of the overlap interval, so a
-//                   capsule lying on another rests on two points. Axes that meet:
-//                   n = ua x ub (the minimum translation), parallel: a perpendicular.
-//  capsule-box      in the box frame. The core's distance to the box is convex along
+//                   capsule lying on another rests on two points. Closest points
+//                   inside both segments (|ua x ub| > 1e-3): n = +-ua x ub, exact
+//                   where qb - qa is rounding noise (cores crossing); axes that meet
+//                   and are parallel: a perpendicular.
+//  capsule-box      in the box frame. (A core outside by less than its rounding
+//                   takes the SAT path below: same depth, a well-defined axis.) The core's distance to the box is convex along
 //                   the segment and its derivative is piecewise linear with kinks
 //                   where the segment crosses the box's slab planes: the minimiser is
 //                   found exactly by evaluating the derivative at those 6 kinks and
@@ -138,10 +141,23 @@ IMPACT_INLINE void capsule_capsule_block(const LeafSoA& a, const LeafSoA& b, con
   const V3<F> c = cross(ua, ub);
   const F c2 = length_sq(c);
   F cl;
-  V3<F> fb = normalize_or(c, any_perpendicular(ua), cl);
-  fb = select(dot(fb, cb) < zero, -fb, fb);
+  const V3<F> cu = normalize_or(c, any_perpendicular(ua), cl);
+  const V3<F> fb = select(dot(cu, cb) < zero, -cu, cu);
+  const V3<F> dq = qb - qa;
   F dist;
-  const V3<F> n = normalize_or(qb - qa, fb, dist);
+  V3<F> n = normalize_or(dq, fb, dist);
+  // Closest points inside both segments: qb - qa is along ua x ub exactly, so take that
+  // direction (oriented by qb - qa, or towards B where qb - qa is rounding noise): from
+  // qb - qa alone it turns by rounding / |qb - qa| as the cores come to cross.
+  {
+    const F dc = dot(cu, dq);
+    const F noise = F(kEdgeRound) * (ha + hb + abs(cb.x) + abs(cb.y) + abs(cb.z));
+    // |ua x ub| > 1e-3: its direction is good to ~1e-4 rad (float rounding / |ua x ub|)
+    const auto inner = (abs(s) < ha) & (abs(t) < hb) & (c2 > F(1e-6f));
+    const V3<F> nc = select(abs(dc) > noise, select(dc < zero, -cu, cu), fb);
+    n = select(inner, nc, n);
+    dist = select(inner, abs(dc), dist);
+  }
   const F rs = ra + rb;
   const F depth = rs - dist;
   const V3<F> pf = (qa + qb + n * (ra - rb)) * half;
@@ -244,7 +260,11 @@ IMPACT_INLINE void capsule_box_block(const LeafSoA& a, const LeafSoA& b, const M
   const V3<F> qs{clamp(ps.x, -e.x, e.x), clamp(ps.y, -e.y, e.y), clamp(ps.z, -e.z, e.z)};
   const V3<F> v = qs - ps;
   const F v2 = length_sq(v);
-  const Mask shallow = v2 >= F(kTinySq);
+  // Core outside by more than rounding: n along the closest points. Closer than that,
+  // their direction is noise; the SAT below gives the same depth (r - distance) there
+  // with a well-defined axis.
+  const F noise = F(kEdgeRound) * (ra + ha + e.x + e.y + e.z + abs(c.x) + abs(c.y) + abs(c.z));
+  const Mask shallow = (v2 >= F(kTinySq)) & (v2 > noise * noise);
   const F dist = sqrt(v2);
   const V3<F> n_sh = v * (one / select(shallow, dist, one));
 
