@@ -83,7 +83,7 @@ Status LbvhBroadPhase::rebuild(const Executor& exec, kernels::AabbSoA boxes, ker
   scratch(leaf_parent_, n);
   if (n >= 2) {
     const kernels::LbvhTopology topo{scratch(nodes_, n - 1), scratch(internal_parent_, n - 1),
-                                     leaf_parent_.data(), scratch(counters_, n - 1)};
+                                     leaf_parent_.data()};
     exec.for_each_chunk(n - 1, kNodeGrain, [&](uint32_t b, uint32_t e, uint32_t) {
       kernels::lbvh_build(keys, shift, n, topo, {b, e});
     });
@@ -104,13 +104,15 @@ void LbvhBroadPhase::refit_bounds(const Executor& exec, kernels::AabbSoA boxes,
                                 leaf_parent_.data()};
   const kernels::LbvhRefitOut out{n >= 2 ? nodes_.data() : nullptr,
                                   leaves_.data(),
-                                  n >= 2 ? counters_.data() : nullptr,
                                   filtered_ ? scratch(layer_, n) : nullptr,
                                   filtered_ ? scratch(mask_, n) : nullptr,
                                   filtered_ ? scratch(static_, n) : nullptr};
   exec.for_each_chunk(n, kNodeGrain, [&](uint32_t b, uint32_t e, uint32_t) {
     kernels::lbvh_refit(boxes, filter, in, out, n, {b, e});
   });
+  // Nodes across chunk seams, chunk by chunk in order (O(depth) each).
+  for (uint32_t b = kNodeGrain; b < n; b += kNodeGrain)
+    kernels::lbvh_refit_seam(in, out, n, {b, std::min(n, b + kNodeGrain)});
 }
 
 Status LbvhBroadPhase::traverse(const Executor& exec, Buffer<kernels::Pair>* out) {

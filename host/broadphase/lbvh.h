@@ -4,8 +4,8 @@
 // filter, in an order that does not depend on the thread count.
 //
 // Passes of a rebuild: bounds summary -> Morton keys (30 or 63 bit) -> radix sort ->
-// hierarchy (Karras 2012, one task per internal node) -> bottom-up refit (integer
-// visit counters, exact min/max unions) -> per-leaf self traversal into per-chunk
+// hierarchy (Karras 2012, one task per internal node) -> bottom-up refit (in leaf
+// order per chunk, then the chunk seams; exact min/max unions) -> per-leaf self traversal into per-chunk
 // buffers concatenated in chunk order (chunked_output). A refit reuses the sorted
 // order and the hierarchy and only reruns the last two passes.
 // See docs/lbvh.md for the rules (code width, refit policy) and the pair order.
@@ -120,7 +120,7 @@ class LbvhBroadPhase {
   Buffer<uint32_t> leaf_index_;
   Buffer<kernels::LbvhNode> nodes_;
   Buffer<kernels::SortedBox> leaves_;
-  Buffer<uint32_t> internal_parent_, leaf_parent_, counters_;
+  Buffer<uint32_t> internal_parent_, leaf_parent_;
   Buffer<uint32_t> layer_, mask_;
   Buffer<uint8_t> static_;
   Buffer<uint64_t> chunk_offsets_;

@@ -16,6 +16,7 @@
 #include "host/broadphase/lbvh.h"
 #include "host/parallel.h"
 #include "kernels/bvh/lbvh_build.h"
+#include "kernels/bvh/lbvh_refit.h"
 #include "kernels/bvh/lbvh_traverse.h"
 #include "kernels/bvh/morton.h"
 #include "support/aabb_reference.h"
@@ -357,6 +358,51 @@ TEST(Lbvh, RefitHundredFrames) {
   IMPACT_ASSERT_OK(fresh.find_pairs(serial(), soa(b), filter_of(b), n, &out));
   EXPECT_GT(aged, fresh.sah_cost(serial()));
   EXPECT_GT(aged, sah0);
+}
+
+// lbvh_refit over irregular chunkings (1-leaf chunks, small, random sizes, one chunk),
+// each followed by the seam passes in order, gives the same node bytes as the host's
+// refit, frame after frame (stale seam marks of one chunking never leak into the next).
+TEST(Lbvh, RefitChunkingsAndSeamsGiveTheSameNodes) {
+  for (const bool clustered : {false, true}) {
+    const uint32_t n = 3001;
+    Boxes b = clustered ? clustered_boxes(n, 71) : uniform_boxes(n, 71, 0.2f, 0.6f);
+    std::mt19937 rng(72);
+    const float side = 2.2f * 0.6f * std::cbrt(static_cast<float>(n));
+    LbvhBroadPhase bp;
+    Buffer<Pair> out;
+    IMPACT_ASSERT_OK(bp.find_pairs(serial(), soa(b), filter_of(b), n, &out));
+    std::vector<kernels::LbvhNode> nodes(bp.view().nodes, bp.view().nodes + (n - 1));
+    std::vector<kernels::SortedBox> leaves(n);
+    const kernels::LbvhRefitIn in{bp.leaf_index(), bp.internal_parent(), bp.leaf_parent()};
+    const kernels::LbvhRefitOut kout{nodes.data(), leaves.data(), nullptr, nullptr, nullptr};
+    for (int frame = 0; frame < 6; ++frame) {
+      move(b, rng, side);
+      IMPACT_ASSERT_OK(bp.refit(serial(), soa(b), filter_of(b), n, &out));
+      const kernels::LbvhView v = bp.view();
+      // Chunk starts: every leaf, every 7th, random, one chunk.
+      std::vector<std::vector<uint32_t>> cuts(4);
+      for (uint32_t s = 0; s < n; ++s) cuts[0].push_back(s);
+      for (uint32_t s = 0; s < n; s += 7) cuts[1].push_back(s);
+      for (uint32_t s = 0; s < n; s += 1 + static_cast<uint32_t>(rng() % 200)) cuts[2].push_back(s);
+      cuts[3].push_back(0);
+      for (const std::vector<uint32_t>& c : cuts) {
+        SCOPED_TRACE("clustered=" + std::to_string(clustered) + " frame " + std::to_string(frame) +
+                     " chunks " + std::to_string(c.size()));
+        // Chunks in reverse order: the seams must not depend on the chunks' order.
+        for (size_t k = c.size(); k-- > 0;) {
+          const uint32_t e = k + 1 < c.size() ? c[k + 1] : n;
+          kernels::lbvh_refit(soa(b), kernels::PairFilter{}, in, kout, n, {c[k], e});
+        }
+        for (size_t k = 1; k < c.size(); ++k) {
+          const uint32_t e = k + 1 < c.size() ? c[k + 1] : n;
+          kernels::lbvh_refit_seam(in, kout, n, {c[k], e});
+        }
+        ASSERT_EQ(0, std::memcmp(nodes.data(), v.nodes, nodes.size() * sizeof(kernels::LbvhNode)));
+        ASSERT_EQ(0, std::memcmp(leaves.data(), v.leaves, n * sizeof(kernels::SortedBox)));
+      }
+    }
+  }
 }
 
 TEST(Lbvh, RefitKnobRebuildsWhenTreeDegrades) {
