@@ -42,13 +42,16 @@ IMPACT_INLINE Bounds child_bounds(const LbvhRefitOut& out, uint32_t split, uint3
 
 }  // namespace
 
+void lbvh_pack_boxes(AabbSoA boxes, SortedBox* IMPACT_RESTRICT out, Range r) {
+  for (uint32_t i = r.begin; i < r.end; ++i) out[i] = pack(boxes, i);
+}
+
 void lbvh_refit(AabbSoA boxes, PairFilter filter, LbvhRefitIn in, LbvhRefitOut out, uint32_t n,
                 Range r) {
   const uint32_t b = r.begin;
   for (uint32_t s = r.begin; s < r.end; ++s) {
     const uint32_t i = in.leaf_index[s];
-    const SortedBox leaf{boxes.min_x[i], boxes.min_y[i], boxes.min_z[i], i,
-                         boxes.max_x[i], boxes.max_y[i], boxes.max_z[i], 0u};
+    const SortedBox leaf = in.packed ? in.packed[i] : pack(boxes, i);
     out.leaves[s] = leaf;
     if (filter.layer) {
       out.layer[s] = filter.layer[i];

@@ -20,8 +20,10 @@
 // Determinism: the union of boxes is exact (min/max of floats, no rounding), and
 //   every node is the union of the same two final children whatever the chunking or
 //   thread count, so the node bytes never depend on either. No float atomics.
-// Inputs: boxes (SoA, original order, finite), filter (all null or all set),
-//   leaf_index[n] (sorted leaf -> box), topology from lbvh_build.
+// Inputs: boxes (SoA, original order, finite; or the same boxes packed as records by
+//   lbvh_pack_boxes: the gather is random access, one record is one cache miss where
+//   the SoA arrays cost six), filter (all null or all set), leaf_index[n] (sorted leaf
+//   -> box), topology from lbvh_build.
 // Outputs: leaves[0, n) (SortedBox with the original index), nodes[0, n - 1) bounds,
 //   sorted filter arrays (when filtered).
 // Preconditions: lbvh_refit runs once on every chunk of one fixed partition of [0, n)
@@ -43,11 +45,20 @@
 
 namespace impact::kernels {
 
+/// Box i of a SoA as a SortedBox record (index i).
+IMPACT_INLINE SortedBox pack(AabbSoA boxes, uint32_t i) {
+  return SortedBox{boxes.min_x[i], boxes.min_y[i], boxes.min_z[i], i,
+                   boxes.max_x[i], boxes.max_y[i], boxes.max_z[i], 0u};
+}
+
 /// What the refit reads besides the boxes.
 struct LbvhRefitIn {
   const uint32_t* leaf_index;       ///< n: sorted leaf -> original box index
   const uint32_t* internal_parent;  ///< n - 1
   const uint32_t* leaf_parent;      ///< n
+  /// n: the boxes as records in original order (lbvh_pack_boxes), or null to gather
+  /// from the SoA arrays (six random reads per leaf instead of one).
+  const SortedBox* packed;
 };
 
 /// What the refit writes.
@@ -58,6 +69,10 @@ struct LbvhRefitOut {
   uint32_t* mask;
   uint8_t* is_static;
 };
+
+/// out[i] = box i as a SortedBox record (index i), i in r: a sequential pass that lets
+/// the leaf gathers read one 32-byte record per leaf instead of six scattered floats.
+void lbvh_pack_boxes(AabbSoA boxes, SortedBox* IMPACT_RESTRICT out, Range r);
 
 /// Gathers the leaves of chunk r and computes the nodes whose leaf range lies in r.
 void lbvh_refit(AabbSoA boxes, PairFilter filter, LbvhRefitIn in, LbvhRefitOut out, uint32_t n,

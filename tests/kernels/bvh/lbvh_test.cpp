@@ -16,6 +16,7 @@
 #include "host/broadphase/lbvh.h"
 #include "host/parallel.h"
 #include "kernels/bvh/lbvh_build.h"
+#include "kernels/bvh/lbvh_build_fused.h"
 #include "kernels/bvh/lbvh_refit.h"
 #include "kernels/bvh/lbvh_traverse.h"
 #include "kernels/bvh/morton.h"
@@ -374,7 +375,7 @@ TEST(Lbvh, RefitChunkingsAndSeamsGiveTheSameNodes) {
     IMPACT_ASSERT_OK(bp.find_pairs(serial(), soa(b), filter_of(b), n, &out));
     std::vector<kernels::LbvhNode> nodes(bp.view().nodes, bp.view().nodes + (n - 1));
     std::vector<kernels::SortedBox> leaves(n);
-    const kernels::LbvhRefitIn in{bp.leaf_index(), bp.internal_parent(), bp.leaf_parent()};
+    const kernels::LbvhRefitIn in{bp.leaf_index(), bp.internal_parent(), bp.leaf_parent(), nullptr};
     const kernels::LbvhRefitOut kout{nodes.data(), leaves.data(), nullptr, nullptr, nullptr};
     for (int frame = 0; frame < 6; ++frame) {
       move(b, rng, side);
@@ -400,6 +401,66 @@ TEST(Lbvh, RefitChunkingsAndSeamsGiveTheSameNodes) {
         }
         ASSERT_EQ(0, std::memcmp(nodes.data(), v.nodes, nodes.size() * sizeof(kernels::LbvhNode)));
         ASSERT_EQ(0, std::memcmp(leaves.data(), v.leaves, n * sizeof(kernels::SortedBox)));
+      }
+    }
+  }
+}
+
+// The one-pass build (lbvh_build_fused) against the Karras build (lbvh_build) plus
+// lbvh_refit over the same sorted codes: the same node bytes, parents and leaves, for
+// every chunking (1-leaf chunks, 7, random sizes, one chunk; packed records or SoA).
+// Codes: random, many duplicates, all equal (ties broken by position), n = 2, 3.
+TEST(Lbvh, FusedBuildEqualsKarrasBuildPlusRefit) {
+  std::mt19937 rng(81);
+  for (const uint32_t n : {2u, 3u, 5u, 64u, 1000u, 4099u}) {
+    for (int kind = 0; kind < 3; ++kind) {
+      const Boxes b = uniform_boxes(n, 82 + static_cast<uint32_t>(kind), 0.2f, 0.6f);
+      // Sorted codes: kind 0 random 30-bit (shift 32), 1 few distinct values, 2 all equal.
+      std::vector<uint64_t> codes(n);
+      for (uint32_t s = 0; s < n; ++s) {
+        const uint64_t c = kind == 0 ? rng() & 0x3fffffffu : kind == 1 ? rng() % 5 : 7;
+        codes[s] = c << 32;
+      }
+      std::sort(codes.begin(), codes.end());
+      std::vector<uint32_t> leaf_index(n);
+      for (uint32_t s = 0; s < n; ++s) leaf_index[s] = s;
+      std::shuffle(leaf_index.begin(), leaf_index.end(), rng);
+      // Reference: Karras + refit in one chunk.
+      std::vector<kernels::LbvhNode> ref_nodes(n - 1);
+      std::vector<uint32_t> ref_ip(n - 1), ref_lp(n);
+      std::vector<kernels::SortedBox> ref_leaves(n);
+      kernels::lbvh_build(codes.data(), 32, n, {ref_nodes.data(), ref_ip.data(), ref_lp.data()}, {0, n - 1});
+      const kernels::LbvhRefitIn rin{leaf_index.data(), ref_ip.data(), ref_lp.data(), nullptr};
+      kernels::lbvh_refit(soa(b), kernels::PairFilter{}, rin,
+                          {ref_nodes.data(), ref_leaves.data(), nullptr, nullptr, nullptr}, n, {0, n});
+      std::vector<kernels::SortedBox> packed(n);
+      kernels::lbvh_pack_boxes(soa(b), packed.data(), {0, n});
+      std::vector<std::vector<uint32_t>> cuts(4);
+      for (uint32_t s = 0; s < n; ++s) cuts[0].push_back(s);
+      for (uint32_t s = 0; s < n; s += 7) cuts[1].push_back(s);
+      for (uint32_t s = 0; s < n; s += 1 + static_cast<uint32_t>(rng() % 100)) cuts[2].push_back(s);
+      cuts[3].push_back(0);
+      for (size_t ci = 0; ci < cuts.size(); ++ci) {
+        const std::vector<uint32_t>& c = cuts[ci];
+        SCOPED_TRACE("n=" + std::to_string(n) + " kind=" + std::to_string(kind) + " chunks=" +
+                     std::to_string(c.size()));
+        std::vector<kernels::LbvhNode> nodes(n - 1);
+        std::vector<uint32_t> ip(n - 1, 12345u), lp(n, 12345u), slot(n, 0xffffffffu);
+        std::vector<kernels::SortedBox> leaves(n);
+        std::vector<kernels::LbvhBlocked> blocked(c.size());
+        const kernels::LbvhFusedIn in{codes.data(), 32, leaf_index.data(), ci % 2 ? packed.data() : nullptr};
+        const kernels::LbvhFusedOut out{{nodes.data(), ip.data(), lp.data()},
+                                        {nodes.data(), leaves.data(), nullptr, nullptr, nullptr},
+                                        slot.data()};
+        for (size_t k = c.size(); k-- > 0;)  // chunks in reverse: order must not matter
+          kernels::lbvh_build_fused(soa(b), kernels::PairFilter{}, in, out, n,
+                                    {c[k], k + 1 < c.size() ? c[k + 1] : n}, &blocked[k]);
+        for (size_t k = 1; k < c.size(); ++k)
+          kernels::lbvh_build_fused_seam(in, out, n, {c[k], k + 1 < c.size() ? c[k + 1] : n}, blocked[k]);
+        ASSERT_EQ(0, std::memcmp(nodes.data(), ref_nodes.data(), (n - 1) * sizeof(kernels::LbvhNode)));
+        ASSERT_EQ(ip, ref_ip);
+        ASSERT_EQ(lp, ref_lp);
+        ASSERT_EQ(0, std::memcmp(leaves.data(), ref_leaves.data(), n * sizeof(kernels::SortedBox)));
       }
     }
   }
