@@ -28,9 +28,12 @@ struct alignas(32) Candidate {
 static_assert(sizeof(Candidate) == 32);
 constexpr uint32_t kCandLeaf = 1u << 31;
 
-template <class B>
-IMPACT_INLINE Candidate candidate(const B& b, uint32_t ref) {
-  return Candidate{b.min_x, b.min_y, b.min_z, ref, b.max_x, b.max_y, b.max_z, 0u};
+// pad: the subtree's last sorted leaf.
+IMPACT_INLINE Candidate candidate(const SortedBox& b, uint32_t pos) {
+  return Candidate{b.min_x, b.min_y, b.min_z, pos | kCandLeaf, b.max_x, b.max_y, b.max_z, pos};
+}
+IMPACT_INLINE Candidate candidate(const LbvhNode& b, uint32_t node) {
+  return Candidate{b.min_x, b.min_y, b.min_z, node, b.max_x, b.max_y, b.max_z, b.last};
 }
 
 // The candidate stack of one chunk of consecutive query leaves. For query s it holds,
@@ -44,7 +47,7 @@ struct CandidateStack {
 
   IMPACT_INLINE void push_child(const LbvhView& t, uint32_t ref, bool is_leaf) {
     IMPACT_ASSERT(size < kLbvhMaxDepth + 1);
-    item[size++] = is_leaf ? candidate(t.leaves[ref], ref | kCandLeaf) : candidate(t.nodes[ref], ref);
+    item[size++] = is_leaf ? candidate(t.leaves[ref], ref) : candidate(t.nodes[ref], ref);
   }
   // Walks down from internal node `node` along left children to its first leaf,
   // pushing each right child passed.
@@ -88,7 +91,8 @@ IMPACT_INLINE void advance_stack(const LbvhView& t, CandidateStack& st) {
 // Calls emit(lo, hi) for every pair whose query leaf is s, in the documented order;
 // st holds the candidates of s.
 template <bool kFiltered, class Emit>
-IMPACT_INLINE void visit_leaf(const LbvhView& t, uint32_t s, const CandidateStack& st, Emit&& emit) {
+IMPACT_INLINE void visit_leaf(const LbvhView& t, uint32_t s, const CandidateStack& st, uint32_t lo,
+                              Emit&& emit) {
   const SortedBox q = t.leaves[s];
   uint32_t lq = 0, mq = 0;
   uint8_t sq = 0;
@@ -112,7 +116,7 @@ IMPACT_INLINE void visit_leaf(const LbvhView& t, uint32_t s, const CandidateStac
   // without branches.
   uint32_t hit[kLbvhMaxDepth + 1];
   uint32_t hits = 0;
-  for (uint32_t k = st.size; k-- > 0;) {
+  for (uint32_t k = st.size; k-- > lo;) {
     hit[hits] = k;
     hits += overlaps(q, st.item[k]) ? 1u : 0u;
   }
@@ -144,6 +148,100 @@ IMPACT_INLINE void visit_leaf(const LbvhView& t, uint32_t s, const CandidateStac
   }
 }
 
+// Queries per group and leaf records kept for a group's shared candidates.
+constexpr uint32_t kGroupMax = 16;
+constexpr uint32_t kSharedMax = 256;
+
+// Runs the queries of r in groups. A group is a run [s, end) of queries such that the
+// top stack entries of query s cover exactly the leaves (s, end): the entries below
+// them ("shared") are then candidates of every query of the group, after (below) its
+// own. The shared candidates are explored once, with the union box of the group's
+// leaves, collecting in pre-order every leaf record overlapping that box; each query
+// then handles its own entries as before and filters the collected list by its box.
+// A leaf overlapping a query overlaps the union box, and a pruned subtree holds none,
+// so each query emits exactly its pairs in the documented order. When the list would
+// overflow kSharedMax (crowded scenes), the group's queries run one by one.
+template <bool kFiltered, class Emit>
+IMPACT_INLINE void run_queries(const LbvhView& t, Range r, Emit&& emit) {
+  CandidateStack st;
+  init_stack(t, r.begin, st);
+  SortedBox shared[kSharedMax];  // index: original box; pad: sorted position
+  uint32_t stack[kLbvhMaxDepth + 1];
+  uint32_t s = r.begin;
+  while (s < r.end) {
+    uint32_t end = s + 1, lo = st.size;
+    for (uint32_t j = st.size; j-- > 0;) {
+      const uint32_t last = st.item[j].pad;
+      if (last + 1 - s > kGroupMax || last >= r.end) break;
+      end = last + 1;
+      lo = j;
+    }
+    uint32_t m = 0;
+    bool grouped = end - s > 1;
+    if (grouped) {
+      SortedBox g = t.leaves[s];
+      for (uint32_t u = s + 1; u < end; ++u) {
+        const SortedBox& b = t.leaves[u];
+        g.min_x = b.min_x < g.min_x ? b.min_x : g.min_x;
+        g.min_y = b.min_y < g.min_y ? b.min_y : g.min_y;
+        g.min_z = b.min_z < g.min_z ? b.min_z : g.min_z;
+        g.max_x = b.max_x > g.max_x ? b.max_x : g.max_x;
+        g.max_y = b.max_y > g.max_y ? b.max_y : g.max_y;
+        g.max_z = b.max_z > g.max_z ? b.max_z : g.max_z;
+      }
+      auto add = [&](uint32_t u) {
+        if (!overlaps(g, t.leaves[u])) return;
+        if (m == kSharedMax) {
+          grouped = false;
+          return;
+        }
+        shared[m] = t.leaves[u];
+        shared[m++].pad = u;
+      };
+      for (uint32_t k = lo; k-- > 0 && grouped;) {
+        const Candidate& c = st.item[k];
+        if (!overlaps(g, c)) continue;
+        if (c.ref & kCandLeaf) {
+          add(c.pad);
+          continue;
+        }
+        uint32_t top = 0;
+        stack[top++] = c.ref;
+        while (top > 0 && grouped) {
+          const LbvhNode& nd = t.nodes[stack[--top]];
+          const uint32_t h = nd.split & kLbvhSplitMask;
+          uint32_t push_left = kInvalidBody, push_right = kInvalidBody;
+          if (nd.split & kLbvhLeftLeaf) add(h);
+          else if (overlaps(g, t.nodes[h])) push_left = h;
+          if (nd.split & kLbvhRightLeaf) add(h + 1);
+          else if (overlaps(g, t.nodes[h + 1])) push_right = h + 1;
+          if (push_right != kInvalidBody) stack[top++] = push_right;
+          if (push_left != kInvalidBody) stack[top++] = push_left;
+          IMPACT_ASSERT(top <= kLbvhMaxDepth + 1);
+        }
+      }
+    }
+    for (uint32_t u = s; u < end; ++u) {
+      visit_leaf<kFiltered>(t, u, st, grouped ? lo : 0u, emit);
+      if (grouped) {
+        const SortedBox q = t.leaves[u];
+        for (uint32_t i = 0; i < m; ++i) {
+          if (!overlaps(q, shared[i])) continue;
+          if constexpr (kFiltered) {
+            const uint32_t v = shared[i].pad;
+            if (!pair_allowed(t.layer[u], t.mask[u], t.is_static[u], t.layer[v], t.mask[v], t.is_static[v]))
+              continue;
+          }
+          const uint32_t ib = shared[i].index;
+          emit(q.index < ib ? q.index : ib, q.index < ib ? ib : q.index);
+        }
+      }
+      if (u + 1 < r.end) advance_stack(t, st);
+    }
+    s = end;
+  }
+}
+
 }  // namespace
 
 uint64_t lbvh_find_pairs(const LbvhView& t, Pair* IMPACT_RESTRICT out, uint64_t capacity, Range r) {
@@ -153,19 +251,8 @@ uint64_t lbvh_find_pairs(const LbvhView& t, Pair* IMPACT_RESTRICT out, uint64_t 
     if (k < capacity) out[k] = Pair{a, b};
     ++k;
   };
-  CandidateStack st;
-  init_stack(t, r.begin, st);
-  if (t.layer) {
-    for (uint32_t s = r.begin; s < r.end; ++s) {
-      visit_leaf<true>(t, s, st, emit);
-      if (s + 1 < r.end) advance_stack(t, st);
-    }
-  } else {
-    for (uint32_t s = r.begin; s < r.end; ++s) {
-      visit_leaf<false>(t, s, st, emit);
-      if (s + 1 < r.end) advance_stack(t, st);
-    }
-  }
+  if (t.layer) run_queries<true>(t, r, emit);
+  else run_queries<false>(t, r, emit);
   return k;
 }
 

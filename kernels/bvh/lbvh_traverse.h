@@ -17,6 +17,12 @@
 //   boxes held in L1; each chunk starts with one root-to-leaf walk. 1M uniform boxes,
 //   one thread: 211 -> 159 ms (the leaf-to-root climb it replaces had taken 290 ->
 //   219 ms over a root-down traversal).
+// Query groups: a run of up to 16 consecutive queries whose own stack entries cover
+//   exactly the leaves between them shares every entry below those: the shared
+//   candidates are explored once with the union box of the run's leaves, the leaves
+//   overlapping it collected in pre-order (at most 256; beyond, the run's queries go
+//   one by one), and each query filters that list after its own entries. Same pairs,
+//   same order; 1M uniform: ~6.6 -> ~5.2 node visits per query, ~5% faster.
 // Order (independent of the thread count): by query leaf s (Morton order); within a
 //   query, by ancestor from the leaf upwards; within one sibling subtree, pre-order
 //   depth first: at each internal node popped, its leaf children are emitted (left,
