@@ -4,6 +4,7 @@
 #include <cmath>
 #include <string>
 
+#include "kernels/bvh/lbvh_build_fused.h"
 #include "kernels/bvh/lbvh_refit.h"
 #include "kernels/bvh/lbvh_traverse.h"
 
@@ -78,22 +79,31 @@ Status LbvhBroadPhase::rebuild(const Executor& exec, kernels::AabbSoA boxes, ker
     sorter_.sort_kv(exec, keys, index, n, 0, 63);
   }
 
-  // 3. Hierarchy, one task per internal node.
-  scratch(leaves_, n);
-  scratch(leaf_parent_, n);
-  if (n >= 2) {
-    const kernels::LbvhTopology topo{scratch(nodes_, n - 1), scratch(internal_parent_, n - 1),
-                                     leaf_parent_.data(), scratch(counters_, n - 1)};
-    exec.for_each_chunk(n - 1, kNodeGrain, [&](uint32_t b, uint32_t e, uint32_t) {
-      kernels::lbvh_build(keys, shift, n, topo, {b, e});
-    });
-  } else {
-    leaf_parent_[0] = kernels::kInvalidBody;
-  }
-
-  // 4. Bounds.
-  refit_bounds(exec, boxes, filter);
+  // 3. Hierarchy and bounds in one pass (lbvh_build_fused.h): chunks in parallel, then
+  //    the chunk seams in order.
+  filtered_ = filter.layer != nullptr;
+  const kernels::LbvhFusedIn in{keys, shift, index, pack(exec, boxes, n)};
+  const kernels::LbvhFusedOut out{
+      {n >= 2 ? scratch(nodes_, n - 1) : nullptr, n >= 2 ? scratch(internal_parent_, n - 1) : nullptr,
+       scratch(leaf_parent_, n)},
+      {n >= 2 ? nodes_.data() : nullptr, scratch(leaves_, n), filtered_ ? scratch(layer_, n) : nullptr,
+       filtered_ ? scratch(mask_, n) : nullptr, filtered_ ? scratch(static_, n) : nullptr},
+      n >= 2 ? scratch(slot_, n) : nullptr};
+  kernels::LbvhBlocked* blocked = scratch(blocked_, chunk_count(n, kNodeGrain));
+  exec.for_each_chunk(n, kNodeGrain, [&](uint32_t b, uint32_t e, uint32_t c) {
+    kernels::lbvh_build_fused(boxes, filter, in, out, n, {b, e}, &blocked[c]);
+  });
+  for (uint32_t c = 1, b = kNodeGrain; b < n; ++c, b += kNodeGrain)
+    kernels::lbvh_build_fused_seam(in, out, n, {b, std::min(n, b + kNodeGrain)}, blocked[c]);
   return Status();
+}
+
+const kernels::SortedBox* LbvhBroadPhase::pack(const Executor& exec, kernels::AabbSoA boxes, uint32_t n) {
+  kernels::SortedBox* packed = scratch(packed_, n);
+  exec.for_each_chunk(n, kKeyGrain, [&](uint32_t b, uint32_t e, uint32_t) {
+    kernels::lbvh_pack_boxes(boxes, packed, {b, e});
+  });
+  return packed;
 }
 
 void LbvhBroadPhase::refit_bounds(const Executor& exec, kernels::AabbSoA boxes,
@@ -101,16 +111,18 @@ void LbvhBroadPhase::refit_bounds(const Executor& exec, kernels::AabbSoA boxes,
   const uint32_t n = info_.leaves;
   filtered_ = filter.layer != nullptr;
   const kernels::LbvhRefitIn in{leaf_index_.data(), n >= 2 ? internal_parent_.data() : nullptr,
-                                leaf_parent_.data()};
+                                leaf_parent_.data(), pack(exec, boxes, n)};
   const kernels::LbvhRefitOut out{n >= 2 ? nodes_.data() : nullptr,
                                   leaves_.data(),
-                                  n >= 2 ? counters_.data() : nullptr,
                                   filtered_ ? scratch(layer_, n) : nullptr,
                                   filtered_ ? scratch(mask_, n) : nullptr,
                                   filtered_ ? scratch(static_, n) : nullptr};
   exec.for_each_chunk(n, kNodeGrain, [&](uint32_t b, uint32_t e, uint32_t) {
     kernels::lbvh_refit(boxes, filter, in, out, n, {b, e});
   });
+  // Nodes across chunk seams, chunk by chunk in order (O(depth) each).
+  for (uint32_t b = kNodeGrain; b < n; b += kNodeGrain)
+    kernels::lbvh_refit_seam(in, out, n, {b, std::min(n, b + kNodeGrain)});
 }
 
 Status LbvhBroadPhase::traverse(const Executor& exec, Buffer<kernels::Pair>* out) {

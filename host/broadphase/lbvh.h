@@ -4,8 +4,8 @@
 // filter, in an order that does not depend on the thread count.
 //
 // Passes of a rebuild: bounds summary -> Morton keys (30 or 63 bit) -> radix sort ->
-// hierarchy (Karras 2012, one task per internal node) -> bottom-up refit (integer
-// visit counters, exact min/max unions) -> per-leaf self traversal into per-chunk
+// hierarchy and bounds in one bottom-up pass (lbvh_build_fused.h: Apetrei 2014 in
+// leaf order per chunk, then the chunk seams; exact min/max unions) -> per-leaf self traversal into per-chunk
 // buffers concatenated in chunk order (chunked_output). A refit reuses the sorted
 // order and the hierarchy and only reruns the last two passes.
 // See docs/lbvh.md for the rules (code width, refit policy) and the pair order.
@@ -23,6 +23,7 @@
 #include "kernels/broadphase/bounds.h"
 #include "kernels/broadphase/grid.h"
 #include "kernels/bvh/lbvh_build.h"
+#include "kernels/bvh/lbvh_build_fused.h"
 #include "kernels/bvh/lbvh_traverse.h"
 #include "kernels/bvh/morton.h"
 
@@ -110,6 +111,8 @@ class LbvhBroadPhase {
                  const kernels::BoundsSummary* summary);
   Status traverse(const Executor& exec, Buffer<kernels::Pair>* out);
   void refit_bounds(const Executor& exec, kernels::AabbSoA boxes, kernels::PairFilter filter);
+  /// The boxes as records in original order (one random read per leaf in the gathers).
+  const kernels::SortedBox* pack(const Executor& exec, kernels::AabbSoA boxes, uint32_t n);
 
   LbvhOptions options_;
   LbvhInfo info_;
@@ -119,8 +122,9 @@ class LbvhBroadPhase {
   Buffer<uint64_t> keys_;
   Buffer<uint32_t> leaf_index_;
   Buffer<kernels::LbvhNode> nodes_;
-  Buffer<kernels::SortedBox> leaves_;
-  Buffer<uint32_t> internal_parent_, leaf_parent_, counters_;
+  Buffer<kernels::SortedBox> leaves_, packed_;
+  Buffer<uint32_t> internal_parent_, leaf_parent_, slot_;
+  Buffer<kernels::LbvhBlocked> blocked_;
   Buffer<uint32_t> layer_, mask_;
   Buffer<uint8_t> static_;
   Buffer<uint64_t> chunk_offsets_;

@@ -52,7 +52,6 @@ void lbvh_build(const uint64_t* IMPACT_RESTRICT codes, uint32_t shift, uint32_t 
     out.nodes[node].last = static_cast<uint32_t>(last);
     (left_leaf ? out.leaf_parent : out.internal_parent)[g] = node;
     (right_leaf ? out.leaf_parent : out.internal_parent)[g + 1] = node;
-    out.refit_counter[node] = 0;
     if (node == 0) out.internal_parent[0] = kInvalidBody;
   }
 }

@@ -26,8 +26,7 @@
 // Inputs: codes[0, n) sorted ascending by (codes[s] >> code_shift, s).
 // Outputs, per internal node i in r: nodes[i].split/.last, the parent entries of its two
 //   children (each child has one parent, so each entry is written by one node),
-//   internal_parent[0] = kInvalidBody by the range holding node 0, and
-//   refit_counter[i] = 0 (lbvh_refit's visit counters).
+//   and internal_parent[0] = kInvalidBody by the range holding node 0.
 // Preconditions: 2 <= n < 2^30 (the flags use the top two bits of split).
 // Cost: O(log n) code reads per internal node (exponential then binary search).
 // Method: T. Karras, "Maximizing Parallelism in the Construction of BVHs, Octrees, and
@@ -55,12 +54,11 @@ inline constexpr uint32_t kLbvhMaxLeaves = (1u << 30) - 1;
 /// Bound on internal nodes on any root-to-leaf path (see "Depth" above).
 inline constexpr uint32_t kLbvhMaxDepth = 96;
 
-/// Arrays the build writes (n - 1 nodes, counters and internal parents; n leaf parents).
+/// Arrays the build writes (n - 1 nodes and internal parents; n leaf parents).
 struct LbvhTopology {
   LbvhNode* nodes;
   uint32_t* internal_parent;
   uint32_t* leaf_parent;
-  uint32_t* refit_counter;
 };
 
 /// Builds internal nodes r (a sub-range of [0, n - 1)).

@@ -1,7 +1,7 @@
 #include "kernels/bvh/lbvh_refit.h"
 
 #include <algorithm>
-#include <atomic>
+#include <bit>
 
 namespace impact::kernels {
 namespace {
@@ -11,46 +11,93 @@ struct Bounds {
   float hi[3];
 };
 
-IMPACT_INLINE Bounds bounds_of(const SortedBox& b) {
+// min_x of a node marked "straddles a chunk seam, computed by lbvh_refit_seam" (a
+// quiet NaN: never a valid bound).
+constexpr uint32_t kSeamMark = 0x7fc5ea11u;
+
+template <class B>
+IMPACT_INLINE Bounds bounds_of(const B& b) {
   return {{b.min_x, b.min_y, b.min_z}, {b.max_x, b.max_y, b.max_z}};
 }
-IMPACT_INLINE Bounds bounds_of(const LbvhNode& b) {
-  return {{b.min_x, b.min_y, b.min_z}, {b.max_x, b.max_y, b.max_z}};
+
+IMPACT_INLINE Bounds unite(const Bounds& a, const Bounds& b) {
+  return {{std::min(a.lo[0], b.lo[0]), std::min(a.lo[1], b.lo[1]), std::min(a.lo[2], b.lo[2])},
+          {std::max(a.hi[0], b.hi[0]), std::max(a.hi[1], b.hi[1]), std::max(a.hi[2], b.hi[2])}};
+}
+
+IMPACT_INLINE void store(LbvhNode& node, const Bounds& u) {
+  node.min_x = u.lo[0];
+  node.min_y = u.lo[1];
+  node.min_z = u.lo[2];
+  node.max_x = u.hi[0];
+  node.max_y = u.hi[1];
+  node.max_z = u.hi[2];
+}
+
+IMPACT_INLINE bool marked(const LbvhNode& node) { return std::bit_cast<uint32_t>(node.min_x) == kSeamMark; }
+
+IMPACT_INLINE Bounds child_bounds(const LbvhRefitOut& out, uint32_t split, uint32_t leaf_flag, uint32_t c) {
+  return (split & leaf_flag) ? bounds_of(out.leaves[c]) : bounds_of(out.nodes[c]);
 }
 
 }  // namespace
 
+void lbvh_pack_boxes(AabbSoA boxes, SortedBox* IMPACT_RESTRICT out, Range r) {
+  for (uint32_t i = r.begin; i < r.end; ++i) out[i] = pack(boxes, i);
+}
+
 void lbvh_refit(AabbSoA boxes, PairFilter filter, LbvhRefitIn in, LbvhRefitOut out, uint32_t n,
                 Range r) {
+  const uint32_t b = r.begin;
   for (uint32_t s = r.begin; s < r.end; ++s) {
     const uint32_t i = in.leaf_index[s];
-    out.leaves[s] = SortedBox{boxes.min_x[i], boxes.min_y[i], boxes.min_z[i], i,
-                              boxes.max_x[i], boxes.max_y[i], boxes.max_z[i], 0u};
+    const SortedBox leaf = in.packed ? in.packed[i] : pack(boxes, i);
+    out.leaves[s] = leaf;
     if (filter.layer) {
       out.layer[s] = filter.layer[i];
       out.mask[s] = filter.mask[i];
       out.is_static[s] = filter.is_static[i];
     }
     if (n < 2) continue;
-    uint32_t p = in.leaf_parent[s];
-    while (p != kInvalidBody) {
-      std::atomic_ref<uint32_t> counter(out.refit_counter[p]);
-      // acq_rel: publishes this child's bounds to the sibling's climb (release) and,
-      // for the second arrival, makes the sibling's bounds visible here (acquire).
-      if ((counter.fetch_add(1, std::memory_order_acq_rel) & 1u) == 0) break;
+    // Climb while the finished node (leaf s first) is its parent's right child; the
+    // bounds of the finished node stay in registers.
+    Bounds cur = bounds_of(leaf);
+    bool seam = false;
+    for (uint32_t p = in.leaf_parent[s]; p != kInvalidBody; p = in.internal_parent[p]) {
       LbvhNode& node = out.nodes[p];
+      if (node.last != s) break;  // came from the left child
       const uint32_t g = node.split & kLbvhSplitMask;
-      const Bounds a = (node.split & kLbvhLeftLeaf) ? bounds_of(out.leaves[g]) : bounds_of(out.nodes[g]);
-      const Bounds b =
-          (node.split & kLbvhRightLeaf) ? bounds_of(out.leaves[g + 1]) : bounds_of(out.nodes[g + 1]);
-      node.min_x = std::min(a.lo[0], b.lo[0]);
-      node.min_y = std::min(a.lo[1], b.lo[1]);
-      node.min_z = std::min(a.lo[2], b.lo[2]);
-      node.max_x = std::max(a.hi[0], b.hi[0]);
-      node.max_y = std::max(a.hi[1], b.hi[1]);
-      node.max_z = std::max(a.hi[2], b.hi[2]);
-      p = in.internal_parent[p];
+      if (!seam) {
+        // The left child ends at g: before b it belongs to the previous chunk; a marked
+        // left child straddles b.
+        seam = g + 1 == b || (!(node.split & kLbvhLeftLeaf) && marked(out.nodes[g]));
+        if (!seam) {
+          cur = unite(child_bounds(out, node.split, kLbvhLeftLeaf, g), cur);
+          store(node, cur);
+          continue;
+        }
+      }
+      node.min_x = std::bit_cast<float>(kSeamMark);
     }
+  }
+}
+
+void lbvh_refit_seam(LbvhRefitIn in, LbvhRefitOut out, uint32_t n, Range r) {
+  const uint32_t b = r.begin;
+  if (n < 2 || b == 0 || b >= n) return;
+  // P_b: the node whose children end at b - 1 and start at b. Its right child is leaf
+  // b or internal node b (lbvh_build.h numbering).
+  const uint32_t q = in.leaf_parent[b];
+  uint32_t p = (out.nodes[q].split & kLbvhSplitMask) + 1 == b ? q : in.internal_parent[b];
+  // The chain P_b, parent, ... whose last leaf lies in r: exactly the nodes this chunk
+  // marked. Children are final: left ones end before b (earlier chunks and seams),
+  // right ones in r (this chunk, or lower on this chain).
+  while (p != kInvalidBody && out.nodes[p].last < r.end) {
+    LbvhNode& node = out.nodes[p];
+    const uint32_t g = node.split & kLbvhSplitMask;
+    store(node, unite(child_bounds(out, node.split, kLbvhLeftLeaf, g),
+                      child_bounds(out, node.split, kLbvhRightLeaf, g + 1)));
+    p = in.internal_parent[p];
   }
 }
 

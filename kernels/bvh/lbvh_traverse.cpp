@@ -16,9 +16,83 @@ IMPACT_INLINE double area(const B& b) {
   return 2.0 * (dx * dy + dy * dz + dz * dx);
 }
 
-// Calls emit(lo, hi) for every pair whose query leaf is s, in the documented order.
+// A right-sibling subtree still to be tested by the current and later queries: its
+// bounds (at the LbvhNode / SortedBox offsets, so records_overlap applies) and its
+// reference (node index, or leaf position | kCandLeaf).
+struct alignas(32) Candidate {
+  float min_x, min_y, min_z;
+  uint32_t ref;
+  float max_x, max_y, max_z;
+  uint32_t pad;
+};
+static_assert(sizeof(Candidate) == 32);
+constexpr uint32_t kCandLeaf = 1u << 31;
+
+// pad: the subtree's last sorted leaf.
+IMPACT_INLINE Candidate candidate(const SortedBox& b, uint32_t pos) {
+  return Candidate{b.min_x, b.min_y, b.min_z, pos | kCandLeaf, b.max_x, b.max_y, b.max_z, pos};
+}
+IMPACT_INLINE Candidate candidate(const LbvhNode& b, uint32_t node) {
+  return Candidate{b.min_x, b.min_y, b.min_z, node, b.max_x, b.max_y, b.max_z, b.last};
+}
+
+// The candidate stack of one chunk of consecutive query leaves. For query s it holds,
+// bottom to top, the right children of the ancestors of s whose left child holds s
+// (root side first): exactly the subtrees made only of leaves after s that the old
+// leaf-to-root climb met, so the top is the right child of the lowest such ancestor
+// (the node whose split is s), whose first leaf is s + 1.
+struct CandidateStack {
+  Candidate item[kLbvhMaxDepth + 1];
+  uint32_t size = 0;
+
+  IMPACT_INLINE void push_child(const LbvhView& t, uint32_t ref, bool is_leaf) {
+    IMPACT_ASSERT(size < kLbvhMaxDepth + 1);
+    item[size++] = is_leaf ? candidate(t.leaves[ref], ref) : candidate(t.nodes[ref], ref);
+  }
+  // Walks down from internal node `node` along left children to its first leaf,
+  // pushing each right child passed.
+  IMPACT_INLINE void descend_left(const LbvhView& t, uint32_t node) {
+    for (;;) {
+      const LbvhNode& m = t.nodes[node];
+      const uint32_t h = m.split & kLbvhSplitMask;
+      push_child(t, h + 1, (m.split & kLbvhRightLeaf) != 0);
+      if (m.split & kLbvhLeftLeaf) return;
+      node = h;
+    }
+  }
+};
+
+// Builds the stack of query s from the root: one root-to-leaf walk per chunk.
+IMPACT_INLINE void init_stack(const LbvhView& t, uint32_t s, CandidateStack& st) {
+  st.size = 0;
+  uint32_t node = 0;
+  for (;;) {
+    const LbvhNode& m = t.nodes[node];
+    const uint32_t h = m.split & kLbvhSplitMask;
+    if (s <= h) {
+      st.push_child(t, h + 1, (m.split & kLbvhRightLeaf) != 0);
+      if (m.split & kLbvhLeftLeaf) return;
+      node = h;
+    } else {
+      if (m.split & kLbvhRightLeaf) return;
+      node = h + 1;
+    }
+  }
+}
+
+// Query s -> s + 1: the top candidate is the subtree whose first leaf is s + 1; it is
+// replaced by the right children along its left spine.
+IMPACT_INLINE void advance_stack(const LbvhView& t, CandidateStack& st) {
+  IMPACT_ASSERT(st.size > 0);
+  const uint32_t ref = st.item[--st.size].ref;
+  if ((ref & kCandLeaf) == 0) st.descend_left(t, ref);
+}
+
+// Calls emit(lo, hi) for every pair whose query leaf is s, in the documented order;
+// st holds the candidates of s.
 template <bool kFiltered, class Emit>
-IMPACT_INLINE void visit_leaf(const LbvhView& t, uint32_t s, Emit&& emit) {
+IMPACT_INLINE void visit_leaf(const LbvhView& t, uint32_t s, const CandidateStack& st, uint32_t lo,
+                              Emit&& emit) {
   const SortedBox q = t.leaves[s];
   uint32_t lq = 0, mq = 0;
   uint8_t sq = 0;
@@ -27,38 +101,36 @@ IMPACT_INLINE void visit_leaf(const LbvhView& t, uint32_t s, Emit&& emit) {
     mq = t.mask[s];
     sq = t.is_static[s];
   }
-  auto leaf = [&](uint32_t u) {
-    const SortedBox& b = t.leaves[u];
-    if (!overlaps(q, b)) return;
+  auto emit_leaf = [&](uint32_t u) {
     if constexpr (kFiltered) {
       if (!pair_allowed(lq, mq, sq, t.layer[u], t.mask[u], t.is_static[u])) return;
     }
-    const uint32_t ib = b.index;
+    const uint32_t ib = t.leaves[u].index;
     emit(q.index < ib ? q.index : ib, q.index < ib ? ib : q.index);
   };
+  auto leaf = [&](uint32_t u) {
+    if (overlaps(q, t.leaves[u])) emit_leaf(u);
+  };
 
-  // Climb from leaf s to the root. Where the path arrives from a left child, the right
-  // sibling subtree holds only leaves after s: test it and, if it overlaps, explore it
-  // depth first. Right-arrivals are skipped (their left siblings hold leaves before s).
+  // Candidates overlapping q, from the top (the lowest ancestor) down, compacted
+  // without branches.
+  uint32_t hit[kLbvhMaxDepth + 1];
+  uint32_t hits = 0;
+  for (uint32_t k = st.size; k-- > lo;) {
+    hit[hits] = k;
+    hits += overlaps(q, st.item[k]) ? 1u : 0u;
+  }
   uint32_t stack[kLbvhMaxDepth + 1];
-  uint32_t child = s;
-  bool child_is_leaf = true;
-  for (uint32_t p = t.leaf_parent[s]; p != kInvalidBody; p = t.internal_parent[p]) {
-    const LbvhNode& node = t.nodes[p];
-    const uint32_t g = node.split & kLbvhSplitMask;
-    const bool from_left = g == child && ((node.split & kLbvhLeftLeaf) != 0) == child_is_leaf;
-    child = p;
-    child_is_leaf = false;
-    if (!from_left) continue;
-    if (node.split & kLbvhRightLeaf) {
-      leaf(g + 1);
+  for (uint32_t c = 0; c < hits; ++c) {
+    const uint32_t ref = st.item[hit[c]].ref;
+    if (ref & kCandLeaf) {
+      emit_leaf(ref & ~kCandLeaf);
       continue;
     }
-    if (!overlaps(q, t.nodes[g + 1])) continue;
     // Pre-order over the sibling subtree: leaf children at once (left, then right),
     // internal children pushed right first so the left subtree comes first.
     uint32_t top = 0;
-    stack[top++] = g + 1;
+    stack[top++] = ref;
     while (top > 0) {
       const LbvhNode& m = t.nodes[stack[--top]];
       const uint32_t h = m.split & kLbvhSplitMask;
@@ -67,8 +139,8 @@ IMPACT_INLINE void visit_leaf(const LbvhView& t, uint32_t s, Emit&& emit) {
       else if (overlaps(q, t.nodes[h])) push_left = h;
       if (m.split & kLbvhRightLeaf) leaf(h + 1);
       else if (overlaps(q, t.nodes[h + 1])) push_right = h + 1;
-      // At most one pending right sibling per level below g + 1, plus two new entries:
-      // within kLbvhMaxDepth + 1 (see lbvh_build.h).
+      // At most one pending right sibling per level below the candidate, plus two new
+      // entries: within kLbvhMaxDepth + 1 (see lbvh_build.h).
       if (push_right != kInvalidBody) stack[top++] = push_right;
       if (push_left != kInvalidBody) stack[top++] = push_left;
       IMPACT_ASSERT(top <= kLbvhMaxDepth + 1);
@@ -76,19 +148,111 @@ IMPACT_INLINE void visit_leaf(const LbvhView& t, uint32_t s, Emit&& emit) {
   }
 }
 
+// Queries per group and leaf records kept for a group's shared candidates.
+constexpr uint32_t kGroupMax = 16;
+constexpr uint32_t kSharedMax = 256;
+
+// Runs the queries of r in groups. A group is a run [s, end) of queries such that the
+// top stack entries of query s cover exactly the leaves (s, end): the entries below
+// them ("shared") are then candidates of every query of the group, after (below) its
+// own. The shared candidates are explored once, with the union box of the group's
+// leaves, collecting in pre-order every leaf record overlapping that box; each query
+// then handles its own entries as before and filters the collected list by its box.
+// A leaf overlapping a query overlaps the union box, and a pruned subtree holds none,
+// so each query emits exactly its pairs in the documented order. When the list would
+// overflow kSharedMax (crowded scenes), the group's queries run one by one.
+template <bool kFiltered, class Emit>
+IMPACT_INLINE void run_queries(const LbvhView& t, Range r, Emit&& emit) {
+  CandidateStack st;
+  init_stack(t, r.begin, st);
+  SortedBox shared[kSharedMax];  // index: original box; pad: sorted position
+  uint32_t stack[kLbvhMaxDepth + 1];
+  uint32_t s = r.begin;
+  while (s < r.end) {
+    uint32_t end = s + 1, lo = st.size;
+    for (uint32_t j = st.size; j-- > 0;) {
+      const uint32_t last = st.item[j].pad;
+      if (last + 1 - s > kGroupMax || last >= r.end) break;
+      end = last + 1;
+      lo = j;
+    }
+    uint32_t m = 0;
+    bool grouped = end - s > 1;
+    if (grouped) {
+      SortedBox g = t.leaves[s];
+      for (uint32_t u = s + 1; u < end; ++u) {
+        const SortedBox& b = t.leaves[u];
+        g.min_x = b.min_x < g.min_x ? b.min_x : g.min_x;
+        g.min_y = b.min_y < g.min_y ? b.min_y : g.min_y;
+        g.min_z = b.min_z < g.min_z ? b.min_z : g.min_z;
+        g.max_x = b.max_x > g.max_x ? b.max_x : g.max_x;
+        g.max_y = b.max_y > g.max_y ? b.max_y : g.max_y;
+        g.max_z = b.max_z > g.max_z ? b.max_z : g.max_z;
+      }
+      auto add = [&](uint32_t u) {
+        if (!overlaps(g, t.leaves[u])) return;
+        if (m == kSharedMax) {
+          grouped = false;
+          return;
+        }
+        shared[m] = t.leaves[u];
+        shared[m++].pad = u;
+      };
+      for (uint32_t k = lo; k-- > 0 && grouped;) {
+        const Candidate& c = st.item[k];
+        if (!overlaps(g, c)) continue;
+        if (c.ref & kCandLeaf) {
+          add(c.pad);
+          continue;
+        }
+        uint32_t top = 0;
+        stack[top++] = c.ref;
+        while (top > 0 && grouped) {
+          const LbvhNode& nd = t.nodes[stack[--top]];
+          const uint32_t h = nd.split & kLbvhSplitMask;
+          uint32_t push_left = kInvalidBody, push_right = kInvalidBody;
+          if (nd.split & kLbvhLeftLeaf) add(h);
+          else if (overlaps(g, t.nodes[h])) push_left = h;
+          if (nd.split & kLbvhRightLeaf) add(h + 1);
+          else if (overlaps(g, t.nodes[h + 1])) push_right = h + 1;
+          if (push_right != kInvalidBody) stack[top++] = push_right;
+          if (push_left != kInvalidBody) stack[top++] = push_left;
+          IMPACT_ASSERT(top <= kLbvhMaxDepth + 1);
+        }
+      }
+    }
+    for (uint32_t u = s; u < end; ++u) {
+      visit_leaf<kFiltered>(t, u, st, grouped ? lo : 0u, emit);
+      if (grouped) {
+        const SortedBox q = t.leaves[u];
+        for (uint32_t i = 0; i < m; ++i) {
+          if (!overlaps(q, shared[i])) continue;
+          if constexpr (kFiltered) {
+            const uint32_t v = shared[i].pad;
+            if (!pair_allowed(t.layer[u], t.mask[u], t.is_static[u], t.layer[v], t.mask[v], t.is_static[v]))
+              continue;
+          }
+          const uint32_t ib = shared[i].index;
+          emit(q.index < ib ? q.index : ib, q.index < ib ? ib : q.index);
+        }
+      }
+      if (u + 1 < r.end) advance_stack(t, st);
+    }
+    s = end;
+  }
+}
+
 }  // namespace
 
 uint64_t lbvh_find_pairs(const LbvhView& t, Pair* IMPACT_RESTRICT out, uint64_t capacity, Range r) {
   uint64_t k = 0;
+  if (r.begin >= r.end) return 0;
   auto emit = [&](uint32_t a, uint32_t b) {
     if (k < capacity) out[k] = Pair{a, b};
     ++k;
   };
-  if (t.layer) {
-    for (uint32_t s = r.begin; s < r.end; ++s) visit_leaf<true>(t, s, emit);
-  } else {
-    for (uint32_t s = r.begin; s < r.end; ++s) visit_leaf<false>(t, s, emit);
-  }
+  if (t.layer) run_queries<true>(t, r, emit);
+  else run_queries<false>(t, r, emit);
   return k;
 }
 

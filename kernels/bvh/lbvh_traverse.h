@@ -1,17 +1,28 @@
 // Self-pair query of an LBVH (kernels/bvh/lbvh_build.h, bounds by lbvh_refit.h):
 // every pair of overlapping leaves, each pair once.
 //
-// What: per query leaf s in r (sorted position), climb from the leaf to the root via
-//   the parent links. At each ancestor reached from its left child, the right sibling
-//   subtree holds only leaves after s (subtrees are contiguous leaf ranges): if its
-//   bounds overlap leaf s it is explored depth first with a fixed stack of
-//   kLbvhMaxDepth + 1 entries. Ancestors reached from the right are skipped (their
-//   left siblings hold only leaves before s). Each overlapping leaf t > s that passes
-//   the filter gives the pair (min, max) of the two original box indices. A pair
-//   {s, t} is thus met only by the query min(s, t): each pair once, no duplicate
-//   removal. Climbing instead of descending from the root skips the ~log2(n) tests
-//   along the query's own root path (which always overlap): 1M uniform boxes,
-//   290 -> 219 ms on one thread.
+// What: per query leaf s in r (sorted position), the subtrees holding only leaves after
+//   s are the right siblings of the ancestors of s reached from their left child
+//   (subtrees are contiguous leaf ranges). Each one whose bounds overlap leaf s is
+//   explored depth first with a fixed stack of kLbvhMaxDepth + 1 entries. Each
+//   overlapping leaf t > s that passes the filter gives the pair (min, max) of the two
+//   original box indices. A pair {s, t} is thus met only by the query min(s, t): each
+//   pair once, no duplicate removal.
+// Candidate stack: those right siblings are kept, with a copy of their bounds, in a
+//   stack (root side at the bottom) carried from query s to s + 1 along a chunk: the
+//   top is the subtree whose first leaf is s + 1; s + 1's stack replaces it by the
+//   right children along its left spine. So the per-query climb to the root (a chain
+//   of ~log2 n dependent parent loads and unpredictable left/right branches) becomes
+//   amortised O(1) pushes per query plus a branch-free scan of ~log2 n / 2 candidate
+//   boxes held in L1; each chunk starts with one root-to-leaf walk. 1M uniform boxes,
+//   one thread: 211 -> 159 ms (the leaf-to-root climb it replaces had taken 290 ->
+//   219 ms over a root-down traversal).
+// Query groups: a run of up to 16 consecutive queries whose own stack entries cover
+//   exactly the leaves between them shares every entry below those: the shared
+//   candidates are explored once with the union box of the run's leaves, the leaves
+//   overlapping it collected in pre-order (at most 256; beyond, the run's queries go
+//   one by one), and each query filters that list after its own entries. Same pairs,
+//   same order; 1M uniform: ~6.6 -> ~5.2 node visits per query, ~5% faster.
 // Order (independent of the thread count): by query leaf s (Morton order); within a
 //   query, by ancestor from the leaf upwards; within one sibling subtree, pre-order
 //   depth first: at each internal node popped, its leaf children are emitted (left,

@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <functional>
 #include <random>
 #include <string>
 #include <vector>
@@ -16,6 +17,8 @@
 #include "host/broadphase/lbvh.h"
 #include "host/parallel.h"
 #include "kernels/bvh/lbvh_build.h"
+#include "kernels/bvh/lbvh_build_fused.h"
+#include "kernels/bvh/lbvh_refit.h"
 #include "kernels/bvh/lbvh_traverse.h"
 #include "kernels/bvh/morton.h"
 #include "support/aabb_reference.h"
@@ -359,6 +362,111 @@ TEST(Lbvh, RefitHundredFrames) {
   EXPECT_GT(aged, sah0);
 }
 
+// lbvh_refit over irregular chunkings (1-leaf chunks, small, random sizes, one chunk),
+// each followed by the seam passes in order, gives the same node bytes as the host's
+// refit, frame after frame (stale seam marks of one chunking never leak into the next).
+TEST(Lbvh, RefitChunkingsAndSeamsGiveTheSameNodes) {
+  for (const bool clustered : {false, true}) {
+    const uint32_t n = 3001;
+    Boxes b = clustered ? clustered_boxes(n, 71) : uniform_boxes(n, 71, 0.2f, 0.6f);
+    std::mt19937 rng(72);
+    const float side = 2.2f * 0.6f * std::cbrt(static_cast<float>(n));
+    LbvhBroadPhase bp;
+    Buffer<Pair> out;
+    IMPACT_ASSERT_OK(bp.find_pairs(serial(), soa(b), filter_of(b), n, &out));
+    std::vector<kernels::LbvhNode> nodes(bp.view().nodes, bp.view().nodes + (n - 1));
+    std::vector<kernels::SortedBox> leaves(n);
+    const kernels::LbvhRefitIn in{bp.leaf_index(), bp.internal_parent(), bp.leaf_parent(), nullptr};
+    const kernels::LbvhRefitOut kout{nodes.data(), leaves.data(), nullptr, nullptr, nullptr};
+    for (int frame = 0; frame < 6; ++frame) {
+      move(b, rng, side);
+      IMPACT_ASSERT_OK(bp.refit(serial(), soa(b), filter_of(b), n, &out));
+      const kernels::LbvhView v = bp.view();
+      // Chunk starts: every leaf, every 7th, random, one chunk.
+      std::vector<std::vector<uint32_t>> cuts(4);
+      for (uint32_t s = 0; s < n; ++s) cuts[0].push_back(s);
+      for (uint32_t s = 0; s < n; s += 7) cuts[1].push_back(s);
+      for (uint32_t s = 0; s < n; s += 1 + static_cast<uint32_t>(rng() % 200)) cuts[2].push_back(s);
+      cuts[3].push_back(0);
+      for (const std::vector<uint32_t>& c : cuts) {
+        SCOPED_TRACE("clustered=" + std::to_string(clustered) + " frame " + std::to_string(frame) +
+                     " chunks " + std::to_string(c.size()));
+        // Chunks in reverse order: the seams must not depend on the chunks' order.
+        for (size_t k = c.size(); k-- > 0;) {
+          const uint32_t e = k + 1 < c.size() ? c[k + 1] : n;
+          kernels::lbvh_refit(soa(b), kernels::PairFilter{}, in, kout, n, {c[k], e});
+        }
+        for (size_t k = 1; k < c.size(); ++k) {
+          const uint32_t e = k + 1 < c.size() ? c[k + 1] : n;
+          kernels::lbvh_refit_seam(in, kout, n, {c[k], e});
+        }
+        ASSERT_EQ(0, std::memcmp(nodes.data(), v.nodes, nodes.size() * sizeof(kernels::LbvhNode)));
+        ASSERT_EQ(0, std::memcmp(leaves.data(), v.leaves, n * sizeof(kernels::SortedBox)));
+      }
+    }
+  }
+}
+
+// The one-pass build (lbvh_build_fused) against the Karras build (lbvh_build) plus
+// lbvh_refit over the same sorted codes: the same node bytes, parents and leaves, for
+// every chunking (1-leaf chunks, 7, random sizes, one chunk; packed records or SoA).
+// Codes: random, many duplicates, all equal (ties broken by position), n = 2, 3.
+TEST(Lbvh, FusedBuildEqualsKarrasBuildPlusRefit) {
+  std::mt19937 rng(81);
+  for (const uint32_t n : {2u, 3u, 5u, 64u, 1000u, 4099u}) {
+    for (int kind = 0; kind < 3; ++kind) {
+      const Boxes b = uniform_boxes(n, 82 + static_cast<uint32_t>(kind), 0.2f, 0.6f);
+      // Sorted codes: kind 0 random 30-bit (shift 32), 1 few distinct values, 2 all equal.
+      std::vector<uint64_t> codes(n);
+      for (uint32_t s = 0; s < n; ++s) {
+        const uint64_t c = kind == 0 ? rng() & 0x3fffffffu : kind == 1 ? rng() % 5 : 7;
+        codes[s] = c << 32;
+      }
+      std::sort(codes.begin(), codes.end());
+      std::vector<uint32_t> leaf_index(n);
+      for (uint32_t s = 0; s < n; ++s) leaf_index[s] = s;
+      std::shuffle(leaf_index.begin(), leaf_index.end(), rng);
+      // Reference: Karras + refit in one chunk.
+      std::vector<kernels::LbvhNode> ref_nodes(n - 1);
+      std::vector<uint32_t> ref_ip(n - 1), ref_lp(n);
+      std::vector<kernels::SortedBox> ref_leaves(n);
+      kernels::lbvh_build(codes.data(), 32, n, {ref_nodes.data(), ref_ip.data(), ref_lp.data()}, {0, n - 1});
+      const kernels::LbvhRefitIn rin{leaf_index.data(), ref_ip.data(), ref_lp.data(), nullptr};
+      kernels::lbvh_refit(soa(b), kernels::PairFilter{}, rin,
+                          {ref_nodes.data(), ref_leaves.data(), nullptr, nullptr, nullptr}, n, {0, n});
+      std::vector<kernels::SortedBox> packed(n);
+      kernels::lbvh_pack_boxes(soa(b), packed.data(), {0, n});
+      std::vector<std::vector<uint32_t>> cuts(4);
+      for (uint32_t s = 0; s < n; ++s) cuts[0].push_back(s);
+      for (uint32_t s = 0; s < n; s += 7) cuts[1].push_back(s);
+      for (uint32_t s = 0; s < n; s += 1 + static_cast<uint32_t>(rng() % 100)) cuts[2].push_back(s);
+      cuts[3].push_back(0);
+      for (size_t ci = 0; ci < cuts.size(); ++ci) {
+        const std::vector<uint32_t>& c = cuts[ci];
+        SCOPED_TRACE("n=" + std::to_string(n) + " kind=" + std::to_string(kind) + " chunks=" +
+                     std::to_string(c.size()));
+        std::vector<kernels::LbvhNode> nodes(n - 1);
+        std::vector<uint32_t> ip(n - 1, 12345u), lp(n, 12345u), slot(n, 0xffffffffu);
+        std::vector<kernels::SortedBox> leaves(n);
+        std::vector<kernels::LbvhBlocked> blocked(c.size());
+        const kernels::LbvhFusedIn in{codes.data(), 32, leaf_index.data(), ci % 2 ? packed.data() : nullptr};
+        const kernels::LbvhFusedOut out{{nodes.data(), ip.data(), lp.data()},
+                                        {nodes.data(), leaves.data(), nullptr, nullptr, nullptr},
+                                        slot.data()};
+        for (size_t k = c.size(); k-- > 0;)  // chunks in reverse: order must not matter
+          kernels::lbvh_build_fused(soa(b), kernels::PairFilter{}, in, out, n,
+                                    {c[k], k + 1 < c.size() ? c[k + 1] : n}, &blocked[k]);
+        for (size_t k = 1; k < c.size(); ++k)
+          kernels::lbvh_build_fused_seam(in, out, n, {c[k], k + 1 < c.size() ? c[k + 1] : n}, blocked[k]);
+        ASSERT_EQ(0, std::memcmp(nodes.data(), ref_nodes.data(), (n - 1) * sizeof(kernels::LbvhNode)));
+        ASSERT_EQ(ip, ref_ip);
+        ASSERT_EQ(lp, ref_lp);
+        ASSERT_EQ(0, std::memcmp(leaves.data(), ref_leaves.data(), n * sizeof(kernels::SortedBox)));
+      }
+    }
+  }
+}
+
 TEST(Lbvh, RefitKnobRebuildsWhenTreeDegrades) {
   const uint32_t n = scaled(2000);
   Boxes b = uniform_boxes(n, 71, 0.2f, 0.6f);
@@ -487,6 +595,97 @@ TEST(Lbvh, PairOrderIsByQueryLeafThenTraversal) {
     const uint32_t q = std::min(slot[p.a], slot[p.b]);
     ASSERT_GE(q, prev);
     prev = q;
+  }
+}
+
+}  // namespace
+}  // namespace impact
+
+namespace impact {
+namespace {
+
+// The documented order, written the plainest way: per query leaf s, climb to the root;
+// at each ancestor reached from its left child, walk the right sibling subtree in
+// pre-order (a node's leaf children left then right, then its left subtree, then its
+// right one), emitting every leaf t overlapping s that passes the filter.
+std::vector<Pair> documented_order(const LbvhBroadPhase& bp) {
+  const kernels::LbvhView t = bp.view();
+  std::vector<Pair> out;
+  auto touch = [](const kernels::SortedBox& a, const auto& b) {
+    return a.min_x <= b.max_x && b.min_x <= a.max_x && a.min_y <= b.max_y && b.min_y <= a.max_y &&
+           a.min_z <= b.max_z && b.min_z <= a.max_z;
+  };
+  for (uint32_t s = 0; s < t.n; ++s) {
+    const kernels::SortedBox& q = t.leaves[s];
+    auto leaf = [&](uint32_t u) {
+      if (!touch(q, t.leaves[u])) return;
+      if (t.layer && !kernels::pair_allowed(t.layer[s], t.mask[s], t.is_static[s], t.layer[u], t.mask[u],
+                                            t.is_static[u]))
+        return;
+      const uint32_t a = q.index, b = t.leaves[u].index;
+      out.push_back(Pair{std::min(a, b), std::max(a, b)});
+    };
+    std::function<void(uint32_t)> walk = [&](uint32_t node) {
+      const kernels::LbvhNode& m = t.nodes[node];
+      const uint32_t h = m.split & kernels::kLbvhSplitMask;
+      const bool ll = m.split & kernels::kLbvhLeftLeaf, rl = m.split & kernels::kLbvhRightLeaf;
+      if (ll) leaf(h);
+      if (rl) leaf(h + 1);
+      if (!ll && touch(q, t.nodes[h])) walk(h);
+      if (!rl && touch(q, t.nodes[h + 1])) walk(h + 1);
+    };
+    uint32_t child = s;
+    bool child_leaf = true;
+    for (uint32_t p = t.leaf_parent[s]; p != kernels::kInvalidBody; p = t.internal_parent[p]) {
+      const kernels::LbvhNode& m = t.nodes[p];
+      const uint32_t g = m.split & kernels::kLbvhSplitMask;
+      const bool from_left = g == child && ((m.split & kernels::kLbvhLeftLeaf) != 0) == child_leaf;
+      child = p;
+      child_leaf = false;
+      if (!from_left) continue;
+      if (m.split & kernels::kLbvhRightLeaf) leaf(g + 1);
+      else if (touch(q, t.nodes[g + 1])) walk(g + 1);
+    }
+  }
+  return out;
+}
+
+// The pair pass (candidate stack carried along chunks, queries grouped over shared
+// candidates, per-query fallback when a group's shared list overflows) gives exactly
+// the documented order, byte for byte: uniform, clustered, crowded (every box at one
+// point: the fallback), mixed sizes, filtered; after a refit too.
+TEST(Lbvh, PairBytesEqualTheDocumentedOrder) {
+  std::vector<std::pair<std::string, Boxes>> scenes;
+  scenes.emplace_back("uniform", uniform_boxes(20000, 111, 0.2f, 0.8f));
+  scenes.emplace_back("clustered", clustered_boxes(6000, 112));
+  scenes.emplace_back("mixed", mixed_size_boxes(6000, 113));
+  Boxes crowd = uniform_boxes(700, 114, 0.2f, 0.8f);
+  for (uint32_t i = 0; i < 700; ++i) {
+    crowd.min_x[i] = crowd.min_y[i] = crowd.min_z[i] = 1.0f;
+    crowd.max_x[i] = crowd.max_y[i] = crowd.max_z[i] = 1.0f + 0.001f * static_cast<float>(i % 3);
+  }
+  scenes.emplace_back("crowd", crowd);
+  Boxes filtered = uniform_boxes(20000, 115, 0.2f, 0.8f);
+  test::add_random_filter(filtered, 116, 0.2);
+  scenes.emplace_back("filtered", filtered);
+  for (auto& [what, b] : scenes) {
+    SCOPED_TRACE(what);
+    for (uint32_t bits : {30u, 63u}) {
+      LbvhOptions o;
+      o.morton_bits = bits;
+      LbvhBroadPhase bp(o);
+      Buffer<Pair> out;
+      IMPACT_ASSERT_OK(bp.find_pairs(Executor(Backend::kDefault, 2), soa(b), filter_of(b), count(b), &out));
+      std::vector<Pair> ref = documented_order(bp);
+      ASSERT_EQ(out.size(), ref.size());
+      EXPECT_EQ(0, std::memcmp(out.data(), ref.data(), ref.size() * sizeof(Pair)));
+      std::mt19937 rng(117);
+      move(b, rng, 2.2f * 0.8f * std::cbrt(static_cast<float>(count(b))));
+      IMPACT_ASSERT_OK(bp.refit(serial(), soa(b), filter_of(b), count(b), &out));
+      ref = documented_order(bp);
+      ASSERT_EQ(out.size(), ref.size());
+      EXPECT_EQ(0, std::memcmp(out.data(), ref.data(), ref.size() * sizeof(Pair)));
+    }
   }
 }
 
