@@ -73,6 +73,7 @@
 #include <cmath>
 
 #include "kernels/narrowphase/pair_kernels.h"
+#include "kernels/narrowphase/sat.h"
 #include "kernels/simd/lanes.h"
 
 namespace impact::kernels::cvx {
@@ -1240,6 +1241,11 @@ void collide_convex_lane(const Leaf& A, const Leaf& B, const NarrowConfig& cfg, 
     pb = e.pb;
   }
   if (!(depth > 0.0f)) return;
+  contact_manifold(A, B, n, depth, pa, pb, out);
+}
+
+void contact_manifold(const Leaf& A, const Leaf& B, V3 n, float depth, V3 pa, V3 pb, LaneContact* out) {
+  const float ra = core_radius(A), rb = core_radius(B);
   out->n = n;
   out->depth = depth;
   // Pairs of faceted sides (polytopes, cylinder caps / side lines): clipped face
@@ -1282,13 +1288,20 @@ namespace impact::kernels {
 
 void collide_gjk_epa(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out, Range r,
                      const NarrowConfig& cfg, LeafType ta, LeafType tb) {
-  // kSimd and kScalar run the same per-lane code (see the header block).
+  // kSimd and kScalar run the same per-lane code (see the header block). Two polytopes
+  // (box, hull) take the separating axis test (sat.cpp) when it is the cheaper.
+  const bool polytopes = cfg.sat_max_vertices > 0 && (ta == kLeafBox || ta == kLeafConvex) &&
+                         (tb == kLeafBox || tb == kLeafConvex);
   for (uint32_t k = r.begin; k < r.end; ++k) {
     const cvx::V3 origin{a.p[0][k], a.p[1][k], a.p[2][k]};
     const cvx::Leaf A = cvx::load_leaf(a, k, ta, &cfg.hulls, origin);
     const cvx::Leaf B = cvx::load_leaf(b, k, tb, &cfg.hulls, origin);
     cvx::LaneContact c;
-    cvx::collide_convex_lane(A, B, cfg, &c);
+    const uint32_t sat_size = polytopes ? cvx::sat_vertex_count(A, B) : 0u;
+    if (sat_size > 0 && sat_size <= cfg.sat_max_vertices)
+      cvx::collide_sat_lane(A, B, &c);
+    else
+      cvx::collide_convex_lane(A, B, cfg, &c);
     out.count[k] = static_cast<uint8_t>(c.count);
     if (c.count == 0) continue;
     out.n[0][k] = c.n.x;
