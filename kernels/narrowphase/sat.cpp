@@ -12,10 +12,14 @@
 // axis n: min over B of n.x - max over A of n.x; > 0 anywhere: separated, stop.
 //  0. Everything runs in A's local frame: B's vertices, face planes and edges are
 //     transformed once per lane (B relative to A: far-from-origin poses keep their
-//     precision, as in gjk_epa.cpp).
+//     precision, as in gjk_epa.cpp). The line of the two origins is tried first (one
+//     support per side, SIMD): most separated pairs stop there.
 //  1. Face queries: for kSimdWidth faces of one side at a time, the minimum over the
 //     other side's vertices of n.v (the vertices broadcast one by one, two running
 //     minima): O(F_A V_B + F_B V_A) / kSimdWidth steps, no horizontal reduction per face.
+//     A face's separation is at most n.c - r - d (c, r: the other side's origin and the
+//     radius of a ball about it inside it); the face of largest bound is evaluated
+//     first, and only faces whose bound beats its separation (less the bias) follow.
 //  2. Edge query: an edge's normal cone (the arc between its two face normals) lies
 //     within angle theta of the bisector m (stored per hull edge, HullView). For any
 //     axis n in A's edge cone, the separation is n.(p_B - p_A) with p_A on the edge and
@@ -44,7 +48,9 @@
 // finite input; no allocation (stack buffers sized by the capacity limits of sat.h).
 // Cost: O(F_A V_B + F_B V_A + E_A + E_B) vector steps plus the surviving edge pairs
 // E'_A E'_B / kSimdWidth Gauss tests; see docs/narrowphase.md for the measured times
-// and the crossover with GJK / EPA (NarrowConfig::sat_max_vertices).
+// and the crossover with GJK / EPA (NarrowConfig::sat_max_vertices: V_A + V_B <= 96).
+// Paths: cfg.path kSimd and kScalar run this same code (as GJK / EPA do); the one-lane
+// build (IMPACT_SIMD_SCALAR) runs it with kSimdWidth = 1.
 #include "kernels/narrowphase/sat.h"
 
 #include <cmath>
@@ -246,6 +252,7 @@ struct Scratch {
   float px[kSatMaxEdges + kW], py[kSatMaxEdges + kW], pz[kSatMaxEdges + kW];
   float el2[kSatMaxEdges + kW];
   uint32_t aedge[kSatMaxEdges + kW];
+  uint32_t bedge[kSatMaxEdges + kW];
   float au[kSatMaxEdges + kW];  // their bounds
 };
 
@@ -294,6 +301,17 @@ void collide_sat_lane(const Leaf& A, const Leaf& B, LaneContact* out, SatStats* 
     (tx + r00 * x + r01 * y + r02 * z).store(S.bvx + j);
     (ty + r10 * x + r11 * y + r12 * z).store(S.bvy + j);
     (tz + r20 * x + r21 * y + r22 * z).store(S.bvz + j);
+  }
+  // A separated pair often separates along the line of the origins: one support per
+  // side (SIMD over the vertices) proves it before any face or edge query.
+  {
+    const float tl2 = t[0] * t[0] + t[1] * t[1] + t[2] * t[2];
+    if (tl2 > 0.0f) {
+      const float il = 1.0f / std::sqrt(tl2);
+      const float ux = t[0] * il, uy = t[1] * il, uz = t[2] * il;
+      const float s = min_dot(S.bvx, S.bvy, S.bvz, PB.nv, ux, uy, uz) + min_dot(S.avx, S.avy, S.avz, PA.nv, -ux, -uy, -uz);
+      if (s > 0.0f) return;
+    }
   }
   // Balls about the local origins inside A and B (radius: the least face offset; <= 0
   // when the origin is not inside: the bounds are then off for that side); the largest
@@ -421,9 +439,14 @@ void collide_sat_lane(const Leaf& A, const Leaf& B, LaneContact* out, SatStats* 
     u.store(S.u + e);
     px.store(S.tpx + e), py.store(S.tpy + e), pz.store(S.tpz + e);
   }
-  uint32_t nb = 0;
+  uint32_t nbc = 0;  // candidate indices first, without branches
   for (uint32_t e = 0; e < PB.ne; ++e) {
-    if (!(S.u[e] > thr)) continue;
+    S.bedge[nbc] = e;
+    nbc += S.u[e] > thr ? 1u : 0u;
+  }
+  uint32_t nb = 0;
+  for (uint32_t k = 0; k < nbc; ++k) {
+    const uint32_t e = S.bedge[k];
     const uint32_t g0 = PB.ef0[e], g1 = PB.ef1[e], v1 = PB.ev1[e];
     const V3 c{-S.bfx[g0], -S.bfy[g0], -S.bfz[g0]}, d{-S.bfx[g1], -S.bfy[g1], -S.bfz[g1]};
     const V3 dxc = cross(d, c);
