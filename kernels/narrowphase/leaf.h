@@ -75,7 +75,8 @@ struct ManifoldSoA {
 /// the hull's local frame. Face f's polygon is face_verts[face_vert_begin[f] ..
 /// face_vert_begin[f + 1]) (absolute vertex indices), counter-clockwise seen from
 /// outside; its plane is { x : fn.x <= fd } with fn unit and outward. Edge
-/// directions (unit, one per parallel class) serve SAT.
+/// directions (unit, one per parallel class; e*) are hints for the tests' reference;
+/// SAT (sat.cpp) reads the per-edge adjacency (adj_*, below).
 struct HullView {
   const uint32_t* vert_begin;       // [h], [h + 1]
   const float* vx;
