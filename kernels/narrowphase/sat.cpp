@@ -384,10 +384,15 @@ void collide_sat_lane(const Leaf& A, const Leaf& B, LaneContact* out, SatStats* 
   {
     const float thr = fmax_nn(sa, sb) - bias;
     FaceList& L = S.fl;
+    // Candidate indices without branches, then their planes.
     L.n = 0;
     for (uint32_t f = 0; f < PA.nf; ++f) {
-      L.nx[L.n] = PA.fnx[f], L.ny[L.n] = PA.fny[f], L.nz[L.n] = PA.fnz[f], L.d[L.n] = PA.fd[f], L.id[L.n] = f;
+      L.id[L.n] = f;
       L.n += (S.u[f] > thr && f != fa_seed) ? 1u : 0u;
+    }
+    for (uint32_t k = 0; k < L.n; ++k) {
+      const uint32_t f = L.id[k];
+      L.nx[k] = PA.fnx[f], L.ny[k] = PA.fny[f], L.nz[k] = PA.fnz[f], L.d[k] = PA.fd[f];
     }
     if (L.n > 0) {
       L.pad();
@@ -398,9 +403,12 @@ void collide_sat_lane(const Leaf& A, const Leaf& B, LaneContact* out, SatStats* 
     }
     L.n = 0;
     for (uint32_t f = 0; f < PB.nf; ++f) {
-      const float u = -ball_a - S.bfd[f];
-      L.nx[L.n] = S.bfx[f], L.ny[L.n] = S.bfy[f], L.nz[L.n] = S.bfz[f], L.d[L.n] = S.bfd[f], L.id[L.n] = f;
-      L.n += (u > thr && f != fb_seed) ? 1u : 0u;
+      L.id[L.n] = f;
+      L.n += (-ball_a - S.bfd[f] > thr && f != fb_seed) ? 1u : 0u;
+    }
+    for (uint32_t k = 0; k < L.n; ++k) {
+      const uint32_t f = L.id[k];
+      L.nx[k] = S.bfx[f], L.ny[k] = S.bfy[f], L.nz[k] = S.bfz[f], L.d[k] = S.bfd[f];
     }
     if (L.n > 0) {
       L.pad();
