@@ -505,22 +505,20 @@ void collide_sat_lane(const Leaf& A, const Leaf& B, LaneContact* out, SatStats* 
         const F cba = cx * BXAx + cy * BXAy + cz * BXAz, dba = dx * BXAx + dy * BXAy + dz * BXAz;
         const F adc = qx * Ax + qy * Ay + qz * Az, bdc = qx * Bx + qy * By + qz * Bz;
         const auto face = ((cba * dba) < zero) & ((adc * bdc) < zero) & ((cba * bdc) > zero);
-        if (simd::none(face)) continue;
         const F ex = F::load(S.ex + j), ey = F::load(S.ey + j), ez = F::load(S.ez + j);
         const F nx = EAy * ez - EAz * ey, ny = EAz * ex - EAx * ez, nz = EAx * ey - EAy * ex;
         const F l2 = nx * nx + ny * ny + nz * nz;
         const auto ok = face & (l2 > par * F::load(S.el2 + j));
-        if (simd::none(ok)) continue;
         const F inv = F(1.0f) / simd::sqrt(simd::select(ok, l2, F(1.0f)));
         const F sgn = simd::select((nx * MAx + ny * MAy + nz * MAz) < zero, -inv, inv);
         const F s = (nx * (F::load(S.px + j) - PAx) + ny * (F::load(S.py + j) - PAy) + nz * (F::load(S.pz + j) - PAz)) * sgn;
         const auto gt = ok & (s > best);
         best = simd::select(gt, s, best);
         bkey = simd::select(gt, key0 + lane + F(static_cast<float>(j)), bkey);
-        for (uint32_t k = 0; k < kW; ++k) s_run = fmax_nn(s_run, best.lane(k));
         if (stats != nullptr)
           for (uint32_t k = 0; k < kW; ++k) hits += ok.lane(k) ? 1u : 0u;
       }
+      for (uint32_t k = 0; k < kW; ++k) s_run = fmax_nn(s_run, best.lane(k));
       if (s_run >= 0.0f) break;  // separated
     }
     float key;
