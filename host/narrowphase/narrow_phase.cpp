@@ -651,6 +651,7 @@ kernels::NarrowConfig host::config_of(const NarrowPhaseOptions& o) {
   cfg.gjk_tolerance = o.gjk_tolerance;
   cfg.epa_max_iterations = o.epa_max_iterations;
   cfg.epa_tolerance = o.epa_tolerance;
+  cfg.sat_max_vertices = o.sat_max_vertices;
   return cfg;
 }
 

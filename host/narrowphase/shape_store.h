@@ -27,6 +27,9 @@ struct HullStore {
   std::vector<uint32_t> vert_begin{0}, face_begin{0}, face_vert_begin{0}, edge_begin{0};
   std::vector<float> vx, vy, vz, fnx, fny, fnz, fd, ex, ey, ez;
   std::vector<uint32_t> face_verts;
+  /// Edge adjacency (kernels::HullView, hull-local indices), from the faces in add().
+  std::vector<uint32_t> adj_begin{0}, ev0, ev1, ef0, ef1;
+  std::vector<float> emx, emy, emz, ecos, esin, epx, epy, epz;
   uint32_t size() const { return static_cast<uint32_t>(vert_begin.size() - 1); }
   /// Appends a hull; returns its index.
   uint32_t add(const HullData& h);

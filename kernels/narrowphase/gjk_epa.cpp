@@ -1,4 +1,6 @@
 // General convex pairs: GJK + EPA on support functions, face clipping for polytopes.
+// Small polytope pairs (box / hull, V_A + V_B <= cfg.sat_max_vertices) are handed to
+// the separating axis test (sat.cpp) lane by lane, with the same manifold routine.
 //
 // What: collide_gjk_epa computes, per lane k of a bucket (A's type <= B's type, neither
 // a half-space), the collision data of leaf.h: count, unit normal A->B, depth, up to 4
@@ -73,6 +75,7 @@
 #include <cmath>
 
 #include "kernels/narrowphase/pair_kernels.h"
+#include "kernels/narrowphase/sat.h"
 #include "kernels/simd/lanes.h"
 
 namespace impact::kernels::cvx {
@@ -1021,11 +1024,14 @@ struct Chord {
   float t_in = -INFINITY, t_out = INFINITY;
 };
 
-IMPACT_INLINE void chord_plane(float c, float slack, Chord* ch) {
-  // slack = d_f - n_f.x; the ray crosses the plane at t = slack / c.
+IMPACT_INLINE void chord_plane(float c, float slack, float tol, Chord* ch) {
+  // slack = d_f - n_f.x; the ray crosses the plane at t = slack / c. A ray parallel
+  // to the plane misses only when outside by more than tol (the rounding of slack):
+  // clipped points lie on the reference face's side planes, and an exact face normal
+  // (SAT) runs their rays along those planes.
   if (c > 0.0f) ch->t_out = fmin_nn(ch->t_out, slack / c);
   else if (c < 0.0f) ch->t_in = fmax_nn(ch->t_in, slack / c);
-  else if (slack < 0.0f) ch->t_in = INFINITY;  // parallel and outside
+  else if (slack < -tol) ch->t_in = INFINITY;  // parallel and outside
 }
 
 Chord chord(const Leaf& l, V3 x, V3 dir) {
@@ -1034,8 +1040,9 @@ Chord chord(const Leaf& l, V3 x, V3 dir) {
     const V3 q = x - l.p;
     for (int i = 0; i < 3; ++i) {
       const float c = dot(l.ax[i], dir), s = dot(l.ax[i], q);
-      chord_plane(c, l.e[i] - s, &ch);
-      chord_plane(-c, l.e[i] + s, &ch);
+      const float tol = 4e-6f * (l.e[i] + std::fabs(s));
+      chord_plane(c, l.e[i] - s, tol, &ch);
+      chord_plane(-c, l.e[i] + s, tol, &ch);
     }
   } else if (l.type == kLeafConvex) {
     // kSimdWidth faces per step (min / max are exact, so the lanes' order does not
@@ -1054,12 +1061,14 @@ Chord chord(const Leaf& l, V3 x, V3 dir) {
       for (; f + kW <= fe; f += kW) {
         const F nx = F::load(h.fnx + f), ny = F::load(h.fny + f), nz = F::load(h.fnz + f);
         const F c = nx * DX + ny * DY + nz * DZ;
-        const F slack = F::load(h.fd + f) - (nx * QX + ny * QY + nz * QZ);
+        const F d = F::load(h.fd + f), nq = nx * QX + ny * QY + nz * QZ;
+        const F slack = d - nq;
         const auto pos = c > zero, neg = c < zero;
         const F t = slack / select(pos | neg, c, one);
         t_out = select(pos, simd::min(t_out, t), t_out);
         t_in = select(neg, simd::max(t_in, t), t_in);
-        miss = select(andnot(slack < zero, pos | neg), one, miss);
+        const F tol = F(4e-6f) * (simd::abs(d) + simd::abs(nq));  // as chord_plane
+        miss = select(andnot(slack < -tol, pos | neg), one, miss);
       }
       for (uint32_t k = 0; k < kW; ++k) {
         ch.t_out = fmin_nn(ch.t_out, t_out.lane(k));
@@ -1068,7 +1077,8 @@ Chord chord(const Leaf& l, V3 x, V3 dir) {
     }
     for (; f < fe; ++f) {
       const float c = h.fnx[f] * dx + h.fny[f] * dy + h.fnz[f] * dz;
-      chord_plane(c, h.fd[f] - (h.fnx[f] * qx + h.fny[f] * qy + h.fnz[f] * qz), &ch);
+      const float nq = h.fnx[f] * qx + h.fny[f] * qy + h.fnz[f] * qz;
+      chord_plane(c, h.fd[f] - nq, 4e-6f * (std::fabs(h.fd[f]) + std::fabs(nq)), &ch);
     }
   }
   return ch;
@@ -1240,6 +1250,11 @@ void collide_convex_lane(const Leaf& A, const Leaf& B, const NarrowConfig& cfg, 
     pb = e.pb;
   }
   if (!(depth > 0.0f)) return;
+  contact_manifold(A, B, n, depth, pa, pb, out);
+}
+
+void contact_manifold(const Leaf& A, const Leaf& B, V3 n, float depth, V3 pa, V3 pb, LaneContact* out) {
+  const float ra = core_radius(A), rb = core_radius(B);
   out->n = n;
   out->depth = depth;
   // Pairs of faceted sides (polytopes, cylinder caps / side lines): clipped face
@@ -1282,13 +1297,20 @@ namespace impact::kernels {
 
 void collide_gjk_epa(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out, Range r,
                      const NarrowConfig& cfg, LeafType ta, LeafType tb) {
-  // kSimd and kScalar run the same per-lane code (see the header block).
+  // kSimd and kScalar run the same per-lane code (see the header block). Two polytopes
+  // (box, hull) take the separating axis test (sat.cpp) when it is the cheaper.
+  const bool polytopes = cfg.sat_max_vertices > 0 && (ta == kLeafBox || ta == kLeafConvex) &&
+                         (tb == kLeafBox || tb == kLeafConvex);
   for (uint32_t k = r.begin; k < r.end; ++k) {
     const cvx::V3 origin{a.p[0][k], a.p[1][k], a.p[2][k]};
     const cvx::Leaf A = cvx::load_leaf(a, k, ta, &cfg.hulls, origin);
     const cvx::Leaf B = cvx::load_leaf(b, k, tb, &cfg.hulls, origin);
     cvx::LaneContact c;
-    cvx::collide_convex_lane(A, B, cfg, &c);
+    const uint32_t sat_size = polytopes ? cvx::sat_vertex_count(A, B) : 0u;
+    if (sat_size > 0 && sat_size <= cfg.sat_max_vertices)
+      cvx::collide_sat_lane(A, B, &c);
+    else
+      cvx::collide_convex_lane(A, B, cfg, &c);
     out.count[k] = static_cast<uint8_t>(c.count);
     if (c.count == 0) continue;
     out.n[0][k] = c.n.x;

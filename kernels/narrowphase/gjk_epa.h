@@ -76,6 +76,12 @@ struct LaneContact {
 /// GJK + EPA + manifold for one pair of convex leaves (neither a half-space).
 void collide_convex_lane(const Leaf& A, const Leaf& B, const NarrowConfig& cfg, LaneContact* out);
 
+/// The manifold of a touching pair (depth > 0) given its normal n (unit, A to B) and
+/// witness points pa, pb on the cores: the clipped faces when both sides offer a flat
+/// feature along n (reference face within ~26 degrees of n), else one point midway
+/// between the surfaces. Sets out's count, n, depth, points and point depths.
+void contact_manifold(const Leaf& A, const Leaf& B, V3 n, float depth, V3 pa, V3 pb, LaneContact* out);
+
 /// Keeps at most 4 of n (point, depth) entries in place: the deepest, the farthest from
 /// it, then the two that add most area (normal n). Returns the new count.
 uint32_t reduce_manifold(V3* pts, float* depth, uint32_t n, V3 normal);

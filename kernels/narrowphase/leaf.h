@@ -75,7 +75,8 @@ struct ManifoldSoA {
 /// the hull's local frame. Face f's polygon is face_verts[face_vert_begin[f] ..
 /// face_vert_begin[f + 1]) (absolute vertex indices), counter-clockwise seen from
 /// outside; its plane is { x : fn.x <= fd } with fn unit and outward. Edge
-/// directions (unit, one per parallel class) serve SAT.
+/// directions (unit, one per parallel class; e*) are hints for the tests' reference;
+/// SAT (sat.cpp) reads the per-edge adjacency (adj_*, below).
 struct HullView {
   const uint32_t* vert_begin;       // [h], [h + 1]
   const float* vx;
@@ -92,6 +93,27 @@ struct HullView {
   const float* ex;
   const float* ey;
   const float* ez;
+  // Edge adjacency for SAT (kernels/narrowphase/sat.cpp): every hull edge once, hull h's
+  // edges adj_begin[h] .. adj_begin[h + 1] (none when the faces do not close into a
+  // 2-manifold: SAT then leaves the hull to GJK/EPA). Hull-local indices: ev0 / ev1 are
+  // the end vertices minus vert_begin[h], ef0 / ef1 the two faces minus face_begin[h].
+  // em = unit bisector of the two face normals (local), ecos / esin = cos / sin of half
+  // the angle between them: the edge's normal cone lies within that angle of em.
+  // ep = vertex ev0 (local), next to the rest for contiguous SIMD loads. A hull's edge
+  // list is padded to a multiple of 8 with copies of its last edge.
+  const uint32_t* adj_begin;        // [h], [h + 1]
+  const uint32_t* ev0;
+  const uint32_t* ev1;
+  const uint32_t* ef0;
+  const uint32_t* ef1;
+  const float* emx;
+  const float* emy;
+  const float* emz;
+  const float* ecos;
+  const float* esin;
+  const float* epx;
+  const float* epy;
+  const float* epz;
 };
 
 /// Which implementation a kernel runs. Both give the same collision data up to
@@ -105,6 +127,10 @@ struct NarrowConfig {
   float gjk_tolerance = 1e-6f;   // relative to the shapes' size
   uint32_t epa_max_iterations = 64;
   float epa_tolerance = 1e-5f;   // relative to the shapes' size
+  /// Polytope pairs (box, hull) go through SAT (sat.cpp) instead of GJK/EPA when their
+  /// vertex counts sum to at most this (a box has 8); 0: always GJK/EPA. SAT's cost
+  /// grows with F_A V_B + F_B V_A, GJK/EPA's with V_A + V_B: measured crossover ~100.
+  uint32_t sat_max_vertices = 96;
   HullView hulls{};
 };
 

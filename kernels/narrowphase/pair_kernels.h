@@ -29,7 +29,9 @@ void collide_box_halfspace(const LeafSoA&, const LeafSoA&, const ManifoldSoA&, R
 
 // --- general convex -----------------------------------------------------------------------
 /// GJK + EPA for any two convex leaf types ta <= tb (neither a half-space), one pair
-/// per lane; polytope pairs (box, convex, triangle) get a clipped face manifold.
+/// per lane; polytope pairs (box, convex, triangle) get a clipped face manifold. Small
+/// box / hull pairs take the separating axis test instead (sat.cpp,
+/// NarrowConfig::sat_max_vertices).
 void collide_gjk_epa(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out, Range r,
                      const NarrowConfig& cfg, LeafType ta, LeafType tb);
 /// Any convex leaf type ta against a half-space (B): the deepest point by the support

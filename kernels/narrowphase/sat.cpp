@@ -1,0 +1,576 @@
+// Polytope pairs (box, convex hull) by the separating axis test.
+//
+// What: collide_sat_lane computes one lane's collision data (leaf.h: count, unit normal
+// A->B, depth = the smallest separating translation, up to 4 points midway between the
+// surfaces with their own depth) for two polytopes, as collide_convex_lane does with
+// GJK + EPA, and through the same manifold routine (contact_manifold, gjk_epa.cpp).
+// Method (D. Gregorius, "The Separating Axis Test between Convex Polyhedra", GDC 2013):
+// the penetration of two polytopes is the largest separation over the face normals of
+// the Minkowski difference A - B: (1) the faces of A, (2) the faces of B, (3) the cross
+// products of an edge of A and an edge of B whose arcs on the Gauss map cross (only
+// those pairs form a face of A - B; the others are skipped). Separation along a unit
+// axis n: min over B of n.x - max over A of n.x; > 0 anywhere: separated, stop.
+//  0. Everything runs in A's local frame: B's vertices, face planes and edges are
+//     transformed once per lane (B relative to A: far-from-origin poses keep their
+//     precision, as in gjk_epa.cpp). The line of the two origins is tried first (one
+//     support per side, SIMD): most separated pairs stop there.
+//  1. Face queries: for kSimdWidth faces of one side at a time, the minimum over the
+//     other side's vertices of n.v (the vertices broadcast one by one, two running
+//     minima): O(F_A V_B + F_B V_A) / kSimdWidth steps, no horizontal reduction per face.
+//     A face's separation is at most n.c - r - d (c, r: the other side's origin and the
+//     radius of a ball about it inside it); the face of largest bound is evaluated
+//     first, and only faces whose bound beats its separation (less the bias) follow.
+//  2. Edge query: an edge's normal cone (the arc between its two face normals) lies
+//     within angle theta of the bisector m (stored per hull edge, HullView). For any
+//     axis n in A's edge cone, the separation is n.(p_B - p_A) with p_A on the edge and
+//     p_B on B, <= n.(c_B - p_A) - r_B (c_B, r_B: B's local origin and the radius of a
+//     ball about it inside B, the least face offset), and n.v <= max(m.v, cos(theta)
+//     m.v) + sin(theta)|v|. An edge whose bound is below the best face separation cannot
+//     win and is dropped (likewise for B's edges with A's ball); on the bench's hulls
+//     this leaves ~1/4 of each side's edges. The remaining pairs get Gregorius's Gauss
+//     map test (arc a-b of A's edge against arc (-c)-(-d) of B's: three sign tests of
+//     triple products), kSimdWidth B edges per step; the pairs that pass (about
+//     E_A + E_B of them) get the axis e_A x e_B oriented along A's bisector. Nearly
+//     parallel edges (|e_A x e_B| < 1e-3 |e_A||e_B|) are skipped: their Minkowski face is
+//     a sliver whose normal is within that angle of a face query's axis.
+//  3. Feature choice with a bias for faces (Gregorius, Box2D): an edge axis wins only
+//     if it separates more than the best face by 1e-5 of the pair's size, and B's face
+//     only if it beats A's by as much (a stable choice near ties; the depth changes
+//     by less than the bias). Face contact: the reference face's normal, the deepest
+//     vertex of the other side as witness; edge contact: the axis, the closest points
+//     of the two edge segments as witnesses. contact_manifold then clips the faces
+//     (or gives the one midway point), exactly as for GJK / EPA.
+// Inputs: lanes loaded by load_leaf (finite, R orthonormal, positive sizes); hulls
+// with edge adjacency (HullView adj_*; sat_vertex_count() says when SAT applies).
+// Outputs: as collide_convex_lane; touching (separation >= 0) gives count 0.
+// Precision: float, in A's frame; separations carry an error of ~1e-7 of the
+// coordinates, below the contract's tolerance. No division without a guard: no NaN for
+// finite input; no allocation (stack buffers sized by the capacity limits of sat.h).
+// Cost: O(F_A V_B + F_B V_A + E_A + E_B) vector steps plus the surviving edge pairs
+// E'_A E'_B / kSimdWidth Gauss tests; see docs/narrowphase.md for the measured times
+// and the crossover with GJK / EPA (NarrowConfig::sat_max_vertices: V_A + V_B <= 96).
+// Paths: cfg.path kSimd and kScalar run this same code (as GJK / EPA do); the one-lane
+// build (IMPACT_SIMD_SCALAR) runs it with kSimdWidth = 1.
+#include "kernels/narrowphase/sat.h"
+
+#include <cmath>
+
+#include "kernels/simd/lanes.h"
+
+namespace impact::kernels::cvx {
+
+namespace {
+
+using F = simd::FloatN<simd::kSimdWidth>;
+constexpr uint32_t kW = simd::kSimdWidth;
+
+constexpr uint32_t kSatMaxVerts = 512;
+constexpr uint32_t kSatMaxFaces = 1024;
+constexpr uint32_t kSatMaxEdges = 1536;
+
+constexpr uint32_t padded(uint32_t n) { return (n + kW - 1) / kW * kW; }
+
+IMPACT_INLINE float fmax_nn(float a, float b) { return b > a ? b : a; }
+IMPACT_INLINE float fmin_nn(float a, float b) { return b < a ? b : a; }
+
+/// A polytope's data in its local frame (a hull's slice of HullView, or a box built on
+/// the stack); edge indices are local.
+struct Poly {
+  const float *vx, *vy, *vz;
+  uint32_t nv;
+  const float *fnx, *fny, *fnz, *fd;
+  uint32_t nf;
+  const uint32_t *ev0, *ev1, *ef0, *ef1;
+  const float *emx, *emy, *emz, *ecos, *esin, *epx, *epy, *epz;
+  uint32_t ne;
+};
+
+// Box topology: vertex i = (+-e0, +-e1, +-e2) with bit 0, 1, 2 of i selecting +; faces
+// +x, -x, +y, -y, +z, -z; 4 edges along each axis.
+constexpr uint32_t kBoxEv0[12] = {0, 2, 4, 6, 0, 1, 4, 5, 0, 1, 2, 3};
+constexpr uint32_t kBoxEv1[12] = {1, 3, 5, 7, 2, 3, 6, 7, 4, 5, 6, 7};
+constexpr uint32_t kBoxEf0[12] = {3, 2, 3, 2, 1, 0, 1, 0, 1, 0, 1, 0};
+constexpr uint32_t kBoxEf1[12] = {5, 5, 4, 4, 5, 5, 4, 4, 3, 3, 2, 2};
+constexpr float kH = 0.70710678f;
+constexpr float kBoxEmx[12] = {0, 0, 0, 0, -kH, kH, -kH, kH, -kH, kH, -kH, kH};
+constexpr float kBoxEmy[12] = {-kH, kH, -kH, kH, 0, 0, 0, 0, -kH, -kH, kH, kH};
+constexpr float kBoxEmz[12] = {-kH, -kH, kH, kH, -kH, -kH, kH, kH, 0, 0, 0, 0};
+// cos / sin of 45 degrees rounded outward (the cone still holds both face normals).
+constexpr float kBoxCos[12] = {0.7071067f, 0.7071067f, 0.7071067f, 0.7071067f, 0.7071067f, 0.7071067f,
+                               0.7071067f, 0.7071067f, 0.7071067f, 0.7071067f, 0.7071067f, 0.7071067f};
+constexpr float kBoxSin[12] = {0.7071068f, 0.7071068f, 0.7071068f, 0.7071068f, 0.7071068f, 0.7071068f,
+                               0.7071068f, 0.7071068f, 0.7071068f, 0.7071068f, 0.7071068f, 0.7071068f};
+constexpr float kBoxFnx[6] = {1, -1, 0, 0, 0, 0};
+constexpr float kBoxFny[6] = {0, 0, 1, -1, 0, 0};
+constexpr float kBoxFnz[6] = {0, 0, 0, 0, 1, -1};
+
+struct BoxPoly {
+  float vx[8], vy[8], vz[8], fd[6], epx[12], epy[12], epz[12];
+};
+
+/// The Poly of a box or hull leaf; false when SAT does not apply to it.
+bool make_poly(const Leaf& l, BoxPoly* box, Poly* p) {
+  if (l.type == kLeafBox) {
+    for (uint32_t i = 0; i < 8; ++i) {
+      box->vx[i] = (i & 1) ? l.e[0] : -l.e[0];
+      box->vy[i] = (i & 2) ? l.e[1] : -l.e[1];
+      box->vz[i] = (i & 4) ? l.e[2] : -l.e[2];
+    }
+    for (uint32_t f = 0; f < 6; ++f) box->fd[f] = l.e[f / 2];
+    for (uint32_t e = 0; e < 12; ++e) {
+      box->epx[e] = box->vx[kBoxEv0[e]];
+      box->epy[e] = box->vy[kBoxEv0[e]];
+      box->epz[e] = box->vz[kBoxEv0[e]];
+    }
+    *p = Poly{box->vx,  box->vy,  box->vz,  8,        kBoxFnx,  kBoxFny,  kBoxFnz,  box->fd,  6,
+              kBoxEv0,  kBoxEv1,  kBoxEf0,  kBoxEf1,  kBoxEmx,  kBoxEmy,  kBoxEmz,  kBoxCos,  kBoxSin,
+              box->epx, box->epy, box->epz, 12};
+    return true;
+  }
+  if (l.type != kLeafConvex || l.hulls == nullptr || l.hulls->adj_begin == nullptr) return false;
+  const HullView& h = *l.hulls;
+  const uint32_t vb = h.vert_begin[l.hull], fb = h.face_begin[l.hull], eb = h.adj_begin[l.hull];
+  p->nv = h.vert_begin[l.hull + 1] - vb;
+  p->nf = h.face_begin[l.hull + 1] - fb;
+  p->ne = h.adj_begin[l.hull + 1] - eb;
+  if (p->ne == 0 || p->nv > kSatMaxVerts || p->nf > kSatMaxFaces || p->ne > kSatMaxEdges) return false;
+  p->vx = h.vx + vb, p->vy = h.vy + vb, p->vz = h.vz + vb;
+  p->fnx = h.fnx + fb, p->fny = h.fny + fb, p->fnz = h.fnz + fb, p->fd = h.fd + fb;
+  p->ev0 = h.ev0 + eb, p->ev1 = h.ev1 + eb, p->ef0 = h.ef0 + eb, p->ef1 = h.ef1 + eb;
+  p->emx = h.emx + eb, p->emy = h.emy + eb, p->emz = h.emz + eb, p->ecos = h.ecos + eb, p->esin = h.esin + eb;
+  p->epx = h.epx + eb, p->epy = h.epy + eb, p->epz = h.epz + eb;
+  return true;
+}
+
+/// kW floats from p[i ..] where n - i > 0 remain (the rest repeat the last one).
+IMPACT_INLINE F load_tail(const float* p, uint32_t i, uint32_t n) {
+  if (i + kW <= n) return F::load(p + i);
+  float t[kW];
+  for (uint32_t k = 0; k < kW; ++k) t[k] = p[i + k < n ? i + k : n - 1];
+  return F::load(t);
+}
+
+/// The lowest index i among the lanes that hold the largest s (ties: lowest idx).
+IMPACT_INLINE float reduce_max(F s, F idx, float* out_idx) {
+  float bs = s.lane(0);
+  for (uint32_t k = 1; k < kW; ++k) bs = fmax_nn(bs, s.lane(k));
+  float bi = INFINITY;
+  for (uint32_t k = 0; k < kW; ++k) bi = (s.lane(k) == bs && idx.lane(k) < bi) ? idx.lane(k) : bi;
+  *out_idx = bi;
+  return bs;
+}
+
+/// Faces in padded SoA (the face query's candidates) and their original indices.
+struct FaceList {
+  float nx[kSatMaxFaces + kW], ny[kSatMaxFaces + kW], nz[kSatMaxFaces + kW], d[kSatMaxFaces + kW];
+  uint32_t id[kSatMaxFaces + kW];
+  uint32_t n = 0;
+  void pad() {
+    for (uint32_t k = n; k < padded(n); ++k) nx[k] = nx[0], ny[k] = ny[0], nz[k] = nz[0], d[k] = d[0], id[k] = id[0];
+  }
+};
+
+/// max over the list's faces f of (min_j n_f.v_j - d_f), and that face (original
+/// index, the lowest among ties); kW faces per step, the vertices broadcast one at a
+/// time (two running minima hide the min latency). L.n > 0.
+float face_query(const FaceList& L, const float* vx, const float* vy, const float* vz, uint32_t nv,
+                 uint32_t* out_face) {
+  F best(-INFINITY), bidx(0.0f);
+  for (uint32_t f = 0; f < L.n; f += kW) {
+    const F NX = F::load(L.nx + f), NY = F::load(L.ny + f), NZ = F::load(L.nz + f);
+    F m0(INFINITY), m1(INFINITY);
+    uint32_t j = 0;
+    for (; j + 2 <= nv; j += 2) {
+      m0 = simd::min(m0, NX * F(vx[j]) + NY * F(vy[j]) + NZ * F(vz[j]));
+      m1 = simd::min(m1, NX * F(vx[j + 1]) + NY * F(vy[j + 1]) + NZ * F(vz[j + 1]));
+    }
+    if (j < nv) m0 = simd::min(m0, NX * F(vx[j]) + NY * F(vy[j]) + NZ * F(vz[j]));
+    const F s = simd::min(m0, m1) - F::load(L.d + f);
+    float ids[kW];
+    for (uint32_t k = 0; k < kW; ++k) ids[k] = static_cast<float>(L.id[f + k]);
+    const auto gt = s > best;
+    best = simd::select(gt, s, best);
+    bidx = simd::select(gt, F::load(ids), bidx);
+  }
+  float bi;
+  const float bs = reduce_max(best, bidx, &bi);
+  *out_face = static_cast<uint32_t>(bi);
+  return bs;
+}
+
+/// min_j n.v_j over padded vertex arrays (nv > 0; the padding repeats a vertex).
+IMPACT_INLINE float min_dot(const float* vx, const float* vy, const float* vz, uint32_t nv, float nx, float ny,
+                            float nz) {
+  const F NX(nx), NY(ny), NZ(nz);
+  F m(INFINITY);
+  for (uint32_t j = 0; j < nv; j += kW) m = simd::min(m, NX * F::load(vx + j) + NY * F::load(vy + j) + NZ * F::load(vz + j));
+  float r = m.lane(0);
+  for (uint32_t k = 1; k < kW; ++k) r = fmin_nn(r, m.lane(k));
+  return r;
+}
+
+/// Upper bound of n.v over unit n within the cone (m, theta): max(m.v, cos m.v) + sin |v|.
+IMPACT_INLINE F cone_bound(F mx, F my, F mz, F c, F s, F vx, F vy, F vz) {
+  const F mv = mx * vx + my * vy + mz * vz;
+  return simd::max(mv, c * mv) + s * simd::sqrt(vx * vx + vy * vy + vz * vz);
+}
+
+/// Closest points of segments p1 + s d1 and p2 + t d2, s, t in [0, 1] (Ericson 5.1.9).
+void closest_segments(V3 p1, V3 d1, V3 p2, V3 d2, V3* c1, V3* c2) {
+  const V3 r = p1 - p2;
+  const float a = dot(d1, d1), e = dot(d2, d2), f = dot(d2, r);
+  float s = 0.0f, t = 0.0f;
+  const float c = dot(d1, r), b = dot(d1, d2);
+  const float denom = a * e - b * b;
+  if (denom > 1e-12f * a * e) s = fmin_nn(fmax_nn((b * f - c * e) / denom, 0.0f), 1.0f);
+  t = e > 0.0f ? (b * s + f) / e : 0.0f;
+  if (t < 0.0f) {
+    t = 0.0f;
+    s = a > 0.0f ? fmin_nn(fmax_nn(-c / a, 0.0f), 1.0f) : 0.0f;
+  } else if (t > 1.0f) {
+    t = 1.0f;
+    s = a > 0.0f ? fmin_nn(fmax_nn((b - c) / a, 0.0f), 1.0f) : 0.0f;
+  }
+  *c1 = p1 + d1 * s;
+  *c2 = p2 + d2 * t;
+}
+
+// Stack buffers of one lane (B's data in A's frame, A's vertices padded, the candidate
+// faces and edges).
+struct Scratch {
+  float avx[kSatMaxVerts + kW], avy[kSatMaxVerts + kW], avz[kSatMaxVerts + kW];
+  float bvx[kSatMaxVerts + kW], bvy[kSatMaxVerts + kW], bvz[kSatMaxVerts + kW];
+  float bfx[kSatMaxFaces + kW], bfy[kSatMaxFaces + kW], bfz[kSatMaxFaces + kW], bfd[kSatMaxFaces + kW];
+  float u[kSatMaxEdges + kW];  // face / edge bounds
+  float tpx[kSatMaxEdges + kW], tpy[kSatMaxEdges + kW], tpz[kSatMaxEdges + kW];  // B's edge starts
+  FaceList fl;
+  // B's candidate edges, padded to kW: -n0 (c), -n1 (d), d x c, edge vector, first vertex.
+  float cx[kSatMaxEdges + kW], cy[kSatMaxEdges + kW], cz[kSatMaxEdges + kW];
+  float dx[kSatMaxEdges + kW], dy[kSatMaxEdges + kW], dz[kSatMaxEdges + kW];
+  float qx[kSatMaxEdges + kW], qy[kSatMaxEdges + kW], qz[kSatMaxEdges + kW];
+  float ex[kSatMaxEdges + kW], ey[kSatMaxEdges + kW], ez[kSatMaxEdges + kW];
+  float px[kSatMaxEdges + kW], py[kSatMaxEdges + kW], pz[kSatMaxEdges + kW];
+  float el2[kSatMaxEdges + kW];
+  uint32_t aedge[kSatMaxEdges + kW];
+  uint32_t bedge[kSatMaxEdges + kW];
+  float au[kSatMaxEdges + kW];  // their bounds
+};
+
+/// Copies n values into dst and pads it to kW with the last one.
+IMPACT_INLINE void copy_padded(const float* src, uint32_t n, float* dst) {
+  for (uint32_t i = 0; i < n; ++i) dst[i] = src[i];
+  for (uint32_t i = n; i < padded(n); ++i) dst[i] = src[n - 1];
+}
+
+}  // namespace
+
+uint32_t sat_vertex_count(const Leaf& A, const Leaf& B) {
+  BoxPoly ba, bb;
+  Poly pa, pb;
+  if (!make_poly(A, &ba, &pa) || !make_poly(B, &bb, &pb)) return 0;
+  return pa.nv + pb.nv;
+}
+
+void collide_sat_lane(const Leaf& A, const Leaf& B, LaneContact* out, SatStats* stats) {
+  out->count = 0;
+  out->used_epa = false;
+  out->gjk_iterations = 0;
+  out->epa_iterations = 0;
+  if (stats != nullptr) *stats = SatStats{};
+  BoxPoly boxa, boxb;
+  Poly PA, PB;
+  if (!make_poly(A, &boxa, &PA) || !make_poly(B, &boxb, &PB)) return;
+  Scratch S;
+
+  // 0. B relative to A: x_A = R x_B + t.
+  float R[3][3], t[3];
+  {
+    const V3 d = B.p - A.p;
+    for (int r = 0; r < 3; ++r) {
+      t[r] = dot(d, A.ax[r]);
+      for (int c = 0; c < 3; ++c) R[r][c] = dot(A.ax[r], B.ax[c]);
+    }
+  }
+  const F r00(R[0][0]), r01(R[0][1]), r02(R[0][2]), r10(R[1][0]), r11(R[1][1]), r12(R[1][2]), r20(R[2][0]),
+      r21(R[2][1]), r22(R[2][2]), tx(t[0]), ty(t[1]), tz(t[2]);
+  copy_padded(PA.vx, PA.nv, S.avx);
+  copy_padded(PA.vy, PA.nv, S.avy);
+  copy_padded(PA.vz, PA.nv, S.avz);
+  for (uint32_t j = 0; j < PB.nv; j += kW) {  // the padding repeats the last vertex
+    const F x = load_tail(PB.vx, j, PB.nv), y = load_tail(PB.vy, j, PB.nv), z = load_tail(PB.vz, j, PB.nv);
+    (tx + r00 * x + r01 * y + r02 * z).store(S.bvx + j);
+    (ty + r10 * x + r11 * y + r12 * z).store(S.bvy + j);
+    (tz + r20 * x + r21 * y + r22 * z).store(S.bvz + j);
+  }
+  // A separated pair often separates along the line of the origins: one support per
+  // side (SIMD over the vertices) proves it before any face or edge query.
+  {
+    const float tl2 = t[0] * t[0] + t[1] * t[1] + t[2] * t[2];
+    if (tl2 > 0.0f) {
+      const float il = 1.0f / std::sqrt(tl2);
+      const float ux = t[0] * il, uy = t[1] * il, uz = t[2] * il;
+      const float s = min_dot(S.bvx, S.bvy, S.bvz, PB.nv, ux, uy, uz) + min_dot(S.avx, S.avy, S.avz, PA.nv, -ux, -uy, -uz);
+      if (s > 0.0f) return;
+    }
+  }
+  // Balls about the local origins inside A and B (radius: the least face offset; <= 0
+  // when the origin is not inside: the bounds are then off for that side); the largest
+  // offsets give the pair's size for the bias.
+  F fmin_a(INFINITY), fmin_b(INFINITY), fmax_a(0.0f), fmax_b(0.0f);
+  for (uint32_t f = 0; f < PA.nf; f += kW) {
+    const F d = load_tail(PA.fd, f, PA.nf);
+    fmin_a = simd::min(fmin_a, d), fmax_a = simd::max(fmax_a, d);
+  }
+  for (uint32_t f = 0; f < PB.nf; f += kW) {
+    const F d = load_tail(PB.fd, f, PB.nf);
+    fmin_b = simd::min(fmin_b, d), fmax_b = simd::max(fmax_b, d);
+  }
+  float ra = fmin_a.lane(0), rb = fmin_b.lane(0), ma = fmax_a.lane(0), mb = fmax_b.lane(0);
+  for (uint32_t k = 1; k < kW; ++k) {
+    ra = fmin_nn(ra, fmin_a.lane(k)), rb = fmin_nn(rb, fmin_b.lane(k));
+    ma = fmax_nn(ma, fmax_a.lane(k)), mb = fmax_nn(mb, fmax_b.lane(k));
+  }
+  const float ball_a = ra > 0.0f ? ra : -INFINITY, ball_b = rb > 0.0f ? rb : -INFINITY;
+  const float scale = fmax_nn(ma + mb, 1e-30f);
+  const float bias = 1e-5f * scale;
+
+  // 1. Face queries. Bound: sep_f = min_B n_f.x - d_f <= n_f.c_B - r_B - d_f. The face of
+  // largest bound on each side is evaluated first; its separation is a lower bound of
+  // the answer, and only faces whose bound beats it (less the bias) are evaluated.
+  uint32_t fa_seed = 0, fb_seed = 0;
+  {
+    F best(-INFINITY), bidx(0.0f), lane_f;
+    float iota[kW];
+    for (uint32_t k = 0; k < kW; ++k) iota[k] = static_cast<float>(k);
+    lane_f = F::load(iota);
+    for (uint32_t f = 0; f < PA.nf; f += kW) {
+      const F u = load_tail(PA.fnx, f, PA.nf) * tx + load_tail(PA.fny, f, PA.nf) * ty +
+                  load_tail(PA.fnz, f, PA.nf) * tz - F(ball_b) - load_tail(PA.fd, f, PA.nf);
+      u.store(S.u + f);
+      const auto gt = u > best;
+      best = simd::select(gt, u, best);
+      bidx = simd::select(gt, lane_f + F(static_cast<float>(f)), bidx);
+    }
+    float bi;
+    reduce_max(best, bidx, &bi);
+    fa_seed = static_cast<uint32_t>(bi);
+  }
+  float sa = min_dot(S.bvx, S.bvy, S.bvz, PB.nv, PA.fnx[fa_seed], PA.fny[fa_seed], PA.fnz[fa_seed]) - PA.fd[fa_seed];
+  uint32_t fa = fa_seed;
+  if (!(sa < 0.0f)) return;
+  // B's faces in A's frame, their bounds (c_A = 0): -r_A - d'_g.
+  {
+    F best(-INFINITY), bidx(0.0f);
+    float iota[kW];
+    for (uint32_t k = 0; k < kW; ++k) iota[k] = static_cast<float>(k);
+    const F lane_f = F::load(iota);
+    for (uint32_t f = 0; f < PB.nf; f += kW) {
+      const F x = load_tail(PB.fnx, f, PB.nf), y = load_tail(PB.fny, f, PB.nf), z = load_tail(PB.fnz, f, PB.nf);
+      const F ox = r00 * x + r01 * y + r02 * z, oy = r10 * x + r11 * y + r12 * z, oz = r20 * x + r21 * y + r22 * z;
+      const F od = load_tail(PB.fd, f, PB.nf) + ox * tx + oy * ty + oz * tz;
+      ox.store(S.bfx + f), oy.store(S.bfy + f), oz.store(S.bfz + f), od.store(S.bfd + f);
+      const F u = -F(ball_a) - od;
+      const auto gt = u > best;
+      best = simd::select(gt, u, best);
+      bidx = simd::select(gt, lane_f + F(static_cast<float>(f)), bidx);
+    }
+    float bi;
+    reduce_max(best, bidx, &bi);
+    fb_seed = static_cast<uint32_t>(bi);
+  }
+  float sb = min_dot(S.avx, S.avy, S.avz, PA.nv, S.bfx[fb_seed], S.bfy[fb_seed], S.bfz[fb_seed]) - S.bfd[fb_seed];
+  uint32_t fb = fb_seed;
+  if (!(sb < 0.0f)) return;
+  {
+    const float thr = fmax_nn(sa, sb) - bias;
+    FaceList& L = S.fl;
+    // Candidate indices without branches, then their planes.
+    L.n = 0;
+    for (uint32_t f = 0; f < PA.nf; ++f) {
+      L.id[L.n] = f;
+      L.n += (S.u[f] > thr && f != fa_seed) ? 1u : 0u;
+    }
+    for (uint32_t k = 0; k < L.n; ++k) {
+      const uint32_t f = L.id[k];
+      L.nx[k] = PA.fnx[f], L.ny[k] = PA.fny[f], L.nz[k] = PA.fnz[f], L.d[k] = PA.fd[f];
+    }
+    if (L.n > 0) {
+      L.pad();
+      uint32_t f;
+      const float s = face_query(L, S.bvx, S.bvy, S.bvz, PB.nv, &f);
+      if (s > sa || (s == sa && f < fa)) sa = s, fa = f;
+      if (!(sa < 0.0f)) return;
+    }
+    L.n = 0;
+    for (uint32_t f = 0; f < PB.nf; ++f) {
+      L.id[L.n] = f;
+      L.n += (-ball_a - S.bfd[f] > thr && f != fb_seed) ? 1u : 0u;
+    }
+    for (uint32_t k = 0; k < L.n; ++k) {
+      const uint32_t f = L.id[k];
+      L.nx[k] = S.bfx[f], L.ny[k] = S.bfy[f], L.nz[k] = S.bfz[f], L.d[k] = S.bfd[f];
+    }
+    if (L.n > 0) {
+      L.pad();
+      uint32_t f;
+      const float s = face_query(L, S.avx, S.avy, S.avz, PA.nv, &f);
+      if (s > sb || (s == sb && f < fb)) sb = s, fb = f;
+      if (!(sb < 0.0f)) return;
+    }
+  }
+  const float s_face = fmax_nn(sa, sb);
+
+  // 2. Edge query: edges whose cone bound cannot beat the best face by the bias are
+  // dropped; the rest pass the Gauss map test pairwise.
+  const float thr = s_face + bias;
+  uint32_t na = 0;
+  for (uint32_t e = 0; e < PA.ne; e += kW) {
+    const F u = cone_bound(load_tail(PA.emx, e, PA.ne), load_tail(PA.emy, e, PA.ne), load_tail(PA.emz, e, PA.ne),
+                           load_tail(PA.ecos, e, PA.ne), load_tail(PA.esin, e, PA.ne), tx - load_tail(PA.epx, e, PA.ne),
+                           ty - load_tail(PA.epy, e, PA.ne), tz - load_tail(PA.epz, e, PA.ne)) -
+                F(ball_b);
+    u.store(S.u + e);
+  }
+  for (uint32_t e = 0; e < PA.ne; ++e) {
+    S.aedge[na] = e;
+    S.au[na] = S.u[e];
+    na += S.u[e] > thr ? 1u : 0u;
+  }
+  for (uint32_t e = 0; e < PB.ne; e += kW) {
+    const F mx = load_tail(PB.emx, e, PB.ne), my = load_tail(PB.emy, e, PB.ne), mz = load_tail(PB.emz, e, PB.ne);
+    const F x = load_tail(PB.epx, e, PB.ne), y = load_tail(PB.epy, e, PB.ne), z = load_tail(PB.epz, e, PB.ne);
+    const F px = tx + r00 * x + r01 * y + r02 * z, py = ty + r10 * x + r11 * y + r12 * z,
+            pz = tz + r20 * x + r21 * y + r22 * z;
+    const F u = cone_bound(r00 * mx + r01 * my + r02 * mz, r10 * mx + r11 * my + r12 * mz, r20 * mx + r21 * my + r22 * mz,
+                           load_tail(PB.ecos, e, PB.ne), load_tail(PB.esin, e, PB.ne), -px, -py, -pz) -
+                F(ball_a);
+    u.store(S.u + e);
+    px.store(S.tpx + e), py.store(S.tpy + e), pz.store(S.tpz + e);
+  }
+  uint32_t nbc = 0;  // candidate indices first, without branches
+  for (uint32_t e = 0; e < PB.ne; ++e) {
+    S.bedge[nbc] = e;
+    nbc += S.u[e] > thr ? 1u : 0u;
+  }
+  uint32_t nb = 0;
+  for (uint32_t k = 0; k < nbc; ++k) {
+    const uint32_t e = S.bedge[k];
+    const uint32_t g0 = PB.ef0[e], g1 = PB.ef1[e], v1 = PB.ev1[e];
+    const V3 c{-S.bfx[g0], -S.bfy[g0], -S.bfz[g0]}, d{-S.bfx[g1], -S.bfy[g1], -S.bfz[g1]};
+    const V3 dxc = cross(d, c);
+    const V3 p{S.tpx[e], S.tpy[e], S.tpz[e]};
+    const V3 ed{S.bvx[v1] - p.x, S.bvy[v1] - p.y, S.bvz[v1] - p.z};
+    S.cx[nb] = c.x, S.cy[nb] = c.y, S.cz[nb] = c.z;
+    S.dx[nb] = d.x, S.dy[nb] = d.y, S.dz[nb] = d.z;
+    S.qx[nb] = dxc.x, S.qy[nb] = dxc.y, S.qz[nb] = dxc.z;
+    S.ex[nb] = ed.x, S.ey[nb] = ed.y, S.ez[nb] = ed.z;
+    S.px[nb] = p.x, S.py[nb] = p.y, S.pz[nb] = p.z;
+    S.el2[nb] = dot(ed, ed);
+    ++nb;
+  }
+  // Padding lanes: c = d fails the first sign test (CBA * DBA = CBA^2 >= 0).
+  for (uint32_t k = nb; k < padded(nb); ++k) {
+    S.cx[k] = S.dx[k] = 1.0f, S.cy[k] = S.dy[k] = 0.0f, S.cz[k] = S.dz[k] = 0.0f;
+    S.qx[k] = S.qy[k] = S.qz[k] = 0.0f;
+    S.ex[k] = S.ey[k] = S.ez[k] = S.px[k] = S.py[k] = S.pz[k] = S.el2[k] = 0.0f;
+  }
+  float s_edge = -INFINITY;
+  uint32_t best_a = 0, best_b = 0;
+  uint32_t hits = 0;
+  if (nb > 0) {
+    constexpr float kParallel2 = 1e-6f;  // |e_A x e_B|^2 < 1e-6 |e_A|^2 |e_B|^2: skipped
+    const uint32_t stride = padded(nb);
+    float iota[kW];
+    for (uint32_t k = 0; k < kW; ++k) iota[k] = static_cast<float>(k);
+    const F lane = F::load(iota), zero(0.0f);
+    F best(-INFINITY), bkey(0.0f);  // key = i * stride + j: exact in a float (< 2^24)
+    float s_run = -INFINITY;        // the best so far (updated when a block finds one)
+    for (uint32_t i = 0; i < na; ++i) {
+      if (!(S.au[i] > s_run)) continue;  // cannot beat it
+      const uint32_t e = S.aedge[i];
+      const uint32_t f0 = PA.ef0[e], f1 = PA.ef1[e], v1 = PA.ev1[e];
+      const V3 a{PA.fnx[f0], PA.fny[f0], PA.fnz[f0]}, b{PA.fnx[f1], PA.fny[f1], PA.fnz[f1]};
+      const V3 bxa = cross(b, a);
+      const V3 pa{PA.epx[e], PA.epy[e], PA.epz[e]};
+      const V3 ea = V3{PA.vx[v1], PA.vy[v1], PA.vz[v1]} - pa;
+      const F BXAx(bxa.x), BXAy(bxa.y), BXAz(bxa.z), Ax(a.x), Ay(a.y), Az(a.z), Bx(b.x), By(b.y), Bz(b.z);
+      const F EAx(ea.x), EAy(ea.y), EAz(ea.z), PAx(pa.x), PAy(pa.y), PAz(pa.z);
+      const F MAx(PA.emx[e]), MAy(PA.emy[e]), MAz(PA.emz[e]);
+      const F par(kParallel2 * dot(ea, ea));
+      const F key0(static_cast<float>(i * stride));
+      for (uint32_t j = 0; j < nb; j += kW) {
+        const F cx = F::load(S.cx + j), cy = F::load(S.cy + j), cz = F::load(S.cz + j);
+        const F dx = F::load(S.dx + j), dy = F::load(S.dy + j), dz = F::load(S.dz + j);
+        const F qx = F::load(S.qx + j), qy = F::load(S.qy + j), qz = F::load(S.qz + j);
+        const F cba = cx * BXAx + cy * BXAy + cz * BXAz, dba = dx * BXAx + dy * BXAy + dz * BXAz;
+        const F adc = qx * Ax + qy * Ay + qz * Az, bdc = qx * Bx + qy * By + qz * Bz;
+        const auto face = ((cba * dba) < zero) & ((adc * bdc) < zero) & ((cba * bdc) > zero);
+        const F ex = F::load(S.ex + j), ey = F::load(S.ey + j), ez = F::load(S.ez + j);
+        const F nx = EAy * ez - EAz * ey, ny = EAz * ex - EAx * ez, nz = EAx * ey - EAy * ex;
+        const F l2 = nx * nx + ny * ny + nz * nz;
+        const auto ok = face & (l2 > par * F::load(S.el2 + j));
+        const F inv = F(1.0f) / simd::sqrt(simd::select(ok, l2, F(1.0f)));
+        const F sgn = simd::select((nx * MAx + ny * MAy + nz * MAz) < zero, -inv, inv);
+        const F s = (nx * (F::load(S.px + j) - PAx) + ny * (F::load(S.py + j) - PAy) + nz * (F::load(S.pz + j) - PAz)) * sgn;
+        const auto gt = ok & (s > best);
+        best = simd::select(gt, s, best);
+        bkey = simd::select(gt, key0 + lane + F(static_cast<float>(j)), bkey);
+        if (stats != nullptr)
+          for (uint32_t k = 0; k < kW; ++k) hits += ok.lane(k) ? 1u : 0u;
+      }
+      for (uint32_t k = 0; k < kW; ++k) s_run = fmax_nn(s_run, best.lane(k));
+      if (s_run >= 0.0f) break;  // separated
+    }
+    float key;
+    s_edge = reduce_max(best, bkey, &key);
+    if (s_edge > -INFINITY) {
+      const uint32_t k = static_cast<uint32_t>(key);
+      best_a = S.aedge[k / stride];
+      best_b = k % stride;
+    }
+  }
+  if (stats != nullptr) {
+    stats->edges_a = na;
+    stats->edges_b = nb;
+    stats->gauss_hits = hits;
+  }
+  if (!(s_edge < 0.0f)) return;
+
+  // 3. Feature, normal (A's frame), witnesses.
+  V3 n, pa_l, pb_l;
+  float depth;
+  int feature;
+  if (s_edge > s_face + bias) {
+    feature = 2;
+    const uint32_t v1 = PA.ev1[best_a];
+    const V3 p1{PA.epx[best_a], PA.epy[best_a], PA.epz[best_a]};
+    const V3 d1 = V3{PA.vx[v1], PA.vy[v1], PA.vz[v1]} - p1;
+    const uint32_t j = best_b;
+    const V3 p2{S.px[j], S.py[j], S.pz[j]}, d2{S.ex[j], S.ey[j], S.ez[j]};
+    n = cross(d1, d2);
+    n = n * (1.0f / len(n));
+    if (dot(n, V3{PA.emx[best_a], PA.emy[best_a], PA.emz[best_a]}) < 0.0f) n = -n;
+    depth = -s_edge;
+    closest_segments(p1, d1, p2, d2, &pa_l, &pb_l);
+  } else if (!(sb > sa + bias)) {
+    feature = 0;
+    n = V3{PA.fnx[fa], PA.fny[fa], PA.fnz[fa]};
+    depth = -sa;
+    const uint32_t j = argmax_dot(S.bvx, S.bvy, S.bvz, 0, PB.nv, -n.x, -n.y, -n.z);
+    pb_l = V3{S.bvx[j], S.bvy[j], S.bvz[j]};
+    pa_l = pb_l + n * depth;
+  } else {
+    feature = 1;
+    n = V3{-S.bfx[fb], -S.bfy[fb], -S.bfz[fb]};
+    depth = -sb;
+    const uint32_t i = argmax_dot(PA.vx, PA.vy, PA.vz, 0, PA.nv, n.x, n.y, n.z);
+    pa_l = V3{PA.vx[i], PA.vy[i], PA.vz[i]};
+    pb_l = pa_l - n * depth;
+  }
+  if (stats != nullptr) stats->feature = feature;
+  const auto to_world = [&](V3 x) { return A.p + A.ax[0] * x.x + A.ax[1] * x.y + A.ax[2] * x.z; };
+  const V3 nw = A.ax[0] * n.x + A.ax[1] * n.y + A.ax[2] * n.z;
+  contact_manifold(A, B, nw, depth, to_world(pa_l), to_world(pb_l), out);
+}
+
+}  // namespace impact::kernels::cvx

@@ -1,0 +1,507 @@
+// The separating axis test for polytope pairs (kernels/narrowphase/sat.cpp) against
+// (1) a brute-force SAT in double over every face normal and every edge-pair cross
+// product (no Gauss map pruning, no bounds), (2) GJK/EPA (the same kernel with
+// NarrowConfig::sat_max_vertices = 0), (3) the specialised box-box kernel; on random
+// poses and on the extremes: touching, deep, coincident centres, near-parallel edges,
+// aspect 1e4, 1e-4 / 1e4 sizes, 1e5 offsets; swap symmetry; the hull store's edge
+// adjacency; the dispatch knob.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+#include <vector>
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+
+#include "host/narrowphase/convex_hull.h"
+#include "host/narrowphase/shape_store.h"
+#include "kernels/narrowphase/gjk_epa.h"
+#include "kernels/narrowphase/pair_kernels.h"
+#include "kernels/narrowphase/sat.h"
+#include "support/test_support.h"
+
+namespace impact::kernels {
+namespace {
+
+using Vec3d = Eigen::Vector3d;
+using Mat3d = Eigen::Matrix3d;
+
+struct Shape {
+  LeafType type = kLeafBox;
+  Vec3d p = Vec3d::Zero();
+  Mat3d R = Mat3d::Identity();
+  Vec3d e = Vec3d::Zero();  // box half extents
+  uint32_t hull = 0;
+};
+
+struct Lanes {
+  std::vector<float> p[3], r[9], e[3];
+  std::vector<uint32_t> ref;
+  void push(const Shape& s) {
+    for (int i = 0; i < 3; ++i) p[i].push_back(static_cast<float>(s.p[i]));
+    for (int i = 0; i < 9; ++i) r[i].push_back(static_cast<float>(s.R(i / 3, i % 3)));
+    for (int i = 0; i < 3; ++i) e[i].push_back(static_cast<float>(s.e[i]));
+    ref.push_back(s.hull);
+  }
+  LeafSoA soa() const {
+    LeafSoA s{};
+    for (int i = 0; i < 3; ++i) s.p[i] = p[i].data();
+    for (int i = 0; i < 9; ++i) s.r[i] = r[i].data();
+    for (int i = 0; i < 3; ++i) s.e[i] = e[i].data();
+    s.ref = ref.data();
+    return s;
+  }
+};
+
+struct Result {
+  uint32_t count = 0;
+  Vec3d n = Vec3d::Zero();
+  double depth = 0;
+  Vec3d pt[4];
+  double pd[4] = {0, 0, 0, 0};
+};
+
+/// Hulls of this file: random ellipsoid clouds, a needle, a pancake, a 400-point hull.
+struct Hulls {
+  HullStore store;
+  std::vector<std::vector<Vec3d>> verts;  // local, double (as stored, from float)
+  std::vector<std::vector<Vec3d>> normals;
+  uint32_t add(const std::vector<Eigen::Vector3f>& pts) {
+    HullData h;
+    EXPECT_TRUE(test::IsOk(build_convex_hull(pts, &h)));
+    std::vector<Vec3d> v, n;
+    for (const auto& x : h.vertices) v.push_back(x.cast<double>());
+    for (const auto& x : h.face_normals) n.push_back(x.cast<double>());
+    verts.push_back(v);
+    normals.push_back(n);
+    return store.add(h);
+  }
+};
+
+std::vector<Eigen::Vector3f> ellipsoid_cloud(std::mt19937& g, int n, Vec3d s) {
+  std::normal_distribution<double> nd;
+  std::vector<Eigen::Vector3f> pts;
+  for (int i = 0; i < n; ++i) {
+    Vec3d u(nd(g), nd(g), nd(g));
+    u.normalize();
+    pts.emplace_back(static_cast<float>(s.x() * u.x()), static_cast<float>(s.y() * u.y()),
+                     static_cast<float>(s.z() * u.z()));
+  }
+  return pts;
+}
+
+Hulls& hulls() {
+  static Hulls* h = [] {
+    auto* hs = new Hulls;
+    std::mt19937 g(7);
+    std::uniform_real_distribution<double> u(0.4, 1.0);
+    for (int i = 0; i < 8; ++i) hs->add(ellipsoid_cloud(g, 8 + 4 * i, Vec3d(u(g), u(g), u(g))));
+    hs->add(ellipsoid_cloud(g, 24, Vec3d(1e-2, 1e-2, 1e2)));  // 8: needle (aspect 1e4)
+    hs->add(ellipsoid_cloud(g, 24, Vec3d(1e2, 1e2, 1e-2)));   // 9: pancake
+    hs->add(ellipsoid_cloud(g, 400, Vec3d(1.0, 0.8, 0.6)));   // 10: 400 points
+    return hs;
+  }();
+  return *h;
+}
+constexpr uint32_t kRandomHulls = 8, kNeedle = 8, kPancake = 9, kBig = 10;
+
+NarrowConfig config(bool sat) {
+  NarrowConfig c;
+  c.hulls = hulls().store.view();
+  c.sat_max_vertices = sat ? 1u << 20 : 0u;
+  return c;
+}
+
+/// Runs the kernel of (a.type, b.type) on one pair (a.type <= b.type).
+Result run(const Shape& a, const Shape& b, const NarrowConfig& cfg) {
+  Lanes la, lb;
+  la.push(a);
+  lb.push(b);
+  std::vector<uint8_t> count(1, 0xff);
+  std::vector<float> n[3], depth(1), pt[4][3], pd[4];
+  ManifoldSoA o{};
+  o.count = count.data();
+  for (int i = 0; i < 3; ++i) n[i].assign(1, NAN), o.n[i] = n[i].data();
+  o.depth = depth.data();
+  for (int j = 0; j < 4; ++j) {
+    for (int i = 0; i < 3; ++i) pt[j][i].assign(1, NAN), o.point[j][i] = pt[j][i].data();
+    pd[j].assign(1, NAN);
+    o.pdepth[j] = pd[j].data();
+  }
+  if (a.type == kLeafBox && b.type == kLeafBox && cfg.sat_max_vertices == 0xffffffffu)
+    collide_box_box(la.soa(), lb.soa(), o, Range{0, 1}, cfg);  // the specialised kernel
+  else
+    collide_gjk_epa(la.soa(), lb.soa(), o, Range{0, 1}, cfg, a.type, b.type);
+  Result r;
+  r.count = count[0];
+  if (r.count > 0) {
+    r.n = Vec3d(n[0][0], n[1][0], n[2][0]);
+    r.depth = depth[0];
+    for (uint32_t j = 0; j < r.count; ++j) {
+      r.pt[j] = Vec3d(pt[j][0][0], pt[j][1][0], pt[j][2][0]);
+      r.pd[j] = pd[j][0];
+    }
+  }
+  return r;
+}
+
+/// World vertices, face normals and edges of a shape, in double (float pose as the
+/// kernel reads it).
+struct Poly {
+  std::vector<Vec3d> v, n;
+  std::vector<std::pair<Vec3d, Vec3d>> e;  // (a, b) of each edge (hulls: each face's)
+};
+
+Poly world_poly(const Shape& s) {
+  // The pose as the kernel reads it: through the float lanes.
+  Lanes l;
+  l.push(s);
+  Poly P;
+  Mat3d R;
+  Vec3d p, e;
+  for (int i = 0; i < 9; ++i) R(i / 3, i % 3) = l.r[i][0];
+  for (int i = 0; i < 3; ++i) p[i] = l.p[i][0], e[i] = l.e[i][0];
+  if (s.type == kLeafBox) {
+    for (int i = 0; i < 8; ++i)
+      P.v.push_back(p + R * Vec3d((i & 1) ? e[0] : -e[0], (i & 2) ? e[1] : -e[1], (i & 4) ? e[2] : -e[2]));
+    for (int a = 0; a < 3; ++a) {
+      P.n.push_back(R.col(a));
+      P.n.push_back(-R.col(a));
+    }
+    for (int i = 0; i < 8; ++i)
+      for (int b = 0; b < 3; ++b)
+        if (!(i & (1 << b))) P.e.emplace_back(P.v[i], P.v[i | (1 << b)]);
+    return P;
+  }
+  const Hulls& H = hulls();
+  for (const Vec3d& x : H.verts[s.hull]) P.v.push_back(p + R * x);
+  for (const Vec3d& x : H.normals[s.hull]) P.n.push_back(R * x);
+  const HullView hv = H.store.view();
+  const uint32_t vb = hv.vert_begin[s.hull];
+  for (uint32_t k = hv.adj_begin[s.hull]; k < hv.adj_begin[s.hull + 1]; ++k)
+    P.e.emplace_back(P.v[hv.ev0[k]], P.v[hv.ev1[k]]);
+  (void)vb;
+  return P;
+}
+
+/// Separation of A and B along unit n: min_B n.x - max_A n.x.
+double separation(const Poly& A, const Poly& B, const Vec3d& n) {
+  double ha = -INFINITY, lb = INFINITY;
+  for (const Vec3d& x : A.v) ha = std::max(ha, n.dot(x));
+  for (const Vec3d& x : B.v) lb = std::min(lb, n.dot(x));
+  return lb - ha;
+}
+
+/// Brute-force SAT in double: the largest separation over all face normals and all
+/// edge-pair crosses (both signs), and its axis. For polytopes this is -depth.
+double brute_sat(const Poly& A, const Poly& B, Vec3d* axis) {
+  double best = -INFINITY;
+  auto test = [&](const Vec3d& n) {
+    const double s = separation(A, B, n);
+    if (s > best) best = s, *axis = n;
+  };
+  for (const Vec3d& n : A.n) test(n);
+  for (const Vec3d& n : B.n) test(-n);
+  for (const auto& ea : A.e)
+    for (const auto& eb : B.e) {
+      const Vec3d da = ea.second - ea.first, db = eb.second - eb.first;
+      Vec3d c = da.cross(db);
+      if (!(c.norm() > 1e-9 * da.norm() * db.norm())) continue;
+      c.normalize();
+      test(c);
+      test(-c);
+    }
+  return best;
+}
+
+Mat3d random_rotation(std::mt19937& g) {
+  std::normal_distribution<double> nd;
+  Eigen::Quaterniond q(nd(g), nd(g), nd(g), nd(g));
+  q.normalize();
+  return q.toRotationMatrix();
+}
+
+double bound_radius(const Shape& s) {
+  if (s.type == kLeafBox) return s.e.norm();
+  double r = 0;
+  for (const Vec3d& v : hulls().verts[s.hull]) r = std::max(r, v.norm());
+  return r;
+}
+
+/// Checks one pair through SAT against the brute force and GJK/EPA: hit agreement
+/// outside the touching band, depth, the normal's separation (a minimum direction),
+/// points between the surfaces. tol relative to the larger bounding radius.
+void check_pair(const Shape& a, const Shape& b, double rel, const char* what) {
+  const double L = std::max(bound_radius(a), bound_radius(b));
+  const double tol = rel * L;
+  const Poly A = world_poly(a), B = world_poly(b);
+  Vec3d axis;
+  const double s = -brute_sat(A, B, &axis);  // > 0: penetration depth
+  const Result sat = run(a, b, config(true));
+  const Result gjk = run(a, b, config(false));
+  SCOPED_TRACE(what);
+  if (std::fabs(s) > tol) {
+    EXPECT_EQ(sat.count > 0, s > 0) << "depth " << s << " tol " << tol;
+    EXPECT_EQ(gjk.count > 0, s > 0);
+  }
+  if (sat.count == 0) return;
+  EXPECT_LE(sat.count, 4u);
+  EXPECT_NEAR(sat.n.norm(), 1.0, 1e-5);
+  EXPECT_NEAR(sat.depth, s, tol) << "gjk depth " << gjk.depth;
+  // Moving B by n * depth separates along n: the separation along n is about -depth.
+  EXPECT_NEAR(separation(A, B, sat.n), -sat.depth, tol);
+  for (uint32_t j = 0; j < sat.count; ++j) {
+    EXPECT_GE(sat.pd[j], -tol);
+    EXPECT_LE(sat.pd[j], sat.depth + tol);
+    EXPECT_TRUE(std::isfinite(sat.pt[j].x()) && std::isfinite(sat.pt[j].y()) && std::isfinite(sat.pt[j].z()));
+  }
+  if (gjk.count > 0) {
+EXPECT_NEAR(sat.depth, gjk.depth, 2 * tol);
+}
+}
+
+Shape random_hull(std::mt19937& g, uint32_t hull, Vec3d p) {
+  Shape s;
+  s.type = kLeafConvex;
+  s.hull = hull;
+  s.R = random_rotation(g);
+  s.p = p;
+  return s;
+}
+
+Shape random_box(std::mt19937& g, Vec3d p, double scale = 1.0) {
+  std::uniform_real_distribution<double> u(0.2, 1.0);
+  Shape s;
+  s.type = kLeafBox;
+  s.e = Vec3d(u(g), u(g), u(g)) * scale;
+  s.R = random_rotation(g);
+  s.p = p;
+  return s;
+}
+
+Vec3d random_unit(std::mt19937& g) {
+  std::normal_distribution<double> nd;
+  Vec3d v(nd(g), nd(g), nd(g));
+  return v.normalized();
+}
+
+// --- hull store adjacency ----------------------------------------------------------------
+
+TEST(Sat, HullEdgeAdjacency) {
+  const Hulls& H = hulls();
+  const HullView v = H.store.view();
+  for (uint32_t h = 0; h < H.store.size(); ++h) {
+    const uint32_t nv = v.vert_begin[h + 1] - v.vert_begin[h], nf = v.face_begin[h + 1] - v.face_begin[h];
+    const uint32_t eb = v.adj_begin[h], ee = v.adj_begin[h + 1];
+    ASSERT_GT(ee, eb);
+    EXPECT_EQ((ee - eb) % 8, 0u);
+    // Unique (undirected) edges: Euler V - E + F = 2; every edge lies on both faces.
+    std::vector<std::pair<uint32_t, uint32_t>> uniq;
+    for (uint32_t k = eb; k < ee; ++k) {
+      const auto e = std::minmax(v.ev0[k], v.ev1[k]);
+      if (std::find(uniq.begin(), uniq.end(), std::pair<uint32_t, uint32_t>(e.first, e.second)) == uniq.end())
+        uniq.emplace_back(e.first, e.second);
+      for (uint32_t f : {v.ef0[k], v.ef1[k]}) {
+        ASSERT_LT(f, nf);
+        const uint32_t fb = v.face_begin[h] + f;
+        const uint32_t* b0 = v.face_verts + v.face_vert_begin[fb];
+        const uint32_t* b1 = v.face_verts + v.face_vert_begin[fb + 1];
+        EXPECT_NE(std::find(b0, b1, v.vert_begin[h] + v.ev0[k]), b1);
+        EXPECT_NE(std::find(b0, b1, v.vert_begin[h] + v.ev1[k]), b1);
+      }
+      EXPECT_NE(v.ef0[k], v.ef1[k]);
+      // The cone (em, theta) holds both face normals.
+      const uint32_t f0 = v.face_begin[h] + v.ef0[k], f1 = v.face_begin[h] + v.ef1[k];
+      const Vec3d m(v.emx[k], v.emy[k], v.emz[k]);
+      EXPECT_NEAR(m.norm(), 1.0, 1e-6);
+      for (uint32_t f : {f0, f1}) EXPECT_GE(m.dot(Vec3d(v.fnx[f], v.fny[f], v.fnz[f])), v.ecos[k] - 1e-6);
+      EXPECT_NEAR(v.ecos[k] * v.ecos[k] + v.esin[k] * v.esin[k], 1.0, 1e-5);
+      EXPECT_EQ(v.epx[k], v.vx[v.vert_begin[h] + v.ev0[k]]);
+    }
+    EXPECT_EQ(static_cast<int>(nv) - static_cast<int>(uniq.size()) + static_cast<int>(nf), 2) << "hull " << h;
+  }
+}
+
+TEST(Sat, NonManifoldFacesGetNoAdjacency) {
+  HullData h;  // two triangles sharing an edge: open surface
+  h.vertices = {Eigen::Vector3f(0, 0, 0), Eigen::Vector3f(1, 0, 0), Eigen::Vector3f(0, 1, 0), Eigen::Vector3f(0, 0, 1)};
+  h.faces = {{0, 2, 1}, {0, 1, 3}};
+  h.face_normals = {Eigen::Vector3f(0, 0, -1), Eigen::Vector3f(0, -1, 0)};
+  h.face_offsets = {0, 0};
+  HullStore s;
+  s.add(h);
+  EXPECT_EQ(s.view().adj_begin[1], 0u);
+  NarrowConfig c;
+  c.hulls = s.view();
+  cvx::Leaf a;
+  a.type = kLeafConvex;
+  a.hulls = &c.hulls;
+  a.ax[0] = {1, 0, 0}, a.ax[1] = {0, 1, 0}, a.ax[2] = {0, 0, 1};
+  EXPECT_EQ(cvx::sat_vertex_count(a, a), 0u);  // GJK/EPA takes such hulls
+}
+
+// --- accuracy ------------------------------------------------------------------------------
+
+TEST(Sat, RandomPosesAgainstBruteForceAndGjk) {
+  std::mt19937 g(11);
+  std::uniform_real_distribution<double> f(0.0, 1.3);
+  const uint32_t n = test::scaled(300);
+  uint32_t edge = 0, face = 0;
+  for (uint32_t i = 0; i < n; ++i) {
+    const bool box_a = i % 3 == 0;
+    Shape a = box_a ? random_box(g, Vec3d::Zero()) : random_hull(g, i % kRandomHulls, Vec3d::Zero());
+    Shape b = random_hull(g, (i * 5 + 1) % kRandomHulls, Vec3d::Zero());
+    b.p = random_unit(g) * f(g) * (bound_radius(a) + bound_radius(b)) * 0.8;
+    check_pair(a, b, 1e-4, box_a ? "box-hull" : "hull-hull");
+    // Which feature SAT picked (both kinds must be exercised).
+    const NarrowConfig cfg = config(true);
+    Lanes la, lb;
+    la.push(a), lb.push(b);
+    const cvx::V3 o{la.p[0][0], la.p[1][0], la.p[2][0]};
+    const cvx::Leaf A = cvx::load_leaf(la.soa(), 0, a.type, &cfg.hulls, o);
+    const cvx::Leaf B = cvx::load_leaf(lb.soa(), 0, b.type, &cfg.hulls, o);
+    cvx::LaneContact c;
+    cvx::SatStats st;
+    cvx::collide_sat_lane(A, B, &c, &st);
+    edge += st.feature == 2;
+    face += st.feature == 0 || st.feature == 1;
+    EXPECT_GT(cvx::sat_vertex_count(A, B), 0u);
+  }
+  EXPECT_GT(edge, n / 20);
+  EXPECT_GT(face, n / 20);
+}
+
+TEST(Sat, Extremes) {
+  std::mt19937 g(12);
+  for (int rep = 0; rep < static_cast<int>(test::scaled(20)); ++rep) {
+    // Deep and coincident centres.
+    {
+      Shape a = random_hull(g, rep % kRandomHulls, Vec3d::Zero());
+      Shape b = random_hull(g, (rep + 3) % kRandomHulls, Vec3d::Zero());
+      check_pair(a, b, 1e-4, "coincident centres");
+      b.p = random_unit(g) * 0.2;
+      check_pair(a, b, 1e-4, "deep");
+    }
+    // Touching: B moved along a direction to the brute-force touching distance.
+    {
+      Shape a = random_box(g, Vec3d::Zero());
+      Shape b = random_hull(g, rep % kRandomHulls, Vec3d::Zero());
+      const Vec3d u = random_unit(g);
+      double lo = 0, hi = 10;
+      for (int it = 0; it < 60; ++it) {
+        b.p = u * (0.5 * (lo + hi));
+        Vec3d ax;
+        (brute_sat(world_poly(a), world_poly(b), &ax) < 0 ? lo : hi) = 0.5 * (lo + hi);
+      }
+      b.p = u * hi;
+      check_pair(a, b, 1e-4, "touching");
+    }
+    // Sizes 1e-4 and 1e4, poses 1e5 from the origin.
+    for (double sc : {1e-4, 1e4}) {
+      Shape a = random_box(g, Vec3d::Zero(), sc);
+      Shape b = random_box(g, random_unit(g) * 0.8 * sc, sc);
+      check_pair(a, b, 1e-4, sc < 1 ? "boxes 1e-4" : "boxes 1e4");
+    }
+    {
+      const Vec3d far(1e5, -1e5, 1e5);
+      Shape a = random_hull(g, rep % kRandomHulls, far);
+      Shape b = random_hull(g, (rep + 1) % kRandomHulls, far + random_unit(g) * 0.9);
+      check_pair(a, b, 1e-3, "far 1e5");  // the float pose at 1e5 is exact to ~4e-3
+    }
+    // Aspect 1e4: needle against pancake and against a box.
+    {
+      Shape a = random_hull(g, kNeedle, Vec3d::Zero());
+      Shape b = random_hull(g, kPancake, random_unit(g) * 0.005);
+      check_pair(a, b, 1e-4, "needle-pancake");
+      Shape c = random_box(g, random_unit(g) * 0.5);
+      check_pair(c, a, 1e-4, "box-needle");
+    }
+  }
+}
+
+TEST(Sat, NearParallelEdges) {
+  // Two boxes crossing edge to edge, the second turned by tiny angles about the
+  // first's edge direction and about the contact normal.
+  for (double ang : {0.0, 1e-7, 1e-5, 1e-4, 1e-3, 1e-2}) {
+    for (int k = 0; k < 4; ++k) {
+      Shape a;
+      a.type = kLeafBox;
+      a.e = Vec3d(1, 1, 1);
+      a.R = Eigen::AngleAxisd(M_PI / 4, Vec3d::UnitX()).toRotationMatrix();  // edge along x, up
+      Shape b;
+      b.type = kLeafBox;
+      b.e = Vec3d(1, 0.5, 0.7);
+      b.R = Eigen::AngleAxisd(M_PI / 4 + ang, Vec3d::UnitX()).toRotationMatrix() *
+            Eigen::AngleAxisd(k * ang, Vec3d::UnitZ()).toRotationMatrix();
+      b.R = Eigen::AngleAxisd(M_PI, Vec3d::UnitY()).toRotationMatrix() * b.R;  // edge down
+      b.p = Vec3d(0.1 * k, 0, std::sqrt(2.0) + 0.7 * std::sqrt(2.0) - 0.01);
+      check_pair(a, b, 1e-4, "near-parallel edges");
+    }
+  }
+}
+
+TEST(Sat, SwapSymmetry) {
+  std::mt19937 g(14);
+  for (uint32_t i = 0; i < test::scaled(100); ++i) {
+    Shape a = random_hull(g, i % kRandomHulls, Vec3d::Zero());
+    Shape b = random_hull(g, (i + 2) % kRandomHulls, random_unit(g) * 0.8);
+    const Result x = run(a, b, config(true)), y = run(b, a, config(true));
+    const double tol = 1e-4 * std::max(bound_radius(a), bound_radius(b));
+    if (x.count == 0 || y.count == 0) {
+      if (x.count != y.count) {
+EXPECT_LT(std::max(x.depth, y.depth), tol);
+}
+      continue;
+    }
+    EXPECT_NEAR(x.depth, y.depth, tol);
+    // Unique minimum directions: opposite normals (ties may pick either).
+    const Poly A = world_poly(a), B = world_poly(b);
+    EXPECT_NEAR(separation(B, A, -x.n), -x.depth, tol);
+    EXPECT_NEAR(separation(A, B, -y.n), -y.depth, tol);
+  }
+}
+
+TEST(Sat, BoxesThroughSatMatchTheBoxBoxKernel) {
+  std::mt19937 g(15);
+  NarrowConfig box_kernel = config(true);
+  box_kernel.sat_max_vertices = 0xffffffffu;  // run() then calls collide_box_box
+  for (uint32_t i = 0; i < test::scaled(200); ++i) {
+    Shape a = random_box(g, Vec3d::Zero()), b = random_box(g, random_unit(g) * 1.2);
+    const Result x = run(a, b, config(true)), y = run(a, b, box_kernel);
+    const double tol = 1e-4 * std::max(a.e.norm(), b.e.norm());
+    if (x.count == 0 || y.count == 0) {
+      if (x.count != y.count) {
+EXPECT_LT(std::max(x.depth, y.depth), tol);
+}
+      continue;
+    }
+    EXPECT_NEAR(x.depth, y.depth, tol);
+    const Poly A = world_poly(a), B = world_poly(b);
+    EXPECT_NEAR(separation(A, B, x.n), separation(A, B, y.n), tol);
+    // (Point counts may differ: the box-box kernel clips and reduces its own way.)
+    check_pair(a, b, 1e-4, "box-box");
+  }
+}
+
+TEST(Sat, BigHullAndTheKnob) {
+  std::mt19937 g(16);
+  NarrowConfig off = config(false);
+  for (uint32_t i = 0; i < test::scaled(20); ++i) {
+    Shape a = random_hull(g, kBig, Vec3d::Zero());
+    Shape b = random_box(g, random_unit(g) * 1.3);
+    Shape c = random_hull(g, i % kRandomHulls, random_unit(g) * 1.0);
+    check_pair(b, a, 1e-4, "box - 400-point hull");
+    check_pair(a, c, 1e-4, "400-point hull - hull");
+    // Knob 0: GJK/EPA, same answer.
+    const Result x = run(a, c, off), y = run(a, c, config(true));
+    EXPECT_EQ(x.count > 0, y.count > 0);
+    if (x.count > 0 && y.count > 0) {
+EXPECT_NEAR(x.depth, y.depth, 2e-4);
+}
+  }
+}
+
+}  // namespace
+}  // namespace impact::kernels
