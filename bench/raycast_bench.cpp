@@ -1,7 +1,7 @@
 // impact_raybench: ray throughput of RayScene (Embree and LBVH paths) on
 //   - a 1M-triangle procedural terrain (static): coherent picking rays from a camera
 //     grid (pick, and closest_hit on the same rays) and incoherent visibility
-//     segments (any hit);
+//     segments (any hit), and incoherent closest-hit rays (closest_incoherent);
 //   - 100k dynamic spheres and 100k dynamic capsules: incoherent closest-hit rays,
 //     camera picking, and the per-frame update (set + commit: refit vs rebuild);
 //   - 100k dynamic posed shapes (boxes, convex hulls, cylinders; set_shapes): the same
@@ -19,6 +19,7 @@
 #include <cmath>
 #include <cstring>
 #include <functional>
+#include <limits>
 #include <memory>
 #include <random>
 #include <string>
@@ -466,11 +467,18 @@ Camera bodies_camera() {
 }
 
 void register_all() {
-  static std::vector<Ray> body_rays, terrain_rays;
+  static std::vector<Ray> body_rays, terrain_rays, terrain_down_rays;
   static std::vector<Segment> terrain_segs, body_segs;
   const float side = bodies().side;
   body_rays = incoherent_rays(side, 0.0f, side, ray_count(), 7);
   terrain_segs = terrain_segments(ray_count(), 9);
+  // Incoherent closest-hit rays on the terrain: from the segments' starts, towards
+  // their ends tilted down, so most meet the ground.
+  terrain_down_rays.resize(terrain_segs.size());
+  for (size_t i = 0; i < terrain_segs.size(); ++i) {
+    const Eigen::Vector3f d = terrain_segs[i].to - terrain_segs[i].from + Eigen::Vector3f(0.0f, -20.0f, 0.0f);
+    terrain_down_rays[i] = Ray{terrain_segs[i].from, d.normalized(), std::numeric_limits<float>::infinity(), ~0u};
+  }
   body_segs.resize(body_rays.size());
   for (size_t i = 0; i < body_rays.size(); ++i)
     body_segs[i] = {body_rays[i].origin, body_rays[i].origin + 50.0f * body_rays[i].direction, ~0u};
@@ -495,12 +503,16 @@ void register_all() {
       // plain loop below on identical input (pick adds making the rays).
       reg(name("Terrain1M", "closest", v.name, t),
           [v, t](benchmark::State& s) { closest_bench(s, SceneKind::kTerrain, v, t, terrain_rays); });
+      reg(name("Terrain1M", "closest_incoherent", v.name, t),
+          [v, t](benchmark::State& s) { closest_bench(s, SceneKind::kTerrain, v, t, terrain_down_rays); });
       reg(name("Terrain1M", "visibility", v.name, t),
           [v, t](benchmark::State& s) { any_bench(s, SceneKind::kTerrain, v, t, terrain_segs); });
     }
   const Variant embree1 = variants(false)[0];
   reg("Terrain1M/pick/plain_rtcIntersect1/threads:1",
       [embree1](benchmark::State& s) { plain_closest_bench(s, SceneKind::kTerrain, embree1, terrain_rays); });
+  reg("Terrain1M/closest_incoherent/plain_rtcIntersect1/threads:1",
+      [embree1](benchmark::State& s) { plain_closest_bench(s, SceneKind::kTerrain, embree1, terrain_down_rays); });
   reg("Terrain1M/pick/plain_rtcIntersect1_store/threads:1",
       [embree1](benchmark::State& s) { plain_closest_store_bench(s, SceneKind::kTerrain, embree1, terrain_rays); });
   reg("Terrain1M/visibility/plain_rtcOccluded1/threads:1",
