@@ -65,6 +65,7 @@ inline constexpr float kTieRel = 1e-5f;       // tie tolerance, relative to the 
 inline constexpr float kTieSize = 1e-6f;      // tie tolerance floor, relative to the boxes' size
 inline constexpr float kEdgeRound = 2e-7f;    // edge axis rounding, relative to size / |a_i x b_j|
 inline constexpr float kEdgeSkipSq = 1e-12f;  // |a_i x b_j|^2 below this: skip the axis
+inline constexpr float kPointRel = 1e-5f;     // edge contact point accuracy, relative to size
 
 template <class F>
 using L4 = Lanes<F, 4>;
@@ -437,11 +438,12 @@ IMPACT_INLINE void box_box_block(const LeafSoA& a, const LeafSoA& b, const Manif
     }
   }
   // Lanes float cannot settle, redone in double: a face won, but an edge axis came under
-  // the face limit and lost only to its rounding band; or an edge axis won whose
-  // rounding (and that of its contact point: the edges' crossing slides by ~1/3 of it)
-  // exceeds the tie tolerance - nearly parallel edges of long boxes.
+  // the face limit and lost only to its rounding band; or an edge axis won (beating the
+  // faces by more than its band, so that choice stands) whose band exceeds 1e-5 of
+  // the boxes' size: its contact point, the crossing of nearly parallel edges of long
+  // boxes, slides by about a third of the band.
   const Mask redo = ((min_edge < lim_face) & (axis < F(6.0f))) |
-                    ((axis >= F(6.0f)) & (edge_round > edge_len * mul_add(F(kTieRel), abs(best), tie_floor)));
+                    ((axis >= F(6.0f)) & (edge_round > edge_len * (F(kPointRel) * size)));
   V3<F> redo_point{zero, zero, zero};
   if (simd::any(redo)) {
     BoxSatLanes<F> r{best, min_all, axis, edge_l, redo_point};
