@@ -568,34 +568,11 @@ std::unique_ptr<TraceBackend> make_embree_backend(const RaySceneDesc& desc, cons
   return b;
 }
 
-uint64_t embree_plain_closest_raw(void* rtc_scene, std::span<const Ray> rays) {
-  RTCScene scene = static_cast<RTCScene>(rtc_scene);
-  RTCIntersectContext ctx;
-  rtcInitIntersectContext(&ctx);
-  uint64_t hits = 0;
-  for (const Ray& r : rays) {
-    RTCRayHit rh;
-    rh.ray.org_x = r.origin.x();
-    rh.ray.org_y = r.origin.y();
-    rh.ray.org_z = r.origin.z();
-    rh.ray.dir_x = r.direction.x();
-    rh.ray.dir_y = r.direction.y();
-    rh.ray.dir_z = r.direction.z();
-    rh.ray.tnear = 0.0f;
-    rh.ray.tfar = r.tmax;
-    rh.ray.time = 0.0f;
-    rh.ray.mask = r.mask;
-    rh.ray.id = 0;
-    rh.ray.flags = 0;
-    rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-    rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
-    rtcIntersect1(scene, &ctx, &rh);
-    hits += rh.hit.geomID != RTC_INVALID_GEOMETRY_ID;
-  }
-  return hits;
-}
+namespace {
 
-uint64_t embree_plain_closest_store_raw(void* rtc_scene, std::span<const Ray> rays, std::span<PlainHit> out) {
+// The plain rtcIntersect1 loop; kStore: keep each ray's hit in out[i].
+template <bool kStore>
+uint64_t plain_closest_loop(void* rtc_scene, std::span<const Ray> rays, PlainHit* out) {
   RTCScene scene = static_cast<RTCScene>(rtc_scene);
   RTCIntersectContext ctx;
   rtcInitIntersectContext(&ctx);
@@ -618,10 +595,21 @@ uint64_t embree_plain_closest_store_raw(void* rtc_scene, std::span<const Ray> ra
     rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
     rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
     rtcIntersect1(scene, &ctx, &rh);
-    out[i] = PlainHit{rh.ray.tfar, rh.hit.geomID, rh.hit.primID, rh.hit.instID[0], {rh.hit.Ng_x, rh.hit.Ng_y, rh.hit.Ng_z}};
+    if constexpr (kStore)
+      out[i] = PlainHit{rh.ray.tfar, rh.hit.geomID, rh.hit.primID, rh.hit.instID[0], {rh.hit.Ng_x, rh.hit.Ng_y, rh.hit.Ng_z}};
     hits += rh.hit.geomID != RTC_INVALID_GEOMETRY_ID;
   }
   return hits;
+}
+
+}  // namespace
+
+uint64_t embree_plain_closest_raw(void* rtc_scene, std::span<const Ray> rays) {
+  return plain_closest_loop<false>(rtc_scene, rays, nullptr);
+}
+
+uint64_t embree_plain_closest_store_raw(void* rtc_scene, std::span<const Ray> rays, std::span<PlainHit> out) {
+  return plain_closest_loop<true>(rtc_scene, rays, out.data());
 }
 
 uint64_t embree_plain_any_raw(void* rtc_scene, std::span<const Segment> segments) {

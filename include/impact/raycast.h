@@ -42,7 +42,7 @@ class World;
 /// Which engine traces the rays.
 enum class RayBackend : int {
   kEmbree = 0,  ///< Embree 3 (two-level: static meshes in their own instanced scene)
-  kLbvh = 1,    ///< impact's LBVH (Karras build, ordered traversal); bit-identical across threads
+  kLbvh = 1,    ///< impact's LBVH (docs/lbvh.md; ordered traversal); bit-identical across threads
 };
 
 /// How dynamic geometry (spheres, capsules) is brought up to date by commit() when only

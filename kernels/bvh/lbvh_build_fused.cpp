@@ -3,25 +3,16 @@
 #include <algorithm>
 #include <bit>
 
+#include "kernels/bvh/lbvh_bounds.h"
+
 namespace impact::kernels {
 namespace {
 
 constexpr uint32_t kBlocked = 0xffffffffu;
 
-struct Bounds {
-  float lo[3];
-  float hi[3];
-};
-
-template <class B>
-IMPACT_INLINE Bounds bounds_of(const B& b) {
-  return {{b.min_x, b.min_y, b.min_z}, {b.max_x, b.max_y, b.max_z}};
-}
-
-IMPACT_INLINE Bounds unite(const Bounds& a, const Bounds& b) {
-  return {{std::min(a.lo[0], b.lo[0]), std::min(a.lo[1], b.lo[1]), std::min(a.lo[2], b.lo[2])},
-          {std::max(a.hi[0], b.hi[0]), std::max(a.hi[1], b.hi[1]), std::max(a.hi[2], b.hi[2])}};
-}
+using lbvh_detail::Bounds;
+using lbvh_detail::bounds_of;
+using lbvh_detail::unite;
 
 struct Ctx {
   const LbvhFusedIn& in;
@@ -75,13 +66,8 @@ struct Ctx {
     const bool left_leaf = l == g, right_leaf = r == g + 1;
     const Bounds u = unite(left, right);
     LbvhNode& node = out.topo.nodes[idx];
-    node.min_x = u.lo[0];
-    node.min_y = u.lo[1];
-    node.min_z = u.lo[2];
+    lbvh_detail::store_bounds(node, u);
     node.split = g | (left_leaf ? kLbvhLeftLeaf : 0u) | (right_leaf ? kLbvhRightLeaf : 0u);
-    node.max_x = u.hi[0];
-    node.max_y = u.hi[1];
-    node.max_z = u.hi[2];
     node.last = r;
     (left_leaf ? out.topo.leaf_parent : out.topo.internal_parent)[g] = idx;
     (right_leaf ? out.topo.leaf_parent : out.topo.internal_parent)[g + 1] = idx;

@@ -3,36 +3,20 @@
 #include <algorithm>
 #include <bit>
 
+#include "kernels/bvh/lbvh_bounds.h"
+
 namespace impact::kernels {
 namespace {
 
-struct Bounds {
-  float lo[3];
-  float hi[3];
-};
+using lbvh_detail::Bounds;
+using lbvh_detail::bounds_of;
+using lbvh_detail::store_bounds;
+using lbvh_detail::unite;
 
 // min_x of a node marked "straddles a chunk seam, computed by lbvh_refit_seam" (a
 // quiet NaN: never a valid bound).
 constexpr uint32_t kSeamMark = 0x7fc5ea11u;
 
-template <class B>
-IMPACT_INLINE Bounds bounds_of(const B& b) {
-  return {{b.min_x, b.min_y, b.min_z}, {b.max_x, b.max_y, b.max_z}};
-}
-
-IMPACT_INLINE Bounds unite(const Bounds& a, const Bounds& b) {
-  return {{std::min(a.lo[0], b.lo[0]), std::min(a.lo[1], b.lo[1]), std::min(a.lo[2], b.lo[2])},
-          {std::max(a.hi[0], b.hi[0]), std::max(a.hi[1], b.hi[1]), std::max(a.hi[2], b.hi[2])}};
-}
-
-IMPACT_INLINE void store(LbvhNode& node, const Bounds& u) {
-  node.min_x = u.lo[0];
-  node.min_y = u.lo[1];
-  node.min_z = u.lo[2];
-  node.max_x = u.hi[0];
-  node.max_y = u.hi[1];
-  node.max_z = u.hi[2];
-}
 
 IMPACT_INLINE bool marked(const LbvhNode& node) { return std::bit_cast<uint32_t>(node.min_x) == kSeamMark; }
 
@@ -73,7 +57,7 @@ void lbvh_refit(AabbSoA boxes, PairFilter filter, LbvhRefitIn in, LbvhRefitOut o
         seam = g + 1 == b || (!(node.split & kLbvhLeftLeaf) && marked(out.nodes[g]));
         if (!seam) {
           cur = unite(child_bounds(out, node.split, kLbvhLeftLeaf, g), cur);
-          store(node, cur);
+          store_bounds(node, cur);
           continue;
         }
       }
@@ -95,7 +79,7 @@ void lbvh_refit_seam(LbvhRefitIn in, LbvhRefitOut out, uint32_t n, Range r) {
   while (p != kInvalidBody && out.nodes[p].last < r.end) {
     LbvhNode& node = out.nodes[p];
     const uint32_t g = node.split & kLbvhSplitMask;
-    store(node, unite(child_bounds(out, node.split, kLbvhLeftLeaf, g),
+    store_bounds(node, unite(child_bounds(out, node.split, kLbvhLeftLeaf, g),
                       child_bounds(out, node.split, kLbvhRightLeaf, g + 1)));
     p = in.internal_parent[p];
   }

@@ -21,6 +21,7 @@
 #include "host/narrowphase/shape_store.h"
 #include "kernels/narrowphase/gjk_epa.h"
 #include "kernels/narrowphase/pair_kernels.h"
+#include "support/leaf_lanes.h"
 #include "support/test_support.h"
 
 namespace impact::kernels {
@@ -39,28 +40,7 @@ struct Shape {
   uint32_t hull = 0;
 };
 
-/// Lanes of one side, owning their arrays.
-struct Lanes {
-  std::vector<float> p[3], r[9], e[3], w[6];
-  std::vector<uint32_t> ref;
-  void push(const Shape& s) {
-    for (int i = 0; i < 3; ++i) p[i].push_back(static_cast<float>(s.p[i]));
-    for (int i = 0; i < 9; ++i) r[i].push_back(static_cast<float>(s.R(i / 3, i % 3)));
-    for (int i = 0; i < 3; ++i) e[i].push_back(static_cast<float>(s.e[i]));
-    for (int i = 0; i < 3; ++i) w[i].push_back(static_cast<float>(s.v1[i]));
-    for (int i = 0; i < 3; ++i) w[3 + i].push_back(static_cast<float>(s.v2[i]));
-    ref.push_back(s.hull);
-  }
-  LeafSoA soa() const {
-    LeafSoA s{};
-    for (int i = 0; i < 3; ++i) s.p[i] = p[i].data();
-    for (int i = 0; i < 9; ++i) s.r[i] = r[i].data();
-    for (int i = 0; i < 3; ++i) s.e[i] = e[i].data();
-    for (int i = 0; i < 6; ++i) s.w[i] = w[i].data();
-    s.ref = ref.data();
-    return s;
-  }
-};
+using Lanes = test::LeafLanes;
 
 struct Out {
   std::vector<uint8_t> count;
@@ -110,13 +90,7 @@ NarrowConfig config() {
   return c;
 }
 
-struct Result {
-  uint32_t count = 0;
-  Vec3d n = Vec3d::Zero();
-  double depth = 0;
-  std::array<Vec3d, 4> pt;
-  std::array<double, 4> pd{};
-};
+using Result = test::PairResult;
 
 /// Runs collide_gjk_epa (or the half-space kernel) on one pair, A's type <= B's.
 Result run_pair(const Shape& a, const Shape& b, const NarrowConfig& cfg = config()) {

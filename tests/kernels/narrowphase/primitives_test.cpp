@@ -123,6 +123,17 @@ void set_rotation(Shape& s, double w, double x, double y, double z) {
     for (int j = 0; j < 3; ++j) s.R[i][j] = m[i][j];
 }
 
+/// s's rotation = from's turned by the small angle ang (rad) about unit axis w (each
+/// column moved by ang * w x column, renormalised).
+void turn_rotation(Shape& s, const Shape& from, const D3& w, double ang) {
+  for (int c = 0; c < 3; ++c) {
+    const D3 col = from.col(c);
+    const D3 r = add(col, mul(cross(w, col), ang));
+    const D3 rn = mul(r, 1.0 / norm(r));
+    for (int i = 0; i < 3; ++i) s.R[i][c] = rn[i];
+  }
+}
+
 /// Rotation taking local z to unit direction u (for capsules), deterministic.
 void set_axis(Shape& s, const D3& u) {
   const D3 h = std::fabs(u[0]) < 0.9 ? D3{1, 0, 0} : D3{0, 1, 0};
@@ -1138,16 +1149,8 @@ TEST(PrimitivesExtremes, NeedleAndPancakeBoxes) {
     sb.p = add(sa.p, mul(g.unit(), g.uni(0, 1.5)));
     // near-parallel variants: B = A's rotation turned by 1e-7 .. 1e-3 rad
     if (k % 4 == 0) {
-      for (int i = 0; i < 3; ++i)
-        for (int j = 0; j < 3; ++j) sb.R[i][j] = sa.R[i][j];
       const double ang = std::pow(10.0, -g.uni(3, 7));
-      const D3 w = g.unit();
-      for (int c = 0; c < 3; ++c) {
-        const D3 col = sb.col(c);
-        const D3 r = add(col, mul(cross(w, col), ang));
-        const D3 rn = mul(r, 1.0 / norm(r));
-        for (int i = 0; i < 3; ++i) sb.R[i][c] = rn[i];
-      }
+      turn_rotation(sb, sa, g.unit(), ang);
     }
     a.push_back(rounded(sa)), b.push_back(rounded(sb));
   }
@@ -1218,13 +1221,7 @@ TEST(PrimitivesExtremes, NearParallelNeedlesTakeTheEdgeAxis) {
     sa.p = {g.uni(-1, 1), g.uni(-1, 1), g.uni(-1, 1)};
     Shape sb = sa;
     const double ang = std::pow(10.0, -g.uni(3, 4));
-    const D3 w = g.unit();
-    for (int c = 0; c < 3; ++c) {
-      const D3 col = sa.col(c);
-      const D3 r = add(col, mul(cross(w, col), ang));
-      const D3 rn = mul(r, 1.0 / norm(r));
-      for (int i = 0; i < 3; ++i) sb.R[i][c] = rn[i];
-    }
+    turn_rotation(sb, sa, g.unit(), ang);
     // across the needle by up to its width, along it anywhere
     sb.p = add(sa.p, add(mul(sa.col(0), g.uni(-60, 60)),
                          add(mul(sa.col(1), g.uni(-0.03, 0.03)), mul(sa.col(2), g.uni(-0.03, 0.03)))));

@@ -20,6 +20,7 @@
 #include "kernels/narrowphase/gjk_epa.h"
 #include "kernels/narrowphase/pair_kernels.h"
 #include "kernels/narrowphase/sat.h"
+#include "support/leaf_lanes.h"
 #include "support/test_support.h"
 
 namespace impact::kernels {
@@ -36,32 +37,9 @@ struct Shape {
   uint32_t hull = 0;
 };
 
-struct Lanes {
-  std::vector<float> p[3], r[9], e[3];
-  std::vector<uint32_t> ref;
-  void push(const Shape& s) {
-    for (int i = 0; i < 3; ++i) p[i].push_back(static_cast<float>(s.p[i]));
-    for (int i = 0; i < 9; ++i) r[i].push_back(static_cast<float>(s.R(i / 3, i % 3)));
-    for (int i = 0; i < 3; ++i) e[i].push_back(static_cast<float>(s.e[i]));
-    ref.push_back(s.hull);
-  }
-  LeafSoA soa() const {
-    LeafSoA s{};
-    for (int i = 0; i < 3; ++i) s.p[i] = p[i].data();
-    for (int i = 0; i < 9; ++i) s.r[i] = r[i].data();
-    for (int i = 0; i < 3; ++i) s.e[i] = e[i].data();
-    s.ref = ref.data();
-    return s;
-  }
-};
+using Lanes = test::LeafLanes;
 
-struct Result {
-  uint32_t count = 0;
-  Vec3d n = Vec3d::Zero();
-  double depth = 0;
-  Vec3d pt[4];
-  double pd[4] = {0, 0, 0, 0};
-};
+using Result = test::PairResult;
 
 /// Hulls of this file: random ellipsoid clouds, a needle, a pancake, a 400-point hull.
 struct Hulls {

@@ -14,6 +14,7 @@
 #include "host/narrowphase/convex_hull.h"
 #include "host/narrowphase/shape_store.h"
 #include "kernels/narrowphase/pair_kernels.h"
+#include "support/leaf_lanes.h"
 #include "support/test_support.h"
 
 namespace impact::kernels {
@@ -76,13 +77,7 @@ struct Plane {
   Vec3d p, n;  // solid: n.(x - p) <= 0
 };
 
-struct Result {
-  uint32_t count = 0;
-  Vec3d n = Vec3d::Zero();
-  double depth = 0;
-  Vec3d pt[4];
-  double pd[4] = {0, 0, 0, 0};
-};
+using Result = test::PairResult;
 
 HullStore& store() {
   static HullStore s;
