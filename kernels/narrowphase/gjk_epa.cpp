@@ -82,9 +82,8 @@ namespace impact::kernels::cvx {
 
 namespace {
 
-/// min / max of non-NaN floats, inlined (std::fmin / fmax are libm calls here).
-IMPACT_INLINE float fmin_nn(float a, float b) { return b < a ? b : a; }
-IMPACT_INLINE float fmax_nn(float a, float b) { return b > a ? b : a; }
+using simd::fmax_nn;
+using simd::fmin_nn;
 
 IMPACT_INLINE D3 operator+(D3 a, D3 b) { return {a.x + b.x, a.y + b.y, a.z + b.z}; }
 IMPACT_INLINE D3 operator-(D3 a, D3 b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }

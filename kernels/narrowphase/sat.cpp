@@ -70,8 +70,8 @@ constexpr uint32_t kSatMaxEdges = 1536;
 
 constexpr uint32_t padded(uint32_t n) { return (n + kW - 1) / kW * kW; }
 
-IMPACT_INLINE float fmax_nn(float a, float b) { return b > a ? b : a; }
-IMPACT_INLINE float fmin_nn(float a, float b) { return b < a ? b : a; }
+using simd::fmax_nn;
+using simd::fmin_nn;
 
 /// A polytope's data in its local frame (a hull's slice of HullView, or a box built on
 /// the stack); edge indices are local.
@@ -150,16 +150,6 @@ IMPACT_INLINE F load_tail(const float* p, uint32_t i, uint32_t n) {
   return F::load(t);
 }
 
-/// The lowest index i among the lanes that hold the largest s (ties: lowest idx).
-IMPACT_INLINE float reduce_max(F s, F idx, float* out_idx) {
-  float bs = s.lane(0);
-  for (uint32_t k = 1; k < kW; ++k) bs = fmax_nn(bs, s.lane(k));
-  float bi = INFINITY;
-  for (uint32_t k = 0; k < kW; ++k) bi = (s.lane(k) == bs && idx.lane(k) < bi) ? idx.lane(k) : bi;
-  *out_idx = bi;
-  return bs;
-}
-
 /// Faces in padded SoA (the face query's candidates) and their original indices.
 struct FaceList {
   float nx[kSatMaxFaces + kW], ny[kSatMaxFaces + kW], nz[kSatMaxFaces + kW], d[kSatMaxFaces + kW];
@@ -193,7 +183,7 @@ float face_query(const FaceList& L, const float* vx, const float* vy, const floa
     bidx = simd::select(gt, F::load(ids), bidx);
   }
   float bi;
-  const float bs = reduce_max(best, bidx, &bi);
+  const float bs = simd::max_lowest_index(best, bidx, INFINITY, &bi);
   *out_face = static_cast<uint32_t>(bi);
   return bs;
 }
@@ -339,10 +329,8 @@ void collide_sat_lane(const Leaf& A, const Leaf& B, LaneContact* out, SatStats* 
   // the answer, and only faces whose bound beats it (less the bias) are evaluated.
   uint32_t fa_seed = 0, fb_seed = 0;
   {
-    F best(-INFINITY), bidx(0.0f), lane_f;
-    float iota[kW];
-    for (uint32_t k = 0; k < kW; ++k) iota[k] = static_cast<float>(k);
-    lane_f = F::load(iota);
+    F best(-INFINITY), bidx(0.0f);
+    const F lane_f = simd::lane_index<F>();
     for (uint32_t f = 0; f < PA.nf; f += kW) {
       const F u = load_tail(PA.fnx, f, PA.nf) * tx + load_tail(PA.fny, f, PA.nf) * ty +
                   load_tail(PA.fnz, f, PA.nf) * tz - F(ball_b) - load_tail(PA.fd, f, PA.nf);
@@ -352,7 +340,7 @@ void collide_sat_lane(const Leaf& A, const Leaf& B, LaneContact* out, SatStats* 
       bidx = simd::select(gt, lane_f + F(static_cast<float>(f)), bidx);
     }
     float bi;
-    reduce_max(best, bidx, &bi);
+    simd::max_lowest_index(best, bidx, INFINITY, &bi);
     fa_seed = static_cast<uint32_t>(bi);
   }
   float sa = min_dot(S.bvx, S.bvy, S.bvz, PB.nv, PA.fnx[fa_seed], PA.fny[fa_seed], PA.fnz[fa_seed]) - PA.fd[fa_seed];
@@ -361,9 +349,7 @@ void collide_sat_lane(const Leaf& A, const Leaf& B, LaneContact* out, SatStats* 
   // B's faces in A's frame, their bounds (c_A = 0): -r_A - d'_g.
   {
     F best(-INFINITY), bidx(0.0f);
-    float iota[kW];
-    for (uint32_t k = 0; k < kW; ++k) iota[k] = static_cast<float>(k);
-    const F lane_f = F::load(iota);
+    const F lane_f = simd::lane_index<F>();
     for (uint32_t f = 0; f < PB.nf; f += kW) {
       const F x = load_tail(PB.fnx, f, PB.nf), y = load_tail(PB.fny, f, PB.nf), z = load_tail(PB.fnz, f, PB.nf);
       const F ox = r00 * x + r01 * y + r02 * z, oy = r10 * x + r11 * y + r12 * z, oz = r20 * x + r21 * y + r22 * z;
@@ -375,7 +361,7 @@ void collide_sat_lane(const Leaf& A, const Leaf& B, LaneContact* out, SatStats* 
       bidx = simd::select(gt, lane_f + F(static_cast<float>(f)), bidx);
     }
     float bi;
-    reduce_max(best, bidx, &bi);
+    simd::max_lowest_index(best, bidx, INFINITY, &bi);
     fb_seed = static_cast<uint32_t>(bi);
   }
   float sb = min_dot(S.avx, S.avy, S.avz, PA.nv, S.bfx[fb_seed], S.bfy[fb_seed], S.bfz[fb_seed]) - S.bfd[fb_seed];
@@ -480,9 +466,7 @@ void collide_sat_lane(const Leaf& A, const Leaf& B, LaneContact* out, SatStats* 
   if (nb > 0) {
     constexpr float kParallel2 = 1e-6f;  // |e_A x e_B|^2 < 1e-6 |e_A|^2 |e_B|^2: skipped
     const uint32_t stride = padded(nb);
-    float iota[kW];
-    for (uint32_t k = 0; k < kW; ++k) iota[k] = static_cast<float>(k);
-    const F lane = F::load(iota), zero(0.0f);
+    const F lane = simd::lane_index<F>(), zero(0.0f);
     F best(-INFINITY), bkey(0.0f);  // key = i * stride + j: exact in a float (< 2^24)
     float s_run = -INFINITY;        // the best so far (updated when a block finds one)
     for (uint32_t i = 0; i < na; ++i) {
@@ -522,7 +506,7 @@ void collide_sat_lane(const Leaf& A, const Leaf& B, LaneContact* out, SatStats* 
       if (s_run >= 0.0f) break;  // separated
     }
     float key;
-    s_edge = reduce_max(best, bkey, &key);
+    s_edge = simd::max_lowest_index(best, bkey, INFINITY, &key);
     if (s_edge > -INFINITY) {
       const uint32_t k = static_cast<uint32_t>(key);
       best_a = S.aedge[k / stride];

@@ -108,9 +108,7 @@ IMPACT_INLINE uint32_t argmax_dot(const float* vx, const float* vy, const float*
   float best_s = -INFINITY;
   uint32_t i = b;
   if (e - b >= kW) {
-    float iota[kW];
-    for (uint32_t k = 0; k < kW; ++k) iota[k] = static_cast<float>(k);
-    const F lane = F::load(iota), X(dx), Y(dy), Z(dz);
+    const F lane = simd::lane_index<F>(), X(dx), Y(dy), Z(dz);
     F m(-INFINITY), idx(0.0f);
     for (; i + kW <= e; i += kW) {
       const F s = X * F::load(vx + i) + Y * F::load(vy + i) + Z * F::load(vz + i);
@@ -120,13 +118,8 @@ IMPACT_INLINE uint32_t argmax_dot(const float* vx, const float* vy, const float*
     }
     // Merge without data-dependent branches (they mispredict about half the time):
     // the largest score, then the lowest index among the lanes that hold it.
-    best_s = m.lane(0);
-    for (uint32_t k = 1; k < kW; ++k) best_s = m.lane(k) > best_s ? m.lane(k) : best_s;
-    float bi = static_cast<float>(e - b);
-    for (uint32_t k = 0; k < kW; ++k) {
-      const float j = idx.lane(k);
-      bi = (m.lane(k) == best_s && j < bi) ? j : bi;
-    }
+    float bi;
+    best_s = simd::max_lowest_index(m, idx, static_cast<float>(e - b), &bi);
     best = b + static_cast<uint32_t>(bi);
   }
   for (; i < e; ++i) {

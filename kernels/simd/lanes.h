@@ -409,6 +409,31 @@ IMPACT_INLINE F sign_nonneg(F x) {
   return select(x >= F(0.0f), F(1.0f), F(-1.0f));
 }
 
+/// min / max of non-NaN floats, inlined (std::fmin / fmax are libm calls here).
+IMPACT_INLINE float fmin_nn(float a, float b) { return b < a ? b : a; }
+IMPACT_INLINE float fmax_nn(float a, float b) { return b > a ? b : a; }
+
+/// 0, 1, ..., W - 1: each lane's own index.
+template <class F>
+IMPACT_INLINE F lane_index() {
+  float iota[F::kWidth];
+  for (uint32_t k = 0; k < F::kWidth; ++k) iota[k] = static_cast<float>(k);
+  return F::load(iota);
+}
+
+/// The end of a lane-parallel argmax: the largest score s over the lanes, and in
+/// *out_idx the lowest idx among the lanes that hold it (none: where no lane does,
+/// i.e. NaN scores only). Branch-free in the data, so the same bytes for any order.
+template <class F>
+IMPACT_INLINE float max_lowest_index(F s, F idx, float none, float* out_idx) {
+  float bs = s.lane(0);
+  for (uint32_t k = 1; k < F::kWidth; ++k) bs = fmax_nn(bs, s.lane(k));
+  float bi = none;
+  for (uint32_t k = 0; k < F::kWidth; ++k) bi = (s.lane(k) == bs && idx.lane(k) < bi) ? idx.lane(k) : bi;
+  *out_idx = bi;
+  return bs;
+}
+
 using FloatW = FloatN<kSimdWidth>;
 using MaskW = MaskN<kSimdWidth>;
 using IntW = IntN<kSimdWidth>;

@@ -236,8 +236,8 @@ void check_pair(const Shape& a, const Shape& b, double rel, const char* what) {
     EXPECT_TRUE(std::isfinite(sat.pt[j].x()) && std::isfinite(sat.pt[j].y()) && std::isfinite(sat.pt[j].z()));
   }
   if (gjk.count > 0) {
-EXPECT_NEAR(sat.depth, gjk.depth, 2 * tol);
-}
+    EXPECT_NEAR(sat.depth, gjk.depth, 2 * tol);
+  }
 }
 
 Shape random_hull(std::mt19937& g, uint32_t hull, Vec3d p) {
@@ -263,6 +263,16 @@ Vec3d random_unit(std::mt19937& g) {
   std::normal_distribution<double> nd;
   Vec3d v(nd(g), nd(g), nd(g));
   return v.normalized();
+}
+
+/// True when both runs found a contact; where only one did, that pair is touching:
+/// its depth is within tol.
+bool both_touch(const Result& x, const Result& y, double tol) {
+  if (x.count > 0 && y.count > 0) return true;
+  if (x.count != y.count) {
+    EXPECT_LT(std::max(x.depth, y.depth), tol);
+  }
+  return false;
 }
 
 // --- hull store adjacency ----------------------------------------------------------------
@@ -427,12 +437,7 @@ TEST(Sat, SwapSymmetry) {
     Shape b = random_hull(g, (i + 2) % kRandomHulls, random_unit(g) * 0.8);
     const Result x = run(a, b, config(true)), y = run(b, a, config(true));
     const double tol = 1e-4 * std::max(bound_radius(a), bound_radius(b));
-    if (x.count == 0 || y.count == 0) {
-      if (x.count != y.count) {
-EXPECT_LT(std::max(x.depth, y.depth), tol);
-}
-      continue;
-    }
+    if (!both_touch(x, y, tol)) continue;
     EXPECT_NEAR(x.depth, y.depth, tol);
     // Unique minimum directions: opposite normals (ties may pick either).
     const Poly A = world_poly(a), B = world_poly(b);
@@ -449,12 +454,7 @@ TEST(Sat, BoxesThroughSatMatchTheBoxBoxKernel) {
     Shape a = random_box(g, Vec3d::Zero()), b = random_box(g, random_unit(g) * 1.2);
     const Result x = run(a, b, config(true)), y = run(a, b, box_kernel);
     const double tol = 1e-4 * std::max(a.e.norm(), b.e.norm());
-    if (x.count == 0 || y.count == 0) {
-      if (x.count != y.count) {
-EXPECT_LT(std::max(x.depth, y.depth), tol);
-}
-      continue;
-    }
+    if (!both_touch(x, y, tol)) continue;
     EXPECT_NEAR(x.depth, y.depth, tol);
     const Poly A = world_poly(a), B = world_poly(b);
     EXPECT_NEAR(separation(A, B, x.n), separation(A, B, y.n), tol);
@@ -476,8 +476,8 @@ TEST(Sat, BigHullAndTheKnob) {
     const Result x = run(a, c, off), y = run(a, c, config(true));
     EXPECT_EQ(x.count > 0, y.count > 0);
     if (x.count > 0 && y.count > 0) {
-EXPECT_NEAR(x.depth, y.depth, 2e-4);
-}
+      EXPECT_NEAR(x.depth, y.depth, 2e-4);
+    }
   }
 }
 
