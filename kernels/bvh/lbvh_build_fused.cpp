@@ -84,6 +84,7 @@ void lbvh_build_fused(AabbSoA boxes, PairFilter filter, LbvhFusedIn in, LbvhFuse
   const Ctx ctx{in, out, n};
   out_blocked->count = 0;
   for (uint32_t s = r.begin; s < r.end; ++s) {
+    lbvh_detail::prefetch_gather(in.packed, in.leaf_index, s, r.end);
     const uint32_t i = in.leaf_index[s];
     const SortedBox leaf = in.packed ? in.packed[i] : pack(boxes, i);
     out.refit.leaves[s] = leaf;

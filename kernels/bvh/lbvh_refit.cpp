@@ -34,6 +34,7 @@ void lbvh_refit(AabbSoA boxes, PairFilter filter, LbvhRefitIn in, LbvhRefitOut o
                 Range r) {
   const uint32_t b = r.begin;
   for (uint32_t s = r.begin; s < r.end; ++s) {
+    lbvh_detail::prefetch_gather(in.packed, in.leaf_index, s, r.end);
     const uint32_t i = in.leaf_index[s];
     const SortedBox leaf = in.packed ? in.packed[i] : pack(boxes, i);
     out.leaves[s] = leaf;

@@ -16,6 +16,15 @@ IMPACT_INLINE double area(const B& b) {
   return 2.0 * (dx * dy + dy * dz + dz * dx);
 }
 
+// Prefetches the child records of internal node m (about to be pushed): the DFS pops
+// a pushed node and then tests its children, one dependent cache miss per level at
+// 1M boxes; issuing it at push time overlaps it with the work in between.
+IMPACT_INLINE void prefetch_children(const LbvhView& t, const LbvhNode& m) {
+  const uint32_t h = m.split & kLbvhSplitMask;
+  __builtin_prefetch((m.split & kLbvhLeftLeaf) ? static_cast<const void*>(&t.leaves[h]) : &t.nodes[h]);
+  __builtin_prefetch((m.split & kLbvhRightLeaf) ? static_cast<const void*>(&t.leaves[h + 1]) : &t.nodes[h + 1]);
+}
+
 // A right-sibling subtree still to be tested by the current and later queries: its
 // bounds (at the LbvhNode / SortedBox offsets, so records_overlap applies) and its
 // reference (node index, or leaf position | kCandLeaf).
@@ -47,7 +56,12 @@ struct CandidateStack {
 
   IMPACT_INLINE void push_child(const LbvhView& t, uint32_t ref, bool is_leaf) {
     IMPACT_ASSERT(size < kLbvhMaxDepth + 1);
-    item[size++] = is_leaf ? candidate(t.leaves[ref], ref) : candidate(t.nodes[ref], ref);
+    if (is_leaf) {
+      item[size++] = candidate(t.leaves[ref], ref);
+    } else {
+      item[size++] = candidate(t.nodes[ref], ref);
+      prefetch_children(t, t.nodes[ref]);
+    }
   }
   // Walks down from internal node `node` along left children to its first leaf,
   // pushing each right child passed.
@@ -139,6 +153,8 @@ IMPACT_INLINE void visit_leaf(const LbvhView& t, uint32_t s, const CandidateStac
       else if (overlaps(q, t.nodes[h])) push_left = h;
       if (m.split & kLbvhRightLeaf) leaf(h + 1);
       else if (overlaps(q, t.nodes[h + 1])) push_right = h + 1;
+      if (push_right != kInvalidBody) prefetch_children(t, t.nodes[push_right]);
+      if (push_left != kInvalidBody) prefetch_children(t, t.nodes[push_left]);
       // At most one pending right sibling per level below the candidate, plus two new
       // entries: within kLbvhMaxDepth + 1 (see lbvh_build.h).
       if (push_right != kInvalidBody) stack[top++] = push_right;
@@ -215,6 +231,8 @@ IMPACT_INLINE void run_queries(const LbvhView& t, Range r, Emit&& emit) {
           else if (overlaps(g, t.nodes[h])) push_left = h;
           if (nd.split & kLbvhRightLeaf) add(h + 1);
           else if (overlaps(g, t.nodes[h + 1])) push_right = h + 1;
+          if (push_right != kInvalidBody) prefetch_children(t, t.nodes[push_right]);
+          if (push_left != kInvalidBody) prefetch_children(t, t.nodes[push_left]);
           if (push_right != kInvalidBody) stack[top++] = push_right;
           if (push_left != kInvalidBody) stack[top++] = push_left;
           IMPACT_ASSERT(top <= kLbvhMaxDepth + 1);
