@@ -25,6 +25,72 @@ IMPACT_INLINE void prefetch_children(const LbvhView& t, const LbvhNode& m) {
   __builtin_prefetch((m.split & kLbvhRightLeaf) ? static_cast<const void*>(&t.leaves[h + 1]) : &t.nodes[h + 1]);
 }
 
+// Overlap (touching included) of query record q with the 32-byte record at p (an
+// LbvhNode or SortedBox: min at p[0..2], max at p[4..6]).
+template <class B>
+IMPACT_INLINE bool overlaps_at(const B& q, const float* p) {
+#if defined(__SSE2__)
+  const __m128 q_lo = _mm_load_ps(&q.min_x), q_hi = _mm_load_ps(&q.max_x);
+  const __m128 le = _mm_and_ps(_mm_cmple_ps(q_lo, _mm_load_ps(p + 4)), _mm_cmple_ps(_mm_load_ps(p), q_hi));
+  return (_mm_movemask_ps(le) & 7) == 7;
+#else
+  return q.min_x <= p[4] && p[0] <= q.max_x && q.min_y <= p[5] && p[1] <= q.max_y && q.min_z <= p[6] &&
+         p[2] <= q.max_z;
+#endif
+}
+
+// Pre-order depth-first walk of the subtree of internal node `root` with query box q:
+// at each internal node popped, on_leaf(u, hit) for its leaf children (left, then
+// right; hit: the leaf overlaps q), then its internal children overlapping q are
+// pushed right first, so the left subtree comes first. Branch-free per child (the
+// overlap and leaf tests of a random box are unpredictable): on_leaf gets every
+// child position u, leaf or not, with hit false for internal children, and must act
+// on hit without branching on it. The walk ends early once stop() is true (checked
+// before each node).
+template <class B, class OnLeaf, class Stop>
+IMPACT_INLINE void explore(const LbvhView& t, const B& q, uint32_t root, OnLeaf&& on_leaf, Stop&& stop) {
+  // Record arrays by leaf flag (0: nodes, 1: leaves; both 32-byte records), indexed
+  // rather than selected so that the choice compiles without a branch.
+  const float* const base[2] = {&t.nodes[0].min_x, &t.leaves[0].min_x};
+  constexpr uint32_t kStride = sizeof(LbvhNode) / sizeof(float);
+  uint32_t stack[kLbvhMaxDepth + 2];
+  uint32_t top = 0;
+  stack[top++] = root;
+  while (top > 0 && !stop()) {
+    const uint32_t split = t.nodes[stack[--top]].split;
+    const uint32_t h = split & kLbvhSplitMask;
+    const uint32_t left_leaf = split >> 31, right_leaf = (split >> 30) & 1u;
+    const bool lo = overlaps_at(q, base[left_leaf] + static_cast<size_t>(h) * kStride);
+    const bool ro = overlaps_at(q, base[right_leaf] + static_cast<size_t>(h + 1) * kStride);
+    on_leaf(h, left_leaf != 0 && lo);
+    on_leaf(h + 1, right_leaf != 0 && ro);
+    // At most one pending right sibling per level below the root, plus two new
+    // entries: within kLbvhMaxDepth + 1 (see lbvh_build.h); the slot past them takes
+    // the unconditional stores.
+    stack[top] = h + 1;
+    top += (right_leaf ^ 1u) & static_cast<uint32_t>(ro);
+    stack[top] = h;
+    top += (left_leaf ^ 1u) & static_cast<uint32_t>(lo);
+    IMPACT_ASSERT(top <= kLbvhMaxDepth + 1);
+    if (top > 0) prefetch_children(t, t.nodes[stack[top - 1]]);
+  }
+}
+
+// The pair output of one range: the first `capacity` pairs go to out, the count goes
+// on; put() stores without branching on `keep` (a dropped pair lands in a spare slot).
+struct PairSink {
+  Pair* out;
+  uint64_t capacity;
+  uint64_t k = 0;
+  Pair spare{};
+
+  IMPACT_INLINE void put(uint32_t a, uint32_t b, bool keep) {
+    Pair* dst = k < capacity ? out + k : &spare;
+    *dst = Pair{a < b ? a : b, a < b ? b : a};
+    k += static_cast<uint64_t>(keep);
+  }
+};
+
 // A right-sibling subtree still to be tested by the current and later queries: its
 // bounds (at the LbvhNode / SortedBox offsets, so records_overlap applies) and its
 // reference (node index, or leaf position | kCandLeaf).
@@ -102,11 +168,11 @@ IMPACT_INLINE void advance_stack(const LbvhView& t, CandidateStack& st) {
   if ((ref & kCandLeaf) == 0) st.descend_left(t, ref);
 }
 
-// Calls emit(lo, hi) for every pair whose query leaf is s, in the documented order;
-// st holds the candidates of s.
-template <bool kFiltered, class Emit>
+// Emits every pair whose query leaf is s into sink, in the documented order; st holds
+// the candidates of s, of which those below lo are left out (a group's shared ones).
+template <bool kFiltered>
 IMPACT_INLINE void visit_leaf(const LbvhView& t, uint32_t s, const CandidateStack& st, uint32_t lo,
-                              Emit&& emit) {
+                              PairSink& sink) {
   const SortedBox q = t.leaves[s];
   uint32_t lq = 0, mq = 0;
   uint8_t sq = 0;
@@ -115,15 +181,9 @@ IMPACT_INLINE void visit_leaf(const LbvhView& t, uint32_t s, const CandidateStac
     mq = t.mask[s];
     sq = t.is_static[s];
   }
-  auto emit_leaf = [&](uint32_t u) {
-    if constexpr (kFiltered) {
-      if (!pair_allowed(lq, mq, sq, t.layer[u], t.mask[u], t.is_static[u])) return;
-    }
-    const uint32_t ib = t.leaves[u].index;
-    emit(q.index < ib ? q.index : ib, q.index < ib ? ib : q.index);
-  };
-  auto leaf = [&](uint32_t u) {
-    if (overlaps(q, t.leaves[u])) emit_leaf(u);
+  auto emit_leaf = [&](uint32_t u, bool hit) {
+    if constexpr (kFiltered) hit = hit && pair_allowed(lq, mq, sq, t.layer[u], t.mask[u], t.is_static[u]);
+    sink.put(q.index, t.leaves[u].index, hit);
   };
 
   // Candidates overlapping q, from the top (the lowest ancestor) down, compacted
@@ -134,33 +194,10 @@ IMPACT_INLINE void visit_leaf(const LbvhView& t, uint32_t s, const CandidateStac
     hit[hits] = k;
     hits += overlaps(q, st.item[k]) ? 1u : 0u;
   }
-  uint32_t stack[kLbvhMaxDepth + 1];
   for (uint32_t c = 0; c < hits; ++c) {
     const uint32_t ref = st.item[hit[c]].ref;
-    if (ref & kCandLeaf) {
-      emit_leaf(ref & ~kCandLeaf);
-      continue;
-    }
-    // Pre-order over the sibling subtree: leaf children at once (left, then right),
-    // internal children pushed right first so the left subtree comes first.
-    uint32_t top = 0;
-    stack[top++] = ref;
-    while (top > 0) {
-      const LbvhNode& m = t.nodes[stack[--top]];
-      const uint32_t h = m.split & kLbvhSplitMask;
-      uint32_t push_left = kInvalidBody, push_right = kInvalidBody;
-      if (m.split & kLbvhLeftLeaf) leaf(h);
-      else if (overlaps(q, t.nodes[h])) push_left = h;
-      if (m.split & kLbvhRightLeaf) leaf(h + 1);
-      else if (overlaps(q, t.nodes[h + 1])) push_right = h + 1;
-      if (push_right != kInvalidBody) prefetch_children(t, t.nodes[push_right]);
-      if (push_left != kInvalidBody) prefetch_children(t, t.nodes[push_left]);
-      // At most one pending right sibling per level below the candidate, plus two new
-      // entries: within kLbvhMaxDepth + 1 (see lbvh_build.h).
-      if (push_right != kInvalidBody) stack[top++] = push_right;
-      if (push_left != kInvalidBody) stack[top++] = push_left;
-      IMPACT_ASSERT(top <= kLbvhMaxDepth + 1);
-    }
+    if (ref & kCandLeaf) emit_leaf(ref & ~kCandLeaf, true);
+    else explore(t, q, ref, emit_leaf, [] { return false; });
   }
 }
 
@@ -177,12 +214,13 @@ constexpr uint32_t kSharedMax = 256;
 // A leaf overlapping a query overlaps the union box, and a pruned subtree holds none,
 // so each query emits exactly its pairs in the documented order. When the list would
 // overflow kSharedMax (crowded scenes), the group's queries run one by one.
-template <bool kFiltered, class Emit>
-IMPACT_INLINE void run_queries(const LbvhView& t, Range r, Emit&& emit) {
+template <bool kFiltered>
+IMPACT_INLINE void run_queries(const LbvhView& t, Range r, PairSink& sink) {
   CandidateStack st;
   init_stack(t, r.begin, st);
-  SortedBox shared[kSharedMax];  // index: original box; pad: sorted position
-  uint32_t stack[kLbvhMaxDepth + 1];
+  // index: original box; pad: sorted position. Two spare slots take the stores of
+  // one node's children past an overflow.
+  SortedBox shared[kSharedMax + 2];
   uint32_t s = r.begin;
   while (s < r.end) {
     uint32_t end = s + 1, lo = st.size;
@@ -205,53 +243,33 @@ IMPACT_INLINE void run_queries(const LbvhView& t, Range r, Emit&& emit) {
         g.max_y = b.max_y > g.max_y ? b.max_y : g.max_y;
         g.max_z = b.max_z > g.max_z ? b.max_z : g.max_z;
       }
-      auto add = [&](uint32_t u) {
-        if (!overlaps(g, t.leaves[u])) return;
-        if (m == kSharedMax) {
-          grouped = false;
-          return;
-        }
+      // Leaves overlapping g, in pre-order; m past kSharedMax: overflow (the walk
+      // stops at the next node, so at most two stores land past kSharedMax - 1).
+      auto add = [&](uint32_t u, bool hit) {
         shared[m] = t.leaves[u];
-        shared[m++].pad = u;
+        shared[m].pad = u;
+        m += static_cast<uint32_t>(hit);
       };
-      for (uint32_t k = lo; k-- > 0 && grouped;) {
+      for (uint32_t k = lo; k-- > 0 && m <= kSharedMax;) {
         const Candidate& c = st.item[k];
         if (!overlaps(g, c)) continue;
-        if (c.ref & kCandLeaf) {
-          add(c.pad);
-          continue;
-        }
-        uint32_t top = 0;
-        stack[top++] = c.ref;
-        while (top > 0 && grouped) {
-          const LbvhNode& nd = t.nodes[stack[--top]];
-          const uint32_t h = nd.split & kLbvhSplitMask;
-          uint32_t push_left = kInvalidBody, push_right = kInvalidBody;
-          if (nd.split & kLbvhLeftLeaf) add(h);
-          else if (overlaps(g, t.nodes[h])) push_left = h;
-          if (nd.split & kLbvhRightLeaf) add(h + 1);
-          else if (overlaps(g, t.nodes[h + 1])) push_right = h + 1;
-          if (push_right != kInvalidBody) prefetch_children(t, t.nodes[push_right]);
-          if (push_left != kInvalidBody) prefetch_children(t, t.nodes[push_left]);
-          if (push_right != kInvalidBody) stack[top++] = push_right;
-          if (push_left != kInvalidBody) stack[top++] = push_left;
-          IMPACT_ASSERT(top <= kLbvhMaxDepth + 1);
-        }
+        if (c.ref & kCandLeaf) add(c.pad, true);
+        else explore(t, g, c.ref, add, [&] { return m > kSharedMax; });
       }
+      grouped = m <= kSharedMax;
     }
     for (uint32_t u = s; u < end; ++u) {
-      visit_leaf<kFiltered>(t, u, st, grouped ? lo : 0u, emit);
+      visit_leaf<kFiltered>(t, u, st, grouped ? lo : 0u, sink);
       if (grouped) {
         const SortedBox q = t.leaves[u];
         for (uint32_t i = 0; i < m; ++i) {
-          if (!overlaps(q, shared[i])) continue;
+          bool keep = overlaps(q, shared[i]);
           if constexpr (kFiltered) {
             const uint32_t v = shared[i].pad;
-            if (!pair_allowed(t.layer[u], t.mask[u], t.is_static[u], t.layer[v], t.mask[v], t.is_static[v]))
-              continue;
+            keep = keep && pair_allowed(t.layer[u], t.mask[u], t.is_static[u], t.layer[v], t.mask[v],
+                                        t.is_static[v]);
           }
-          const uint32_t ib = shared[i].index;
-          emit(q.index < ib ? q.index : ib, q.index < ib ? ib : q.index);
+          sink.put(q.index, shared[i].index, keep);
         }
       }
       if (u + 1 < r.end) advance_stack(t, st);
@@ -263,15 +281,11 @@ IMPACT_INLINE void run_queries(const LbvhView& t, Range r, Emit&& emit) {
 }  // namespace
 
 uint64_t lbvh_find_pairs(const LbvhView& t, Pair* IMPACT_RESTRICT out, uint64_t capacity, Range r) {
-  uint64_t k = 0;
   if (r.begin >= r.end) return 0;
-  auto emit = [&](uint32_t a, uint32_t b) {
-    if (k < capacity) out[k] = Pair{a, b};
-    ++k;
-  };
-  if (t.layer) run_queries<true>(t, r, emit);
-  else run_queries<false>(t, r, emit);
-  return k;
+  PairSink sink{out, capacity};
+  if (t.layer) run_queries<true>(t, r, sink);
+  else run_queries<false>(t, r, sink);
+  return sink.k;
 }
 
 double lbvh_area_sum(const LbvhView& t, Range r) {
