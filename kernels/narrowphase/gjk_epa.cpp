@@ -475,12 +475,12 @@ void epa_finish(const Leaf& A, const Leaf& B, const Polytope& P, const EpaFace& 
       const double hm = dot(to_d(mf), wm.w);
       const double curv = 2.0 * (hm - h + dl * step) / (step * step);
       const bool model = curv > 0.0;
-      const double newton = model ? std::fmin(4.0 * step, std::fmax(0.125 * step, dl / curv)) : 0.0;
+      const double newton = model ? std::min(4.0 * step, std::max(0.125 * step, dl / curv)) : 0.0;
       if (hm < h) {
         n = mf;
         w = wm;
         h = hm;
-        step = std::fmin(kMaxStep, model ? newton : 2.0 * step);
+        step = std::min(kMaxStep, model ? newton : 2.0 * step);
         fresh = true;
       } else {
         // Second subgradient: the trial's support, tangential at n.
@@ -488,10 +488,10 @@ void epa_finish(const Leaf& A, const Leaf& B, const Polytope& P, const EpaFace& 
         const D3 e = g2 - dir;
         const double e2 = len2(e);
         double t = e2 > 0.0 ? -dot(dir, e) / e2 : 0.0;
-        t = std::fmin(1.0, std::fmax(0.0, t));
+        t = std::min(1.0, std::max(0.0, t));
         const D3 bundle = dir + e * t;
         if (len2(bundle) < 0.25 * len2(dir)) dir = bundle;  // a kink: follow it
-        step = model ? std::fmin(0.5 * step, newton) : 0.25 * step;
+        step = model ? std::min(0.5 * step, newton) : 0.25 * step;
         fresh = false;
       }
     }
@@ -610,7 +610,7 @@ GjkResult gjk_cores(const Leaf& A, const Leaf& B, float margin, float scale, uin
                     float tolerance) {
   GjkResult r;
   Simplex& s = r.simplex;
-  const double tol = static_cast<double>(std::fmax(tolerance, 1e-7f)) * scale;
+  const double tol = static_cast<double>(simd::fmax_nn(tolerance, 1e-7f)) * scale;
   const double touch = 1e-5 * scale;
   // Start from the centres' difference (A - B).
   V3 d0 = leaf_center(B) - leaf_center(A);
@@ -676,19 +676,19 @@ EpaResult epa_cores(const Leaf& A, const Leaf& B, const Simplex& start, float sc
                     uint32_t max_iterations, float tolerance) {
   EpaResult r;
   const double eps_len = 1e-5 * scale;
-  const double tol = static_cast<double>(std::fmax(tolerance, 1e-7f)) * scale;
+  const double tol = static_cast<double>(simd::fmax_nn(tolerance, 1e-7f)) * scale;
   Simplex s = start;
   // A tetrahedron from GJK's simplex; a degenerate one drops its last vertex first.
   if (s.n == 4) {
     const D3 p0 = s.v[0].w;
     const double vol = dot(s.v[1].w - p0, cross(s.v[2].w - p0, s.v[3].w - p0));
-    const double l = std::sqrt(std::fmax(std::fmax(len2(s.v[1].w - p0), len2(s.v[2].w - p0)), len2(s.v[3].w - p0)));
+    const double l = std::sqrt(std::max({len2(s.v[1].w - p0), len2(s.v[2].w - p0), len2(s.v[3].w - p0)}));
     if (!(std::fabs(vol) > eps_len * l * l)) s.n = 3;
   }
   if (s.n == 3) {
     const D3 n = cross(s.v[1].w - s.v[0].w, s.v[2].w - s.v[0].w);
     const double nl = std::sqrt(len2(n));
-    const double l = std::sqrt(std::fmax(len2(s.v[1].w - s.v[0].w), len2(s.v[2].w - s.v[0].w)));
+    const double l = std::sqrt(std::max(len2(s.v[1].w - s.v[0].w), len2(s.v[2].w - s.v[0].w)));
     if (!(nl > eps_len * l)) s.n = 2;  // collinear
     // Drop the middle vertex of a collinear triple: keep the two farthest apart.
     if (s.n == 2) {

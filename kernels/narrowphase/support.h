@@ -203,10 +203,10 @@ inline float leaf_size(const Leaf& l) {
     case kLeafCapsule: return l.e[0] + l.e[1];
     case kLeafBox: return l.e[0] + l.e[1] + l.e[2];
     case kLeafCylinder: return l.e[0] + l.e[1];
-    case kLeafEllipsoid: return std::fmax(l.e[0], std::fmax(l.e[1], l.e[2]));
+    case kLeafEllipsoid: return simd::fmax_nn(l.e[0], simd::fmax_nn(l.e[1], l.e[2]));
     case kLeafTriangle: {
       const V3 c = leaf_center(l);
-      return std::sqrt(std::fmax(len2(l.p - c), std::fmax(len2(l.v1 - c), len2(l.v2 - c))));
+      return std::sqrt(simd::fmax_nn(len2(l.p - c), simd::fmax_nn(len2(l.v1 - c), len2(l.v2 - c))));
     }
     case kLeafConvex: {
       // kSimdWidth vertices per step (max is exact: the order does not matter).

@@ -91,7 +91,7 @@ uint32_t pick_below(uint32_t n, Get get, V3 nh, float off, V3* pts, float* pd) {
         const float o0 = -sgn * cvx::dot(cvx::cross(p1 - p0, x - p0), nh);
         const float o1 = -sgn * cvx::dot(cvx::cross(p2 - p1, x - p1), nh);
         const float o2 = -sgn * cvx::dot(cvx::cross(p0 - p2, x - p2), nh);
-        const float o = std::fmax(o0, std::fmax(o1, o2));
+        const float o = simd::fmax_nn(o0, simd::fmax_nn(o1, o2));
         if (o > best) {
           best = o;
           idx[3] = i;
@@ -234,7 +234,7 @@ void collide_support_halfspace(const LeafSoA& a, const LeafSoA& b, const Manifol
     out.n[2][k] = -nh.z;
     // The reported depth is the support's (the exact deepest point, also for curved sides).
     float dmax = depth;
-    for (uint32_t i = 0; i < m; ++i) dmax = std::fmax(dmax, pd[i]);
+    for (uint32_t i = 0; i < m; ++i) dmax = simd::fmax_nn(dmax, pd[i]);
     out.depth[k] = dmax;
     for (uint32_t i = 0; i < m; ++i) {
       out.point[i][0][k] = pts[i].x + origin.x;
