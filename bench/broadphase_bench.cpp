@@ -13,6 +13,9 @@
 //       scratch buffers are already grown, as from a game's second frame on)
 //   BM_<Grid|Lbvh>ColdStart   from scratch with a new BroadPhase per call (allocation
 //       and first touch included, as the peers' from-scratch runs)
+//   BM_AutoChoice/<scene>/<grid|lbvh|auto>   from scratch on the scenes behind
+//       BroadPhaseKind::kAuto's rule (size spread 1x..1000x, dense and sparse, and the
+//       clustered scene); counter lbvh_active: what kAuto picked (docs/broadphase.md)
 //   BM_LbvhBuild / BM_LbvhRefit / BM_LbvhTraverse   the LBVH's phases apart:
 //       build() from scratch; update() as a refit after one frame of motion; pairs()
 //       on a fresh tree
@@ -74,10 +77,11 @@ bool check(benchmark::State& state, const impact::Status& s) {
 
 // --- from scratch ---------------------------------------------------------------------------
 
-void run_broad_phase(benchmark::State& state, impact::BroadPhaseKind kind, BoxScene scene) {
+// find_pairs from scratch on `boxes` (n = state.range(0) of them) per iteration.
+void run_broad_phase(benchmark::State& state, impact::BroadPhaseKind kind, const impact::bench::UniformBoxes& boxes) {
   const uint32_t n = static_cast<uint32_t>(state.range(0));
   const impact::ExecConfig exec = exec_of(state);
-  const impact::AabbInput input = scene_boxes(scene, n).view();
+  const impact::AabbInput input = boxes.view();
   impact::BroadPhase bp(kind);
   std::vector<impact::BodyPair> pairs;
   // One untimed call grows the scratch buffers and the output.
@@ -91,6 +95,11 @@ void run_broad_phase(benchmark::State& state, impact::BroadPhaseKind kind, BoxSc
   }
   timer.stop();
   report_frames(state, n, timer, pairs.size());
+  state.counters["lbvh_active"] = bp.active_kind() == impact::BroadPhaseKind::kLbvh ? 1.0 : 0.0;
+}
+
+void run_broad_phase(benchmark::State& state, impact::BroadPhaseKind kind, BoxScene scene) {
+  run_broad_phase(state, kind, scene_boxes(scene, static_cast<uint32_t>(state.range(0))));
 }
 
 // A new BroadPhase per call: the first frame's cost, allocations included.
@@ -144,6 +153,51 @@ void BM_GridColdStart(benchmark::State& state) {
 void BM_LbvhColdStart(benchmark::State& state) {
   run_cold_start(state, impact::BroadPhaseKind::kLbvh);
 }
+
+// --- the automatic choice's scenes -----------------------------------------------------------
+
+// Size spread (largest / smallest box, log-uniform) and sparsity (per axis) of the
+// BM_AutoChoice scenes (make_size_spread_boxes); ratio 0 stands for the clustered scene.
+struct SpreadScene {
+  const char* name;
+  double ratio, sparsity;
+};
+constexpr SpreadScene kSpreadScenes[] = {{"1x_dense", 1, 1},       {"4x_dense", 4, 1},
+                                         {"16x_dense", 16, 1},     {"1000x_dense", 1000, 1},
+                                         {"1x_sparse", 1, 10},     {"16x_sparse", 16, 10},
+                                         {"1000x_sparse", 1000, 10}, {"clustered", 0, 0}};
+
+const impact::bench::UniformBoxes& spread_boxes(const SpreadScene& sc, uint32_t n) {
+  static std::map<std::pair<std::string, uint32_t>, impact::bench::UniformBoxes> cache;
+  const std::pair<std::string, uint32_t> key{sc.name, n};
+  if (auto it = cache.find(key); it != cache.end()) return it->second;
+  if (sc.ratio == 0) return scene_boxes(BoxScene::kClustered, n);
+  return cache
+      .emplace(key, impact::bench::make_size_spread_boxes(n, sc.ratio, sc.sparsity, impact::bench::kDefaultSeed))
+      .first->second;
+}
+
+// BM_AutoChoice/<scene>/<grid|lbvh|auto>/<bodies>/<threads>: the table behind
+// kAuto's rule; counter lbvh_active says what kAuto picked.
+const int kAutoChoiceRegistered = [] {
+  const std::pair<const char*, impact::BroadPhaseKind> kinds[] = {{"grid", impact::BroadPhaseKind::kGrid},
+                                                                  {"lbvh", impact::BroadPhaseKind::kLbvh},
+                                                                  {"auto", impact::BroadPhaseKind::kAuto}};
+  for (const SpreadScene& sc : kSpreadScenes) {
+    for (const auto& [kind_name, kind] : kinds) {
+      const std::string name = std::string("BM_AutoChoice/") + sc.name + "/" + kind_name;
+      benchmark::RegisterBenchmark(name.c_str(),
+                                   [sc, kind](benchmark::State& state) {
+                                     run_broad_phase(state, kind,
+                                                     spread_boxes(sc, static_cast<uint32_t>(state.range(0))));
+                                   })
+          ->ArgsProduct({{10000, 100000, 1000000}, {1}})
+          ->UseRealTime()
+          ->Unit(benchmark::kMillisecond);
+    }
+  }
+  return 0;
+}();
 
 // --- LBVH phases ----------------------------------------------------------------------------
 

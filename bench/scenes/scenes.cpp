@@ -190,6 +190,32 @@ AabbInput UniformBoxes::view() const {
   return in;
 }
 
+UniformBoxes make_size_spread_boxes(uint32_t n, double ratio, double sparsity, uint64_t seed) {
+  // Two cubes of half extents h1, h2 overlap when their centres lie within a window of
+  // (2 (h1 + h2))^3; E[(h1 + h2)^3] = 2 m3 + 6 m1 m2 with m_k = E[h^k] of the log-uniform
+  // law, (1 - a^k) / (k ln(1 / a)) for a = 1 / ratio (1 when ratio is 1).
+  const double a = 1.0 / std::max(ratio, 1.0);
+  const double log_span = -std::log(a);
+  auto moment = [&](int k) { return log_span > 0.0 ? (1.0 - std::pow(a, k)) / (k * log_span) : 1.0; };
+  const double window = 8.0 * (2.0 * moment(3) + 6.0 * moment(1) * moment(2));
+  const double others = std::max(1.0, static_cast<double>(n) - 1.0);
+  UniformBoxes b;
+  b.side = static_cast<float>(sparsity * std::cbrt(0.5 * others * window));
+  for (auto* v : {&b.min_x, &b.min_y, &b.min_z, &b.max_x, &b.max_y, &b.max_z}) v->resize(n);
+  Rng rng(seed);
+  for (uint32_t i = 0; i < n; ++i) {
+    const float h = static_cast<float>(std::exp(-log_span * static_cast<double>(rng.uniform())));
+    const float x = rng.uniform() * b.side, y = rng.uniform() * b.side, z = rng.uniform() * b.side;
+    b.min_x[i] = x - h;
+    b.min_y[i] = y - h;
+    b.min_z[i] = z - h;
+    b.max_x[i] = x + h;
+    b.max_y[i] = y + h;
+    b.max_z[i] = z + h;
+  }
+  return b;
+}
+
 UniformBoxes make_uniform_boxes(uint32_t n, float radius, double pairs_per_body, uint64_t seed) {
   UniformBoxes b;
   b.side = box_cube_side(n, radius, pairs_per_body);

@@ -105,6 +105,12 @@ UniformBoxes make_uniform_boxes(uint32_t n, float radius, double pairs_per_body,
 /// hold thousands of small ones.
 UniformBoxes make_mixed_boxes(uint32_t n, uint64_t seed);
 
+/// Size spread: cubes with half extents log-uniform over [1 / ratio, 1] m (ratio 1:
+/// all 1 m), centres uniform in a cube sized for about one overlapping pair per body,
+/// times `sparsity` per axis (10: 1000x the volume, ~1/1000 of the pairs). The scenes
+/// of the automatic grid / LBVH choice (docs/broadphase.md).
+UniformBoxes make_size_spread_boxes(uint32_t n, double ratio, double sparsity, uint64_t seed);
+
 /// Clustered: n boxes of unit-radius spheres (like make_uniform_boxes) in
 /// kClusterBlobs gaussian-like blobs (each coordinate a sum of 12 uniforms, so no
 /// transcendental function shapes the bodies), blob centres uniform in a cube 16

@@ -20,7 +20,10 @@ BroadPhaseKind choose_broad_phase(const uint64_t* level_counts, uint64_t n, cons
     for (int k = 0; k < 3; ++k) cells *= std::min(std::floor(extent[k] / cell) + 1.0, static_cast<double>(kernels::kGridMaxDim));
     if (cells > grid_dense_limit(level_counts[l])) hashed += level_counts[l];
   }
-  return crowded >= kAutoLevels && 2 * hashed >= n ? BroadPhaseKind::kLbvh : BroadPhaseKind::kGrid;
+  // hashed == n: every populated level hashes (a few huge boxes that widen the
+  // extent sit in a level of their own that does not, so they do not count).
+  const bool sparse = 2 * hashed >= n, spread = crowded >= kAutoLevels;
+  return sparse && (spread || hashed == n) ? BroadPhaseKind::kLbvh : BroadPhaseKind::kGrid;
 }
 
 void BroadPhaseStage::set_kind(BroadPhaseKind kind) {
