@@ -99,6 +99,24 @@ double uniform_moment(double a, double b, int k) {
   return (std::pow(b, k + 1) - std::pow(a, k + 1)) / ((k + 1) * (b - a));
 }
 
+// n boxes (filled by put_cube) in a cube of the given side.
+UniformBoxes sized_boxes(uint32_t n, float side) {
+  UniformBoxes b;
+  b.side = side;
+  for (auto* v : {&b.min_x, &b.min_y, &b.min_z, &b.max_x, &b.max_y, &b.max_z}) v->resize(n);
+  return b;
+}
+
+// Box i: the cube of half extent h about (x, y, z).
+void put_cube(UniformBoxes& b, uint32_t i, float x, float y, float z, float h) {
+  b.min_x[i] = x - h;
+  b.min_y[i] = y - h;
+  b.min_z[i] = z - h;
+  b.max_x[i] = x + h;
+  b.max_y[i] = y + h;
+  b.max_z[i] = z + h;
+}
+
 }  // namespace
 
 std::span<const std::string_view> scene_names() {
@@ -161,20 +179,14 @@ float box_cube_side(uint32_t n, float half_extent, double pairs_per_body) {
 }
 
 UniformBoxes make_mixed_boxes(uint32_t n, uint64_t seed) {
-  UniformBoxes b;
-  b.side = static_cast<float>(std::cbrt(n * 0.004));  // small-small window 0.2^3 m^3: ~1 pair each
-  for (auto* v : {&b.min_x, &b.min_y, &b.min_z, &b.max_x, &b.max_y, &b.max_z}) v->resize(n);
+  // small-small window 0.2^3 m^3: ~1 pair each
+  UniformBoxes b = sized_boxes(n, static_cast<float>(std::cbrt(n * 0.004)));
   const uint32_t big = std::max<uint32_t>(1, n / 10000);
   Rng rng(seed);
   for (uint32_t i = 0; i < n; ++i) {
     const float h = i < big ? 0.5f * std::pow(10.0f, rng.uniform()) : 0.05f;
     const float x = rng.uniform() * b.side, y = rng.uniform() * b.side, z = rng.uniform() * b.side;
-    b.min_x[i] = x - h;
-    b.min_y[i] = y - h;
-    b.min_z[i] = z - h;
-    b.max_x[i] = x + h;
-    b.max_y[i] = y + h;
-    b.max_z[i] = z + h;
+    put_cube(b, i, x, y, z, h);
   }
   return b;
 }
@@ -199,36 +211,22 @@ UniformBoxes make_size_spread_boxes(uint32_t n, double ratio, double sparsity, u
   auto moment = [&](int k) { return log_span > 0.0 ? (1.0 - std::pow(a, k)) / (k * log_span) : 1.0; };
   const double window = 8.0 * (2.0 * moment(3) + 6.0 * moment(1) * moment(2));
   const double others = std::max(1.0, static_cast<double>(n) - 1.0);
-  UniformBoxes b;
-  b.side = static_cast<float>(sparsity * std::cbrt(0.5 * others * window));
-  for (auto* v : {&b.min_x, &b.min_y, &b.min_z, &b.max_x, &b.max_y, &b.max_z}) v->resize(n);
+  UniformBoxes b = sized_boxes(n, static_cast<float>(sparsity * std::cbrt(0.5 * others * window)));
   Rng rng(seed);
   for (uint32_t i = 0; i < n; ++i) {
     const float h = static_cast<float>(std::exp(-log_span * static_cast<double>(rng.uniform())));
     const float x = rng.uniform() * b.side, y = rng.uniform() * b.side, z = rng.uniform() * b.side;
-    b.min_x[i] = x - h;
-    b.min_y[i] = y - h;
-    b.min_z[i] = z - h;
-    b.max_x[i] = x + h;
-    b.max_y[i] = y + h;
-    b.max_z[i] = z + h;
+    put_cube(b, i, x, y, z, h);
   }
   return b;
 }
 
 UniformBoxes make_uniform_boxes(uint32_t n, float radius, double pairs_per_body, uint64_t seed) {
-  UniformBoxes b;
-  b.side = box_cube_side(n, radius, pairs_per_body);
-  for (auto* v : {&b.min_x, &b.min_y, &b.min_z, &b.max_x, &b.max_y, &b.max_z}) v->resize(n);
+  UniformBoxes b = sized_boxes(n, box_cube_side(n, radius, pairs_per_body));
   Rng rng(seed);
   for (uint32_t i = 0; i < n; ++i) {
     const float x = rng.uniform() * b.side, y = rng.uniform() * b.side, z = rng.uniform() * b.side;
-    b.min_x[i] = x - radius;
-    b.min_y[i] = y - radius;
-    b.min_z[i] = z - radius;
-    b.max_x[i] = x + radius;
-    b.max_y[i] = y + radius;
-    b.max_z[i] = z + radius;
+    put_cube(b, i, x, y, z, radius);
   }
   return b;
 }
@@ -241,9 +239,7 @@ UniformBoxes make_clustered_boxes(uint32_t n, double pairs_per_body, uint64_t se
   const double m = std::max(1.0, static_cast<double>(n) / kClusterBlobs);
   const double sigma =
       std::max(1.0, std::cbrt(4.0 * m / (std::pow(std::numbers::pi, 1.5) * std::max(pairs_per_body, 1e-3))));
-  UniformBoxes b;
-  b.side = static_cast<float>(16.0 * sigma);
-  for (auto* v : {&b.min_x, &b.min_y, &b.min_z, &b.max_x, &b.max_y, &b.max_z}) v->resize(n);
+  UniformBoxes b = sized_boxes(n, static_cast<float>(16.0 * sigma));
   Rng rng(seed);
   float centre[kClusterBlobs][3];
   for (auto& c : centre)
@@ -258,12 +254,7 @@ UniformBoxes make_clustered_boxes(uint32_t n, double pairs_per_body, uint64_t se
   for (uint32_t i = 0; i < n; ++i) {
     const float* c = centre[rng.next_u64() % kClusterBlobs];
     const float x = c[0] + sig * gauss(), y = c[1] + sig * gauss(), z = c[2] + sig * gauss();
-    b.min_x[i] = x - kRadius;
-    b.min_y[i] = y - kRadius;
-    b.min_z[i] = z - kRadius;
-    b.max_x[i] = x + kRadius;
-    b.max_y[i] = y + kRadius;
-    b.max_z[i] = z + kRadius;
+    put_cube(b, i, x, y, z, kRadius);
   }
   return b;
 }

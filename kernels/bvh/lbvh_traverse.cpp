@@ -25,20 +25,6 @@ IMPACT_INLINE void prefetch_children(const LbvhView& t, const LbvhNode& m) {
   __builtin_prefetch((m.split & kLbvhRightLeaf) ? static_cast<const void*>(&t.leaves[h + 1]) : &t.nodes[h + 1]);
 }
 
-// Overlap (touching included) of query record q with the 32-byte record at p (an
-// LbvhNode or SortedBox: min at p[0..2], max at p[4..6]).
-template <class B>
-IMPACT_INLINE bool overlaps_at(const B& q, const float* p) {
-#if defined(__SSE2__)
-  const __m128 q_lo = _mm_load_ps(&q.min_x), q_hi = _mm_load_ps(&q.max_x);
-  const __m128 le = _mm_and_ps(_mm_cmple_ps(q_lo, _mm_load_ps(p + 4)), _mm_cmple_ps(_mm_load_ps(p), q_hi));
-  return (_mm_movemask_ps(le) & 7) == 7;
-#else
-  return q.min_x <= p[4] && p[0] <= q.max_x && q.min_y <= p[5] && p[1] <= q.max_y && q.min_z <= p[6] &&
-         p[2] <= q.max_z;
-#endif
-}
-
 // Pre-order depth-first walk of the subtree of internal node `root` with query box q:
 // at each internal node popped, on_leaf(u, hit) for its leaf children (left, then
 // right; hit: the leaf overlaps q), then its internal children overlapping q are
@@ -60,8 +46,8 @@ IMPACT_INLINE void explore(const LbvhView& t, const B& q, uint32_t root, OnLeaf&
     const uint32_t split = t.nodes[stack[--top]].split;
     const uint32_t h = split & kLbvhSplitMask;
     const uint32_t left_leaf = split >> 31, right_leaf = (split >> 30) & 1u;
-    const bool lo = overlaps_at(q, base[left_leaf] + static_cast<size_t>(h) * kStride);
-    const bool ro = overlaps_at(q, base[right_leaf] + static_cast<size_t>(h + 1) * kStride);
+    const bool lo = records_overlap_at(q, base[left_leaf] + static_cast<size_t>(h) * kStride);
+    const bool ro = records_overlap_at(q, base[right_leaf] + static_cast<size_t>(h + 1) * kStride);
     on_leaf(h, left_leaf != 0 && lo);
     on_leaf(h + 1, right_leaf != 0 && ro);
     // At most one pending right sibling per level below the root, plus two new
