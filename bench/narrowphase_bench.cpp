@@ -544,7 +544,11 @@ std::unique_ptr<PairScene> generate(uint8_t ka, uint8_t kb, uint32_t n) {
     random_shape(rng, s.get(), &a);
     random_orientation(rng, &a);
     const V3 ca{rng.uniform(-50, 50), rng.uniform(-50, 50), rng.uniform(-50, 50)};
-    set_centre(&a, ca);
+    if (ka == kTriangle) {
+      place_triangle(rng, ca, &a);  // its vertices around ca (as for a triangle B)
+    } else {
+      set_centre(&a, ca);
+    }
     const V3 u = random_unit(rng);
     const double f = rng.uniform(0.6, 1.4);
     s->f.push_back(static_cast<float>(f));

@@ -49,6 +49,8 @@ struct Table {
     k[kLeafSphere][kLeafHalfSpace] = &collide_sphere_halfspace;
     k[kLeafCapsule][kLeafHalfSpace] = &collide_capsule_halfspace;
     k[kLeafBox][kLeafHalfSpace] = &collide_box_halfspace;
+    k[kLeafCylinder][kLeafHalfSpace] = &collide_cylinder_halfspace;
+    k[kLeafEllipsoid][kLeafHalfSpace] = &collide_ellipsoid_halfspace;
   }
 };
 

@@ -3,8 +3,9 @@
 // pair_kernels.cpp maps each bucket to one of them.
 //
 // Specialised, vectorised across pairs (kernels/narrowphase/primitives_*.cpp): the
-// sphere / capsule / box / triangle / half-space pairs below. Everything else goes
-// through the general convex path (kernels/narrowphase/gjk_epa.cpp): GJK + EPA on the
+// sphere / capsule / box / triangle / half-space pairs below, with the closed-form
+// cylinder and ellipsoid against half-space kernels (primitives_round.cpp). Everything
+// else goes through the general convex path (kernels/narrowphase/gjk_epa.cpp): GJK + EPA on the
 // leaves' support functions, with face clipping for polytope manifolds, and a
 // support-function kernel against half-spaces.
 #pragma once
@@ -26,6 +27,8 @@ void collide_box_triangle(const LeafSoA&, const LeafSoA&, const ManifoldSoA&, Ra
 void collide_sphere_halfspace(const LeafSoA&, const LeafSoA&, const ManifoldSoA&, Range, const NarrowConfig&);
 void collide_capsule_halfspace(const LeafSoA&, const LeafSoA&, const ManifoldSoA&, Range, const NarrowConfig&);
 void collide_box_halfspace(const LeafSoA&, const LeafSoA&, const ManifoldSoA&, Range, const NarrowConfig&);
+void collide_cylinder_halfspace(const LeafSoA&, const LeafSoA&, const ManifoldSoA&, Range, const NarrowConfig&);
+void collide_ellipsoid_halfspace(const LeafSoA&, const LeafSoA&, const ManifoldSoA&, Range, const NarrowConfig&);
 
 // --- general convex -----------------------------------------------------------------------
 /// GJK + EPA for any two convex leaf types ta <= tb (neither a half-space), one pair
@@ -35,7 +38,8 @@ void collide_box_halfspace(const LeafSoA&, const LeafSoA&, const ManifoldSoA&, R
 void collide_gjk_epa(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out, Range r,
                      const NarrowConfig& cfg, LeafType ta, LeafType tb);
 /// Any convex leaf type ta against a half-space (B): the deepest point by the support
-/// function, and for polytopes / cylinders up to 4 manifold points below the plane.
+/// function, and for polytopes up to 4 manifold points below the plane (pair_kernel()
+/// sends convex hulls and triangles here; cylinders and ellipsoids have lane kernels).
 void collide_support_halfspace(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out, Range r,
                                const NarrowConfig& cfg, LeafType ta);
 

@@ -28,7 +28,9 @@
 //                   parallel to the face gives 2 points clipped to the triangle's
 //                   prism. Core crossing the triangle: SAT over the face normal and the
 //                   3 axis x edge directions.
-//  capsule-halfspace the 1-2 core endpoints below the plane (+ radius).
+//  capsule-halfspace the capsule's surface below each core endpoint (along the
+//                   normal), where below the plane; one point when the capsule
+//                   stands steep (both lines leave through the lower end's cap).
 // Preconditions: finite inputs, positive radius, half lengths >= 0, unit axes,
 // non-degenerate triangles for a meaningful face normal (degenerate ones still give
 // finite output). Cost: 60 (half-space) to ~600 (triangle) flops per pair, no
@@ -570,7 +572,11 @@ IMPACT_INLINE void capsule_halfspace_block(const LeafSoA& a, const LeafSoA& b, c
   const F d0 = l0 - (hc - hu), d1 = l1 - (hc + hu);  // endpoints -ha, +ha
   const V3<F> x0 = u * (-ha), x1 = u * ha;
   const V3<F> p0 = madd(x0, l0 - half * d0, n), p1 = madd(x1, l1 - half * d1, n);
-  const auto two = (d0 > zero) & (d1 > zero);
+  // A steep capsule (the line down from the upper endpoint leaves through the lower
+  // end's cap: r |s| > 2 h sin) touches with that cap alone; its second line would give
+  // the same point for an upright capsule (or a zero-length core), so it keeps one.
+  const auto steep = ra * abs(snu) > F(2.0f) * ha * sqrt(max(F(1.0f) - snu * snu, F(1e-12f)));
+  const auto two = andnot((d0 > zero) & (d1 > zero), steep);
   const auto first = d0 >= d1;
   L2<F> m;
   finish(m, n, max(d0, d1), two, p0, d0, p1, d1, select(first, p0, p1), max(d0, d1));

@@ -6,10 +6,10 @@
 // Manifold: every candidate point of A below the plane, reduced to at most 4: the
 // deepest, the farthest from it, then the two adding most area:
 //   box, convex hull, triangle: their vertices;
-//   cylinder: 4 rim points per cap (along the deepest radial direction and at 90, 180,
-//     270 degrees from it): a cap lying flat gives 4 points, a cylinder on its side 2;
 //   capsule: the lowest points of the two end spheres (up to 2);
-//   sphere, ellipsoid: the deepest point.
+//   sphere, ellipsoid, cylinder: the deepest point (pair_kernel() gives cylinders and
+//     ellipsoids closed-form lane kernels, primitives_round.cpp, with the cylinder's
+//     cap / side manifold; this routine serves hulls and triangles).
 // Each point lies midway between A's point x and its projection onto the plane; its
 // pdepth is x's depth. Points are computed relative to A's position (precision far from
 // the origin) and shifted back on output.
@@ -201,24 +201,6 @@ void collide_support_halfspace(const LeafSoA& a, const LeafSoA& b, const Manifol
             2, [&](uint32_t i) { return A.p + A.ax[2] * (i == 0 ? -A.e[1] : A.e[1]) - nh * A.e[0]; }, nh, off,
             pts, pd);
         break;
-      case kLeafCylinder: {
-        const V3 u = A.ax[2];
-        const V3 down = -nh;
-        const float dx = cvx::dot(down, A.ax[0]), dy = cvx::dot(down, A.ax[1]);
-        const float rl = std::sqrt(dx * dx + dy * dy);
-        const V3 rad = rl > 1e-6f ? (A.ax[0] * dx + A.ax[1] * dy) * (1.0f / rl) : A.ax[0];
-        const V3 side = cvx::cross(u, rad);
-        m = pick_below(
-            8,
-            [&](uint32_t i) {
-              const V3 c = A.p + u * ((i & 4) ? A.e[1] : -A.e[1]);
-              const uint32_t q = i & 3;
-              const V3 dir = q == 0 ? rad : (q == 1 ? side : (q == 2 ? -rad : -side));
-              return c + dir * A.e[0];
-            },
-            nh, off, pts, pd);
-        break;
-      }
       default:
         break;
     }

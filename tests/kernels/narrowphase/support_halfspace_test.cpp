@@ -1,7 +1,9 @@
-// collide_support_halfspace (kernels/narrowphase/support_halfspace.cpp) against closed
-// forms in double: the deepest point of every convex leaf type below a plane, the
-// normal, the manifold points (each one a point of A below the plane, midway to the
-// plane), and the manifold sizes of resting boxes, cylinders and capsules.
+// The convex-leaf / half-space kernels (collide_support_halfspace for hulls and
+// triangles, the lane kernels of primitives_*.cpp for the others; through pair_kernel,
+// on both paths) against closed forms in double: the deepest point of every convex
+// leaf type below a plane, the normal, the manifold points (each one a point of A below
+// the plane, midway to the plane), and the manifold sizes of resting boxes, cylinders
+// and capsules.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -88,7 +90,11 @@ std::vector<HullData>& hull_data() {
   return d;
 }
 
-Result run(const Leaf1& l, const Plane& pl) {
+/// One lane through the bucket's kernel (pair_kernel: the lane kernels of spheres,
+/// capsules, boxes, cylinders and ellipsoids; the support routine of hulls and
+/// triangles) on the given path. The tests check both paths: they may differ by
+/// rounding, and where vertices tie by a different (equally valid) choice.
+Result run(const Leaf1& l, const Plane& pl, KernelPath path = KernelPath::kSimd) {
   Arrays a = arrays_of(l);
   Arrays b{};
   for (int i = 0; i < 3; ++i) {
@@ -107,7 +113,10 @@ Result run(const Leaf1& l, const Plane& pl) {
   }
   NarrowConfig cfg;
   cfg.hulls = store().view();
-  collide_support_halfspace(a.soa(), b.soa(), o, Range{0, 1}, cfg, l.type);
+  cfg.path = path;
+  const PairKernel kernel = pair_kernel(l.type, kLeafHalfSpace);
+  EXPECT_NE(kernel, nullptr);
+  if (kernel != nullptr) kernel(a.soa(), b.soa(), o, Range{0, 1}, cfg);
   Result r;
   r.count = count;
   if (count == 0) return r;
@@ -246,28 +255,31 @@ TEST_P(SupportHalfspace, DeepestPointAndManifoldAgreeWithClosedForms) {
       pl.n = pl.n.cast<float>().cast<double>();
       pl.p = (Vec3d(1, -2, 0.5) * offset + Vec3d(v(rng), v(rng), v(rng)) * size * 0.5).cast<float>().cast<double>();
       const double depth = -lowest(l, pl);
-      const Result r = run(l, pl);
       if (std::fabs(depth) < tol * 4) continue;
-      ASSERT_EQ(r.count > 0, depth > 0) << tname(t) << " " << k << " depth " << depth;
-      if (depth <= 0) continue;
-      ++hits;
-      ASSERT_LE(r.count, 4u);
-      EXPECT_NEAR(r.depth, depth, tol * 4) << tname(t) << " " << k;
-      EXPECT_NEAR((r.n + pl.n).norm(), 0.0, 1e-6);
-      double maxpd = 0;
-      for (uint32_t j = 0; j < r.count; ++j) {
-        EXPECT_GT(r.pd[j], 0.0);
-        EXPECT_LE(r.pd[j], r.depth + tol);
-        maxpd = std::max(maxpd, r.pd[j]);
-        // A's point x = pt - nh pd/2 lies in A, pd below the plane.
-        const Vec3d x = r.pt[j] - pl.n * (0.5 * r.pd[j]);
-        EXPECT_NEAR(pl.n.dot(x - pl.p), -r.pd[j], tol * 4) << tname(t) << " " << k;
-        EXPECT_TRUE(contains(l, x, tol * 4)) << tname(t) << " " << k;
+      for (KernelPath path : {KernelPath::kSimd, KernelPath::kScalar}) {
+        const Result r = run(l, pl, path);
+        ASSERT_EQ(r.count > 0, depth > 0) << tname(t) << " " << k << " depth " << depth;
+        if (depth <= 0) continue;
+        hits += path == KernelPath::kSimd;
+        ASSERT_LE(r.count, 4u);
+        EXPECT_NEAR(r.depth, depth, tol * 4) << tname(t) << " " << k;
+        EXPECT_NEAR((r.n + pl.n).norm(), 0.0, 1e-6);
+        double maxpd = 0;
+        for (uint32_t j = 0; j < r.count; ++j) {
+          EXPECT_GT(r.pd[j], 0.0);
+          EXPECT_LE(r.pd[j], r.depth + tol);
+          maxpd = std::max(maxpd, r.pd[j]);
+          // A's point x = pt - nh pd/2 lies in A, pd below the plane.
+          const Vec3d x = r.pt[j] - pl.n * (0.5 * r.pd[j]);
+          EXPECT_NEAR(pl.n.dot(x - pl.p), -r.pd[j], tol * 4) << tname(t) << " " << k;
+          EXPECT_TRUE(contains(l, x, tol * 4)) << tname(t) << " " << k;
+        }
+        EXPECT_NEAR(maxpd, r.depth, tol * 4);
+        // Distinct points.
+        for (uint32_t i = 0; i < r.count; ++i)
+          for (uint32_t j = i + 1; j < r.count; ++j)
+            EXPECT_GT((r.pt[i] - r.pt[j]).norm(), 1e-6 * size) << tname(t) << " " << k << " points " << i << " " << j;
       }
-      EXPECT_NEAR(maxpd, r.depth, tol * 4);
-      // Distinct points.
-      for (uint32_t i = 0; i < r.count; ++i)
-        for (uint32_t j = i + 1; j < r.count; ++j) EXPECT_GT((r.pt[i] - r.pt[j]).norm(), 1e-6 * size);
     }
     EXPECT_GT(hits, trials / 10) << tname(t);
   }
@@ -277,7 +289,8 @@ INSTANTIATE_TEST_SUITE_P(Scales, SupportHalfspace,
                          ::testing::Values(std::make_tuple(1.0, 0.0), std::make_tuple(1e-4, 0.0),
                                            std::make_tuple(1e4, 0.0), std::make_tuple(1.0, 1e5)));
 
-TEST(SupportHalfspaceManifold, RestingShapesGiveTheirContactPatch) {
+void resting_shapes(KernelPath path) {
+  SCOPED_TRACE(path == KernelPath::kSimd ? "simd" : "scalar");
   const Plane ground{Vec3d::Zero(), Vec3d::UnitZ()};
   const Mat3d I = Mat3d::Identity();
   // A box resting flat, 0.01 deep: 4 corners.
@@ -286,7 +299,7 @@ TEST(SupportHalfspaceManifold, RestingShapesGiveTheirContactPatch) {
   b.p = Vec3d(3, 4, 0.49);
   b.R = Eigen::AngleAxisd(0.4, Vec3d::UnitZ()).toRotationMatrix();
   b.e = Vec3d(1, 0.7, 0.5);
-  Result r = run(rounded(b), ground);
+  Result r = run(rounded(b), ground, path);
   ASSERT_EQ(r.count, 4u);
   for (uint32_t j = 0; j < 4; ++j) {
     EXPECT_NEAR(r.pd[j], 0.01, 1e-6);
@@ -296,7 +309,7 @@ TEST(SupportHalfspaceManifold, RestingShapesGiveTheirContactPatch) {
   b.p = Vec3d(0, 0, 0.5 * std::sqrt(2.0) - 0.01);
   b.R = Eigen::AngleAxisd(M_PI / 4, Vec3d::UnitX()).toRotationMatrix();
   b.e = Vec3d(1, 0.5, 0.5);
-  r = run(rounded(b), ground);
+  r = run(rounded(b), ground, path);
   ASSERT_EQ(r.count, 2u);
   EXPECT_NEAR(std::fabs(r.pt[0].x() - r.pt[1].x()), 2.0, 1e-5);
   // An upright cylinder: 4 rim points; lying on its side: 2; tilted on its rim: 1.
@@ -305,17 +318,17 @@ TEST(SupportHalfspaceManifold, RestingShapesGiveTheirContactPatch) {
   c.p = Vec3d(0, 0, 0.99);
   c.R = I;
   c.e = Vec3d(0.5, 1.0, 0);
-  r = run(rounded(c), ground);
+  r = run(rounded(c), ground, path);
   ASSERT_EQ(r.count, 4u);
   for (uint32_t j = 0; j < 4; ++j) EXPECT_NEAR(Vec3d(r.pt[j].x(), r.pt[j].y(), 0).norm(), 0.5, 1e-6);
   c.p = Vec3d(0, 0, 0.49);
   c.R = Eigen::AngleAxisd(M_PI / 2, Vec3d::UnitY()).toRotationMatrix();
-  r = run(rounded(c), ground);
+  r = run(rounded(c), ground, path);
   ASSERT_EQ(r.count, 2u);
   EXPECT_NEAR(std::fabs(r.pt[0].x() - r.pt[1].x()), 2.0, 1e-5);
   c.R = Eigen::AngleAxisd(0.3, Vec3d::UnitY()).toRotationMatrix();
   c.p = Vec3d(0, 0, std::cos(0.3) * 1.0 + std::sin(0.3) * 0.5 - 0.01);
-  r = run(rounded(c), ground);
+  r = run(rounded(c), ground, path);
   ASSERT_EQ(r.count, 1u);
   EXPECT_NEAR(r.depth, 0.01, 1e-6);
   // A capsule lying flat: 2 points; a sphere and an ellipsoid: 1.
@@ -324,24 +337,59 @@ TEST(SupportHalfspaceManifold, RestingShapesGiveTheirContactPatch) {
   k.p = Vec3d(0, 0, 0.29);
   k.R = Eigen::AngleAxisd(M_PI / 2, Vec3d::UnitX()).toRotationMatrix();
   k.e = Vec3d(0.3, 1.0, 0);
-  r = run(rounded(k), ground);
+  r = run(rounded(k), ground, path);
   ASSERT_EQ(r.count, 2u);
   EXPECT_NEAR(r.pd[0], 0.01, 1e-6);
+  // Standing upright, sunk 0.4: one point (the surface below both endpoints is the lower
+  // cap's tip); tilted 0.2 rad, still steep: one; tilted 1.4 rad and sunk 0.5: two.
+  k.R = I;
+  k.p = Vec3d(0, 0, 0.9);
+  r = run(rounded(k), ground, path);
+  ASSERT_EQ(r.count, 1u);
+  EXPECT_NEAR(r.depth, 0.4, 1e-6);
+  EXPECT_NEAR(r.pt[0].x(), 0.0, 1e-6);
+  k.R = Eigen::AngleAxisd(0.2, Vec3d::UnitX()).toRotationMatrix();
+  r = run(rounded(k), ground, path);
+  ASSERT_EQ(r.count, 1u);
+  EXPECT_NEAR(r.depth, 0.3 + std::cos(0.2) - 0.9, 1e-6);
+  k.R = Eigen::AngleAxisd(1.4, Vec3d::UnitX()).toRotationMatrix();
+  k.p = Vec3d(0, 0, -0.2 + std::cos(1.4));
+  r = run(rounded(k), ground, path);
+  ASSERT_EQ(r.count, 2u);
+  EXPECT_NEAR(r.depth, 0.5, 1e-6);
+  EXPECT_GT((r.pt[0] - r.pt[1]).norm(), 1.5);
+  // A cylinder upright and entirely below: its 4 lower rim points, the deepest first; on
+  // its side sunk past its axis: the 2 ends of the lowest line.
+  c.R = I;
+  c.p = Vec3d(0, 0, -5);
+  r = run(rounded(c), ground, path);
+  ASSERT_EQ(r.count, 4u);
+  for (uint32_t j = 0; j < 4; ++j) EXPECT_NEAR(r.pd[j], 6.0, 1e-5);
+  c.R = Eigen::AngleAxisd(M_PI / 2, Vec3d::UnitY()).toRotationMatrix();
+  c.p = Vec3d(0, 0, -0.2);
+  r = run(rounded(c), ground, path);
+  ASSERT_EQ(r.count, 2u);
+  EXPECT_NEAR(r.depth, 0.7, 1e-6);
   Leaf1 e;
   e.type = kLeafEllipsoid;
   e.p = Vec3d(0, 0, 0.19);
   e.e = Vec3d(1, 2, 0.2);
-  r = run(rounded(e), ground);
+  r = run(rounded(e), ground, path);
   ASSERT_EQ(r.count, 1u);
   EXPECT_NEAR(r.depth, 0.01, 1e-6);
   // Separated, and a box exactly touching: nothing.
   e.p = Vec3d(0, 0, 0.2001);
-  EXPECT_EQ(run(rounded(e), ground).count, 0u);
+  EXPECT_EQ(run(rounded(e), ground, path).count, 0u);
   e.p = Vec3d(0, 0, 0.3);
-  EXPECT_EQ(run(rounded(e), ground).count, 0u);
+  EXPECT_EQ(run(rounded(e), ground, path).count, 0u);
   b.p = Vec3d(0.25, 0, 0.5);
   b.R = I;
-  EXPECT_EQ(run(rounded(b), ground).count, 0u);
+  EXPECT_EQ(run(rounded(b), ground, path).count, 0u);
+}
+
+TEST(SupportHalfspaceManifold, RestingShapesGiveTheirContactPatch) {
+  resting_shapes(KernelPath::kSimd);
+  resting_shapes(KernelPath::kScalar);
 }
 
 /// A deeply sunk hull: the 4 points spread out (the deepest first, then the farthest).
