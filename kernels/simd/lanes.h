@@ -213,6 +213,19 @@ template <uint32_t N>
 IMPACT_INLINE bool none(MaskN<N> m) {
   return !any(m);
 }
+/// Bit i set where lane i is (N <= 32).
+template <uint32_t N>
+IMPACT_INLINE uint32_t bits(MaskN<N> m) {
+#if defined(__AVX__)
+  if constexpr (N == 8) return static_cast<uint32_t>(_mm256_movemask_ps(reinterpret_cast<__m256>(m.v)));
+#endif
+#if defined(__SSE2__)
+  if constexpr (N == 4) return static_cast<uint32_t>(_mm_movemask_ps(reinterpret_cast<__m128>(m.v)));
+#endif
+  uint32_t r = 0;
+  for (uint32_t i = 0; i < N; ++i) r |= (m.v[i] != 0 ? 1u : 0u) << i;
+  return r;
+}
 
 template <uint32_t N>
 IMPACT_INLINE FloatN<N> min(FloatN<N> a, FloatN<N> b) {
@@ -367,6 +380,7 @@ IMPACT_INLINE IntN<1> to_int(MaskN<1> m) { return IntN<1>(m.v ? 1 : 0); }
 IMPACT_INLINE bool any(MaskN<1> m) { return m.v; }
 IMPACT_INLINE bool all(MaskN<1> m) { return m.v; }
 IMPACT_INLINE bool none(MaskN<1> m) { return !m.v; }
+IMPACT_INLINE uint32_t bits(MaskN<1> m) { return m.v ? 1u : 0u; }
 // Same operand order as the x86 instructions, so both paths agree bit for bit.
 IMPACT_INLINE FloatN<1> min(FloatN<1> a, FloatN<1> b) { return a.v < b.v ? a : b; }
 IMPACT_INLINE FloatN<1> max(FloatN<1> a, FloatN<1> b) { return a.v > b.v ? a : b; }
