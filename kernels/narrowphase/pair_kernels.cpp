@@ -51,6 +51,7 @@ struct Table {
     k[kLeafBox][kLeafHalfSpace] = &collide_box_halfspace;
     k[kLeafCylinder][kLeafHalfSpace] = &collide_cylinder_halfspace;
     k[kLeafEllipsoid][kLeafHalfSpace] = &collide_ellipsoid_halfspace;
+    k[kLeafTriangle][kLeafHalfSpace] = &collide_triangle_halfspace;
   }
 };
 

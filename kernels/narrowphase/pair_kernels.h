@@ -4,7 +4,8 @@
 //
 // Specialised, vectorised across pairs (kernels/narrowphase/primitives_*.cpp): the
 // sphere / capsule / box / triangle / half-space pairs below, with the closed-form
-// cylinder and ellipsoid against half-space kernels (primitives_round.cpp). Everything
+// cylinder, ellipsoid and triangle against half-space kernels
+// (primitives_halfspace.cpp). Everything
 // else goes through the general convex path (kernels/narrowphase/gjk_epa.cpp): GJK + EPA on the
 // leaves' support functions, with face clipping for polytope manifolds, and a
 // support-function kernel against half-spaces.
@@ -29,6 +30,7 @@ void collide_capsule_halfspace(const LeafSoA&, const LeafSoA&, const ManifoldSoA
 void collide_box_halfspace(const LeafSoA&, const LeafSoA&, const ManifoldSoA&, Range, const NarrowConfig&);
 void collide_cylinder_halfspace(const LeafSoA&, const LeafSoA&, const ManifoldSoA&, Range, const NarrowConfig&);
 void collide_ellipsoid_halfspace(const LeafSoA&, const LeafSoA&, const ManifoldSoA&, Range, const NarrowConfig&);
+void collide_triangle_halfspace(const LeafSoA&, const LeafSoA&, const ManifoldSoA&, Range, const NarrowConfig&);
 
 // --- general convex -----------------------------------------------------------------------
 /// GJK + EPA for any two convex leaf types ta <= tb (neither a half-space), one pair
@@ -39,7 +41,7 @@ void collide_gjk_epa(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out,
                      const NarrowConfig& cfg, LeafType ta, LeafType tb);
 /// Any convex leaf type ta against a half-space (B): the deepest point by the support
 /// function, and for polytopes up to 4 manifold points below the plane (pair_kernel()
-/// sends convex hulls and triangles here; cylinders and ellipsoids have lane kernels).
+/// sends convex hulls here; the other types have lane kernels).
 void collide_support_halfspace(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out, Range r,
                                const NarrowConfig& cfg, LeafType ta);
 

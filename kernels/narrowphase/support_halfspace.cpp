@@ -5,11 +5,11 @@
 // A->B: n = -nh (B must move down, away from A, to separate). depth <= 0: count 0.
 // Manifold: every candidate point of A below the plane, reduced to at most 4: the
 // deepest, the farthest from it, then the two adding most area:
-//   box, convex hull, triangle: their vertices;
+//   box, convex hull: their vertices;
 //   capsule: the lowest points of the two end spheres (up to 2);
-//   sphere, ellipsoid, cylinder: the deepest point (pair_kernel() gives cylinders and
-//     ellipsoids closed-form lane kernels, primitives_round.cpp, with the cylinder's
-//     cap / side manifold; this routine serves hulls and triangles).
+//   sphere, ellipsoid, cylinder, triangle: the deepest point (pair_kernel() gives
+//     these closed-form lane kernels, primitives_*.cpp, with the cylinder's cap / side
+//     manifold and the triangle's vertices below; this routine serves hulls).
 // Each point lies midway between A's point x and its projection onto the plane; its
 // pdepth is x's depth. Points are computed relative to A's position (precision far from
 // the origin) and shifted back on output.
@@ -203,9 +203,6 @@ void collide_support_halfspace(const LeafSoA& a, const LeafSoA& b, const Manifol
                      A.ax[2] * ((i & 4) ? A.e[2] : -A.e[2]);
             },
             nh, off, pts, pd);
-        break;
-      case kLeafTriangle:
-        m = pick_below(3, [&](uint32_t i) { return i == 0 ? A.p : (i == 1 ? A.v1 : A.v2); }, nh, off, pts, pd);
         break;
       case kLeafCapsule:
         m = pick_below(

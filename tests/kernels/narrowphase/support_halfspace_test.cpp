@@ -377,6 +377,25 @@ void resting_shapes(KernelPath path) {
   r = run(rounded(e), ground, path);
   ASSERT_EQ(r.count, 1u);
   EXPECT_NEAR(r.depth, 0.01, 1e-6);
+  // A triangle with two vertices below (0.3 and 0.1 deep): those two, deepest first,
+  // whatever the vertex order; all three below: all three.
+  Leaf1 t;
+  t.type = kLeafTriangle;
+  t.p = Vec3d(1, 0, -0.1);
+  t.v1 = Vec3d(0, 1, 0.5);
+  t.v2 = Vec3d(-1, 0, -0.3);
+  r = run(rounded(t), ground, path);
+  ASSERT_EQ(r.count, 2u);
+  EXPECT_NEAR(r.depth, 0.3, 1e-6);
+  EXPECT_NEAR(r.pd[0], 0.3, 1e-6);
+  EXPECT_NEAR(r.pd[1], 0.1, 1e-6);
+  EXPECT_NEAR(r.pt[0].x(), -1.0, 1e-6);
+  EXPECT_NEAR(r.pt[1].x(), 1.0, 1e-6);
+  t.v1.z() = -0.2;
+  r = run(rounded(t), ground, path);
+  ASSERT_EQ(r.count, 3u);
+  EXPECT_NEAR(r.pd[1], 0.2, 1e-6);
+  EXPECT_NEAR(r.pt[1].y(), 1.0, 1e-6);
   // Separated, and a box exactly touching: nothing.
   e.p = Vec3d(0, 0, 0.2001);
   EXPECT_EQ(run(rounded(e), ground, path).count, 0u);
