@@ -40,6 +40,7 @@ struct Table {
     k[kLeafSphere][kLeafSphere] = &collide_sphere_sphere;
     k[kLeafSphere][kLeafCapsule] = &collide_sphere_capsule;
     k[kLeafSphere][kLeafBox] = &collide_sphere_box;
+    k[kLeafSphere][kLeafCylinder] = &collide_sphere_cylinder;
     k[kLeafCapsule][kLeafCapsule] = &collide_capsule_capsule;
     k[kLeafCapsule][kLeafBox] = &collide_capsule_box;
     k[kLeafBox][kLeafBox] = &collide_box_box;
