@@ -49,6 +49,7 @@ struct Table {
     k[kLeafSphere][kLeafHalfSpace] = &collide_sphere_halfspace;
     k[kLeafCapsule][kLeafHalfSpace] = &collide_capsule_halfspace;
     k[kLeafBox][kLeafHalfSpace] = &collide_box_halfspace;
+    k[kLeafSphere][kLeafConvex] = &collide_sphere_convex;
   }
 };
 
