@@ -53,6 +53,7 @@ struct Table {
     k[kLeafCylinder][kLeafHalfSpace] = &collide_cylinder_halfspace;
     k[kLeafEllipsoid][kLeafHalfSpace] = &collide_ellipsoid_halfspace;
     k[kLeafTriangle][kLeafHalfSpace] = &collide_triangle_halfspace;
+    k[kLeafSphere][kLeafConvex] = &collide_sphere_convex;
   }
 };
 

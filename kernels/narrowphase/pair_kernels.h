@@ -3,10 +3,11 @@
 // pair_kernels.cpp maps each bucket to one of them.
 //
 // Specialised, vectorised across pairs (kernels/narrowphase/primitives_*.cpp): the
-// sphere / capsule / box / triangle / half-space pairs below, with the closed-form
-// cylinder, ellipsoid and triangle against half-space kernels
-// (primitives_halfspace.cpp). Everything
-// else goes through the general convex path (kernels/narrowphase/gjk_epa.cpp): GJK + EPA on the
+// sphere / capsule / box / cylinder / triangle / half-space pairs below, with the
+// closed-form cylinder, ellipsoid and triangle against half-space kernels
+// (primitives_halfspace.cpp). Sphere-hull has its own exact per-lane kernel
+// (kernels/narrowphase/sphere_convex.cpp). Everything else goes through the general
+// convex path (kernels/narrowphase/gjk_epa.cpp): GJK + EPA on the
 // leaves' support functions, with face clipping for polytope manifolds, and a
 // support-function kernel against half-spaces.
 #pragma once
@@ -32,6 +33,9 @@ void collide_box_halfspace(const LeafSoA&, const LeafSoA&, const ManifoldSoA&, R
 void collide_cylinder_halfspace(const LeafSoA&, const LeafSoA&, const ManifoldSoA&, Range, const NarrowConfig&);
 void collide_ellipsoid_halfspace(const LeafSoA&, const LeafSoA&, const ManifoldSoA&, Range, const NarrowConfig&);
 void collide_triangle_halfspace(const LeafSoA&, const LeafSoA&, const ManifoldSoA&, Range, const NarrowConfig&);
+/// Sphere against convex hull: exact, by the hull's face planes and, near an edge, its
+/// edge segments (sphere_convex.cpp); one lane at a time, not GJK / EPA.
+void collide_sphere_convex(const LeafSoA&, const LeafSoA&, const ManifoldSoA&, Range, const NarrowConfig&);
 
 // --- general convex -----------------------------------------------------------------------
 /// GJK + EPA for any two convex leaf types ta <= tb (neither a half-space), one pair

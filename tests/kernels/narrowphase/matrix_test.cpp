@@ -20,10 +20,10 @@
 //      (o(n) <= depth + tol), and moving it by n*(depth - 2 tol) leaves it overlapping
 //      by the reference (a fresh reference solve for the moved B).
 // tol = rel * L, L = the larger bounding radius, rel = 1e-4 for the specialised kernels
-// (sphere/capsule/box/triangle/half-space pairs of pair_kernels.h), 1e-3 for the
-// general GJK/EPA and support kernels (100x cfg.epa_tolerance); the inputs are exact
-// floats, so poses far from the origin get no extra depth tolerance; contact points,
-// being world floats, get one ulp of the largest coordinate on top (0.008 at 1e5).
+// (sphere/capsule/box/triangle/half-space pairs of pair_kernels.h, and sphere-hull),
+// 1e-3 for the general GJK/EPA and support kernels (100x cfg.epa_tolerance); the inputs
+// are exact floats, so poses far from the origin get no extra depth tolerance; contact
+// points, being world floats, get one ulp of the largest coordinate on top (0.008 at 1e5).
 //
 // Scenarios per pair: random poses and sizes (about half overlapping), tiny (1e-4) and
 // huge (1e4) shapes, poses 1e5 from the origin, deep penetration, coincident centres,
@@ -424,7 +424,8 @@ bool specialised(LeafType a, LeafType b) {
           kp == &k::collide_capsule_capsule || kp == &k::collide_capsule_box || kp == &k::collide_box_box ||
           kp == &k::collide_sphere_triangle || kp == &k::collide_capsule_triangle ||
           kp == &k::collide_sphere_halfspace || kp == &k::collide_capsule_halfspace ||
-          kp == &k::collide_box_halfspace || kp == &k::collide_box_triangle);
+          kp == &k::collide_box_halfspace || kp == &k::collide_box_triangle ||
+          kp == &k::collide_sphere_convex);
 }
 
 struct Lane {
