@@ -299,34 +299,14 @@ IMPACT_INLINE EdgeOffset nearest_polygon_edge(const HullView& h, uint32_t fb, ui
   return best;
 }
 
-/// The general path for one lane (a hull HullView holds no faces for).
-void general_lane(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out, uint32_t k,
-                  const NarrowConfig& cfg) {
-  const V3 origin{a.p[0][k], a.p[1][k], a.p[2][k]};
-  const cvx::Leaf A = cvx::load_leaf(a, k, kLeafSphere, &cfg.hulls, origin);
-  const cvx::Leaf B = cvx::load_leaf(b, k, kLeafConvex, &cfg.hulls, origin);
-  cvx::LaneContact lc;
-  cvx::collide_convex_lane(A, B, cfg, &lc);
-  out.count[k] = static_cast<uint8_t>(lc.count);
-  if (lc.count == 0) return;
-  out.n[0][k] = lc.n.x;
-  out.n[1][k] = lc.n.y;
-  out.n[2][k] = lc.n.z;
-  out.depth[k] = lc.depth;
-  out.point[0][0][k] = lc.point[0].x + origin.x;
-  out.point[0][1][k] = lc.point[0].y + origin.y;
-  out.point[0][2][k] = lc.point[0].z + origin.z;
-  out.pdepth[0][k] = lc.pdepth[0];
-}
-
 void sphere_convex_lane(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out, uint32_t k,
                         const NarrowConfig& cfg) {
   const HullView& h = cfg.hulls;
   const uint32_t hull = b.ref[k];
   const uint32_t fb = h.face_begin != nullptr ? h.face_begin[hull] : 0u;
   const uint32_t fe = h.face_begin != nullptr ? h.face_begin[hull + 1] : 0u;
-  if (fe == fb) {
-    general_lane(a, b, out, k, cfg);
+  if (fe == fb) {  // a hull HullView holds no faces for: the general path, this lane
+    collide_gjk_epa(a, b, out, Range{k, k + 1}, cfg, kLeafSphere, kLeafConvex);
     return;
   }
   const float r = a.e[0][k];

@@ -31,6 +31,14 @@ struct TestRng {
   }
 };
 
+/// A uniformly random rotation (a normalised quaternion of 4 normal draws), in double.
+inline Eigen::Matrix3d random_rotation(std::mt19937& rng) {
+  std::normal_distribution<double> g;
+  Eigen::Quaterniond q(g(rng), g(rng), g(rng), g(rng));
+  q.normalize();
+  return q.toRotationMatrix();
+}
+
 /// A cells x cells grid of `spacing` m squares centred on the origin in the xz plane,
 /// each vertex lifted by a uniform height in [-bump, bump]; two triangles per square.
 inline void bumpy_grid(TestRng& r, int cells, float spacing, float bump, std::vector<Eigen::Vector3f>* v,

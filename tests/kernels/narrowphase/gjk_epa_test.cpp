@@ -22,6 +22,7 @@
 #include "kernels/narrowphase/gjk_epa.h"
 #include "kernels/narrowphase/pair_kernels.h"
 #include "support/leaf_lanes.h"
+#include "support/random_input.h"
 #include "support/test_support.h"
 
 namespace impact::kernels {
@@ -110,13 +111,6 @@ Result run_pair(const Shape& a, const Shape& b, const NarrowConfig& cfg = config
     }
   }
   return r;
-}
-
-Mat3d random_rotation(std::mt19937& rng) {
-  std::normal_distribution<double> g;
-  Eigen::Quaterniond q(g(rng), g(rng), g(rng), g(rng));
-  q.normalize();
-  return q.toRotationMatrix();
 }
 
 Shape sphere(Vec3d p, double r) {
@@ -473,9 +467,9 @@ TEST(GjkEpa, OrientedBoxesAgreeWithSat) {
   std::uniform_real_distribution<double> u(-1, 1);
   int overlapping = 0;
   for (int t = 0; t < 2000; ++t) {
-    const Shape a = rounded(box(Vec3d(u(rng), u(rng), u(rng)) * 0.2, random_rotation(rng),
+    const Shape a = rounded(box(Vec3d(u(rng), u(rng), u(rng)) * 0.2, test::random_rotation(rng),
                                 Vec3d(0.05 + std::fabs(u(rng)), 0.05 + std::fabs(u(rng)), 0.05 + std::fabs(u(rng)))));
-    const Shape b = rounded(box(Vec3d(u(rng), u(rng), u(rng)) * 2, random_rotation(rng),
+    const Shape b = rounded(box(Vec3d(u(rng), u(rng), u(rng)) * 2, test::random_rotation(rng),
                                 Vec3d(0.05 + std::fabs(u(rng)), 0.05 + std::fabs(u(rng)), 0.05 + std::fabs(u(rng)))));
     const Sat s = sat(polytope_of(a), polytope_of(b));
     const Result r = run_pair(a, b);
@@ -512,12 +506,12 @@ TEST(GjkEpa, RandomHullsAgreeWithSat) {
   int overlapping = 0;
   for (int t = 0; t < 1500; ++t) {
     const uint32_t ha = ids[t % ids.size()], hb = ids[(t / 6) % ids.size()];
-    const Shape a = rounded(convex(Vec3d(u(rng), u(rng), u(rng)) * 0.2, random_rotation(rng), ha));
+    const Shape a = rounded(convex(Vec3d(u(rng), u(rng), u(rng)) * 0.2, test::random_rotation(rng), ha));
     Shape b;
     const Vec3d pb = Vec3d(u(rng), u(rng), u(rng)) * 1.5;
     switch (t % 3) {
-      case 0: b = convex(pb, random_rotation(rng), hb); break;
-      case 1: b = box(pb, random_rotation(rng), Vec3d(0.1 + std::fabs(u(rng)), 0.1 + std::fabs(u(rng)), 0.1)); break;
+      case 0: b = convex(pb, test::random_rotation(rng), hb); break;
+      case 1: b = box(pb, test::random_rotation(rng), Vec3d(0.1 + std::fabs(u(rng)), 0.1 + std::fabs(u(rng)), 0.1)); break;
       default:
         b = triangle(pb + Vec3d(u(rng), u(rng), u(rng)), pb + Vec3d(u(rng), u(rng), u(rng)), pb + Vec3d(u(rng), u(rng), u(rng)));
         break;
@@ -551,7 +545,7 @@ TEST(GjkEpa, SphereCapsuleClosedForm) {
   std::uniform_real_distribution<double> u(-1, 1);
   for (int t = 0; t < 500; ++t) {
     const Shape a = rounded(sphere(Vec3d(u(rng), u(rng), u(rng)), 0.1 + 0.5 * std::fabs(u(rng))));
-    const Shape b = rounded(capsule(Vec3d(u(rng), u(rng), u(rng)), random_rotation(rng), 0.1 + 0.5 * std::fabs(u(rng)),
+    const Shape b = rounded(capsule(Vec3d(u(rng), u(rng), u(rng)), test::random_rotation(rng), 0.1 + 0.5 * std::fabs(u(rng)),
                                     std::fabs(u(rng))));
     const Vec3d ax = b.R.col(2);
     const double tt = std::clamp((a.p - b.p).dot(ax), -b.e[1], b.e[1]);
@@ -573,7 +567,7 @@ TEST(GjkEpa, SphereCapsuleClosedForm) {
 TEST(GjkEpa, CoaxialCylinders) {
   std::mt19937 rng(15);
   for (int t = 0; t < 100; ++t) {
-    const Mat3d R = random_rotation(rng);
+    const Mat3d R = test::random_rotation(rng);
     const Shape a = rounded(cylinder({0, 0, 0}, R, 1.0, 0.5));
     const Shape b = rounded(cylinder(R.col(2) * 0.9, R, 0.7, 0.5));
     const Result r = run_pair(a, b);
@@ -589,7 +583,7 @@ TEST(GjkEpa, RoundEllipsoidIsASphere) {
   std::uniform_real_distribution<double> u(-1, 1);
   for (int t = 0; t < 200; ++t) {
     const Shape a = rounded(sphere(Vec3d(u(rng), u(rng), u(rng)) * 0.3, 0.6));
-    const Shape b = rounded(ellipsoid(Vec3d(u(rng), u(rng), u(rng)), random_rotation(rng), {0.5, 0.5, 0.5}));
+    const Shape b = rounded(ellipsoid(Vec3d(u(rng), u(rng), u(rng)), test::random_rotation(rng), {0.5, 0.5, 0.5}));
     const double d = (b.p - a.p).norm();
     const double depth = 1.1 - d;
     const Result r = run_pair(a, b);
@@ -615,8 +609,8 @@ TEST(GjkEpa, NearConcentricRoundEllipsoids) {
     Vec3d dir(u(rng), u(rng), u(rng));
     if (!(dir.norm() > 1e-3)) continue;
     const Vec3d c = dir.normalized() * mag(rng);
-    const Shape a = rounded(ellipsoid(Vec3d(u(rng), u(rng), u(rng)) * 0.5, random_rotation(rng), {0.45, 0.45, 0.45}));
-    const Shape b = rounded(ellipsoid(a.p + c, random_rotation(rng), {0.9, 0.9, 0.9}));
+    const Shape a = rounded(ellipsoid(Vec3d(u(rng), u(rng), u(rng)) * 0.5, test::random_rotation(rng), {0.45, 0.45, 0.45}));
+    const Shape b = rounded(ellipsoid(a.p + c, test::random_rotation(rng), {0.9, 0.9, 0.9}));
     const double depth = 1.35 - (b.p - a.p).norm();
     const Result r = run_pair(a, b);
     ASSERT_GE(r.count, 1u) << t;
@@ -695,13 +689,13 @@ TEST(GjkEpa, SmoothPairsNewtonMatchesReference) {
       Vec3d ea(rad(rng), rad(rng), rad(rng)), eb(rad(rng), rad(rng), rad(rng));
       if (thin) eb = Vec3d(1.0, 0.05, 0.3);
       const Vec3d pa = Vec3d::Constant(offset) + Vec3d(u(rng), u(rng), u(rng)) * scale;
-      Shape a = sphere_a ? sphere(pa, ea.x() * scale) : ellipsoid(pa, random_rotation(rng), ea * scale);
+      Shape a = sphere_a ? sphere(pa, ea.x() * scale) : ellipsoid(pa, test::random_rotation(rng), ea * scale);
       Vec3d dir(u(rng), u(rng), u(rng));
       if (!(dir.norm() > 1e-2)) continue;
       dir.normalize();
       // B along dir at f times roughly the touching distance (sizes along dir).
       const double reach = (sphere_a ? ea.x() : ea.maxCoeff()) + eb.maxCoeff();
-      const Shape b = rounded(ellipsoid(pa + dir * (f(rng) * reach * scale), random_rotation(rng), eb * scale));
+      const Shape b = rounded(ellipsoid(pa + dir * (f(rng) * reach * scale), test::random_rotation(rng), eb * scale));
       a = rounded(a);
       Vec3d n_ref;
       const double depth = smooth_reference(a, b, &n_ref);
@@ -745,7 +739,7 @@ TEST(GjkEpa, SphereDeepInCylinder) {
   std::mt19937 rng(22);
   std::uniform_real_distribution<double> u(-1, 1), size(0.25, 0.3), rs(0.1, 0.3);
   for (int t = 0; t < 300; ++t) {
-    const Mat3d R = random_rotation(rng);
+    const Mat3d R = test::random_rotation(rng);
     const double rad = size(rng), hl = size(rng), r0 = rs(rng);
     const Shape b = rounded(cylinder(Vec3d(u(rng), u(rng), u(rng)), R, rad, hl));
     const Shape a = rounded(sphere(b.p + Vec3d(u(rng), u(rng), u(rng)) * 0.01, r0));
@@ -767,7 +761,7 @@ const char* tname(LeafType t) {
 
 Shape random_shape(LeafType t, std::mt19937& rng, Vec3d centre, double size) {
   std::uniform_real_distribution<double> u(0.2, 1.0);
-  const Mat3d R = random_rotation(rng);
+  const Mat3d R = test::random_rotation(rng);
   switch (t) {
     case kLeafSphere: return sphere(centre, size * u(rng));
     case kLeafCapsule: return capsule(centre, R, size * u(rng) * 0.5, size * u(rng));
@@ -939,8 +933,8 @@ TEST(GjkEpa, ToleranceKnobChangesError) {
     double err = 0;
     for (int t = 0; t < 100; ++t) {
       // A round ellipsoid (radius 1, curved for EPA) resting 0.2 deep on a big box.
-      const Mat3d R = random_rotation(g);
-      const Shape a = rounded(box(Vec3d(0, 0, -5), random_rotation(g) * 0 + Mat3d::Identity(), {5, 5, 5}));
+      const Mat3d R = test::random_rotation(g);
+      const Shape a = rounded(box(Vec3d(0, 0, -5), test::random_rotation(g) * 0 + Mat3d::Identity(), {5, 5, 5}));
       const Shape b = rounded(ellipsoid(Vec3d(0, 0, 0.8), R, {1, 1, 1}));
       const Result r = run_pair(a, b, cfg);
       EXPECT_EQ(r.count, 1u);

@@ -21,6 +21,7 @@
 #include "kernels/narrowphase/pair_kernels.h"
 #include "kernels/narrowphase/sat.h"
 #include "support/leaf_lanes.h"
+#include "support/random_input.h"
 #include "support/test_support.h"
 
 namespace impact::kernels {
@@ -194,13 +195,6 @@ double brute_sat(const Poly& A, const Poly& B, Vec3d* axis) {
   return best;
 }
 
-Mat3d random_rotation(std::mt19937& g) {
-  std::normal_distribution<double> nd;
-  Eigen::Quaterniond q(nd(g), nd(g), nd(g), nd(g));
-  q.normalize();
-  return q.toRotationMatrix();
-}
-
 double bound_radius(const Shape& s) {
   if (s.type == kLeafBox) return s.e.norm();
   double r = 0;
@@ -244,7 +238,7 @@ Shape random_hull(std::mt19937& g, uint32_t hull, Vec3d p) {
   Shape s;
   s.type = kLeafConvex;
   s.hull = hull;
-  s.R = random_rotation(g);
+  s.R = test::random_rotation(g);
   s.p = p;
   return s;
 }
@@ -254,7 +248,7 @@ Shape random_box(std::mt19937& g, Vec3d p, double scale = 1.0) {
   Shape s;
   s.type = kLeafBox;
   s.e = Vec3d(u(g), u(g), u(g)) * scale;
-  s.R = random_rotation(g);
+  s.R = test::random_rotation(g);
   s.p = p;
   return s;
 }

@@ -14,6 +14,7 @@
 #include <Eigen/Geometry>
 
 #include "kernels/narrowphase/pair_kernels.h"
+#include "support/random_input.h"
 #include "support/test_support.h"
 
 namespace impact::kernels {
@@ -109,13 +110,6 @@ double reference(const Vec3d& c, double ra, const Cyl& cy, Vec3d* dir) {
   return ra - best;
 }
 
-Mat3d random_rotation(std::mt19937& g) {
-  std::normal_distribution<double> n;
-  Eigen::Quaterniond q(n(g), n(g), n(g), n(g));
-  q.normalize();
-  return q.toRotationMatrix().cast<float>().cast<double>();
-}
-
 class SphereCylinder : public ::testing::TestWithParam<std::tuple<double, double>> {};
 
 TEST_P(SphereCylinder, RandomPosesAgainstDoubleReference) {
@@ -128,7 +122,7 @@ TEST_P(SphereCylinder, RandomPosesAgainstDoubleReference) {
   for (int k = 0; k < trials; ++k) {
     Cyl cy;
     cy.p = (Vec3d(offset, -offset, 0.5 * offset) + Vec3d(u(g), u(g), u(g)) * size).cast<float>().cast<double>();
-    cy.R = random_rotation(g);
+    cy.R = test::random_rotation(g).cast<float>().cast<double>();
     cy.r = double(float(s(g) * size));
     cy.h = double(float(s(g) * size));
     const double ra = double(float(s(g) * size));

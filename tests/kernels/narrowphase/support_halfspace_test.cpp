@@ -17,6 +17,7 @@
 #include "host/narrowphase/shape_store.h"
 #include "kernels/narrowphase/pair_kernels.h"
 #include "support/leaf_lanes.h"
+#include "support/random_input.h"
 #include "support/test_support.h"
 
 namespace impact::kernels {
@@ -196,13 +197,6 @@ bool contains(const Leaf1& l, const Vec3d& x, double tol) {
   }
 }
 
-Mat3d random_rotation(std::mt19937& rng) {
-  std::normal_distribution<double> g;
-  Eigen::Quaterniond q(g(rng), g(rng), g(rng), g(rng));
-  q.normalize();
-  return q.toRotationMatrix();
-}
-
 uint32_t test_hull() {
   static const uint32_t id = [] {
     std::mt19937 g(5);
@@ -222,7 +216,7 @@ Leaf1 random_leaf(LeafType t, std::mt19937& rng, const Vec3d& c, double size) {
   Leaf1 l;
   l.type = t;
   l.p = c;
-  l.R = random_rotation(rng);
+  l.R = test::random_rotation(rng);
   l.e = Vec3d(u(rng), u(rng), u(rng)) * size;
   if (t == kLeafConvex) l.hull = test_hull();
   if (t == kLeafTriangle) {
@@ -455,7 +449,7 @@ TEST(SupportHalfspaceManifold, ManyVertexHullAtEverySinking) {
     Leaf1 l;
     l.type = kLeafConvex;
     l.hull = big;
-    l.R = random_rotation(rng);
+    l.R = test::random_rotation(rng);
     l.p = Vec3d(v(rng), v(rng), v(rng)) * (k % 2 == 0 ? 1.0 : 1e5);
     l = rounded(l);
     Plane pl;
