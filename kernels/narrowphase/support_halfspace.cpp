@@ -14,13 +14,16 @@
 // pdepth is x's depth. Points are computed relative to A's position (precision far from
 // the origin) and shifted back on output.
 // Inputs: posed leaves per leaf.h (finite, unit nh). Deterministic (fixed loop order,
-// first index wins ties). cfg.path kSimd and kScalar run the same per-lane code.
-// Cost: O(1) per lane, O(vertex count) for convex hulls: one kSimdWidth-wide pass in
-// the hull's frame lists the vertices below the plane (at most 64; more fall back to
-// scanning all vertices), their world positions are computed once, and the deepest
-// vertex and the selection passes come from that list (no separate support scan). No
-// allocation. impact_narrowbench (24-point hulls, half the pairs touching): ~70 ns per
-// pair (was 130 with the support scan and per-pass vertex transforms; FCL ~190).
+// first index wins ties). Hulls: kSimd passes over the vertices kSimdWidth at a time,
+// kScalar one at a time, with the same formulas and tie rule; other types run the same
+// per-lane code on both paths.
+// Cost: O(1) per lane, O(vertex count) for convex hulls: the plane is moved into the
+// hull's frame once, then one SIMD pass finds the deepest vertex (all a separated pair
+// costs) and three more, masked to the vertices below, pick the manifold (first_max,
+// hull_below); only the chosen points are transformed to the world frame. No
+// allocation. impact_narrowbench (24-point hulls, half the pairs touching), A/B in one
+// run: ~71 ns per pair (was 78 with a candidate list and world-frame selection passes,
+// 130 before that; FCL ~190, one contact point).
 #include <cmath>
 
 #include "kernels/narrowphase/pair_kernels.h"
@@ -113,43 +116,131 @@ uint32_t pick_below(uint32_t n, Get get, V3 nh, float off, V3* pts, float* pd) {
   return k;
 }
 
-/// Most hull vertices below the plane that the candidate list holds; a hull sunk
-/// deeper falls back to scanning all its vertices.
-constexpr uint32_t kMaxCandidates = 64;
-
-/// Hull vertices [vb, ve) that may lie below the plane nh.x = off, in index order:
-/// one pass in the hull's frame (the plane moved into it: nl = R^T nh, offl = off -
-/// nh.p), kSimdWidth vertices per step. The slack admits the vertices whose local and
-/// world depths differ in sign by rounding; pick_below re-tests every candidate in the
-/// world frame, so the result equals a scan of all vertices. Returns the count, or
-/// kMaxCandidates + 1 when more would be needed.
-uint32_t hull_candidates(const HullView& h, uint32_t vb, uint32_t ve, const cvx::Leaf& A, V3 nh, float off,
-                         uint32_t* cand) {
-  using F = simd::FloatN<simd::kSimdWidth>;
-  constexpr uint32_t kW = simd::kSimdWidth;
-  const float nx = cvx::dot(nh, A.ax[0]), ny = cvx::dot(nh, A.ax[1]), nz = cvx::dot(nh, A.ax[2]);
-  const float offl = off - cvx::dot(nh, A.p);
-  // Rounding of the two frames' dot products: relative to the terms' magnitudes.
-  const float reach = std::fabs(off) + cvx::len(A.p);
-  const float slack = 1e-5f * reach + 1e-30f;
-  const float lim = offl + slack;  // below: nl.v < lim
-  uint32_t nc = 0;
-  uint32_t i = vb;
-  const F X(nx), Y(ny), Z(nz), L(lim);
-  for (; i + kW <= ve; i += kW) {
-    const F s = X * F::load(h.vx + i) + Y * F::load(h.vy + i) + Z * F::load(h.vz + i);
-    // the set lanes only, lowest first
-    for (uint32_t below = simd::bits(s < L); below != 0; below &= below - 1) {
-      if (nc == kMaxCandidates) return kMaxCandidates + 1;
-      cand[nc++] = i + static_cast<uint32_t>(__builtin_ctz(below));
+/// First maximum of score(x, y, z) over the hull vertices [vb, ve) (local
+/// coordinates), lanes of type F at a time: each lane keeps its first strict maximum,
+/// then the lanes merge by (score, lowest index) (simd::all_lanes butterflies); the
+/// last block overlaps the one before it instead of a scalar tail (a vertex seen
+/// twice keeps its index, so the first maximum is unchanged). Float1 or fewer
+/// vertices than lanes: one vertex at a time, strict >. score is a generic callable
+/// (lane type in, same type out). Returns the maximum; *at is its index, set only
+/// when the maximum exceeds `above` (the lanes' index merge is skipped otherwise).
+template <class F, class Score>
+IMPACT_INLINE float first_max(const HullView& h, uint32_t vb, uint32_t ve, Score score, float above,
+                              uint32_t* at) {
+  constexpr uint32_t kW = F::kWidth;
+  auto one_by_one = [&] {
+    float best = -INFINITY;
+    uint32_t bi = vb;
+    for (uint32_t i = vb; i < ve; ++i) {
+      const float s = score(simd::Float1(h.vx[i]), simd::Float1(h.vy[i]), simd::Float1(h.vz[i])).lane(0);
+      if (s > best) {
+        best = s;
+        bi = i;
+      }
     }
+    *at = bi;
+    return best;
+  };
+  if constexpr (kW == 1) {
+    return one_by_one();
+  } else {
+    if (ve - vb < kW) return one_by_one();
+    const F lane = simd::lane_index<F>();
+    F m(-INFINITY), idx(0.0f);
+    auto step = [&](uint32_t i) {
+      const F s = score(F::load(h.vx + i), F::load(h.vy + i), F::load(h.vz + i));
+      const auto gt = s > m;
+      m = select(gt, s, m);
+      idx = select(gt, lane + F(static_cast<float>(i - vb)), idx);
+    };
+    uint32_t i = vb;
+    for (; i + kW <= ve; i += kW) step(i);
+    if (i < ve) step(ve - kW);
+    const F bs = simd::all_lanes(m, [](F x, F y) { return max(x, y); });
+    const float best = bs.lane(0);
+    if (best > above) {
+      const F bi = simd::all_lanes(select(m == bs, idx, F(INFINITY)), [](F x, F y) { return min(x, y); });
+      *at = vb + static_cast<uint32_t>(bi.lane(0));
+    }
+    return best;
   }
-  for (; i < ve; ++i) {
-    if (!(nx * h.vx[i] + ny * h.vy[i] + nz * h.vz[i] < lim)) continue;
-    if (nc == kMaxCandidates) return kMaxCandidates + 1;
-    cand[nc++] = i;
-  }
-  return nc;
+}
+
+/// Up to 4 vertices of hull [vb, ve) below the plane nl.x = offl (the hull's frame),
+/// the same rule as pick_below: the deepest (pd > 0), the farthest from it, the one
+/// adding the largest area, the one farthest outside that triangle. Four passes over
+/// the vertices (one when none is below), each a first_max of a masked score; the
+/// area terms are triple products with nl precomputed as one dot per vertex:
+/// nl.((p1 - p0) x (x - p0)) = (x - p0).(nl x (p1 - p0)). Outputs local vertices v[]
+/// and their depths pd[]; returns the count.
+template <class F>
+uint32_t hull_below(const HullView& h, uint32_t vb, uint32_t ve, V3 nl, float offl, V3* v, float* pd) {
+  const float nx = nl.x, ny = nl.y, nz = nl.z;
+  auto depth = [=](auto x, auto y, auto z) {
+    using G = decltype(x);
+    return G(offl) - (G(nx) * x + G(ny) * y + G(nz) * z);
+  };
+  auto local = [&](uint32_t i) { return V3{h.vx[i], h.vy[i], h.vz[i]}; };
+  uint32_t i0 = vb;
+  const float d0 = first_max<F>(h, vb, ve, depth, 0.0f, &i0);
+  if (!(d0 > 0.0f)) return 0;
+  const V3 p0 = local(i0);
+  v[0] = p0;
+  pd[0] = d0;
+  // Farthest from p0 among the vertices below.
+  uint32_t i1 = vb;
+  const float far = first_max<F>(
+      h, vb, ve,
+      [=](auto x, auto y, auto z) {
+        using G = decltype(x);
+        const G dx = x - G(p0.x), dy = y - G(p0.y), dz = z - G(p0.z);
+        return select(depth(x, y, z) > G(0.0f), dx * dx + dy * dy + dz * dz, G(-INFINITY));
+      },
+      0.0f, &i1);
+  if (!(far > 0.0f)) return 1;
+  const V3 p1 = local(i1);
+  v[1] = p1;
+  pd[1] = depth(simd::Float1(p1.x), simd::Float1(p1.y), simd::Float1(p1.z)).lane(0);
+  // Largest |area| with p0, p1 (about nl): a = (x - p0).c with c = nl x (p1 - p0).
+  const V3 c = cvx::cross(nl, p1 - p0);
+  auto area = [=](auto x, auto y, auto z) {
+    using G = decltype(x);
+    return (x - G(p0.x)) * G(c.x) + (y - G(p0.y)) * G(c.y) + (z - G(p0.z)) * G(c.z);
+  };
+  // Area threshold: a relative 1e-6 of the squared span, so rounding never adds a
+  // collinear point.
+  const float tiny = 1e-6f * cvx::len2(p1 - p0);
+  uint32_t i2 = vb;
+  const float amax = first_max<F>(
+      h, vb, ve,
+      [=](auto x, auto y, auto z) {
+        using G = decltype(x);
+        return select(depth(x, y, z) > G(0.0f), abs(area(x, y, z)), G(-INFINITY));
+      },
+      tiny, &i2);
+  if (!(amax > tiny)) return 2;
+  const V3 p2 = local(i2);
+  v[2] = p2;
+  pd[2] = depth(simd::Float1(p2.x), simd::Float1(p2.y), simd::Float1(p2.z)).lane(0);
+  // Farthest outside the triangle p0 p1 p2: the largest of its three edge distances
+  // (times the edge lengths), each (x - pj).gj with gj = -sgn nl x (pj+1 - pj).
+  const float sgn = area(simd::Float1(p2.x), simd::Float1(p2.y), simd::Float1(p2.z)).lane(0) >= 0.0f ? -1.0f : 1.0f;
+  const V3 g0 = cvx::cross(nl, p1 - p0) * sgn, g1 = cvx::cross(nl, p2 - p1) * sgn, g2 = cvx::cross(nl, p0 - p2) * sgn;
+  uint32_t i3 = vb;
+  const float omax = first_max<F>(
+      h, vb, ve,
+      [=](auto x, auto y, auto z) {
+        using G = decltype(x);
+        auto edge = [&](V3 p, V3 g) { return (x - G(p.x)) * G(g.x) + (y - G(p.y)) * G(g.y) + (z - G(p.z)) * G(g.z); };
+        const G o = max(edge(p0, g0), max(edge(p1, g1), edge(p2, g2)));
+        return select(depth(x, y, z) > G(0.0f), o, G(-INFINITY));
+      },
+      tiny, &i3);
+  if (!(omax > tiny)) return 3;
+  const V3 p3 = local(i3);
+  v[3] = p3;
+  pd[3] = depth(simd::Float1(p3.x), simd::Float1(p3.y), simd::Float1(p3.z)).lane(0);
+  return 4;
 }
 
 }  // namespace
@@ -170,22 +261,23 @@ void collide_support_halfspace(const LeafSoA& a, const LeafSoA& b, const Manifol
     if (ta == kLeafConvex) {
       // One pass lists the vertices that may lie below; the deepest of them (in the
       // world frame) is the support along -nh, so no separate support scan.
+      // The plane in the hull's frame: nl = R^T nh, offl = off - nh.p.
       const uint32_t vb = cfg.hulls.vert_begin[A.hull];
       const uint32_t ve = cfg.hulls.vert_begin[A.hull + 1];
-      uint32_t cand[kMaxCandidates];
-      const uint32_t nc = hull_candidates(cfg.hulls, vb, ve, A, nh, off, cand);
-      if (nc <= kMaxCandidates) {
-        V3 xs[kMaxCandidates];
-        for (uint32_t i = 0; i < nc; ++i) xs[i] = cvx::hull_vertex(A, cand[i]);
-        m = pick_below(nc, [&](uint32_t i) { return xs[i]; }, nh, off, pts, pd);
-      } else {
-        m = pick_below(ve - vb, [&](uint32_t i) { return cvx::hull_vertex(A, vb + i); }, nh, off, pts, pd);
-      }
+      const V3 nl{cvx::dot(nh, A.ax[0]), cvx::dot(nh, A.ax[1]), cvx::dot(nh, A.ax[2])};
+      const float offl = off - cvx::dot(nh, A.p);
+      V3 vl[4];
+      m = cfg.path == KernelPath::kScalar ? hull_below<simd::Float1>(cfg.hulls, vb, ve, nl, offl, vl, pd)
+                                          : hull_below<simd::FloatW>(cfg.hulls, vb, ve, nl, offl, vl, pd);
       if (m == 0) {
         out.count[k] = 0;
         continue;
       }
-      depth = pd[0];  // pick_below's first point is the deepest vertex
+      for (uint32_t i = 0; i < m; ++i) {
+        const V3 x = A.p + A.ax[0] * vl[i].x + A.ax[1] * vl[i].y + A.ax[2] * vl[i].z;
+        pts[i] = x + nh * (0.5f * pd[i]);
+      }
+      depth = pd[0];  // hull_below's first point is the deepest vertex
     } else {
       deepest = cvx::support(A, -nh);
       depth = off - cvx::dot(nh, deepest);

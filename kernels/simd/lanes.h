@@ -435,17 +435,47 @@ IMPACT_INLINE F lane_index() {
   return F::load(iota);
 }
 
+/// Every lane = op folded over all of a's lanes (op associative and commutative, e.g.
+/// max or min): log2(W) butterfly steps, each a shuffle that swaps lane i with lane
+/// i ^ step. For W > 1.
+template <class F, class Op>
+IMPACT_INLINE F all_lanes(F a, Op op) {
+  auto v = a.v;
+  if constexpr (F::kWidth == 16) {
+    v = op(F(v), F(__builtin_shufflevector(v, v, 8, 9, 10, 11, 12, 13, 14, 15, 0, 1, 2, 3, 4, 5, 6, 7))).v;
+    v = op(F(v), F(__builtin_shufflevector(v, v, 4, 5, 6, 7, 0, 1, 2, 3, 12, 13, 14, 15, 8, 9, 10, 11))).v;
+    v = op(F(v), F(__builtin_shufflevector(v, v, 2, 3, 0, 1, 6, 7, 4, 5, 10, 11, 8, 9, 14, 15, 12, 13))).v;
+    v = op(F(v), F(__builtin_shufflevector(v, v, 1, 0, 3, 2, 5, 4, 7, 6, 9, 8, 11, 10, 13, 12, 15, 14))).v;
+  } else if constexpr (F::kWidth == 8) {
+    v = op(F(v), F(__builtin_shufflevector(v, v, 4, 5, 6, 7, 0, 1, 2, 3))).v;
+    v = op(F(v), F(__builtin_shufflevector(v, v, 2, 3, 0, 1, 6, 7, 4, 5))).v;
+    v = op(F(v), F(__builtin_shufflevector(v, v, 1, 0, 3, 2, 5, 4, 7, 6))).v;
+  } else {
+    static_assert(F::kWidth == 4, "all_lanes: widths 4, 8, 16");
+    v = op(F(v), F(__builtin_shufflevector(v, v, 2, 3, 0, 1))).v;
+    v = op(F(v), F(__builtin_shufflevector(v, v, 1, 0, 3, 2))).v;
+  }
+  return F(v);
+}
+
 /// The end of a lane-parallel argmax: the largest score s over the lanes, and in
 /// *out_idx the lowest idx among the lanes that hold it (none: where no lane does,
-/// i.e. NaN scores only). Branch-free in the data, so the same bytes for any order.
+/// i.e. NaN scores only; a NaN beside numbers may be ignored or returned).
+/// Branch-free in the data, so the same bytes for any order. all_lanes butterflies
+/// for the maximum and for the index (a lane-by-lane loop is a chain of 2W dependent
+/// compares, the larger part of a short pass's cost).
 template <class F>
 IMPACT_INLINE float max_lowest_index(F s, F idx, float none, float* out_idx) {
-  float bs = s.lane(0);
-  for (uint32_t k = 1; k < F::kWidth; ++k) bs = fmax_nn(bs, s.lane(k));
-  float bi = none;
-  for (uint32_t k = 0; k < F::kWidth; ++k) bi = (s.lane(k) == bs && idx.lane(k) < bi) ? idx.lane(k) : bi;
-  *out_idx = bi;
-  return bs;
+  if constexpr (F::kWidth == 1) {
+    const bool ok = s.lane(0) == s.lane(0);
+    *out_idx = ok ? idx.lane(0) : none;
+    return s.lane(0);
+  } else {
+    const F bs = all_lanes(s, [](F a, F b) { return max(a, b); });
+    const F bi = all_lanes(select(s == bs, idx, F(none)), [](F a, F b) { return min(a, b); });
+    *out_idx = bi.lane(0);
+    return bs.lane(0);
+  }
 }
 
 using FloatW = FloatN<kSimdWidth>;

@@ -1,0 +1,70 @@
+// The lane reductions of kernels/simd/lanes.h (all_lanes, max_lowest_index) against a
+// brute-force loop over the lanes, at every width the vocabulary has (1, 4, 8, 16),
+// on random scores with many exact ties (small integers), -inf lanes and shuffled
+// indices: the maximum, and the lowest index among the lanes that hold it.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <random>
+
+#include "kernels/simd/lanes.h"
+
+namespace impact::kernels::simd {
+namespace {
+
+template <uint32_t N>
+void check_reductions(uint32_t seed) {
+  using F = FloatN<N>;
+  std::mt19937 rng(seed);
+  std::uniform_int_distribution<int> small(-3, 3), pick(0, 9);
+  for (int trial = 0; trial < 2000; ++trial) {
+    float s[N], idx[N];
+    for (uint32_t k = 0; k < N; ++k) {
+      s[k] = pick(rng) == 0 ? -INFINITY : static_cast<float>(small(rng)) * 0.5f;
+      idx[k] = static_cast<float>(k);
+    }
+    std::shuffle(idx, idx + N, rng);
+    float want_max = -INFINITY, want_idx = 1e9f;
+    for (uint32_t k = 0; k < N; ++k) want_max = std::max(want_max, s[k]);
+    for (uint32_t k = 0; k < N; ++k)
+      if (s[k] == want_max) want_idx = std::min(want_idx, idx[k]);
+    float got_idx = -1.0f;
+    const float got_max = max_lowest_index(F::load(s), F::load(idx), 1e9f, &got_idx);
+    ASSERT_EQ(got_max, want_max) << "width " << N << " trial " << trial;
+    ASSERT_EQ(got_idx, want_idx) << "width " << N << " trial " << trial;
+    if constexpr (N > 1) {
+      const F mx = all_lanes(F::load(s), [](F a, F b) { return max(a, b); });
+      const F mn = all_lanes(F::load(idx), [](F a, F b) { return min(a, b); });
+      for (uint32_t k = 0; k < N; ++k) {
+        ASSERT_EQ(mx.lane(k), want_max) << "width " << N << " lane " << k;
+        ASSERT_EQ(mn.lane(k), 0.0f) << "width " << N << " lane " << k;
+      }
+    }
+  }
+}
+
+TEST(Lanes, AllLanesAndMaxLowestIndexMatchALoop) {
+  check_reductions<1>(1);
+  check_reductions<4>(2);
+  check_reductions<8>(3);
+  check_reductions<16>(4);
+}
+
+TEST(Lanes, MaxLowestIndexReportsNoneForNaNOnly) {
+  const float nan = std::nanf("");
+  float s[8], idx[8];
+  for (uint32_t k = 0; k < 8; ++k) {
+    s[k] = nan;
+    idx[k] = static_cast<float>(k);
+  }
+  float got = 0.0f;
+  max_lowest_index(FloatN<8>::load(s), FloatN<8>::load(idx), 42.0f, &got);
+  EXPECT_EQ(got, 42.0f);
+  max_lowest_index(FloatN<1>(nan), FloatN<1>(0.0f), 42.0f, &got);
+  EXPECT_EQ(got, 42.0f);
+}
+
+}  // namespace
+}  // namespace impact::kernels::simd
