@@ -1,8 +1,9 @@
-// One side of a narrow-phase kernel bucket as owning SoA lanes (kernels::LeafSoA), and
-// one pair's collision data read back in double: shared by the kernel-level tests
-// that drive the general convex kernels pair by pair.
+// One side of a narrow-phase kernel bucket as owning SoA lanes (kernels::LeafSoA), the
+// output lanes (kernels::ManifoldSoA), and one pair's collision data read back in
+// double: shared by the kernel-level tests that drive kernels pair by pair.
 #pragma once
 
+#include <cmath>
 #include <cstdint>
 #include <vector>
 
@@ -54,6 +55,47 @@ struct PairResult {
   double depth = 0;
   Eigen::Vector3d pt[4];
   double pd[4] = {0, 0, 0, 0};
+};
+
+/// Owning output lanes for n pairs (kernels::ManifoldSoA), every value poisoned (count
+/// 0xff, NaN floats) so a kernel that leaves a lane or a slot unwritten shows; result(k)
+/// reads lane k back as a PairResult (the points and depths of its count slots).
+struct ManifoldLanes {
+  std::vector<uint8_t> count;
+  std::vector<float> n[3], depth, pt[4][3], pd[4];
+
+  explicit ManifoldLanes(uint32_t lanes = 1) : count(lanes, 0xff), depth(lanes, NAN) {
+    for (int i = 0; i < 3; ++i) n[i].assign(lanes, NAN);
+    for (int j = 0; j < 4; ++j) {
+      for (int i = 0; i < 3; ++i) pt[j][i].assign(lanes, NAN);
+      pd[j].assign(lanes, NAN);
+    }
+  }
+
+  kernels::ManifoldSoA view() {
+    kernels::ManifoldSoA o{};
+    o.count = count.data();
+    for (int i = 0; i < 3; ++i) o.n[i] = n[i].data();
+    o.depth = depth.data();
+    for (int j = 0; j < 4; ++j) {
+      for (int i = 0; i < 3; ++i) o.point[j][i] = pt[j][i].data();
+      o.pdepth[j] = pd[j].data();
+    }
+    return o;
+  }
+
+  PairResult result(uint32_t k = 0) const {
+    PairResult r;
+    r.count = count[k];
+    if (r.count == 0) return r;
+    r.n = Eigen::Vector3d(n[0][k], n[1][k], n[2][k]);
+    r.depth = depth[k];
+    for (uint32_t j = 0; j < r.count && j < 4; ++j) {
+      r.pt[j] = Eigen::Vector3d(pt[j][0][k], pt[j][1][k], pt[j][2][k]);
+      r.pd[j] = pd[j][k];
+    }
+    return r;
+  }
 };
 
 }  // namespace impact::test

@@ -98,32 +98,12 @@ Result run(const Shape& a, const Shape& b, const NarrowConfig& cfg) {
   Lanes la, lb;
   la.push(a);
   lb.push(b);
-  std::vector<uint8_t> count(1, 0xff);
-  std::vector<float> n[3], depth(1), pt[4][3], pd[4];
-  ManifoldSoA o{};
-  o.count = count.data();
-  for (int i = 0; i < 3; ++i) n[i].assign(1, NAN), o.n[i] = n[i].data();
-  o.depth = depth.data();
-  for (int j = 0; j < 4; ++j) {
-    for (int i = 0; i < 3; ++i) pt[j][i].assign(1, NAN), o.point[j][i] = pt[j][i].data();
-    pd[j].assign(1, NAN);
-    o.pdepth[j] = pd[j].data();
-  }
+  test::ManifoldLanes out;
   if (a.type == kLeafBox && b.type == kLeafBox && cfg.sat_max_vertices == 0xffffffffu)
-    collide_box_box(la.soa(), lb.soa(), o, Range{0, 1}, cfg);  // the specialised kernel
+    collide_box_box(la.soa(), lb.soa(), out.view(), Range{0, 1}, cfg);  // the specialised kernel
   else
-    collide_gjk_epa(la.soa(), lb.soa(), o, Range{0, 1}, cfg, a.type, b.type);
-  Result r;
-  r.count = count[0];
-  if (r.count > 0) {
-    r.n = Vec3d(n[0][0], n[1][0], n[2][0]);
-    r.depth = depth[0];
-    for (uint32_t j = 0; j < r.count; ++j) {
-      r.pt[j] = Vec3d(pt[j][0][0], pt[j][1][0], pt[j][2][0]);
-      r.pd[j] = pd[j][0];
-    }
-  }
-  return r;
+    collide_gjk_epa(la.soa(), lb.soa(), out.view(), Range{0, 1}, cfg, a.type, b.type);
+  return out.result();
 }
 
 /// World vertices, face normals and edges of a shape, in double (float pose as the

@@ -14,6 +14,7 @@
 #include <Eigen/Geometry>
 
 #include "kernels/narrowphase/pair_kernels.h"
+#include "support/leaf_lanes.h"
 #include "support/random_input.h"
 #include "support/test_support.h"
 
@@ -43,28 +44,20 @@ Hit run(const Vec3d& c, double ra, const Cyl& cy, KernelPath path) {
   LeafSoA a{}, b{};
   for (int i = 0; i < 3; ++i) a.p[i] = &ap[i], a.e[i] = &ae[i], b.p[i] = &bp[i], b.e[i] = &be[i];
   for (int i = 0; i < 9; ++i) b.r[i] = &br[i];
-  uint8_t count = 0xff;
-  float n[3], depth, pt[4][3], pd[4];
-  ManifoldSoA o{};
-  o.count = &count;
-  for (int i = 0; i < 3; ++i) o.n[i] = &n[i];
-  o.depth = &depth;
-  for (int j = 0; j < 4; ++j) {
-    for (int i = 0; i < 3; ++i) o.point[j][i] = &pt[j][i];
-    o.pdepth[j] = &pd[j];
-  }
+  test::ManifoldLanes out;
   NarrowConfig cfg;
   cfg.path = path;
   const PairKernel k = pair_kernel(kLeafSphere, kLeafCylinder);
   EXPECT_EQ(k, &collide_sphere_cylinder);
-  k(a, b, o, Range{0, 1}, cfg);
+  k(a, b, out.view(), Range{0, 1}, cfg);
+  const test::PairResult r = out.result();
   Hit h;
-  h.count = count;
-  if (count == 0) return h;
-  h.n = Vec3d(n[0], n[1], n[2]);
-  h.pt = Vec3d(pt[0][0], pt[0][1], pt[0][2]);
-  h.depth = depth;
-  h.pd = pd[0];
+  h.count = r.count;
+  if (r.count == 0) return h;
+  h.n = r.n;
+  h.pt = r.pt[0];
+  h.depth = r.depth;
+  h.pd = r.pd[0];
   return h;
 }
 

@@ -102,32 +102,14 @@ Result run(const Leaf1& l, const Plane& pl, KernelPath path = KernelPath::kSimd)
     b.p[i] = static_cast<float>(pl.p[i]);
     b.e[i] = static_cast<float>(pl.n[i]);
   }
-  uint8_t count = 0xff;
-  float n[3], depth, pt[4][3], pd[4];
-  ManifoldSoA o{};
-  o.count = &count;
-  for (int i = 0; i < 3; ++i) o.n[i] = &n[i];
-  o.depth = &depth;
-  for (int j = 0; j < 4; ++j) {
-    for (int i = 0; i < 3; ++i) o.point[j][i] = &pt[j][i];
-    o.pdepth[j] = &pd[j];
-  }
+  test::ManifoldLanes out;
   NarrowConfig cfg;
   cfg.hulls = store().view();
   cfg.path = path;
   const PairKernel kernel = pair_kernel(l.type, kLeafHalfSpace);
   EXPECT_NE(kernel, nullptr);
-  if (kernel != nullptr) kernel(a.soa(), b.soa(), o, Range{0, 1}, cfg);
-  Result r;
-  r.count = count;
-  if (count == 0) return r;
-  r.n = Vec3d(n[0], n[1], n[2]);
-  r.depth = depth;
-  for (uint32_t j = 0; j < count; ++j) {
-    r.pt[j] = Vec3d(pt[j][0], pt[j][1], pt[j][2]);
-    r.pd[j] = pd[j];
-  }
-  return r;
+  if (kernel != nullptr) kernel(a.soa(), b.soa(), out.view(), Range{0, 1}, cfg);
+  return out.result();
 }
 
 /// Signed distance of A's lowest point to the plane (closed forms, double).
