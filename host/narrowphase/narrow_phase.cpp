@@ -4,7 +4,8 @@
 //
 // Passes (each a for_each_chunk over a fixed grain, so the bytes never depend on
 // the thread count):
-//   poses      quaternion -> rotation matrix per object
+//   poses      per object: the check of its shape id and pose, then quaternion ->
+//              rotation matrix (one pass, in NarrowPhase::Impl::collide)
 //   expand     per pair: its leaf pairs (a shape, a compound child, a mesh triangle
 //              found through the mesh's BVH), in (child_a, child_b) order, into
 //              per-chunk lists concatenated in chunk order
@@ -578,12 +579,20 @@ Status NarrowPhase::Impl::collide(const ShapeSet& shapes, std::span<const ShapeI
   const uint32_t pair_chunks = host::chunk_count(np_in, kExpandGrain);
   first_bad.assign(static_cast<size_t>(obj_chunks) + pair_chunks, 0xffffffffu);
   const size_t shape_count = store->shapes.size();
+  // Objects are checked and posed in one pass (one read of the poses); after a bad
+  // object the rest of its chunk is left unposed, and the call fails below.
+  rec.resize(n);
+  posed.resize(n);
   exec.for_each_chunk(n, kExpandGrain, [&](uint32_t b, uint32_t e, uint32_t chunk) {
     for (uint32_t i = b; i < e; ++i) {
-      if (shape_of_in[i].index >= shape_count || !host::pose_ok(poses[i])) {
+      const Pose& pose = poses[i];
+      if (shape_of_in[i].index >= shape_count || !host::pose_ok(pose)) {
         first_bad[chunk] = i;
         return;
       }
+      rec[i] = &store->shapes[shape_of_in[i].index];
+      posed[i].R = pose.orientation.normalized().toRotationMatrix();
+      posed[i].p = pose.position;
     }
   });
   exec.for_each_chunk(np_in, kExpandGrain, [&](uint32_t b, uint32_t e, uint32_t chunk) {
@@ -631,16 +640,6 @@ Status NarrowPhase::Impl::collide(const ShapeSet& shapes, std::span<const ShapeI
     }
   }
   result->clear();
-  rec.resize(n);
-  posed.resize(n);
-  exec.for_each_chunk(n, kExpandGrain, [&](uint32_t b, uint32_t e, uint32_t) {
-    for (uint32_t i = b; i < e; ++i) {
-      rec[i] = &store->shapes[shape_of_in[i].index];
-      posed[i].R = poses[i].orientation.normalized().toRotationMatrix();
-      posed[i].p = poses[i].position;
-    }
-  });
-
   return runner.run(exec, *store, rec, posed, pairs_in, host::config_of(options), result);
 }
 
