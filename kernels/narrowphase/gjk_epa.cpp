@@ -23,6 +23,13 @@
 //     function over the unit sphere (up to 40 descent steps with a quadratic-model step
 //     and a two-subgradient bundle across kinks such as a cylinder's side), then runs a
 //     GJK on the pair moved just clear for the witnesses. Converged lanes skip this.
+//     Pairs with a hull side are not stopped by the cap: they expand until converged
+//     or the polytope is full (512 vertices). A hull gives the support function a
+//     strict local minimum at every face of A - B that holds the origin's projection
+//     (hundreds around a deep core in a round many-vertex hull), and a descent stays on
+//     the face it starts from: a sphere deep in a 400-vertex hull, stopped at the cap,
+//     reported a face 104 degrees from the least one, its depth 3.4e-3 too large; 81
+//     expansions converge it.
 //     Smooth pairs (sphere and ellipsoid cores: unique supports, a differentiable
 //     support function h) leave EPA once its gap is below 3e-3 of the scale: Newton's
 //     method on h over unit directions (forward-difference Hessian, two supports per
@@ -48,7 +55,8 @@
 // cost on a CPU, and it keeps the sub-algorithm's sign tests away from cancellation).
 // Tolerances: cfg.gjk_tolerance and cfg.epa_tolerance times the scale (the sum of the
 // two shapes' sizes, support.h leaf_size); iteration caps cfg.gjk_max_iterations and
-// cfg.epa_max_iterations (EPA also stops at its fixed polytope capacity).
+// cfg.epa_max_iterations (the latter for pairs without a hull side; EPA also stops at
+// its fixed polytope capacity, kEpaMaxVerts).
 // Paths: GJK/EPA do not vectorise across lanes; cfg.path kSimd and kScalar run this same
 // per-lane code (bit-identical results). Within a lane, hull supports and the ray chord
 // through a hull's face planes run kSimdWidth vertices / faces per step; the EPA
@@ -63,7 +71,11 @@
 // O(vertices). impact_narrowbench (half the pairs overlapping, 24-point hulls, loaded
 // 2-core machine): ~1.2 us per box-hull pair, 1.5 us hull-hull, 1.5 us
 // cylinder-cylinder, 1.55 us ellipsoid-ellipsoid (2.5-2.7 us before the Newton finish);
-// a lane at the EPA cap ~25-35 us (the cap refinement ~6-10 us).
+// a lane at the EPA cap ~25-35 us (the cap refinement ~6-10 us). Deep, nearly
+// concentric lanes in a round 400-vertex hull (the worst case of the uncapped hull
+// pairs): ~28 us sphere-hull (~75 expansions), ~23 us ellipsoid-hull, ~74 us hull-hull
+// against another such hull (~130 expansions, at most ~180; ~140 us at 1000 vertices
+// each).
 // cfg.epa_tolerance trades depth error for time on curved pairs (polytope pairs converge
 // exactly and do not change): measured against the matrix test's double reference, the
 // worst |depth error| over its curved-pair scenarios is ~2e-5 L at 1e-5 (the default),
@@ -283,9 +295,17 @@ void witnesses(const Simplex& s, V3* pa, V3* pb) {
 
 // --- EPA polytope ----------------------------------------------------------------------
 
-constexpr uint32_t kEpaMaxVerts = 132;
-constexpr uint32_t kEpaMaxFaces = 2 * kEpaMaxVerts;
-constexpr uint32_t kEpaMaxHorizon = 3 * kEpaMaxVerts;
+// Capacities of the EPA polytope (on the stack, ~160 bytes per vertex, in its SoA
+// arrays and the expansion's scratch). Every lane starts in the small one (~21 KB, the
+// frame of the common path); the few that fill it go on in the large one (~80 KB, in a
+// frame of its own), the same expansions from the same state. Those are pairs with a
+// hull side, which run EPA to convergence (epa_cores): deep, nearly concentric, round
+// many-vertex hulls take up to ~350 expansions at 1000 vertices per hull (~230 for a
+// sphere in a 2000-vertex hull; beyond the capacity the lane ends as a capped one);
+// and lanes with a cfg.epa_max_iterations above ~128. A closed triangulated polytope of
+// V vertices has 2V - 4 faces.
+constexpr uint32_t kEpaSmallVerts = 132;
+constexpr uint32_t kEpaMaxVerts = 512;
 
 struct EpaFace {
   uint16_t i[3];
@@ -294,14 +314,33 @@ struct EpaFace {
 };
 
 /// The polytope: vertices, and its live faces in SoA (compacted in order after every
-/// expansion), so that the visibility test runs over contiguous doubles.
+/// expansion), so that the visibility test runs over contiguous doubles. Capacity:
+/// kMaxV vertices.
+template <uint32_t kMaxV>
 struct Polytope {
-  SupportPoint v[kEpaMaxVerts];
+  static constexpr uint32_t kMaxVerts = kMaxV;
+  static constexpr uint32_t kMaxFaces = 2 * kMaxV;
+  static constexpr uint32_t kMaxHorizon = 3 * kMaxV;
+  SupportPoint v[kMaxVerts];
   uint32_t nv = 0;
-  double fnx[kEpaMaxFaces], fny[kEpaMaxFaces], fnz[kEpaMaxFaces];
-  double fd[kEpaMaxFaces];  // n . w[i0]: signed distance of the plane from the origin
-  uint16_t fi[kEpaMaxFaces][3];
+  double fnx[kMaxFaces], fny[kMaxFaces], fnz[kMaxFaces];
+  double fd[kMaxFaces];  // n . w[i0]: signed distance of the plane from the origin
+  uint16_t fi[kMaxFaces][3];
   uint32_t nf = 0;
+
+  /// This polytope becomes a copy of o (o.nv <= kMaxVerts).
+  template <uint32_t kOther>
+  void copy_from(const Polytope<kOther>& o) {
+    nv = o.nv;
+    nf = o.nf;
+    std::copy(o.v, o.v + o.nv, v);
+    std::copy(o.fnx, o.fnx + o.nf, fnx);
+    std::copy(o.fny, o.fny + o.nf, fny);
+    std::copy(o.fnz, o.fnz + o.nf, fnz);
+    std::copy(o.fd, o.fd + o.nf, fd);
+    for (uint32_t k = 0; k < o.nf; ++k)
+      for (int j = 0; j < 3; ++j) fi[k][j] = o.fi[k][j];
+  }
 
   EpaFace face(uint32_t k) const {
     EpaFace F;
@@ -322,7 +361,8 @@ struct Polytope {
 /// The live face of least distance, the lowest index among ties (P.nf > 0). A plain
 /// compare-and-branch scan: the branch is rarely taken, so it predicts well, where a
 /// branch-free running minimum is one long chain of dependent min operations.
-uint32_t closest_face(const Polytope& P) {
+template <class Poly>
+uint32_t closest_face(const Poly& P) {
   double bd = P.fd[0];
   uint32_t best = 0;
   for (uint32_t k = 1; k < P.nf; ++k)
@@ -334,8 +374,9 @@ uint32_t closest_face(const Polytope& P) {
 }
 
 /// Adds face (a, b, c), counter-clockwise seen from outside; false if degenerate/full.
-bool add_face(Polytope& P, uint32_t a, uint32_t b, uint32_t c) {
-  if (P.nf >= kEpaMaxFaces) return false;  // P holds live faces only
+template <class Poly>
+bool add_face(Poly& P, uint32_t a, uint32_t b, uint32_t c) {
+  if (P.nf >= Poly::kMaxFaces) return false;  // P holds live faces only
   const D3 n = cross(P.v[b].w - P.v[a].w, P.v[c].w - P.v[a].w);
   const double l2 = len2(n);
   if (!(l2 > 0.0)) return false;
@@ -405,7 +446,8 @@ bool lower_support(const Leaf& A, const Leaf& B, const V3& m, V3* n, SupportPoin
   return true;
 }
 
-void epa_finish(const Leaf& A, const Leaf& B, const Polytope& P, const EpaFace& F, bool converged,
+template <class Poly>
+void epa_finish(const Leaf& A, const Leaf& B, const Poly& P, const EpaFace& F, bool converged,
                 double tol, float scale, EpaResult* r) {
   V3 n = to_f(F.n);
   n = n * (1.0f / len(n));  // unit to float rounding
@@ -592,7 +634,8 @@ __attribute__((noinline)) bool polish_smooth(const Leaf& A, const Leaf& B, D3 n0
 /// (nearly concentric pairs have two, in opposite directions): every polytope face
 /// whose distance (a lower bound of h over the directions it covers) is below h - tol
 /// must lie within ~25 degrees of n. False: EPA goes on.
-__attribute__((noinline)) bool single_basin(const Polytope& P, const EpaResult& pr, double tol) {
+template <class Poly>
+__attribute__((noinline)) bool single_basin(const Poly& P, const EpaResult& pr, double tol) {
   const D3 n = to_d(pr.n);
   const double lim = static_cast<double>(pr.depth) - tol;
   for (uint32_t k = 0; k < P.nf; ++k) {
@@ -671,6 +714,155 @@ GjkResult gjk_cores(const Leaf& A, const Leaf& B, float margin, float scale, uin
 }
 
 // --- EPA ---------------------------------------------------------------------------------
+
+namespace {
+
+/// EPA's parameters and the state it carries from the small polytope to the large one.
+struct EpaRun {
+  const Leaf* A = nullptr;
+  const Leaf* B = nullptr;
+  double tol = 0.0, polish_start = 0.0;
+  float scale = 0.0f;
+  uint32_t max_iterations = 0;
+  bool to_convergence = false;  // a hull side: no iteration cap (epa_cores)
+  bool smooth = false;          // the Newton finish is still to be tried
+  uint32_t it = 0;              // expansions so far
+};
+
+/// Expands P (a closed polytope about the origin) until EPA converges, reaches the
+/// cap or an inconsistent polytope, or fills P; then sets *r (epa_finish) and returns
+/// true. Except when P is full and can_grow (a larger capacity to go on in): then P is
+/// as after its last expansion, *r untouched, and the result false.
+template <uint32_t kMaxV>
+IMPACT_INLINE bool epa_expand(EpaRun& run, Polytope<kMaxV>& P, bool can_grow, EpaResult* r) {
+  const Leaf& A = *run.A;
+  const Leaf& B = *run.B;
+  const double tol = run.tol;
+  using Poly = Polytope<kMaxV>;
+  bool converged = false;
+  uint16_t horizon[Poly::kMaxHorizon][2];
+  // Closest face (lowest index wins ties): found here, then again after every expansion.
+  uint32_t best = closest_face(P);
+  // Per-vertex horizon counters, zero between iterations; cleared as vertices are
+  // added (not up front: most lanes use a few dozen of the capacity).
+  uint16_t starts[kMaxV], ends[kMaxV];
+  for (uint32_t i = 0; i < P.nv; ++i) starts[i] = ends[i] = 0;
+  double sees[Poly::kMaxFaces];
+  uint16_t visible[Poly::kMaxFaces];
+  for (;;) {
+    const EpaFace F = P.face(best);
+    const SupportPoint w = support_diff(A, B, to_f(F.n));
+    const double gap = dot(F.n, w.w) - F.d;
+    if (gap <= tol) {
+      converged = true;
+      break;
+    }
+    if (run.smooth && gap <= run.polish_start) {
+      // Near the minimum of a smooth support function: Newton finishes it (see
+      // polish_smooth); on failure EPA goes on as if it had not been tried.
+      run.smooth = false;
+      if (polish_smooth(A, B, F.n, tol, r) && single_basin(P, *r, tol)) {
+        r->iterations = run.it;
+        return true;
+      }
+    }
+    if (P.nv >= kMaxV && can_grow) return false;
+    if ((run.it >= run.max_iterations && !run.to_convergence) || P.nv >= kMaxV) break;
+    ++run.it;
+    // Faces that see w (a contiguous pass over the SoA normals), then their horizon
+    // (edges not shared by two visible faces), walked in index order. The visible
+    // faces are removed by moving the last live face into each hole (highest hole
+    // first), so the SoA holds only live faces and no pass moves the faces that stay.
+    const uint32_t nf = P.nf;
+    for (uint32_t k = 0; k < nf; ++k) sees[k] = P.fnx[k] * w.w.x + P.fny[k] * w.w.y + P.fnz[k] * w.w.z - P.fd[k];
+    sees[best] = 1.0;  // the closest face always goes (w is beyond it: gap > tol)
+    uint32_t nvis = 0;
+    for (uint32_t k = 0; k < nf; ++k) {
+      visible[nvis] = static_cast<uint16_t>(k);
+      nvis += sees[k] > 0.0 ? 1u : 0u;
+    }
+    uint32_t nh = 0;
+    bool ok = true;
+    for (uint32_t j = 0; j < nvis && ok; ++j) {
+      const uint32_t k = visible[j];
+      const uint16_t gi[3] = {P.fi[k][0], P.fi[k][1], P.fi[k][2]};
+      for (int e = 0; e < 3; ++e) {
+        const uint16_t a = gi[e], b = gi[(e + 1) % 3];
+        bool cancelled = false;
+        for (uint32_t h = 0; h < nh; ++h) {
+          if (horizon[h][0] == b && horizon[h][1] == a) {
+            horizon[h][0] = horizon[nh - 1][0];
+            horizon[h][1] = horizon[nh - 1][1];
+            --nh;
+            cancelled = true;
+            break;
+          }
+        }
+        if (!cancelled) {
+          if (nh >= Poly::kMaxHorizon) {
+            ok = false;
+            break;
+          }
+          horizon[nh][0] = a;
+          horizon[nh][1] = b;
+          ++nh;
+        }
+      }
+    }
+    // The horizon must be one simple loop: every vertex starts and ends one edge.
+    // Counted per vertex (the counters are zero between iterations).
+    if (ok) {
+      for (uint32_t h = 0; h < nh; ++h) {
+        ++starts[horizon[h][0]];
+        ++ends[horizon[h][1]];
+      }
+      for (uint32_t h = 0; h < nh; ++h) ok = ok && starts[horizon[h][0]] == 1 && ends[horizon[h][0]] == 1;
+      for (uint32_t h = 0; h < nh; ++h) {
+        starts[horizon[h][0]] = 0;
+        ends[horizon[h][1]] = 0;
+      }
+      ok = ok && nh >= 3;
+    }
+    if (ok) {
+      uint32_t live = nf;
+      for (uint32_t j = nvis; j-- > 0;) {
+        const uint32_t k = visible[j];
+        --live;
+        if (k != live) P.move_face(k, live);
+      }
+      P.nf = live;
+      const uint32_t wi = P.nv++;
+      P.v[wi] = w;
+      starts[wi] = ends[wi] = 0;
+      for (uint32_t h = 0; h < nh && ok; ++h) ok = add_face(P, horizon[h][0], horizon[h][1], wi);
+      if (ok) best = closest_face(P);
+    }
+    if (!ok) {
+      // Inconsistent topology (rounding) or capacity: stop at the last good face. The
+      // removal of the visible faces may be partly applied, so report F itself.
+      epa_finish(A, B, P, F, false, tol, run.scale, r);
+      r->status = 2;
+      r->iterations = run.it;
+      return true;
+    }
+  }
+  epa_finish(A, B, P, P.face(best), converged, tol, run.scale, r);
+  r->iterations = run.it;
+  return true;
+}
+
+/// The expansions of a lane that filled the small polytope go on in the large one, from
+/// the same state (out of line: only these lanes pay for its ~80 KB frame). run is a
+/// copy, so that the caller's stays in registers.
+__attribute__((noinline)) EpaResult epa_expand_large(EpaRun run, const Polytope<kEpaSmallVerts>& small) {
+  Polytope<kEpaMaxVerts> P;
+  P.copy_from(small);
+  EpaResult r;
+  epa_expand(run, P, false, &r);
+  return r;
+}
+
+}  // namespace
 
 EpaResult epa_cores(const Leaf& A, const Leaf& B, const Simplex& start, float scale,
                     uint32_t max_iterations, float tolerance) {
@@ -751,7 +943,7 @@ EpaResult epa_cores(const Leaf& A, const Leaf& B, const Simplex& start, float sc
     return r;
   }
 
-  Polytope P;
+  Polytope<kEpaSmallVerts> P;
   for (uint32_t i = 0; i < 4; ++i) P.v[i] = s.v[i];
   P.nv = 4;
   {
@@ -770,119 +962,28 @@ EpaResult epa_cores(const Leaf& A, const Leaf& B, const Simplex& start, float sc
       add_face(P, 1, 2, 3);
     }
   }
-  uint32_t best = 0;
-  uint32_t it = 0;
-  bool converged = false;
-  uint16_t horizon[kEpaMaxHorizon][2];
-  // Closest face (lowest index wins ties): found here, then again after every expansion.
-  best = closest_face(P);
-  uint8_t starts[kEpaMaxVerts] = {}, ends[kEpaMaxVerts] = {};
-  double sees[kEpaMaxFaces];
-  uint16_t visible[kEpaMaxFaces];
+  EpaRun run;
+  run.A = &A;
+  run.B = &B;
+  run.tol = tol;
+  run.scale = scale;
+  run.max_iterations = max_iterations;
   // Both supports unique in every direction (points and ellipsoids): h is smooth and
   // its minimum, once EPA has bracketed it to kPolishStart of the scale, goes to Newton.
-  bool smooth = is_smooth(A.type) && is_smooth(B.type);
-  const double polish_start = kPolishStart * scale;
-  smooth = smooth && polish_start > tol;
-  for (;;) {
-    const EpaFace F = P.face(best);
-    const SupportPoint w = support_diff(A, B, to_f(F.n));
-    const double gap = dot(F.n, w.w) - F.d;
-    if (gap <= tol) {
-      converged = true;
-      break;
-    }
-    if (smooth && gap <= polish_start) {
-      // Near the minimum of a smooth support function: Newton finishes it (see
-      // polish_smooth); on failure EPA goes on as if it had not been tried.
-      smooth = false;
-      EpaResult pr;
-      if (polish_smooth(A, B, F.n, tol, &pr) && single_basin(P, pr, tol)) {
-        pr.iterations = it;
-        return pr;
-      }
-    }
-    if (it >= max_iterations || P.nv >= kEpaMaxVerts) break;
-    ++it;
-    // Faces that see w (a contiguous pass over the SoA normals), then their horizon
-    // (edges not shared by two visible faces), walked in index order. The visible
-    // faces are removed by moving the last live face into each hole (highest hole
-    // first), so the SoA holds only live faces and no pass moves the faces that stay.
-    const uint32_t nf = P.nf;
-    for (uint32_t k = 0; k < nf; ++k) sees[k] = P.fnx[k] * w.w.x + P.fny[k] * w.w.y + P.fnz[k] * w.w.z - P.fd[k];
-    sees[best] = 1.0;  // the closest face always goes (w is beyond it: gap > tol)
-    uint32_t nvis = 0;
-    for (uint32_t k = 0; k < nf; ++k) {
-      visible[nvis] = static_cast<uint16_t>(k);
-      nvis += sees[k] > 0.0 ? 1u : 0u;
-    }
-    uint32_t nh = 0;
-    bool ok = true;
-    for (uint32_t j = 0; j < nvis && ok; ++j) {
-      const uint32_t k = visible[j];
-      const uint16_t gi[3] = {P.fi[k][0], P.fi[k][1], P.fi[k][2]};
-      for (int e = 0; e < 3; ++e) {
-        const uint16_t a = gi[e], b = gi[(e + 1) % 3];
-        bool cancelled = false;
-        for (uint32_t h = 0; h < nh; ++h) {
-          if (horizon[h][0] == b && horizon[h][1] == a) {
-            horizon[h][0] = horizon[nh - 1][0];
-            horizon[h][1] = horizon[nh - 1][1];
-            --nh;
-            cancelled = true;
-            break;
-          }
-        }
-        if (!cancelled) {
-          if (nh >= kEpaMaxHorizon) {
-            ok = false;
-            break;
-          }
-          horizon[nh][0] = a;
-          horizon[nh][1] = b;
-          ++nh;
-        }
-      }
-    }
-    // The horizon must be one simple loop: every vertex starts and ends one edge.
-    // Counted per vertex (the counters are zero between iterations).
-    if (ok) {
-      for (uint32_t h = 0; h < nh; ++h) {
-        ++starts[horizon[h][0]];
-        ++ends[horizon[h][1]];
-      }
-      for (uint32_t h = 0; h < nh; ++h) ok = ok && starts[horizon[h][0]] == 1 && ends[horizon[h][0]] == 1;
-      for (uint32_t h = 0; h < nh; ++h) {
-        starts[horizon[h][0]] = 0;
-        ends[horizon[h][1]] = 0;
-      }
-      ok = ok && nh >= 3;
-    }
-    if (ok) {
-      uint32_t live = nf;
-      for (uint32_t j = nvis; j-- > 0;) {
-        const uint32_t k = visible[j];
-        --live;
-        if (k != live) P.move_face(k, live);
-      }
-      P.nf = live;
-      const uint32_t wi = P.nv++;
-      P.v[wi] = w;
-      for (uint32_t h = 0; h < nh && ok; ++h) ok = add_face(P, horizon[h][0], horizon[h][1], wi);
-      if (ok) best = closest_face(P);
-    }
-    if (!ok) {
-      // Inconsistent topology (rounding) or capacity: stop at the last good face. The
-      // removal of the visible faces may be partly applied, so report F itself.
-      epa_finish(A, B, P, F, false, tol, scale, &r);
-      r.status = 2;
-      r.iterations = it;
-      return r;
-    }
-  }
-  epa_finish(A, B, P, P.face(best), converged, tol, scale, &r);
-  r.iterations = it;
-  return r;
+  run.polish_start = kPolishStart * scale;
+  run.smooth = is_smooth(A.type) && is_smooth(B.type) && run.polish_start > tol;
+  // The iteration cap is for curved pairs, where EPA converges linearly and the
+  // descent after the cap (epa_finish) completes a minimum that h has in few places.
+  // Points, segments, boxes and triangles have at most 64 support points between
+  // them, so their EPA converges within the default cap. A hull side gives h a strict
+  // local minimum at every face of the difference that holds the origin's projection
+  // (hundreds on a round many-vertex hull around a deep core): a descent stays on the
+  // face it starts from, which can be 100 degrees from the least one. Such pairs
+  // expand until converged or the polytope is full: exact and finite on a polytope
+  // pair, to cfg.epa_tolerance with a curved side.
+  run.to_convergence = A.type == kLeafConvex || B.type == kLeafConvex;
+  if (epa_expand(run, P, true, &r)) return r;
+  return epa_expand_large(run, P);
 }
 
 // --- manifold --------------------------------------------------------------------------

@@ -44,8 +44,9 @@ GjkResult gjk_cores(const Leaf& A, const Leaf& B, float margin, float scale, uin
                     float tolerance);
 
 struct EpaResult {
-  /// 0: converged or stopped at the cap (n, depth valid); 1: the Minkowski difference
-  /// of the cores is flat (dimension < 3): n is the deterministic fallback, depth 0;
+  /// 0: converged or stopped at the cap or the vertex capacity (n, depth valid); 1: the
+  /// Minkowski difference of the cores is flat (dimension < 3): n is the deterministic
+  /// fallback, depth 0;
   /// 2: stopped early at an inconsistent polytope (rounding) or its capacity: n, depth
   /// are the last closest face's (a lower bound).
   int status = 0;
@@ -57,7 +58,9 @@ struct EpaResult {
 
 /// EPA on the cores, seeded with GJK's final simplex (the origin on or in it). Pairs
 /// of smooth cores (sphere, ellipsoid) finish with Newton's method once EPA has
-/// bracketed the depth (gjk_epa.cpp, header block, step 3).
+/// bracketed the depth (gjk_epa.cpp, header block, step 3). max_iterations caps the
+/// expansions of pairs without a hull side; a pair with a hull expands until it
+/// converges or the polytope is full (a descent cannot finish it: step 3).
 EpaResult epa_cores(const Leaf& A, const Leaf& B, const Simplex& start, float scale,
                     uint32_t max_iterations, float tolerance);
 

@@ -4,7 +4,9 @@
 // box-box and hull-hull, and the "safe displacement" property for every type pair
 // (moving B by n * depth separates the pair, moving it by less does not). Also: caps
 // on GJK/EPA iterations, the tolerance knob, degenerate and extreme inputs, no NaN,
-// determinism across range partitions.
+// determinism across range partitions, and deep pairs with a round 400-vertex hull (EPA
+// past its iteration cap) against brute-force SAT in double, the SAT kernel and the
+// support-function reference of narrow_reference.h.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -21,7 +23,9 @@
 #include "host/narrowphase/shape_store.h"
 #include "kernels/narrowphase/gjk_epa.h"
 #include "kernels/narrowphase/pair_kernels.h"
+#include "kernels/narrowphase/sat.h"
 #include "support/leaf_lanes.h"
+#include "support/narrow_reference.h"
 #include "support/random_input.h"
 #include "support/test_support.h"
 
@@ -973,6 +977,195 @@ TEST(GjkEpa, DeterministicAcrossPartitions) {
         for (int i = 0; i < 3; ++i) EXPECT_EQ(std::memcmp(&o1.n[i][k], &o2.n[i][k], 4), 0);
       }
     }
+}
+
+// --- deep pairs with a many-vertex hull: EPA past its iteration cap ------------------------
+// Around a deep core, a round hull's support function has a strict local minimum at
+// nearly every face, and EPA must uncover most of the faces within the depth band
+// before it converges: up to ~100-350 expansions where the cap is 64. EPA stopped at
+// the cap ended on a wrong face (depth 3e-3 too large, normal up to 104 degrees off).
+
+/// Points on an ellipsoid with semi-axes uniform in [lo, 1] (float), like
+/// sphere_convex_test.cpp's ellipsoid_points (same draws for the same generator state).
+std::vector<Eigen::Vector3f> ellipsoid_cloud(std::mt19937& g, int np, double lo) {
+  double ax[3];
+  for (double& a : ax) a = std::uniform_real_distribution<double>(lo, 1.0)(g);
+  std::vector<Eigen::Vector3f> pts;
+  for (int i = 0; i < np; ++i) {
+    Vec3d u;
+    do {
+      std::normal_distribution<double> d(0.0, 1.0);
+      const double x = d(g), y = d(g), z = d(g);
+      u = Vec3d(x, y, z);
+    } while (!(u.norm() > 1e-3));
+    u.normalize();
+    pts.emplace_back(static_cast<float>(ax[0] * u.x()), static_cast<float>(ax[1] * u.y()),
+                     static_cast<float>(ax[2] * u.z()));
+  }
+  return pts;
+}
+
+/// The posed hull of a convex shape (as the lanes see it) with its faces' outward unit
+/// normals in double from the polygons (Newell), one per face.
+Polytope posed_hull(const Shape& s) {
+  const Shape r = rounded(s);
+  const HullData& h = hulls().data[r.hull];
+  Polytope P;
+  for (const auto& v : h.vertices) P.verts.push_back(r.R * v.cast<double>() + r.p);
+  for (const auto& f : h.faces) {
+    Vec3d n = Vec3d::Zero();
+    for (size_t i = 0; i < f.size(); ++i) n += P.verts[f[i]].cross(P.verts[f[(i + 1) % f.size()]]);
+    P.normals.push_back(n.normalized());
+    for (size_t i = 0; i < f.size(); ++i) {
+      const uint32_t a = f[i], b = f[(i + 1) % f.size()];
+      if (a < b) P.edges.push_back((P.verts[b] - P.verts[a]).normalized());  // each edge once
+    }
+  }
+  return P;
+}
+
+/// The lane's EPA expansions through collide_convex_lane (0: no EPA), and whether
+/// the SAT kernel accepts the pair (sat_vertex_count > 0).
+struct LaneInfo {
+  uint32_t epa_expansions = 0;
+  bool sat_applies = false;
+};
+LaneInfo lane_info(const Shape& a, const Shape& b, const NarrowConfig& cfg) {
+  Lanes la, lb;
+  la.push(a);
+  lb.push(b);
+  const cvx::V3 origin{static_cast<float>(a.p.x()), static_cast<float>(a.p.y()), static_cast<float>(a.p.z())};
+  const cvx::Leaf A = cvx::load_leaf(la.soa(), 0, a.type, &cfg.hulls, origin);
+  const cvx::Leaf B = cvx::load_leaf(lb.soa(), 0, b.type, &cfg.hulls, origin);
+  cvx::LaneContact c;
+  cvx::collide_convex_lane(A, B, cfg, &c);
+  LaneInfo info;
+  info.epa_expansions = c.used_epa ? c.epa_iterations : 0u;
+  info.sat_applies = (a.type == kLeafBox || a.type == kLeafConvex) &&
+                     (b.type == kLeafBox || b.type == kLeafConvex) && cvx::sat_vertex_count(A, B) > 0;
+  return info;
+}
+
+/// The lane of sphere_convex_test.cpp (ManyFaceHull, IMPACT_TEST_INTENSITY=30) where
+/// GJK/EPA disagreed with the sphere-hull kernel: a sphere deep in a 400-vertex hull
+/// (796 faces). Reference: the nearest face plane of the posed hull in double
+/// (depth = r + its distance, normal = minus its outward normal).
+TEST(GjkEpa, SphereDeepInManyFaceHull) {
+  std::mt19937 g(99);
+  const uint32_t h = hulls().add(ellipsoid_cloud(g, 400, 0.3));
+  ASSERT_EQ(hulls().data[h].vertices.size(), 400u);
+  ASSERT_EQ(hulls().data[h].faces.size(), 796u);
+  const float r9[9] = {-0.346952617f, 0.932676554f,  0.0986829549f, 0.00505506434f, 0.107076995f,
+                       -0.9942379f,   -0.937869012f, -0.344454587f, -0.0418653823f};
+  Mat3d R;
+  for (int i = 0; i < 9; ++i) R(i / 3, i % 3) = r9[i];
+  const Shape a = rounded(sphere(Vec3d(-0.77271837f, 3.45435047f, -0.32568711f), 0.672836065f));
+  const Shape b = rounded(convex(Vec3d(-0.794422328f, 3.45396376f, -0.31916979f), R, h));
+  const Polytope P = posed_hull(b);
+  double best = INFINITY, second = INFINITY;
+  Vec3d n_ref = Vec3d::Zero();
+  for (const Vec3d& m : P.normals) {
+    double hi = -INFINITY;
+    for (const Vec3d& v : P.verts) hi = std::max(hi, m.dot(v));
+    const double s = hi - m.dot(a.p);  // > 0: the centre is inside this face's plane
+    ASSERT_GT(s, 0.0);
+    if (s < best) {
+      second = best;
+      best = s;
+      n_ref = -m;
+    } else {
+      second = std::min(second, s);
+    }
+  }
+  const double depth_ref = a.e[0] + best;  // 1.4532464
+  ASSERT_GT(second - best, 1e-3);          // one nearest face: the normal is defined
+  // The regression's premise: EPA needs more expansions than the default cap.
+  EXPECT_GT(lane_info(a, b, config()).epa_expansions, config().epa_max_iterations);
+  const Result r = run_pair(a, b);
+  ASSERT_EQ(r.count, 1u);
+  EXPECT_NEAR(r.depth, depth_ref, 2e-5);
+  EXPECT_GT(r.n.dot(n_ref), std::cos(1e-3)) << r.n.transpose() << " vs " << n_ref.transpose();
+}
+
+/// Deep, nearly concentric pairs of a round 400-vertex hull with every other type,
+/// against exact references: the brute-force separating axis minimum in double over
+/// the pair's face normals and edge crosses (sphere, capsule, box, triangle), the SAT
+/// kernel (hull-hull, forced past sat_max_vertices; sat_test checks it against the
+/// same brute force), the double-precision support-function minimiser of
+/// narrow_reference.h (cylinder, ellipsoid). Checked: depth, and that the normal is a
+/// minimiser (the overlap along it is the depth). Many lanes go past the default cap.
+TEST(GjkEpa, DeepInManyVertexHullsMatchReferences) {
+  std::mt19937 g(31);
+  std::uniform_real_distribution<double> u(-1, 1);
+  std::vector<uint32_t> round;
+  for (int i = 0; i < 4; ++i) round.push_back(hulls().add(ellipsoid_cloud(g, 400, 0.9)));
+  const LeafType types[] = {kLeafSphere,   kLeafCapsule,   kLeafBox,     kLeafConvex,
+                            kLeafCylinder, kLeafEllipsoid, kLeafTriangle};
+  const int trials = static_cast<int>(test::scaled(12));
+  NarrowConfig gjk = config();
+  gjk.sat_max_vertices = 0;  // hull-hull through GJK/EPA even where SAT would take it
+  NarrowConfig exact = config();
+  exact.sat_max_vertices = 1024;
+  for (LeafType t : types) {
+    int past_cap = 0;
+    for (int k = 0; k < trials; ++k) {
+      const Shape hs =
+          rounded(convex(Vec3d(u(g), u(g), u(g)) * 0.02, test::random_rotation(g), round[k % 4]));
+      const Shape o =
+          rounded(t == kLeafConvex ? convex(Vec3d::Zero(), test::random_rotation(g), round[(k + 1) % 4])
+                                   : random_shape(t, g, Vec3d::Zero(), 0.8));
+      const Shape& a = t <= kLeafConvex ? o : hs;
+      const Shape& b = t <= kLeafConvex ? hs : o;
+      const LaneInfo info = lane_info(a, b, gjk);
+      past_cap += info.epa_expansions > gjk.epa_max_iterations ? 1 : 0;
+      const Result r = run_pair(a, b, gjk);
+      ASSERT_GE(r.count, 1u) << tname(t) << " " << k;
+      // Exact depth and the overlap along a unit direction, from the reference.
+      double depth_ref = 0, along = 0;
+      if (t == kLeafConvex) {
+        ASSERT_TRUE(info.sat_applies);  // else `exact` would run GJK/EPA too
+        const Result s = run_pair(a, b, exact);
+        ASSERT_GE(s.count, 1u);
+        depth_ref = s.depth;
+        const Polytope A = posed_hull(a), B = posed_hull(b);
+        along = overlap_along(A, B, r.n);
+      } else if (t == kLeafCylinder || t == kLeafEllipsoid) {
+        Lanes la, lb;
+        la.push(a);
+        lb.push(b);
+        const test::nref::Shape ra = test::nref::shape_from_leaf(la.soa(), 0, a.type, &gjk.hulls);
+        const test::nref::Shape rb = test::nref::shape_from_leaf(lb.soa(), 0, b.type, &gjk.hulls);
+        depth_ref = test::nref::solve_pair(ra, rb).s;
+        along = test::nref::overlap(ra, rb, {r.n.x(), r.n.y(), r.n.z()});
+      } else {
+        // Polytope cores: the point, the segment, the box, the triangle; radius added.
+        Polytope A;
+        double radius = 0;
+        if (t == kLeafSphere) {
+          A.verts = {a.p};
+          radius = a.e[0];
+        } else if (t == kLeafCapsule) {
+          const Vec3d axis = a.R.col(2);
+          A.verts = {a.p - axis * a.e[1], a.p + axis * a.e[1]};
+          A.edges = {axis};
+          radius = a.e[0];
+        } else {
+          A = polytope_of(t == kLeafTriangle ? b : a);
+        }
+        const Polytope H = posed_hull(hs);
+        const bool hull_is_b = t != kLeafTriangle;
+        const Sat s = hull_is_b ? sat(A, H) : sat(H, A);
+        depth_ref = s.depth + radius;
+        along = (hull_is_b ? overlap_along(A, H, r.n) : overlap_along(H, A, r.n)) + radius;
+      }
+      const double tol = 1e-4;  // of L ~ 1; EPA converges to 1e-5 of the pair's size
+      EXPECT_NEAR(r.depth, depth_ref, tol) << tname(t) << " " << k;
+      EXPECT_NEAR(along, depth_ref, tol) << tname(t) << " " << k << ": the normal is not a minimiser";
+    }
+    if (t == kLeafSphere || t == kLeafConvex || t == kLeafEllipsoid) {
+      EXPECT_GT(past_cap, 0) << tname(t);
+    }
+  }
 }
 
 }  // namespace
