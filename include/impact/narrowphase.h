@@ -32,7 +32,11 @@ struct NarrowPhaseOptions {
   uint32_t gjk_max_iterations = 64;
   float gjk_tolerance = 1e-6f;
   /// EPA (penetration depth of general convex pairs): iteration cap and relative
-  /// tolerance on the depth.
+  /// tolerance on the depth. The cap does not stop pairs with a convex hull side:
+  /// around a deep core a hull's support function has a local minimum at every face
+  /// holding the core's projection, so a capped EPA could end on a wrong face. Those
+  /// expand until the tolerance is met or the polytope (512 vertices) is full
+  /// (docs/narrowphase.md, "EPA").
   uint32_t epa_max_iterations = 64;
   float epa_tolerance = 1e-5f;
   /// Pairs of polytopes (boxes other than box-box, convex hulls) whose vertex counts

@@ -125,7 +125,7 @@ struct NarrowConfig {
   KernelPath path = KernelPath::kSimd;
   uint32_t gjk_max_iterations = 64;
   float gjk_tolerance = 1e-6f;   // relative to the shapes' size
-  uint32_t epa_max_iterations = 64;
+  uint32_t epa_max_iterations = 64;  // not for pairs with a hull side (gjk_epa.cpp)
   float epa_tolerance = 1e-5f;   // relative to the shapes' size
   /// Polytope pairs (box, hull) go through SAT (sat.cpp) instead of GJK/EPA when their
   /// vertex counts sum to at most this (a box has 8); 0: always GJK/EPA. SAT's cost
