@@ -1124,13 +1124,20 @@ struct Chord {
   float t_in = -INFINITY, t_out = INFINITY;
 };
 
+/// |n_f.dir| at or below this counts as parallel: a unit face normal and a unit
+/// direction that are perpendicular up to rounding give ~1e-8, not 0, and slack / c
+/// of a point on the plane (slack ~ rounding, of either sign) is then an arbitrary t.
+/// Over a travel of the shape's size L a ray this close to parallel drifts <= 1e-5 L
+/// off the plane, within the slack tolerance's order.
+inline constexpr float kChordParallel = 1e-5f;
+
 IMPACT_INLINE void chord_plane(float c, float slack, float tol, Chord* ch) {
   // slack = d_f - n_f.x; the ray crosses the plane at t = slack / c. A ray parallel
   // to the plane misses only when outside by more than tol (the rounding of slack):
   // clipped points lie on the reference face's side planes, and an exact face normal
   // (SAT) runs their rays along those planes.
-  if (c > 0.0f) ch->t_out = fmin_nn(ch->t_out, slack / c);
-  else if (c < 0.0f) ch->t_in = fmax_nn(ch->t_in, slack / c);
+  if (c > kChordParallel) ch->t_out = fmin_nn(ch->t_out, slack / c);
+  else if (c < -kChordParallel) ch->t_in = fmax_nn(ch->t_in, slack / c);
   else if (slack < -tol) ch->t_in = INFINITY;  // parallel and outside
 }
 
@@ -1156,14 +1163,14 @@ Chord chord(const Leaf& l, V3 x, V3 dir) {
     const uint32_t fb = h.face_begin[l.hull], fe = h.face_begin[l.hull + 1];
     uint32_t f = fb;
     if (fe - fb >= kW) {
-      const F DX(dx), DY(dy), DZ(dz), QX(qx), QY(qy), QZ(qz), zero(0.0f), one(1.0f);
+      const F DX(dx), DY(dy), DZ(dz), QX(qx), QY(qy), QZ(qz), one(1.0f);
       F t_in(-INFINITY), t_out(INFINITY), miss(0.0f);
       for (; f + kW <= fe; f += kW) {
         const F nx = F::load(h.fnx + f), ny = F::load(h.fny + f), nz = F::load(h.fnz + f);
         const F c = nx * DX + ny * DY + nz * DZ;
         const F d = F::load(h.fd + f), nq = nx * QX + ny * QY + nz * QZ;
         const F slack = d - nq;
-        const auto pos = c > zero, neg = c < zero;
+        const auto pos = c > F(kChordParallel), neg = c < F(-kChordParallel);
         const F t = slack / select(pos | neg, c, one);
         t_out = select(pos, simd::min(t_out, t), t_out);
         t_in = select(neg, simd::max(t_in, t), t_in);

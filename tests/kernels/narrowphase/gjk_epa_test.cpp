@@ -852,6 +852,32 @@ void safe_displacement(double size, double offset, double slack, bool with_conve
 
 TEST(GjkEpa, EveryPairSafeDisplacement) { safe_displacement(1.0, 0.0, 2e-3, true); }
 TEST(GjkEpa, EveryPairSafeDisplacementTiny) { safe_displacement(1e-4, 0.0, 2e-7, false); }
+/// Regression (found by the test above at IMPACT_TEST_INTENSITY=30): two tiny boxes
+/// (1e-4 scale) overlapping deeper than A is thick, face axis A's x. The clipped
+/// points lie on the side planes of A's face and their rays run along them; the ray's
+/// direction cosine with those planes is rounding (~1e-8, not 0), so slack / c was an
+/// arbitrary t and the chord rejected every point, leaving the one-point fallback
+/// outside A. Planes within kChordParallel of parallel are now treated as parallel.
+TEST(GjkEpa, DeepTinyBoxesKeepTheirClippedPoints) {
+  Mat3d ra, rb;
+  ra << -0.51715076, 0.509102225, 0.688018918, 0.386209488, 0.856173396, -0.343233645, -0.763804495, 0.0882158875,
+      -0.639390826;
+  rb << -0.290857047, 0.680982769, -0.672060013, -0.928076863, -0.030086318, 0.371171355, 0.232541472, 0.731681168,
+      0.640755117;
+  const Shape a = rounded(box(Vec3d(0, 0, 0), ra, Vec3d(2.26050179e-05, 6.92345129e-05, 3.87736181e-05)));
+  const Shape b = rounded(box(Vec3d(-2.11805e-05, 2.61831701e-05, 1.7516355e-05), rb,
+                              Vec3d(4.31563749e-05, 4.56742346e-05, 7.49517058e-05)));
+  for (uint32_t sat : {96u, 0u}) {  // through SAT and through GJK/EPA
+    NarrowConfig cfg = config();
+    cfg.sat_max_vertices = sat;
+    const Result r = run_pair(a, b, cfg);
+    ASSERT_GT(r.count, 1u) << "sat " << sat << ": the face clip kept no point";
+    for (uint32_t j = 0; j < r.count; ++j) {
+      EXPECT_TRUE(inside_leaf(a, r.pt[j] + r.n * (0.5 * r.pd[j]), 2e-7)) << "sat " << sat << " point " << j;
+      EXPECT_TRUE(inside_leaf(b, r.pt[j] - r.n * (0.5 * r.pd[j]), 2e-7)) << "sat " << sat << " point " << j;
+    }
+  }
+}
 TEST(GjkEpa, EveryPairSafeDisplacementHuge) { safe_displacement(1e4, 0.0, 20.0, false); }
 /// 1e5 from the origin the float spacing is 7.8e-3: the slack covers the pose rounding.
 TEST(GjkEpa, EveryPairSafeDisplacementFarAway) { safe_displacement(1.0, 1e5, 3e-2, true); }
