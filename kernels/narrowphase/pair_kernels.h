@@ -6,7 +6,8 @@
 // sphere / capsule / box / cylinder / triangle / half-space pairs below, with the
 // closed-form cylinder, ellipsoid and triangle against half-space kernels
 // (primitives_halfspace.cpp). Sphere-hull has its own exact per-lane kernel
-// (kernels/narrowphase/sphere_convex.cpp). Everything else goes through the general
+// (kernels/narrowphase/sphere_convex.cpp), sphere-ellipsoid a lane kernel
+// (kernels/narrowphase/sphere_ellipsoid.cpp). Everything else goes through the general
 // convex path (kernels/narrowphase/gjk_epa.cpp): GJK + EPA on the
 // leaves' support functions, with face clipping for polytope manifolds, and a
 // support-function kernel against half-spaces.
@@ -36,6 +37,8 @@ void collide_triangle_halfspace(const LeafSoA&, const LeafSoA&, const ManifoldSo
 /// Sphere against convex hull: exact, by the hull's face planes and, near an edge, its
 /// edge segments (sphere_convex.cpp); one lane at a time, not GJK / EPA.
 void collide_sphere_convex(const LeafSoA&, const LeafSoA&, const ManifoldSoA&, Range, const NarrowConfig&);
+/// Sphere against ellipsoid: closest surface point by a fixed-count root solve, SIMD across pairs.
+void collide_sphere_ellipsoid(const LeafSoA&, const LeafSoA&, const ManifoldSoA&, Range, const NarrowConfig&);
 
 // --- general convex -----------------------------------------------------------------------
 /// GJK + EPA for any two convex leaf types ta <= tb (neither a half-space), one pair

@@ -1,5 +1,6 @@
 // Sphere (A) against sphere, capsule, box, cylinder, triangle and half-space (B): one point of
-// collision data per pair, vectorised across pairs (one lane = one pair).
+// collision data per pair, vectorised across pairs (one lane = one pair). Sphere against
+// ellipsoid has its own file (sphere_ellipsoid.cpp: an iterative root solve).
 //
 // Inputs: LeafSoA lanes per leaf.h (A a sphere; B per kernel), Range r of the bucket.
 // Outputs: ManifoldSoA lanes r.begin .. r.end: count (0 or 1), n (A to B), depth,
