@@ -2,6 +2,7 @@
 // floats, indices, vectors, unit vectors and rotations, and a bumpy grid mesh.
 #pragma once
 
+#include <cmath>
 #include <cstdint>
 #include <random>
 #include <vector>
@@ -30,6 +31,23 @@ struct TestRng {
     return Eigen::Quaternionf(c[0], c[1], c[2], c[3]);
   }
 };
+
+/// A uniformly random rotation as a row-major 3x3 in double: a quaternion of 4 normal
+/// draws (drawn again while its length is below 1e-3), normalised (the matrix and
+/// sphere-hull tests' draws).
+inline void random_rotation_rows(std::mt19937& g, double m[9]) {
+  std::normal_distribution<double> d(0.0, 1.0);
+  double q[4], l = 0;
+  do {
+    for (double& c : q) c = d(g);
+    l = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
+  } while (l < 1e-3);
+  const double w = q[0] / l, x = q[1] / l, y = q[2] / l, z = q[3] / l;
+  const double r9[9] = {1 - 2 * (y * y + z * z), 2 * (x * y - w * z),     2 * (x * z + w * y),
+                        2 * (x * y + w * z),     1 - 2 * (x * x + z * z), 2 * (y * z - w * x),
+                        2 * (x * z - w * y),     2 * (y * z + w * x),     1 - 2 * (x * x + y * y)};
+  for (int i = 0; i < 9; ++i) m[i] = r9[i];
+}
 
 /// A uniformly random rotation (a normalised quaternion of 4 normal draws), in double.
 inline Eigen::Matrix3d random_rotation(std::mt19937& rng) {

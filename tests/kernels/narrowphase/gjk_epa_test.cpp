@@ -47,29 +47,7 @@ struct Shape {
 
 using Lanes = test::LeafLanes;
 
-struct Out {
-  std::vector<uint8_t> count;
-  std::vector<float> n[3], depth, pt[4][3], pd[4];
-  explicit Out(size_t m) : count(m, 0xff), depth(m, NAN) {
-    for (auto& v : n) v.assign(m, NAN);
-    for (auto& a : pt)
-      for (auto& v : a) v.assign(m, NAN);
-    for (auto& v : pd) v.assign(m, NAN);
-  }
-  ManifoldSoA soa() {
-    ManifoldSoA s{};
-    s.count = count.data();
-    for (int i = 0; i < 3; ++i) s.n[i] = n[i].data();
-    s.depth = depth.data();
-    for (int j = 0; j < 4; ++j) {
-      for (int i = 0; i < 3; ++i) s.point[j][i] = pt[j][i].data();
-      s.pdepth[j] = pd[j].data();
-    }
-    return s;
-  }
-  Vec3d normal(size_t k) const { return {n[0][k], n[1][k], n[2][k]}; }
-  Vec3d point(size_t k, int j) const { return {pt[j][0][k], pt[j][1][k], pt[j][2][k]}; }
-};
+using Out = test::ManifoldLanes;
 
 /// Hulls shared by the tests of this file.
 struct Hulls {
@@ -103,18 +81,8 @@ Result run_pair(const Shape& a, const Shape& b, const NarrowConfig& cfg = config
   la.push(a);
   lb.push(b);
   Out o(1);
-  collide_gjk_epa(la.soa(), lb.soa(), o.soa(), Range{0, 1}, cfg, a.type, b.type);
-  Result r;
-  r.count = o.count[0];
-  if (r.count > 0) {
-    r.n = o.normal(0);
-    r.depth = o.depth[0];
-    for (uint32_t j = 0; j < r.count; ++j) {
-      r.pt[j] = o.point(0, static_cast<int>(j));
-      r.pd[j] = o.pd[j][0];
-    }
-  }
-  return r;
+  collide_gjk_epa(la.soa(), lb.soa(), o.view(), Range{0, 1}, cfg, a.type, b.type);
+  return o.result();
 }
 
 Shape sphere(Vec3d p, double r) {
@@ -993,9 +961,9 @@ TEST(GjkEpa, DeterministicAcrossPartitions) {
       }
       Out o1(m), o2(m);
       const NarrowConfig cfg = config();
-      collide_gjk_epa(la.soa(), lb.soa(), o1.soa(), Range{0, m}, cfg, ta, tb);
+      collide_gjk_epa(la.soa(), lb.soa(), o1.view(), Range{0, m}, cfg, ta, tb);
       for (uint32_t b0 = 0; b0 < m; b0 += 7)
-        collide_gjk_epa(la.soa(), lb.soa(), o2.soa(), Range{b0, std::min(m, b0 + 7)}, cfg, ta, tb);
+        collide_gjk_epa(la.soa(), lb.soa(), o2.view(), Range{b0, std::min(m, b0 + 7)}, cfg, ta, tb);
       for (uint32_t k = 0; k < m; ++k) {
         ASSERT_EQ(o1.count[k], o2.count[k]);
         if (o1.count[k] == 0) continue;

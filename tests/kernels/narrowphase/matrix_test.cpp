@@ -53,6 +53,7 @@
 #include "host/narrowphase/shape_store.h"
 #include "kernels/narrowphase/pair_kernels.h"
 #include "support/narrow_reference.h"
+#include "support/random_input.h"
 #include "support/test_support.h"
 
 namespace impact::test {
@@ -186,20 +187,6 @@ void axis_angle(V3 u, double a, double m[9]) {
   std::copy(r9, r9 + 9, m);
 }
 
-void random_rotation(Rng& g, double m[9]) {
-  std::normal_distribution<double> d(0.0, 1.0);
-  double q[4], l = 0;
-  do {
-    for (double& c : q) c = d(g);
-    l = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
-  } while (l < 1e-3);
-  const double w = q[0] / l, x = q[1] / l, y = q[2] / l, z = q[3] / l;
-  const double r9[9] = {1 - 2 * (y * y + z * z), 2 * (x * y - w * z),     2 * (x * z + w * y),
-                        2 * (x * y + w * z),     1 - 2 * (x * x + z * z), 2 * (y * z - w * x),
-                        2 * (x * z - w * y),     2 * (y * z + w * x),     1 - 2 * (x * x + y * y)};
-  std::copy(r9, r9 + 9, m);
-}
-
 void mat_mul(const double a[9], const double b[9], double out[9]) {
   for (int i = 0; i < 3; ++i)
     for (int j = 0; j < 3; ++j) out[3 * i + j] = a[3 * i] * b[j] + a[3 * i + 1] * b[3 + j] + a[3 * i + 2] * b[6 + j];
@@ -306,7 +293,7 @@ LeafF make_leaf(LeafType t, V3 c, double scale, Rng& g, HullBank& w) {
   LeafF l;
   l.t = t;
   double m[9];
-  random_rotation(g, m);
+  test::random_rotation_rows(g, m);
   auto put_p = [&](V3 q) {
     l.p[0] = f32(q.x);
     l.p[1] = f32(q.y);

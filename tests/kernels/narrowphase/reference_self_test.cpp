@@ -19,6 +19,7 @@
 #include <vector>
 
 #include "support/narrow_reference.h"
+#include "support/random_input.h"
 #include "support/test_support.h"
 
 namespace impact::test {
@@ -32,21 +33,6 @@ V3 random_unit(std::mt19937& rng) {
     const V3 v{g(rng), g(rng), g(rng)};
     if (nref::norm(v) > 1e-3) return nref::normalized(v);
   }
-}
-
-void random_rotation(std::mt19937& rng, double r[9]) {
-  std::normal_distribution<double> g(0.0, 1.0);
-  double q[4];
-  double l = 0;
-  do {
-    for (double& c : q) c = g(rng);
-    l = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
-  } while (l < 1e-3);
-  const double w = q[0] / l, x = q[1] / l, y = q[2] / l, z = q[3] / l;
-  const double m[9] = {1 - 2 * (y * y + z * z), 2 * (x * y - w * z),     2 * (x * z + w * y),
-                       2 * (x * y + w * z),     1 - 2 * (x * x + z * z), 2 * (y * z - w * x),
-                       2 * (x * z - w * y),     2 * (y * z + w * x),     1 - 2 * (x * x + y * y)};
-  std::copy(m, m + 9, r);
 }
 
 constexpr double kIdentity[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};
@@ -138,8 +124,8 @@ TEST(NarrowReference, RotatedBoxesAgainstAxisEnumeration) {
   const uint32_t n = scaled(150);
   for (uint32_t i = 0; i < n; ++i) {
     double ra[9], rb[9];
-    random_rotation(rng, ra);
-    random_rotation(rng, rb);
+    random_rotation_rows(rng, ra);
+    random_rotation_rows(rng, rb);
     const auto a = nref::make_box({0.3, -0.2, 0.1}, ra, u(rng), u(rng), u(rng));
     const auto b = nref::make_box(V3{0.3, -0.2, 0.1} + V3{off(rng), off(rng), off(rng)}, rb, u(rng), u(rng), u(rng));
     std::vector<V3> axes;
@@ -178,7 +164,7 @@ TEST(NarrowReference, AgainstHalfSpace) {
     EXPECT_NEAR(sr.s, rad - nref::dot(nrm, c - pp), 1e-12);
     EXPECT_LT(nref::angle(sr.n, -nrm), 1e-12);
     double r9[9];
-    random_rotation(rng, r9);
+    random_rotation_rows(rng, r9);
     const auto box = nref::make_box(c, r9, u(rng), u(rng), u(rng));
     double ext = 0;
     for (int k = 0; k < 3; ++k) ext += box.e[k] * std::fabs(nref::dot(box.col(k), nrm));
@@ -201,7 +187,7 @@ TEST(NarrowReference, SphereBoxAndSphereTriangle) {
   const uint32_t n = scaled(150);
   for (uint32_t i = 0; i < n; ++i) {
     double r9[9];
-    random_rotation(rng, r9);
+    random_rotation_rows(rng, r9);
     const auto box = nref::make_box({0, 0, 0}, r9, u(rng), u(rng), u(rng));
     const V3 c{off(rng), off(rng), off(rng)};
     const double rad = u(rng);
@@ -307,7 +293,7 @@ TEST(NarrowReference, PointDistancesThroughSupport) {
     wc.add(std::fabs(got_c - want_c), 0);
     // A box given as a hull (its 8 corners) vs the box's closed form.
     double r9[9];
-    random_rotation(rng, r9);
+    random_rotation_rows(rng, r9);
     const auto box = nref::make_box(c, r9, u(rng), u(rng), u(rng));
     std::vector<V3> corners;
     for (int k = 0; k < 8; ++k)
@@ -344,7 +330,7 @@ TEST(NarrowReference, ExtremeAspectBoxes) {
   nohint.use_hints = false;
   for (uint32_t i = 0; i < n; ++i) {
     double r9[9];
-    random_rotation(rng, r9);
+    random_rotation_rows(rng, r9);
     const bool needle = i % 2 == 0;
     const auto box = nref::make_box({0, 0, 0}, r9, 1.0, needle ? 1e-4 : 1.0, 1e-4);
     const double rad = u(rng);
@@ -381,8 +367,8 @@ TEST(NarrowReference, TranslationIdentity) {
   const uint32_t n = scaled(40);
   for (uint32_t i = 0; i < n; ++i) {
     double ra[9], rb[9];
-    random_rotation(rng, ra);
-    random_rotation(rng, rb);
+    random_rotation_rows(rng, ra);
+    random_rotation_rows(rng, rb);
     const V3 d{off(rng), off(rng), off(rng)};
     const auto a = nref::make_box({0, 0, 0}, ra, u(rng), u(rng), u(rng), kernels::kLeafEllipsoid);
     const auto b = nref::make_axial(kernels::kLeafCylinder, d, random_unit(rng), u(rng), u(rng));

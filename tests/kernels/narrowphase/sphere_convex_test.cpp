@@ -46,6 +46,7 @@
 #include "host/narrowphase/convex_hull.h"
 #include "host/narrowphase/shape_store.h"
 #include "kernels/narrowphase/pair_kernels.h"
+#include "support/random_input.h"
 #include "support/test_support.h"
 
 namespace impact::test {
@@ -94,17 +95,9 @@ D3 random_unit(Rng& g) {
   }
 }
 void random_rotation(Rng& g, float m[9]) {
-  std::normal_distribution<double> d(0.0, 1.0);
-  double q[4], l = 0;
-  do {
-    for (double& c : q) c = d(g);
-    l = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
-  } while (l < 1e-3);
-  const double w = q[0] / l, x = q[1] / l, y = q[2] / l, z = q[3] / l;
-  const double r9[9] = {1 - 2 * (y * y + z * z), 2 * (x * y - w * z),     2 * (x * z + w * y),
-                        2 * (x * y + w * z),     1 - 2 * (x * x + z * z), 2 * (y * z - w * x),
-                        2 * (x * z - w * y),     2 * (y * z + w * x),     1 - 2 * (x * x + y * y)};
-  for (int i = 0; i < 9; ++i) m[i] = static_cast<float>(r9[i]);
+  double r[9];
+  test::random_rotation_rows(g, r);
+  for (int i = 0; i < 9; ++i) m[i] = static_cast<float>(r[i]);
 }
 
 // --- hulls ------------------------------------------------------------------------------------

@@ -39,6 +39,7 @@
 #include <vector>
 
 #include "kernels/narrowphase/pair_kernels.h"
+#include "support/leaf_lanes.h"
 #include "support/random_input.h"
 #include "support/test_support.h"
 
@@ -109,29 +110,20 @@ std::vector<Hit> run(const std::vector<Query>& qs, KernelPath path, PairKernel k
   for (int i = 0; i < 3; ++i)
     a.p[i] = ap[i].data(), a.e[i] = ae[i].data(), b.p[i] = bp[i].data(), b.e[i] = be[i].data();
   for (int i = 0; i < 9; ++i) b.r[i] = br[i].data();
-  std::vector<uint8_t> count(n, 0xee);
-  std::vector<float> on[3], depth(n), pt[4][3], pd[4];
-  ManifoldSoA o{};
-  o.count = count.data();
-  for (int i = 0; i < 3; ++i) on[i].assign(n, NAN), o.n[i] = on[i].data();
-  o.depth = depth.data();
-  for (int j = 0; j < 4; ++j) {
-    for (int i = 0; i < 3; ++i) pt[j][i].assign(n, NAN), o.point[j][i] = pt[j][i].data();
-    pd[j].assign(n, NAN);
-    o.pdepth[j] = pd[j].data();
-  }
+  test::ManifoldLanes o(static_cast<uint32_t>(n));
   NarrowConfig cfg;
   cfg.path = path;
-  kern(a, b, o, Range{begin, end}, cfg);
+  kern(a, b, o.view(), Range{begin, end}, cfg);
   std::vector<Hit> out(n);
   for (uint32_t k = begin; k < end; ++k) {
+    const test::PairResult r = o.result(k);
     Hit& h = out[k];
-    h.count = count[k];
+    h.count = r.count;
     if (h.count == 0) continue;
-    h.n = Vec3d(on[0][k], on[1][k], on[2][k]);
-    h.pt = Vec3d(pt[0][0][k], pt[0][1][k], pt[0][2][k]);
-    h.depth = depth[k];
-    h.pd = pd[0][k];
+    h.n = r.n;
+    h.pt = r.pt[0];
+    h.depth = r.depth;
+    h.pd = r.pd[0];
   }
   return out;
 }
