@@ -22,6 +22,10 @@
 //   BM_<Grid|Lbvh>Coherent[Clustered|MixedSizes]   frame to frame: every box moves up
 //       to 0.05 m per axis, then update() + pairs() (LBVH: refit policy; grid: rebuild);
 //       64-frame episodes, the first move after each build untimed (micro_common.h)
+//   BM_LbvhCacheCoherent[Clustered|MixedSizes]   the same walk through the LBVH's
+//       kPairCache policy (fat boxes + pair cache, docs/lbvh.md); BM_LbvhCacheMargin/<m>
+//       sweeps its fat margin on the uniform walk (counters: movers per frame, cached
+//       pairs per exact pair, share of updates that rebuilt)
 //   BM_LbvhSahVsBinned[Clustered|MixedSizes]   the LBVH tree's SAH cost against an
 //       independent binned-SAH build of the same boxes (tests/support/binned_sah.h):
 //       counters lbvh_sah, binned_sah, sah_ratio; the time is one sah_cost() pass
@@ -287,6 +291,57 @@ void coherent_lbvh(benchmark::State& state, BoxScene scene) {
   impact::BroadPhase bp(lbvh_refit_options());
   run_coherent_api(state, bp, scene, /*with_pairs=*/true);
 }
+void coherent_lbvh_cache(benchmark::State& state, BoxScene scene) {
+  impact::BroadPhaseOptions o;
+  o.kind = impact::BroadPhaseKind::kLbvh;
+  o.lbvh_update = impact::LbvhUpdate::kPairCache;
+  impact::BroadPhase bp(o);
+  run_coherent_api(state, bp, scene, /*with_pairs=*/true);
+}
+void BM_LbvhCacheCoherent(benchmark::State& state) { coherent_lbvh_cache(state, BoxScene::kUniform); }
+void BM_LbvhCacheCoherentClustered(benchmark::State& state) { coherent_lbvh_cache(state, BoxScene::kClustered); }
+void BM_LbvhCacheCoherentMixedSizes(benchmark::State& state) { coherent_lbvh_cache(state, BoxScene::kMixed); }
+
+// BM_LbvhCacheMargin/<fat margin>/<bodies>/<threads>: the kPairCache knob's cost on
+// the uniform coherent walk, through the host class so the counters can say why:
+// movers_per_frame (boxes re-queried), cached_per_pair (fat pairs held per exact
+// pair), rebuild_share (updates that rebuilt instead).
+void run_cache_margin(benchmark::State& state, float margin) {
+  const uint32_t n = static_cast<uint32_t>(state.range(0));
+  const impact::host::Executor exec(impact::Backend::kDefault, static_cast<uint32_t>(state.range(1)));
+  impact::host::LbvhOptions o;
+  o.update = impact::LbvhUpdate::kPairCache;
+  o.fat_margin = margin;
+  o.max_refits = std::numeric_limits<uint32_t>::max();
+  impact::host::LbvhBroadPhase lbvh(o);
+  impact::host::Buffer<impact::kernels::Pair> pairs;
+  auto soa = [](const impact::bench::UniformBoxes& b) {
+    return impact::kernels::AabbSoA{b.min_x.data(), b.min_y.data(), b.min_z.data(),
+                                    b.max_x.data(), b.max_y.data(), b.max_z.data()};
+  };
+  const impact::kernels::PairFilter none{nullptr, nullptr, nullptr};
+  double movers = 0.0, cached = 0.0, exact = 0.0, rebuilds = 0.0, frames = 0.0;
+  const bool ok = impact::bench::run_coherent(
+      state, scene_boxes(BoxScene::kUniform, n),
+      [&](const impact::bench::UniformBoxes& b) {
+        return check(state, lbvh.find_pairs(exec, soa(b), none, n, &pairs));
+      },
+      [&](const impact::bench::UniformBoxes& b) -> int64_t {
+        if (!check(state, lbvh.find_pairs(exec, soa(b), none, n, &pairs))) return -1;
+        const impact::host::LbvhInfo& info = lbvh.info();
+        movers += info.rebuilt ? 0.0 : info.movers;
+        rebuilds += info.rebuilt ? 1.0 : 0.0;
+        cached += static_cast<double>(info.cached_pairs);
+        exact += static_cast<double>(pairs.size());
+        frames += 1.0;
+        return static_cast<int64_t>(pairs.size());
+      });
+  if (!ok || frames == 0.0) return;
+  state.counters["movers_per_frame"] = movers / frames;
+  state.counters["cached_per_pair"] = exact > 0.0 ? cached / exact : 0.0;
+  state.counters["rebuild_share"] = rebuilds / frames;
+}
+
 void BM_GridCoherent(benchmark::State& state) { coherent_grid(state, BoxScene::kUniform); }
 void BM_LbvhCoherent(benchmark::State& state) { coherent_lbvh(state, BoxScene::kUniform); }
 void BM_GridCoherentClustered(benchmark::State& state) { coherent_grid(state, BoxScene::kClustered); }
@@ -390,6 +445,37 @@ BENCHMARK(BM_LbvhTraverse)->ArgsProduct({{k10k, k100k, k1M}, {1, 2}})->UseRealTi
 
 BENCHMARK(BM_GridCoherent)->ArgsProduct({{k10k, k100k, k1M}, {1, 2}})->UseManualTime()->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_LbvhCoherent)->ArgsProduct({{k10k, k100k, k1M}, {1, 2}})->UseManualTime()->Unit(benchmark::kMillisecond);
+// The pair cache's cost grows over an episode (boxes drift out of their fat boxes, and
+// the movers add up to a rebuild), so these time whole episodes: every timed frame of
+// one episode, whatever --benchmark_min_time says.
+constexpr int64_t kEpisodeFrames = static_cast<int64_t>(impact::bench::kCoherentFrames - impact::bench::kCoherentWarmupFrames);
+BENCHMARK(BM_LbvhCacheCoherent)
+    ->ArgsProduct({{k10k, k100k, k1M}, {1, 2}})
+    ->Iterations(kEpisodeFrames)
+    ->UseManualTime()
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_LbvhCacheCoherentClustered)
+    ->ArgsProduct({{k10k, k100k, k1M}, {1, 2}})
+    ->Iterations(kEpisodeFrames)
+    ->UseManualTime()
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_LbvhCacheCoherentMixedSizes)
+    ->ArgsProduct({{k100k, k1M}, {1, 2}})
+    ->Iterations(kEpisodeFrames)
+    ->UseManualTime()
+    ->Unit(benchmark::kMillisecond);
+const int kCacheMarginRegistered = [] {
+  for (const char* m : {"0.02", "0.05", "0.1", "0.2", "0.4"}) {
+    const float margin = std::strtof(m, nullptr);
+    benchmark::RegisterBenchmark((std::string("BM_LbvhCacheMargin/") + m).c_str(),
+                                 [margin](benchmark::State& state) { run_cache_margin(state, margin); })
+        ->ArgsProduct({{k100k, k1M}, {1}})
+        ->Iterations(kEpisodeFrames)
+        ->UseManualTime()
+        ->Unit(benchmark::kMillisecond);
+  }
+  return 0;
+}();
 BENCHMARK(BM_GridCoherentClustered)
     ->ArgsProduct({{k10k, k100k, k1M}, {1, 2}})
     ->UseManualTime()
@@ -436,7 +522,7 @@ void register_large() {
       {"BM_GridMixedSizes", BM_GridMixedSizes, false}, {"BM_LbvhMixedSizes", BM_LbvhMixedSizes, false},
       {"BM_LbvhBuild", BM_LbvhBuild, false},           {"BM_LbvhRefit", BM_LbvhRefit, true},
       {"BM_LbvhTraverse", BM_LbvhTraverse, false},     {"BM_GridCoherent", BM_GridCoherent, true},
-      {"BM_LbvhCoherent", BM_LbvhCoherent, true},
+      {"BM_LbvhCoherent", BM_LbvhCoherent, true},     {"BM_LbvhCacheCoherent", BM_LbvhCacheCoherent, true},
   };
   for (const Family& f : families) {
     benchmark::internal::Benchmark* b = benchmark::RegisterBenchmark(f.name, f.fn);

@@ -31,6 +31,7 @@ const char* to_string(LbvhUpdate update) {
     case LbvhUpdate::kRebuild: return "rebuild";
     case LbvhUpdate::kRefit: return "refit";
     case LbvhUpdate::kAuto: return "auto";
+    case LbvhUpdate::kPairCache: return "pair_cache";
   }
   return "?";
 }

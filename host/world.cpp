@@ -117,8 +117,10 @@ Status check_desc(const WorldDesc& d) {
       d.broad_phase != BroadPhaseKind::kAuto)
     return invalid(w, "broad_phase is not a known BroadPhaseKind");
   if (d.lbvh_update != LbvhUpdate::kRebuild && d.lbvh_update != LbvhUpdate::kRefit &&
-      d.lbvh_update != LbvhUpdate::kAuto)
+      d.lbvh_update != LbvhUpdate::kAuto && d.lbvh_update != LbvhUpdate::kPairCache)
     return invalid(w, "lbvh_update is not a known LbvhUpdate");
+  if (!(std::isfinite(d.lbvh_fat_margin) && d.lbvh_fat_margin >= 0.0f))
+    return invalid(w, "lbvh_fat_margin must be finite and >= 0, got " + fmt_float(d.lbvh_fat_margin));
   if (!(std::isfinite(d.lbvh_refit_sah_limit) && d.lbvh_refit_sah_limit >= 1.0))
     return invalid(w, "lbvh_refit_sah_limit must be finite and >= 1, got " +
                           std::to_string(d.lbvh_refit_sah_limit));
@@ -147,6 +149,7 @@ void WorldImpl::configure_broad_phase() {
   host::LbvhOptions o = broad_phase.lbvh.options();
   o.update = desc.lbvh_update;
   o.refit_sah_limit = desc.lbvh_refit_sah_limit;
+  o.fat_margin = desc.lbvh_fat_margin;
   broad_phase.set_lbvh_options(o);
 }
 

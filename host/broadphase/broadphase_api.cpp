@@ -18,6 +18,7 @@ class BroadPhaseImpl {
     lo.update = o.lbvh_update;
     lo.refit_sah_limit = o.lbvh_refit_sah_limit;
     lo.max_refits = o.lbvh_max_refits;
+    lo.fat_margin = o.lbvh_fat_margin;
     stage.set_lbvh_options(lo);
   }
   BroadPhaseOptions options;
@@ -154,8 +155,11 @@ Status BroadPhaseImpl::check_options() const {
       o.kind != BroadPhaseKind::kSweepAndPrune && o.kind != BroadPhaseKind::kAuto)
     return Status(StatusCode::kInvalidArgument, "BroadPhaseOptions: kind is not a known BroadPhaseKind");
   if (o.lbvh_update != LbvhUpdate::kRebuild && o.lbvh_update != LbvhUpdate::kRefit &&
-      o.lbvh_update != LbvhUpdate::kAuto)
+      o.lbvh_update != LbvhUpdate::kAuto && o.lbvh_update != LbvhUpdate::kPairCache)
     return Status(StatusCode::kInvalidArgument, "BroadPhaseOptions: lbvh_update is not a known LbvhUpdate");
+  if (!(std::isfinite(o.lbvh_fat_margin) && o.lbvh_fat_margin >= 0.0f))
+    return Status(StatusCode::kInvalidArgument, "BroadPhaseOptions: lbvh_fat_margin must be finite and >= 0, got " +
+                                                    std::to_string(o.lbvh_fat_margin));
   if (!(std::isfinite(o.lbvh_refit_sah_limit) && o.lbvh_refit_sah_limit >= 1.0))
     return Status(StatusCode::kInvalidArgument, "BroadPhaseOptions: lbvh_refit_sah_limit must be finite and >= 1, got " +
                                                     std::to_string(o.lbvh_refit_sah_limit));

@@ -2,9 +2,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <string>
 
 #include "kernels/bvh/lbvh_build_fused.h"
+#include "kernels/bvh/lbvh_pair_cache.h"
 #include "kernels/bvh/lbvh_refit.h"
 #include "kernels/bvh/lbvh_traverse.h"
 
@@ -41,6 +43,8 @@ Status LbvhBroadPhase::rebuild(const Executor& exec, kernels::AabbSoA boxes, ker
   info_ = LbvhInfo{};
   info_.rebuilt = true;
   built_ = false;
+  cache_valid_ = false;
+  exact_leaves_valid_ = false;
   if (n > kernels::kLbvhMaxLeaves)
     return Status(StatusCode::kInvalidArgument, "LBVH broad phase: " + std::to_string(n) +
                                                     " boxes exceed the limit of " +
@@ -82,7 +86,18 @@ Status LbvhBroadPhase::rebuild(const Executor& exec, kernels::AabbSoA boxes, ker
   // 3. Hierarchy and bounds in one pass (lbvh_build_fused.h): chunks in parallel, then
   //    the chunk seams in order.
   filtered_ = filter.layer != nullptr;
-  const kernels::LbvhFusedIn in{keys, shift, index, pack(exec, boxes, n)};
+  const kernels::SortedBox* packed = nullptr;
+  if (cache_mode()) {  // the tree over the fat boxes (lbvh_pair_cache.h)
+    margin_ = fat_margin(sum);
+    kernels::SortedBox* fat = scratch(fat_, n);
+    exec.for_each_chunk(n, kKeyGrain, [&](uint32_t b, uint32_t e, uint32_t) {
+      kernels::lbvh_pack_fat(boxes, margin_, fat, {b, e});
+    });
+    packed = fat;
+  } else {
+    packed = pack(exec, boxes, n);
+  }
+  const kernels::LbvhFusedIn in{keys, shift, index, packed};
   const kernels::LbvhFusedOut out{
       {n >= 2 ? scratch(nodes_, n - 1) : nullptr, n >= 2 ? scratch(internal_parent_, n - 1) : nullptr,
        scratch(leaf_parent_, n)},
@@ -161,11 +176,197 @@ Status LbvhBroadPhase::build(const Executor& exec, kernels::AabbSoA boxes, kerne
   const Status s = rebuild(exec, boxes, filter, n, summary);
   if (!s.ok()) return s;
   if (options_.update == LbvhUpdate::kAuto) info_.built_sah = info_.last_sah = sah_cost(exec);
+  if (cache_mode() && n >= 2) {
+    if (Status c = cache_build(exec, boxes, filter); !c.ok()) {
+      built_ = false;
+      return c;
+    }
+  }
   return Status();
+}
+
+kernels::LbvhFatMargin LbvhBroadPhase::fat_margin(const kernels::BoundsSummary& s) const {
+  return kernels::LbvhFatMargin{options_.fat_margin, s.max_edge / 1024.0f};
+}
+
+bool LbvhBroadPhase::same_filter(kernels::PairFilter filter) const {
+  if ((filter.layer != nullptr) != cache_filtered_) return false;
+  if (!cache_filtered_) return true;
+  const size_t n = info_.leaves;
+  return std::memcmp(filter.layer, filter_layer_.data(), n * sizeof(uint32_t)) == 0 &&
+         std::memcmp(filter.mask, filter_mask_.data(), n * sizeof(uint32_t)) == 0 &&
+         std::memcmp(filter.is_static, filter_static_.data(), n) == 0;
+}
+
+Status LbvhBroadPhase::cache_build(const Executor& exec, kernels::AabbSoA boxes, kernels::PairFilter filter) {
+  const uint32_t n = info_.leaves;
+  pack(exec, boxes, n);  // exact records, for the exact filter
+  uint32_t* pos = scratch(leaf_pos_, n);
+  const uint32_t* index = leaf_index_.data();
+  exec.for_each_chunk(n, kKeyGrain, [&](uint32_t b, uint32_t e, uint32_t) {
+    for (uint32_t s = b; s < e; ++s) pos[index[s]] = s;
+  });
+  cache_filtered_ = filter.layer != nullptr;
+  if (cache_filtered_) {
+    std::memcpy(scratch(filter_layer_, n), filter.layer, n * sizeof(uint32_t));
+    std::memcpy(scratch(filter_mask_, n), filter.mask, n * sizeof(uint32_t));
+    std::memcpy(scratch(filter_static_, n), filter.is_static, n);
+  }
+  // Every fat pair (a traversal of the fat tree), as keys (lo << w) | hi, sorted.
+  if (Status s = traverse(exec, &fat_pairs_); !s.ok()) return s;
+  key_shift_ = std::max(1u, bits_for(n - 1));
+  const uint64_t m = fat_pairs_.size();
+  uint64_t* keys = scratch(new_keys_, m);
+  const kernels::Pair* fp = fat_pairs_.data();
+  const uint32_t w = key_shift_;
+  exec.for_each_chunk(m, kKeyGrain, [&](uint32_t b, uint32_t e, uint32_t) {
+    for (uint32_t p = b; p < e; ++p) keys[p] = (static_cast<uint64_t>(fp[p].a) << w) | fp[p].b;
+  });
+  sorter_.sort(exec, keys, static_cast<uint32_t>(m), 0, 2 * w);
+  // One buffer per kLbvhCacheGrain lo indices.
+  const uint32_t chunks = chunk_count(n, kernels::kLbvhCacheGrain);
+  cur_ = 0;
+  cache_[0].resize(std::max<size_t>(cache_[0].size(), chunks));
+  cache_count_[0].assign(chunks, 0);
+  exec.for_each_chunk(n, kernels::kLbvhCacheGrain, [&](uint32_t b, uint32_t e, uint32_t c) {
+    const uint64_t* all = keys;
+    const uint64_t* lo = std::lower_bound(all, all + m, static_cast<uint64_t>(b) << w);
+    const uint64_t* hi = std::lower_bound(lo, all + m, static_cast<uint64_t>(e) << w);
+    const size_t count = static_cast<size_t>(hi - lo);
+    if (count > 0) std::memcpy(scratch(cache_[0][c], count), lo, count * sizeof(uint64_t));
+    cache_count_[0][c] = count;
+  });
+  info_.cached_pairs = m;
+  info_.movers_since_build = 0;
+  cache_valid_ = true;
+  return Status();
+}
+
+Status LbvhBroadPhase::cache_update(const Executor& exec, kernels::AabbSoA boxes, kernels::PairFilter filter,
+                                    bool* rebuild) {
+  const uint32_t n = info_.leaves;
+  *rebuild = false;
+  if (!same_filter(filter)) {
+    *rebuild = true;
+    return Status();
+  }
+  exact_leaves_valid_ = false;
+  // 1. Exact records; who left their fat box (they get a new one).
+  kernels::SortedBox* fat = fat_.data();
+  kernels::SortedBox* exact = scratch(packed_, n);
+  uint8_t* moved = scratch(moved_, n);
+  const uint32_t chunks = chunk_count(n, kKeyGrain);
+  uint64_t* off = scratch(mover_offsets_, static_cast<size_t>(chunks) + 1);
+  exec.for_each_chunk(n, kKeyGrain, [&](uint32_t b, uint32_t e, uint32_t c) {
+    off[c] = kernels::lbvh_cache_check(boxes, margin_, fat, exact, moved, {b, e});
+  });
+  const uint64_t m = exclusive_scan_chunks(off, chunks);
+  info_.movers = static_cast<uint32_t>(m);
+  if (m == 0) return Status();
+  // A re-query per mover costs more than a share of the traversal once many moved; a
+  // grow-only tree loosens as movers add up.
+  if (m > n / 4 || info_.movers_since_build + m > n) {
+    *rebuild = true;
+    return Status();
+  }
+  info_.movers_since_build += m;
+  const uint32_t* index = leaf_index_.data();
+  if (Status s = chunked_output<uint32_t>(
+          exec, n, kKeyGrain, mover_chunks_, mover_offsets_, n, "LBVH movers",
+          [&](uint32_t b, uint32_t e, uint32_t* dst, uint64_t) {
+            return kernels::lbvh_cache_movers(moved, index, dst, {b, e});
+          },
+          &movers_);
+      !s.ok())
+    return s;
+  const uint32_t* movers = movers_.data();
+  // 2. Their leaves and ancestors take the new fat boxes (serial).
+  kernels::lbvh_cache_grow({nodes_.data(), leaves_.data(), internal_parent_.data(), leaf_parent_.data(),
+                            leaf_pos_.data()},
+                           fat, movers, static_cast<uint32_t>(m));
+  // 3. Their pairs, against the grown tree, sorted.
+  const kernels::LbvhView v = view();
+  const uint32_t w = key_shift_;
+  if (Status s = chunked_output<uint64_t>(
+          exec, m, kMoverGrain, key_chunks_, key_offsets_, kMaxPairs, "LBVH pair cache",
+          [&](uint32_t b, uint32_t e, uint64_t* dst, uint64_t capacity) {
+            return kernels::lbvh_cache_query(v, leaf_pos_.data(), fat, moved, movers, w, dst, capacity, {b, e});
+          },
+          &new_keys_);
+      !s.ok())
+    return s;
+  const uint64_t k = new_keys_.size();
+  const uint64_t* nk = new_keys_.data();
+  sorter_.sort(exec, new_keys_.data(), static_cast<uint32_t>(k), 0, 2 * w);
+  // 4. Per chunk: the old keys without movers, merged with the new ones.
+  const uint32_t cc = chunk_count(n, kernels::kLbvhCacheGrain);
+  const int nxt = cur_ ^ 1;
+  cache_[nxt].resize(std::max<size_t>(cache_[nxt].size(), cc));
+  cache_count_[nxt].assign(cc, 0);
+  exec.for_each_chunk(n, kernels::kLbvhCacheGrain, [&](uint32_t b, uint32_t e, uint32_t c) {
+    const uint64_t* lo = std::lower_bound(nk, nk + k, static_cast<uint64_t>(b) << w);
+    const uint64_t* hi = std::lower_bound(lo, nk + k, static_cast<uint64_t>(e) << w);
+    const uint64_t old_count = cache_count_[cur_][c];
+    const uint64_t room = old_count + static_cast<uint64_t>(hi - lo);
+    uint64_t* dst = scratch(cache_[nxt][c], std::max<uint64_t>(room, 1));
+    cache_count_[nxt][c] = kernels::lbvh_cache_merge(cache_[cur_][c].data(), old_count, lo,
+                                                     static_cast<uint64_t>(hi - lo), moved, w, dst);
+  });
+  cur_ = nxt;
+  uint64_t total = 0;
+  for (uint32_t c = 0; c < cc; ++c) total += cache_count_[cur_][c];
+  info_.cached_pairs = total;
+  return Status();
+}
+
+Status LbvhBroadPhase::cache_pairs(const Executor& exec, Buffer<kernels::Pair>* out) {
+  const uint32_t n = info_.leaves;
+  const kernels::SortedBox* exact = packed_.data();
+  const uint32_t w = key_shift_;
+  return chunked_output<kernels::Pair>(
+      exec, n, kernels::kLbvhCacheGrain, cache_out_, chunk_offsets_, kMaxPairs, "LBVH broad phase pairs",
+      [&](uint32_t b, uint32_t, kernels::Pair* dst, uint64_t capacity) {
+        const uint32_t c = b / kernels::kLbvhCacheGrain;
+        return kernels::lbvh_cache_pairs(cache_[cur_][c].data(), cache_count_[cur_][c], exact, w, dst, capacity);
+      },
+      out);
+}
+
+kernels::LbvhView LbvhBroadPhase::query_view(const Executor& exec) {
+  kernels::LbvhView v = view();
+  if (!(cache_mode() && cache_valid_)) return v;
+  const uint32_t n = info_.leaves;
+  if (!exact_leaves_valid_) {
+    kernels::SortedBox* dst = scratch(exact_leaves_, n);
+    const kernels::SortedBox* exact = packed_.data();
+    const uint32_t* index = leaf_index_.data();
+    exec.for_each_chunk(n, kKeyGrain, [&](uint32_t b, uint32_t e, uint32_t) {
+      for (uint32_t s = b; s < e; ++s) dst[s] = exact[index[s]];
+    });
+    exact_leaves_valid_ = true;
+  }
+  v.leaves = exact_leaves_.data();
+  return v;
 }
 
 Status LbvhBroadPhase::update(const Executor& exec, kernels::AabbSoA boxes, kernels::PairFilter filter,
                               uint32_t n, const kernels::BoundsSummary* summary) {
+  if (cache_mode()) {
+    if (cache_valid_ && built_ && info_.leaves == n && n >= 2 && info_.refits_since_build < options_.max_refits) {
+      bool rebuild = false;
+      if (Status s = cache_update(exec, boxes, filter, &rebuild); !s.ok()) {
+        built_ = false;
+        cache_valid_ = false;
+        return s;
+      }
+      if (!rebuild) {
+        info_.rebuilt = false;
+        ++info_.refits_since_build;
+        return Status();
+      }
+    }
+    return build(exec, boxes, filter, n, summary);
+  }
   const bool can_refit = options_.update != LbvhUpdate::kRebuild && built_ && info_.leaves == n &&
                          n >= 2 && info_.refits_since_build < options_.max_refits;
   if (can_refit) {
@@ -189,6 +390,7 @@ Status LbvhBroadPhase::pairs(const Executor& exec, Buffer<kernels::Pair>* out) {
     out->clear();
     return Status();
   }
+  if (cache_valid_) return cache_pairs(exec, out);
   return traverse(exec, out);
 }
 
@@ -216,6 +418,10 @@ Status LbvhBroadPhase::refit(const Executor& exec, kernels::AabbSoA boxes, kerne
     out->clear();
     return Status();
   }
+  // Exact leaves again: a kPairCache cache no longer matches the tree (the next
+  // update rebuilds it).
+  cache_valid_ = false;
+  exact_leaves_valid_ = false;
   refit_bounds(exec, boxes, filter);
   info_.rebuilt = false;
   ++info_.refits_since_build;

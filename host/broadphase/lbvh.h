@@ -24,6 +24,7 @@
 #include "kernels/broadphase/grid.h"
 #include "kernels/bvh/lbvh_build.h"
 #include "kernels/bvh/lbvh_build_fused.h"
+#include "kernels/bvh/lbvh_pair_cache.h"
 #include "kernels/bvh/lbvh_traverse.h"
 #include "kernels/bvh/morton.h"
 
@@ -40,6 +41,10 @@ struct LbvhOptions {
   LbvhUpdate update = LbvhUpdate::kRebuild;
   double refit_sah_limit = 1.5;
   uint32_t max_refits = 1000;
+  /// kPairCache: each box's fat box is the box grown on every side by fat_margin
+  /// times its largest edge (at least fat_margin * the scene's largest edge / 1024,
+  /// so points get a margin too). >= 0.
+  float fat_margin = 0.1f;
 };
 
 /// What the last call did (for benchmarks and diagnostics).
@@ -50,6 +55,9 @@ struct LbvhInfo {
   uint32_t refits_since_build = 0;
   double built_sah = 0.0;        ///< SAH right after the last build (update kAuto only)
   double last_sah = 0.0;         ///< SAH of the last refit (update kAuto only)
+  uint32_t movers = 0;           ///< kPairCache: boxes that left their fat box in the last update
+  uint64_t movers_since_build = 0;  ///< kPairCache: their sum since the last build
+  uint64_t cached_pairs = 0;     ///< kPairCache: fat-overlapping pairs held
 };
 
 /// The 30/63-bit rule: 63-bit codes when n > 2^24, or when a 30-bit cell (largest
@@ -91,13 +99,25 @@ class LbvhBroadPhase {
   double sah_cost(const Executor& exec);
 
   const LbvhOptions& options() const { return options_; }
-  void set_options(const LbvhOptions& o) { options_ = o; }
+  /// Leaving kPairCache (or changing fat_margin) drops a fat tree: the next update
+  /// builds, and pairs() is empty until then.
+  void set_options(const LbvhOptions& o) {
+    if (cache_valid_ && (o.update != LbvhUpdate::kPairCache || o.fat_margin != options_.fat_margin)) {
+      built_ = false;
+      cache_valid_ = false;
+    }
+    options_ = o;
+  }
   const LbvhInfo& info() const { return info_; }
 
   /// Boxes of the current tree (0 when none).
   uint32_t size() const { return built_ ? info_.leaves : 0; }
-  /// The current tree (valid when info().leaves >= 2; nodes only then).
+  /// The current tree (valid when info().leaves >= 2; nodes only then). Under
+  /// kPairCache its leaves are the fat boxes: use query_view() for exact ones.
   kernels::LbvhView view() const;
+  /// view() with the exact boxes as leaves (under kPairCache, gathered into sorted
+  /// order on the first call after an update; the nodes bound them too).
+  kernels::LbvhView query_view(const Executor& exec);
   const uint32_t* leaf_index() const { return leaf_index_.data(); }
   const uint32_t* internal_parent() const { return internal_parent_.data(); }
   const uint32_t* leaf_parent() const { return leaf_parent_.data(); }
@@ -105,6 +125,7 @@ class LbvhBroadPhase {
   static constexpr uint32_t kKeyGrain = 1u << 14;   ///< boxes per chunk, streaming passes
   static constexpr uint32_t kNodeGrain = 1u << 14;  ///< nodes / leaves per chunk, build and refit
   static constexpr uint32_t kPairGrain = 1u << 11;  ///< query leaves per chunk, pair pass
+  static constexpr uint32_t kMoverGrain = 1u << 10;  ///< movers per chunk, kPairCache re-query
 
  private:
   Status rebuild(const Executor& exec, kernels::AabbSoA boxes, kernels::PairFilter filter, uint32_t n,
@@ -113,6 +134,16 @@ class LbvhBroadPhase {
   void refit_bounds(const Executor& exec, kernels::AabbSoA boxes, kernels::PairFilter filter);
   /// The boxes as records in original order (one random read per leaf in the gathers).
   const kernels::SortedBox* pack(const Executor& exec, kernels::AabbSoA boxes, uint32_t n);
+  // kPairCache (kernels/bvh/lbvh_pair_cache.h).
+  bool cache_mode() const { return options_.update == LbvhUpdate::kPairCache; }
+  kernels::LbvhFatMargin fat_margin(const kernels::BoundsSummary& s) const;
+  /// After a rebuild over fat boxes: the sorted cache of every fat pair.
+  Status cache_build(const Executor& exec, kernels::AabbSoA boxes, kernels::PairFilter filter);
+  /// One coherent update; *rebuild set when the movers call for a rebuild instead.
+  Status cache_update(const Executor& exec, kernels::AabbSoA boxes, kernels::PairFilter filter,
+                      bool* rebuild);
+  bool same_filter(kernels::PairFilter filter) const;
+  Status cache_pairs(const Executor& exec, Buffer<kernels::Pair>* out);
 
   LbvhOptions options_;
   LbvhInfo info_;
@@ -131,6 +162,27 @@ class LbvhBroadPhase {
   std::vector<Buffer<kernels::Pair>> chunk_pairs_;
   Buffer<kernels::BoundsSummary> partial_bounds_;
   Buffer<double> partial_area_;
+  // kPairCache state: fat and exact boxes (original order), movers, the cache (keys
+  // (lo << key_shift_) | hi, one sorted buffer per kLbvhCacheGrain lo indices, double
+  // buffered), the filter it was built with, and exact sorted leaves for queries.
+  bool cache_valid_ = false;
+  bool exact_leaves_valid_ = false;
+  uint32_t key_shift_ = 1;
+  kernels::LbvhFatMargin margin_{};
+  Buffer<kernels::SortedBox> fat_, exact_leaves_;
+  Buffer<uint8_t> moved_;
+  Buffer<uint32_t> movers_, leaf_pos_;
+  Buffer<uint64_t> mover_offsets_, new_keys_, key_offsets_;
+  std::vector<Buffer<uint64_t>> key_chunks_;
+  std::vector<Buffer<uint32_t>> mover_chunks_;
+  std::vector<Buffer<kernels::Pair>> cache_out_;
+  Buffer<kernels::Pair> fat_pairs_;
+  std::vector<Buffer<uint64_t>> cache_[2];
+  std::vector<uint64_t> cache_count_[2];
+  int cur_ = 0;
+  Buffer<uint32_t> filter_layer_, filter_mask_;
+  Buffer<uint8_t> filter_static_;
+  bool cache_filtered_ = false;
 };
 
 }  // namespace impact::host

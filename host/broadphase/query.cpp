@@ -216,13 +216,13 @@ Status BroadPhaseQuery::query(const Executor& exec, const GridBroadPhase& grid, 
       offsets, hits);
 }
 
-Status BroadPhaseQuery::query(const Executor& exec, const LbvhBroadPhase& lbvh, const QueryBatch& q,
+Status BroadPhaseQuery::query(const Executor& exec, LbvhBroadPhase& lbvh, const QueryBatch& q,
                               std::vector<uint32_t>* offsets, std::vector<uint32_t>* hits) {
   if (lbvh.size() == 0) {
     no_hits(q.n, offsets, hits);
     return Status();
   }
-  const kernels::LbvhView t = lbvh.view();
+  const kernels::LbvhView t = lbvh.query_view(exec);
   kernels::QueryView view = q.view;
   if (t.n >= kReorderMinBoxes && q.n >= kReorderMinQueries) {
     // Morton order of the query centres in the root's bounds: consecutive queries

@@ -57,7 +57,7 @@ class BroadPhaseQuery {
   Status query(const Executor& exec, const GridBroadPhase& grid, const QueryBatch& q,
                std::vector<uint32_t>* offsets, std::vector<uint32_t>* hits);
   /// The LBVH as last built, updated or refitted (any n, 0 and 1 included).
-  Status query(const Executor& exec, const LbvhBroadPhase& lbvh, const QueryBatch& q,
+  Status query(const Executor& exec, LbvhBroadPhase& lbvh, const QueryBatch& q,
                std::vector<uint32_t>* offsets, std::vector<uint32_t>* hits);
   /// Sweep-and-prune as last built or updated. One box (or reset()): kInvalidArgument,
   /// as the grid.

@@ -53,7 +53,12 @@ class BroadPhaseStage {
   /// choice; kGrid before any build).
   BroadPhaseKind active() const { return active_; }
 
-  void set_lbvh_options(const LbvhOptions& o) { lbvh.set_options(o); }
+  /// A change of update policy or fat margin also forgets coherence (a kPairCache
+  /// tree holds fat boxes).
+  void set_lbvh_options(const LbvhOptions& o) {
+    if (o.update != lbvh.options().update || o.fat_margin != lbvh.options().fat_margin) built_ = false;
+    lbvh.set_options(o);
+  }
 
   /// `summary`, when given, is the boxes' union and largest edge.
   Status build(const Executor& exec, kernels::AabbSoA boxes, kernels::PairFilter filter, uint32_t n,

@@ -45,8 +45,13 @@ struct BroadPhaseOptions {
   /// LbvhUpdate::kAuto: rebuild once the refitted tree's SAH cost exceeds this
   /// multiple (>= 1) of its cost right after the last build.
   double lbvh_refit_sah_limit = 1.5;
-  /// Either refit policy rebuilds after this many refits in a row (>= 1).
+  /// Either refit policy (and kPairCache) rebuilds after this many updates in a row (>= 1).
   uint32_t lbvh_max_refits = 1000;
+  /// LbvhUpdate::kPairCache: the tree holds each box grown on every side by this
+  /// fraction of its largest edge (at least of the scene's largest edge / 1024), and
+  /// a box is re-queried only when it leaves that fat box. Larger: fewer re-queries,
+  /// more cached candidate pairs. Finite, >= 0. Speed only: pairs are always exact.
+  float lbvh_fat_margin = 0.1f;
 };
 
 // --- queries ("what is near me") ----------------------------------------------------------

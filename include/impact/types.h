@@ -86,6 +86,12 @@ enum class LbvhUpdate : int {
   /// Refit, and rebuild once the refitted tree's SAH cost exceeds refit_sah_limit
   /// times its cost right after the last build (one extra pass over the nodes).
   kAuto = 2,
+  /// Tree over fat (margin-grown) boxes plus a cache of the fat-overlapping pairs:
+  /// an update re-queries only the boxes that left their fat box and filters the
+  /// cache by the exact boxes. Pairs come sorted by (a, b). Rebuilds when more
+  /// than a quarter of the boxes moved out in one update, once the movers since the
+  /// build add up to n, after max_refits updates, or when the filter changes.
+  kPairCache = 3,
 };
 
 /// A broad-phase candidate pair of body slots (or box indices), a < b.

@@ -51,9 +51,11 @@ struct WorldDesc {
   bool interpolation = false;
   BroadPhaseKind broad_phase = BroadPhaseKind::kGrid;
   /// What an LBVH broad phase does from step to step (docs/lbvh.md): rebuild,
-  /// refit, or refit until its SAH cost grows by lbvh_refit_sah_limit (> 1).
+  /// refit, refit until its SAH cost grows by lbvh_refit_sah_limit (> 1), or keep a
+  /// fat-box pair cache (kPairCache, margin lbvh_fat_margin; see BroadPhaseOptions).
   LbvhUpdate lbvh_update = LbvhUpdate::kRebuild;
   double lbvh_refit_sah_limit = 1.5;
+  float lbvh_fat_margin = 0.1f;
   /// Broad-phase boxes cover each sphere's motion over the step (from p to
   /// p + v dt, v after gravity) instead of its pose at the step's start, so bodies
   /// that meet within the step become candidate pairs even when fast. More pairs

@@ -222,6 +222,7 @@ TEST(BroadPhaseQueries, HundredFramesOfMotion) {
       {{.kind = BroadPhaseKind::kGrid}, "grid"},
       {{.kind = BroadPhaseKind::kLbvh, .lbvh_update = LbvhUpdate::kRefit}, "lbvh refit"},
       {{.kind = BroadPhaseKind::kLbvh, .lbvh_update = LbvhUpdate::kAuto}, "lbvh auto"},
+      {{.kind = BroadPhaseKind::kLbvh, .lbvh_update = LbvhUpdate::kPairCache}, "lbvh pair cache"},
       {{.kind = BroadPhaseKind::kSweepAndPrune}, "sap"},
       {{.kind = BroadPhaseKind::kBruteForce}, "brute force"},
   };

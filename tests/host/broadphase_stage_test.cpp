@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <random>
 #include <string>
 #include <vector>
@@ -112,6 +113,7 @@ TEST(BroadPhaseStage, HundredFramesOfMotionThroughEveryUpdatePolicy) {
                         {BroadPhaseKind::kLbvh, LbvhUpdate::kRebuild},
                         {BroadPhaseKind::kLbvh, LbvhUpdate::kRefit},
                         {BroadPhaseKind::kLbvh, LbvhUpdate::kAuto},
+                        {BroadPhaseKind::kLbvh, LbvhUpdate::kPairCache},
                         {BroadPhaseKind::kSweepAndPrune, LbvhUpdate::kRebuild},
                         {BroadPhaseKind::kAuto, LbvhUpdate::kRefit}};
   const uint32_t n = scaled(1500, 300);
@@ -268,6 +270,11 @@ TEST(BroadPhaseStage, RejectsBadOptionsAndSweptInput) {
     BroadPhase bp(BroadPhaseOptions{.lbvh_update = static_cast<LbvhUpdate>(7)});
     EXPECT_TRUE(IsError(bp.pairs(&got), StatusCode::kInvalidArgument, {"lbvh_update"}));
   }
+  for (float margin : {-0.1f, std::numeric_limits<float>::quiet_NaN(), std::numeric_limits<float>::infinity()}) {
+    BroadPhase bp(BroadPhaseOptions{.kind = BroadPhaseKind::kLbvh, .lbvh_update = LbvhUpdate::kPairCache,
+                                    .lbvh_fat_margin = margin});
+    EXPECT_TRUE(IsError(bp.build(b.input()), StatusCode::kInvalidArgument, {"lbvh_fat_margin"}));
+  }
   BroadPhase bp;
   IMPACT_ASSERT_OK(bp.build(b.input()));
   std::vector<float> dx(b.size(), 0.0f), dy(b.size(), 0.0f), dz(b.size() - 1, 0.0f);
@@ -290,11 +297,18 @@ TEST(BroadPhaseStage, RejectsBadOptionsAndSweptInput) {
 }
 
 // Same bytes for every backend and thread count through build/update/pairs, for the
-// refitting LBVH and the incremental sweep.
+// refitting and the pair-caching LBVH and the incremental sweep.
 TEST(BroadPhaseStage, CoherentPathsIndependentOfThreads) {
   const uint32_t n = scaled(20000, 2000);
-  for (BroadPhaseKind kind : {BroadPhaseKind::kLbvh, BroadPhaseKind::kSweepAndPrune, BroadPhaseKind::kAuto}) {
-    SCOPED_TRACE(to_string(kind));
+  struct Case {
+    BroadPhaseKind kind;
+    LbvhUpdate update;
+  };
+  for (const Case& k : {Case{BroadPhaseKind::kLbvh, LbvhUpdate::kRefit}, Case{BroadPhaseKind::kLbvh, LbvhUpdate::kPairCache},
+                        Case{BroadPhaseKind::kSweepAndPrune, LbvhUpdate::kRefit},
+                        Case{BroadPhaseKind::kAuto, LbvhUpdate::kRefit}}) {
+    const BroadPhaseKind kind = k.kind;
+    SCOPED_TRACE(std::string(to_string(kind)) + "/" + to_string(k.update));
     std::vector<BodyPair> first;
     bool have_first = false;
     for (const test::ExecCase& c : test::exec_cases()) {
@@ -302,7 +316,7 @@ TEST(BroadPhaseStage, CoherentPathsIndependentOfThreads) {
       const ExecConfig exec{c.backend, c.threads};
       Boxes b = test::uniform_boxes(n, 61, 0.2f, 0.5f);
       std::mt19937 rng(62);
-      BroadPhase bp(BroadPhaseOptions{.kind = kind, .lbvh_update = LbvhUpdate::kRefit});
+      BroadPhase bp(BroadPhaseOptions{.kind = kind, .lbvh_update = k.update});
       std::vector<BodyPair> got;
       for (int f = 0; f < 4; ++f) {
         IMPACT_ASSERT_OK(bp.update(b.input(), exec));
@@ -396,13 +410,19 @@ TEST(WorldSweptBounds, PairsMatchReferenceOfSweptSpheres) {
 // backend and thread count, and bodies re-sorted into Morton order stay reachable by
 // handle (a contact-free scene gives bit-identical positions with and without re-sorts).
 TEST(WorldBroadPhaseStage, AutoAndRefitWorldsAreDeterministic) {
-  for (BroadPhaseKind kind : {BroadPhaseKind::kAuto, BroadPhaseKind::kLbvh}) {
-    SCOPED_TRACE(to_string(kind));
+  struct Case {
+    BroadPhaseKind kind;
+    LbvhUpdate update;
+  };
+  for (const Case& k : {Case{BroadPhaseKind::kAuto, LbvhUpdate::kAuto}, Case{BroadPhaseKind::kLbvh, LbvhUpdate::kAuto},
+                        Case{BroadPhaseKind::kLbvh, LbvhUpdate::kPairCache}}) {
+    const BroadPhaseKind kind = k.kind;
+    SCOPED_TRACE(std::string(to_string(kind)) + "/" + to_string(k.update));
     uint64_t first = 0;
     for (const test::ExecCase& c : test::exec_cases()) {
       WorldDesc d;
       d.broad_phase = kind;
-      d.lbvh_update = LbvhUpdate::kAuto;
+      d.lbvh_update = k.update;
       d.reorder_interval = 5;
       d.backend = c.backend;
       d.threads = c.threads;

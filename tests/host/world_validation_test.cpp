@@ -342,6 +342,8 @@ TEST(WorldDescValidation, InvalidDescsAreRejected) {
       {"warm_start", StatusCode::kInvalidArgument, [](WorldDesc& d) { d.solver.warm_start = 2.0f; }},
       {"broad_phase", StatusCode::kInvalidArgument,
        [](WorldDesc& d) { d.broad_phase = static_cast<BroadPhaseKind>(7); }},
+      {"lbvh_update", StatusCode::kInvalidArgument, [](WorldDesc& d) { d.lbvh_update = static_cast<LbvhUpdate>(9); }},
+      {"lbvh_fat_margin", StatusCode::kInvalidArgument, [](WorldDesc& d) { d.lbvh_fat_margin = -1.0f; }},
   };
   for (const Case& c : cases) {
     SCOPED_TRACE(c.field);

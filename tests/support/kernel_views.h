@@ -1,13 +1,16 @@
-// Kernel-level views of the tests' box sets (tests/support/aabb_reference.h) and a
-// serial executor, for the tests that drive host/ and kernels/ directly.
+// Kernel-level views of the tests' box sets (tests/support/aabb_reference.h) and
+// query batches (tests/support/query_reference.h), and a serial executor, for the
+// tests that drive host/ and kernels/ directly.
 #pragma once
 
 #include <cstdint>
 
+#include "host/broadphase/query.h"
 #include "host/parallel.h"
 #include "kernels/broadphase/bounds.h"
 #include "kernels/broadphase/grid.h"
 #include "support/aabb_reference.h"
+#include "support/query_reference.h"
 
 namespace impact::test {
 
@@ -22,6 +25,17 @@ inline kernels::PairFilter filter_of(const Boxes& b) {
 }
 
 inline uint32_t count(const Boxes& b) { return static_cast<uint32_t>(b.size()); }
+
+/// The queries as the host's batch (views into q).
+inline host::QueryBatch query_batch(const Queries& q) {
+  auto ptr = [](const std::vector<float>& v) { return v.empty() ? nullptr : v.data(); };
+  const kernels::QueryShape shape = q.shape == QShape::kAabb     ? kernels::QueryShape::kAabb
+                                    : q.shape == QShape::kSphere ? kernels::QueryShape::kSphere
+                                                                 : kernels::QueryShape::kPoint;
+  return host::QueryBatch{kernels::QueryView{shape, ptr(q.x0), ptr(q.y0), ptr(q.z0), ptr(q.x1), ptr(q.y1),
+                                             ptr(q.z1), ptr(q.radius), q.mask.empty() ? nullptr : q.mask.data()},
+                          static_cast<uint32_t>(q.size())};
+}
 
 /// A one-thread serial executor shared by a test binary.
 inline const host::Executor& serial() {

@@ -44,15 +44,6 @@ using test::filter_of;
 using test::serial;
 using test::soa;
 
-QueryBatch batch(const Queries& q) {
-  auto ptr = [](const std::vector<float>& v) { return v.empty() ? nullptr : v.data(); };
-  const kernels::QueryShape shape = q.shape == QShape::kAabb     ? kernels::QueryShape::kAabb
-                                    : q.shape == QShape::kSphere ? kernels::QueryShape::kSphere
-                                                                 : kernels::QueryShape::kPoint;
-  return QueryBatch{kernels::QueryView{shape, ptr(q.x0), ptr(q.y0), ptr(q.z0), ptr(q.x1), ptr(q.y1), ptr(q.z1),
-                                       ptr(q.radius), q.mask.empty() ? nullptr : q.mask.data()},
-                    static_cast<uint32_t>(q.size())};
-}
 
 
 // Every structure over one box set. The grid comes in two flavours (levels allowed,
@@ -79,7 +70,7 @@ struct Structures {
   template <class Fn>
   void each(const Executor& exec, const Queries& q, Fn&& fn) {
     BroadPhaseQuery run;
-    const QueryBatch qb = batch(q);
+    const QueryBatch qb = test::query_batch(q);
     auto one = [&](const char* name, auto&& call) {
       Csr c{{7u}, {3u}};  // stale content must be replaced
       const Status s = call(&c);
@@ -388,9 +379,9 @@ TEST(BroadPhaseQuery, LbvhRefitAndSapIncrementalFrames) {
       const Queries q = random_queries(b, shape, 100, 100 + frame, 2.0f, 1);
       const Csr ref = test::reference_query(b, q);
       Csr got;
-      IMPACT_ASSERT_OK(run.query(serial(), lbvh, batch(q), &got.offsets, &got.hits));
+      IMPACT_ASSERT_OK(run.query(serial(), lbvh, test::query_batch(q), &got.offsets, &got.hits));
       EXPECT_TRUE(test::SameCsr(got, ref)) << "lbvh frame " << frame;
-      IMPACT_ASSERT_OK(run.query(serial(), sap, batch(q), &got.offsets, &got.hits));
+      IMPACT_ASSERT_OK(run.query(serial(), sap, test::query_batch(q), &got.offsets, &got.hits));
       EXPECT_TRUE(test::SameCsr(got, ref)) << "sap frame " << frame;
     }
   }
@@ -416,15 +407,15 @@ TEST(BroadPhaseQuery, SpatialProcessingOrderGivesTheSameBytes) {
     if (shape == QShape::kAabb) {
       ref = test::reference_query(b, q);
     } else {  // the brute-force kernel, itself checked against the reference above
-      IMPACT_ASSERT_OK(run.query(serial(), soa(b), b.layer.data(), n, batch(q), &ref.offsets, &ref.hits));
+      IMPACT_ASSERT_OK(run.query(serial(), soa(b), b.layer.data(), n, test::query_batch(q), &ref.offsets, &ref.hits));
     }
     ASSERT_GT(ref.hits.size(), 100u);
     for (const test::ExecCase& c : test::exec_cases()) {
       const Executor exec(c.backend, c.threads);
       Csr got;
-      IMPACT_ASSERT_OK(run.query(exec, lbvh, batch(q), &got.offsets, &got.hits));
+      IMPACT_ASSERT_OK(run.query(exec, lbvh, test::query_batch(q), &got.offsets, &got.hits));
       EXPECT_TRUE(test::SameCsr(got, ref)) << "lbvh " << test::to_string(shape) << " " << test::to_string(c);
-      IMPACT_ASSERT_OK(run.query(exec, sap, batch(q), &got.offsets, &got.hits));
+      IMPACT_ASSERT_OK(run.query(exec, sap, test::query_batch(q), &got.offsets, &got.hits));
       EXPECT_TRUE(test::SameCsr(got, ref)) << "sap " << test::to_string(shape) << " " << test::to_string(c);
     }
   }
