@@ -44,7 +44,7 @@ struct LbvhOptions {
   /// kPairCache: each box's fat box is the box grown on every side by fat_margin
   /// times its largest edge (at least fat_margin * the scene's largest edge / 1024,
   /// so points get a margin too). >= 0.
-  float fat_margin = 0.1f;
+  float fat_margin = 0.2f;
 };
 
 /// What the last call did (for benchmarks and diagnostics).

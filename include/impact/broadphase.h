@@ -51,7 +51,7 @@ struct BroadPhaseOptions {
   /// fraction of its largest edge (at least of the scene's largest edge / 1024), and
   /// a box is re-queried only when it leaves that fat box. Larger: fewer re-queries,
   /// more cached candidate pairs. Finite, >= 0. Speed only: pairs are always exact.
-  float lbvh_fat_margin = 0.1f;
+  float lbvh_fat_margin = 0.2f;
 };
 
 // --- queries ("what is near me") ----------------------------------------------------------

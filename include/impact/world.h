@@ -55,7 +55,7 @@ struct WorldDesc {
   /// fat-box pair cache (kPairCache, margin lbvh_fat_margin; see BroadPhaseOptions).
   LbvhUpdate lbvh_update = LbvhUpdate::kRebuild;
   double lbvh_refit_sah_limit = 1.5;
-  float lbvh_fat_margin = 0.1f;
+  float lbvh_fat_margin = 0.2f;
   /// Broad-phase boxes cover each sphere's motion over the step (from p to
   /// p + v dt, v after gravity) instead of its pose at the step's start, so bodies
   /// that meet within the step become candidate pairs even when fast. More pairs

@@ -99,14 +99,21 @@ uint64_t lbvh_cache_query(const LbvhView& t, const uint32_t* leaf_pos, const Sor
     };
     if (!records_overlap(q, t.nodes[0])) continue;
     uint32_t top = 0;
+    // A pushed node's children are tested when it is popped: fetch them now.
+    auto push = [&](uint32_t h) {
+      stack[top++] = h;
+      const uint32_t split = t.nodes[h].split, c = split & kLbvhSplitMask;
+      __builtin_prefetch((split & kLbvhLeftLeaf) ? static_cast<const void*>(&t.leaves[c]) : &t.nodes[c]);
+      __builtin_prefetch((split & kLbvhRightLeaf) ? static_cast<const void*>(&t.leaves[c + 1]) : &t.nodes[c + 1]);
+    };
     stack[top++] = 0;
     while (top > 0) {
       const LbvhNode& m = t.nodes[stack[--top]];
       const uint32_t h = m.split & kLbvhSplitMask;
       if (m.split & kLbvhLeftLeaf) leaf(h);
-      else if (records_overlap(q, t.nodes[h])) stack[top++] = h;
+      else if (records_overlap(q, t.nodes[h])) push(h);
       if (m.split & kLbvhRightLeaf) leaf(h + 1);
-      else if (records_overlap(q, t.nodes[h + 1])) stack[top++] = h + 1;
+      else if (records_overlap(q, t.nodes[h + 1])) push(h + 1);
       // At most one pending sibling per level below the root plus the two just pushed
       // (lbvh_build.h's depth bound; growing bounds does not change the topology).
       IMPACT_ASSERT(top <= kLbvhMaxDepth + 1);
@@ -137,7 +144,7 @@ uint64_t lbvh_cache_merge(const uint64_t* old_keys, uint64_t old_count, const ui
 uint64_t lbvh_cache_pairs(const uint64_t* keys, uint64_t count, const SortedBox* exact, uint32_t key_shift,
                           Pair* IMPACT_RESTRICT out, uint64_t capacity) {
   // The hi side is a random read (a cache miss at 1M boxes): prefetch it ahead.
-  constexpr uint64_t kAhead = 16;
+  constexpr uint64_t kAhead = 48;
   const uint64_t low = (uint64_t{1} << key_shift) - 1;
   uint64_t k = 0;
   Pair spare{};
