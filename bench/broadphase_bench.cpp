@@ -469,7 +469,7 @@ const int kCacheMarginRegistered = [] {
     const float margin = std::strtof(m, nullptr);
     benchmark::RegisterBenchmark((std::string("BM_LbvhCacheMargin/") + m).c_str(),
                                  [margin](benchmark::State& state) { run_cache_margin(state, margin); })
-        ->ArgsProduct({{k100k, k1M}, {1}})
+        ->ArgsProduct({{k10k, k100k, k1M}, {1}})
         ->Iterations(kEpisodeFrames)
         ->UseManualTime()
         ->Unit(benchmark::kMillisecond);
