@@ -24,10 +24,13 @@
 //                   tolerance favouring faces (kTieRel); face axes give the clipped
 //                   ends, edge axes one point.
 //  capsule-triangle two-sided triangle. Core outside: closest points of segment and
-//                   triangle (endpoints vs triangle, segment vs edges); a segment
+//                   triangle (endpoints vs triangle, segment vs edges); the normal is
+//                   the face normal when an end point over the face's interior wins,
+//                   and axis x edge when the segment's and an edge's interiors do (the
+//                   points' difference has only rounding / gap precision); a segment
 //                   parallel to the face gives 2 points clipped to the triangle's
-//                   prism. Core crossing the triangle: SAT over the face normal and the
-//                   3 axis x edge directions.
+//                   prism. Core crossing the triangle, or within the inputs' rounding
+//                   of it: SAT over the face normal and the 3 axis x edge directions.
 //  capsule-halfspace the capsule's surface below each core endpoint (along the
 //                   normal), where below the plane; one point when the capsule
 //                   stands steep (both lines leave through the lower end's cap).
@@ -406,18 +409,28 @@ IMPACT_INLINE void capsule_triangle_block(const LeafSoA& a, const LeafSoA& b, co
   const V3<F> nf = triangle_normal(v[0], v[1], v[2]);
 
   // --- closest points of the core segment and the triangle ---
-  Mask face;
+  // Also which feature pair won, so that a short gap takes its normal from the
+  // features rather than from the difference of two nearly equal points: an end point
+  // over the face's interior -> the face normal; a segment interior against an edge
+  // interior -> their common perpendicular u x edge.
+  Mask face0, face1;
   const V3<F> e0 = u * (-ha), e1 = u * ha;
-  V3<F> bp = e0, bq = closest_on_triangle(v[0], v[1], v[2], e0, nf, face);
+  V3<F> bp = e0, bq = closest_on_triangle(v[0], v[1], v[2], e0, nf, face0);
   F bd = length_sq(bq - bp);
-  auto consider = [&](const V3<F>& p, const V3<F>& q) {
+  Mask by_face = face0, by_edge = Mask(false);
+  V3<F> edge_axis = nf;
+  auto consider = [&](const V3<F>& p, const V3<F>& q, Mask is_face, Mask is_edge, const V3<F>& axis) {
     const F d = length_sq(q - p);
     const Mask take = d < bd;
     bd = select(take, d, bd);
     bp = select(take, p, bp);
     bq = select(take, q, bq);
+    by_face = select(take, is_face, by_face);
+    by_edge = select(take, is_edge, by_edge);
+    edge_axis = select(take, axis, edge_axis);
   };
-  consider(e1, closest_on_triangle(v[0], v[1], v[2], e1, nf, face));
+  const V3<F> q1 = closest_on_triangle(v[0], v[1], v[2], e1, nf, face1);
+  consider(e1, q1, face1, Mask(false), nf);
   V3<F> ed[3], em[3];
   F eh[3];
   for (int i = 0; i < 3; ++i) {
@@ -428,7 +441,10 @@ IMPACT_INLINE void capsule_triangle_block(const LeafSoA& a, const LeafSoA& b, co
     em[i] = (v[i] + v[(i + 1) % 3]) * half;
     F s, t;
     closest_segment_segment(c, u, ha, em[i], ed[i], eh[i], s, t);
-    consider(u * s, madd(em[i], t, ed[i]));
+    const V3<F> l = cross(u, ed[i]);
+    const F l2 = length_sq(l);
+    const Mask interior = (abs(s) < ha) & (abs(t) < eh[i]) & (l2 > F(1e-10f));
+    consider(u * s, madd(em[i], t, ed[i]), Mask(false), interior, l * (one / sqrt(select(interior, l2, one))));
   }
   // segment crossing the triangle's interior
   const F hc = -dot(nf, v[0]);  // height of the centre above the plane
@@ -444,9 +460,17 @@ IMPACT_INLINE void capsule_triangle_block(const LeafSoA& a, const LeafSoA& b, co
   bq = select(inside, xc, bq);
   bd = select(inside, zero, bd);
 
-  const Mask shallow = bd >= F(kTinySq);
+  // A gap within the rounding of the inputs has no reliable direction, not even its
+  // sign: such lanes take the SAT below, as capsule-box does.
+  const F size = ra + ha + eh[0] + eh[1] + eh[2];
+  const F edge_round = F(kEdgeRound) * (size + abs(v[0].x) + abs(v[0].y) + abs(v[0].z));
+  const Mask shallow = (bd >= F(kTinySq)) & (bd > edge_round * edge_round);
   const F dist = sqrt(bd);
-  const V3<F> n_sh = (bq - bp) * (one / select(shallow, dist, one));
+  const V3<F> gap = bq - bp;
+  V3<F> n_sh = gap * (one / select(shallow, dist, one));
+  const V3<F> feature_axis = select(by_face, nf, edge_axis);
+  const V3<F> n_feat = select(dot(feature_axis, gap) >= zero, feature_axis, -feature_axis);
+  n_sh = select(by_face | by_edge, n_feat, n_sh);
 
   // --- core crossing: SAT over the face normal and 3 axis x edge directions ---
   // overlap along unit l: capsule [l.c - ha|u.l| - r, + ...] vs triangle [min l.v, max l.v]
@@ -455,8 +479,6 @@ IMPACT_INLINE void capsule_triangle_block(const LeafSoA& a, const LeafSoA& b, co
   Mask edge_win = Mask(false);
   F edge_which(0.0f);
   F lim_face(0.0f);  // set after the face axis: an edge axis must be below it
-  const F size = ra + ha + eh[0] + eh[1] + eh[2];
-  const F edge_round = F(kEdgeRound) * (size + abs(v[0].x) + abs(v[0].y) + abs(v[0].z));
   auto axis = [&](const V3<F>& l, Mask ok, bool is_edge, float which, F round) {
     const F t0 = dot(l, v[0]), t1 = dot(l, v[1]), t2 = dot(l, v[2]);
     const F tmin = min(t0, min(t1, t2)), tmax = max(t0, max(t1, t2));

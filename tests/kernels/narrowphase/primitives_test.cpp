@@ -1202,6 +1202,85 @@ TEST(PrimitivesExtremes, CrossingCapsuleCoresTakeTheCrossProductNormal) {
   }
 }
 
+TEST(PrimitivesExtremes, CapsuleCoreJustOffATriangleTakesTheFeatureNormal) {
+  // A capsule core within 1e-7 .. 1e-4 of a triangle, away from the origin: (a) crossing
+  // over an edge's interior (the minimum translation is along u x edge), (b) an end
+  // point over the face's interior (along the face normal). The difference of the two
+  // closest points gives those directions only up to rounding / gap (a 1.7e-4 rad
+  // error failed the matrix test at IMPACT_TEST_INTENSITY 10).
+  const PairType& t = pair_type("capsule-triangle");
+  Gen g(0x5eed0021u);
+  const uint32_t n = test::scaled(2000);
+  std::vector<Shape> a, b;
+  std::vector<D3> want;  // expected normal: from the capsule to the triangle
+  for (uint32_t k = 0; k < n; ++k) {
+    // Local frame: the triangle in z = 0, edge v0 v1 on the x axis, the face at y < 0.
+    const double r = g.uni(0.1, 0.5), h = g.uni(0.3, 1.5);
+    // (the face case needs room for its foot: an in-radius well over 2 r)
+    const double l = k % 2 == 0 ? g.uni(0.5, 2.0) : g.uni(8.0, 12.0) * r;
+    const double gap = std::pow(10.0, -g.uni(4, 7));
+    const D3 v0{-l, 0, 0}, v1{l, 0, 0}, v2{g.uni(-0.5, 0.5) * l, -l, 0};
+    D3 c, u, axis;
+    if (k % 2 == 0) {
+      // over the edge: uy, uz > 0 keep the part of the core above the face farther
+      // than gap from it; the common perpendicular is u x ex
+      u = D3{g.uni(-1, 1), g.uni(0.2, 1.0), g.uni(0.2, 1.0)};
+      u = mul(u, 1.0 / norm(u));
+      axis = cross(u, D3{1, 0, 0});
+      axis = mul(axis, 1.0 / norm(axis));
+      const D3 x{g.uni(-0.6, 0.6) * l, 0, 0};
+      c = add(add(x, mul(axis, gap)), mul(u, g.uni(-0.6, 0.6) * h));
+    } else {
+      // an end point over the face, at least 2 r inside every edge (else sliding off
+      // an edge can be the shorter way out), the core leaning up and away
+      u = D3{g.uni(-0.5, 0.5), g.uni(-0.5, 0.5), 1.0};
+      u = mul(u, 1.0 / norm(u));
+      axis = D3{0, 0, 1};
+      D3 foot;
+      for (bool inside = false; !inside;) {
+        double w[3] = {g.uni(0.1, 1), g.uni(0.1, 1), g.uni(0.1, 1)};
+        const double sum = w[0] + w[1] + w[2];
+        foot = add(add(mul(v0, w[0] / sum), mul(v1, w[1] / sum)), mul(v2, w[2] / sum));
+        inside = true;
+        const D3 vs[3] = {v0, v1, v2};
+        for (int i = 0; i < 3; ++i) {
+          const D3 e = sub(vs[(i + 1) % 3], vs[i]), f = sub(foot, vs[i]);
+          inside = inside && std::fabs(e[0] * f[1] - e[1] * f[0]) / norm(e) > 2.0 * r;
+        }
+      }
+      foot[2] = gap;
+      c = add(foot, mul(u, h));
+    }
+    // A random frame, 10 m from the origin.
+    const D3 e0 = g.unit();
+    D3 e1 = cross(e0, g.unit());
+    e1 = mul(e1, 1.0 / norm(e1));
+    const D3 e2 = cross(e0, e1);
+    const D3 o{g.uni(-10, 10), g.uni(-10, 10), g.uni(-10, 10)};
+    auto world = [&](const D3& q) { return add(o, add(add(mul(e0, q[0]), mul(e1, q[1])), mul(e2, q[2]))); };
+    auto dir = [&](const D3& q) { return add(add(mul(e0, q[0]), mul(e1, q[1])), mul(e2, q[2])); };
+    a.push_back(capsule(world(c), dir(u), r, h));
+    b.push_back(triangle(world(v0), world(v1), world(v2)));
+    want.push_back(mul(dir(axis), -1.0));  // the core sits on the +axis side
+  }
+  const Out simd = run(t, a, b, KernelPath::kSimd);
+  const Out scalar = run(t, a, b, KernelPath::kScalar);
+  EXPECT_EQ(check_bucket(t, a, b, simd), n);
+  EXPECT_EQ(check_bucket(t, a, b, scalar), n);
+  uint32_t bad = 0;
+  for (uint32_t k = 0; k < n; ++k) {
+    if (simd.count[k] == 0 || scalar.count[k] == 0) {
+      if (bad++ < 5) ADD_FAILURE() << "lane " << k << ": no contact";
+      continue;
+    }
+    const double align = dot(simd.normal(k), want[k]) / norm(want[k]);
+    const double agree = dot(simd.normal(k), scalar.normal(k));
+    if ((align < 1.0 - 1e-6 || agree < 1.0 - 1e-6) && bad++ < 5)
+      ADD_FAILURE() << "lane " << k << (k % 2 == 0 ? " (edge)" : " (face)") << ": n . expected " << align
+                    << ", simd . scalar normals " << agree;
+  }
+}
+
 TEST(PrimitivesExtremes, NearParallelNeedlesTakeTheEdgeAxis) {
   // Needles (aspect 1e4) crossing at 1e-4 .. 1e-3 rad: the cross product of the long
   // edges is so short that float rounding of that edge axis's overlap (~100 * 1e-7 /
