@@ -1,0 +1,305 @@
+// Triangle (A) against triangle (B): a manifold of up to 4 points, vectorised across
+// pairs (one lane = one pair).
+//
+// Inputs: LeafSoA lanes per leaf.h (both triangles p = v0, w0..w2 = v1, w3..w5 = v2;
+// zero thickness, both sides solid). Outputs: ManifoldSoA lanes of the Range, point
+// slots 0..3; n points from A to B. Everything is computed relative to A's v0 (poses
+// far from the origin keep the precision of the inputs' differences).
+//   1. SAT over 11 axes (Ericson 4.4 / 5.2.9; Moeller's triangle-triangle test): the
+//      two triangle normals and the 9 crosses L = fa_i x fb_j of their edges. A flat
+//      triangle's interval along an axis is its vertices' min..max, and the faces of
+//      the Minkowski difference A - B are among these axes, so they hold the minimum
+//      translation. Along an edge axis each triangle's interval is {its edge, its
+//      opposite vertex}; the vertex's offset from the edge is a triple product that
+//      does not depend on the edge (-fb_j.NA for A, fa_i.NB for B, NA / NB the
+//      unnormalised normals), so an edge axis costs one cross and one dot. A cross is
+//      skipped where |L| < 1e-6 |fa_i| |fb_j| (within 1e-6 rad of parallel: the face
+//      axes decide). Separated or exactly touching on any axis -> count 0.
+//   2. Least overlap with the box-triangle tie rule: B's normal beats A's, and an edge
+//      beats the best face, only when shallower by more than
+//      tie = 1e-5 * overlap + 1e-6 * size (size: the longest edge of A plus B's); an
+//      edge also by its own rounding, ~2e-7 * size * |fa_i| |fb_j| / |L|.
+//   3. Face axis (n = +-A's or +-B's normal): both triangles projected along n onto a
+//      plane (frame t1 = any_perpendicular(n), t2 = n x t1; heights h = n.x). At a
+//      projected point where both exist the local penetration is hA - hB (A reaches
+//      up to hA along n, B starts at hB). The overlap polygon's vertices are among 15
+//      fixed candidates, each with a validity mask (branch-free, as box-triangle): A's
+//      vertices inside B's projection and B's inside A's (the other's height by
+//      barycentric interpolation; skipped where that triangle is within ~0.6 deg of
+//      edge-on to n), and the 9 crossings of A's edges with B's. Candidates with
+//      penetration > -1e-6 size are reduced to 4 (reduce4), pdepth = the penetration
+//      clamped to [0, depth]; each point lies midway between the two triangles.
+//   4. Edge axis: one point midway between the closest points of A's support feature
+//      and B's (each the edge of the axis or, when it reaches further, the opposite
+//      vertex), pdepth = depth.
+// Coplanar triangles: A - B is flat, the least overlap (along +-the common normal) is
+// 0: they touch, count 0, as GJK/EPA (gjk_epa.cpp) and the reference
+// (tests/support/narrow_reference.h) have it. Float inputs are rarely exactly
+// coplanar: within rounding the overlap is a few ulps of the size either way; when it
+// is > 0 the pair is a contact with n = the winning face's normal, depth = that overlap
+// and the points = the overlap polygon of the two triangles in that plane (all its
+// candidates sit in the -1e-6 size band). Swapping A and B flips n and keeps the depth
+// (the tie rule may pick the other, equally deep face).
+// Preconditions: finite inputs. Degenerate triangles give finite output
+// (triangle_normal's fallback normal is a valid, if useless, SAT axis; zero edges skip
+// their crosses). Cost: ~330 flops SAT, ~550 flops face manifold, ~120 edge point
+// (each run only for blocks where some lane needs it).
+#include <cstdint>
+
+#include "kernels/narrowphase/pair_kernels.h"
+#include "kernels/narrowphase/primitives.h"
+
+namespace impact::kernels {
+namespace {
+
+using namespace prim;  // NOLINT: lane helpers of this kernel family
+using simd::cross;
+using simd::dot;
+using simd::length_sq;
+
+inline constexpr float kTieRel = 1e-5f;       // tie tolerance, relative to the overlap
+inline constexpr float kTieSize = 1e-6f;      // tie tolerance floor, relative to the size
+inline constexpr float kEdgeRound = 2e-7f;    // edge axis rounding, relative to size |fa||fb| / |L|
+inline constexpr float kEdgeSkipSq = 1e-12f;  // |L|^2 / (|fa|^2 |fb|^2) below this: skip the axis
+/// Points inside a projected triangle need its barycentric coordinates; below this
+/// |twice area|, relative to the squared edge lengths, they are not used.
+inline constexpr float kFlatTri = 1e-2f;
+/// Edge crossings of nearly parallel projected edges (|sin| below 1e-6) are skipped:
+/// the overlap's ends are then vertex candidates.
+inline constexpr float kParallelSq = 1e-12f;
+/// Candidates this far (relative to the size) below zero penetration still count: the
+/// rounding band of the heights (coplanar triangles' overlap polygon).
+inline constexpr float kBand = 1e-6f;
+
+/// A projected triangle: 2-D vertices, heights along n, and its barycentric setup.
+template <class F>
+struct Proj {
+  F x[3], y[3], h[3];
+  F dx1, dy1, dx2, dy2, inv_det;
+  typename F::Mask ok;  // not within ~0.6 deg of edge-on
+
+  IMPACT_INLINE void setup() {
+    dx1 = x[1] - x[0], dy1 = y[1] - y[0], dx2 = x[2] - x[0], dy2 = y[2] - y[0];
+    const F det = dx1 * dy2 - dx2 * dy1;  // twice the signed area
+    ok = abs(det) > F(kFlatTri) * (dx1 * dx1 + dy1 * dy1 + dx2 * dx2 + dy2 * dy2);
+    inv_det = F(1.0f) / select(ok, det, F(1.0f));
+  }
+  /// Whether (px, py) lies inside (within lo of the barycentric range), and the height there.
+  IMPACT_INLINE typename F::Mask inside(F px, F py, F lo, F& height) const {
+    const F rx = px - x[0], ry = py - y[0];
+    const F l1 = (rx * dy2 - dx2 * ry) * inv_det;
+    const F l2 = (dx1 * ry - dy1 * rx) * inv_det;
+    const F l0 = F(1.0f) - l1 - l2;
+    height = h[0] * l0 + h[1] * l1 + h[2] * l2;
+    return ok & (l0 >= lo) & (l1 >= lo) & (l2 >= lo);
+  }
+};
+
+template <class F>
+IMPACT_INLINE void triangle_triangle_block(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out,
+                                           uint32_t k) {
+  using Mask = typename F::Mask;
+  using Int = typename F::Int;
+  const F zero(0.0f), one(1.0f), half(0.5f);
+  const V3<F> pa = load_p<F>(a, k);
+  const V3<F> zv{zero, zero, zero};
+  // both triangles relative to A's v0
+  const V3<F> va[3] = {zv, load_w<F>(a, k, 0) - pa, load_w<F>(a, k, 3) - pa};
+  const V3<F> vb[3] = {load_p<F>(b, k) - pa, load_w<F>(b, k, 0) - pa, load_w<F>(b, k, 3) - pa};
+  const V3<F> fa[3] = {va[1], va[2] - va[1], -va[2]};  // edge i: v[i] -> v[i+1]
+  const V3<F> fb[3] = {vb[1] - vb[0], vb[2] - vb[1], vb[0] - vb[2]};
+  const F lfa[3] = {length_sq(fa[0]), length_sq(fa[1]), length_sq(fa[2])};
+  const F lfb[3] = {length_sq(fb[0]), length_sq(fb[1]), length_sq(fb[2])};
+  const F fla[3] = {sqrt(lfa[0]), sqrt(lfa[1]), sqrt(lfa[2])};
+  const F flb[3] = {sqrt(lfb[0]), sqrt(lfb[1]), sqrt(lfb[2])};
+  const V3<F> big_na = cross(fa[0], va[2]);          // (a1 - a0) x (a2 - a0)
+  const V3<F> big_nb = cross(fb[0], vb[2] - vb[0]);  // (b1 - b0) x (b2 - b0)
+  const V3<F> na = triangle_normal(va[0], va[1], va[2]);
+  const V3<F> nb = triangle_normal(vb[0], vb[1], vb[2]);
+  const F size = max(fla[0], max(fla[1], fla[2])) + max(flb[0], max(flb[1], flb[2]));
+  const F tie_floor = F(kTieSize) * size;
+
+  // --- 1. SAT ---
+  F best, min_all;
+  F axis;    // 0 A's normal, 1 B's normal, 2 + 3i + j edge fa_i x fb_j
+  Mask pos;  // n = +axis (B is pushed along +axis)
+  {
+    // A's normal: A's interval is ~a point (its rounding), B's its vertices'
+    const F ta1 = dot(na, va[1]), ta2 = dot(na, va[2]);
+    const F tb0 = dot(na, vb[0]), tb1 = dot(na, vb[1]), tb2 = dot(na, vb[2]);
+    const F op = max(zero, max(ta1, ta2)) - min(tb0, min(tb1, tb2));
+    const F on = max(tb0, max(tb1, tb2)) - min(zero, min(ta1, ta2));
+    best = min(op, on);
+    min_all = best;
+    axis = zero;
+    pos = op <= on;
+  }
+  {
+    const F ta1 = dot(nb, va[1]), ta2 = dot(nb, va[2]);
+    const F tb0 = dot(nb, vb[0]), tb1 = dot(nb, vb[1]), tb2 = dot(nb, vb[2]);
+    const F op = max(zero, max(ta1, ta2)) - min(tb0, min(tb1, tb2));
+    const F on = max(tb0, max(tb1, tb2)) - min(zero, min(ta1, ta2));
+    const F o = min(op, on);
+    const F lim = best - mul_add(F(kTieRel), abs(best), tie_floor);
+    min_all = min(min_all, o);
+    const Mask take = (o < lim) & (o < best);
+    best = select(take, o, best);
+    axis = select(take, one, axis);
+    pos = select(take, op <= on, pos);
+  }
+  const F lim_face = best - mul_add(F(kTieRel), abs(best), tie_floor);
+  const F edge_round = F(kEdgeRound) * size;
+  // offsets of the opposite vertex from the axis's edge: A's by B's edge j, B's by A's edge i
+  const F sa[3] = {-dot(fb[0], big_na), -dot(fb[1], big_na), -dot(fb[2], big_na)};
+  const F sb[3] = {dot(fa[0], big_nb), dot(fa[1], big_nb), dot(fa[2], big_nb)};
+  V3<F> edge_l = zv;  // the winning edge axis (unit)
+  Mask vert_a = Mask(false), vert_b = Mask(false);  // its support features are the opposite vertices
+  for (int i = 0; i < 3; ++i) {
+    for (int j = 0; j < 3; ++j) {
+      const V3<F> l = cross(fa[i], fb[j]);
+      const F ll = length_sq(l);
+      const Mask ok = ll > F(kEdgeSkipSq) * lfa[i] * lfb[j];
+      const F inv = one / sqrt(select(ok, ll, one));
+      // A's interval {0, sa_j}, B's {d, d + sb_i} (times |l|)
+      const F d = dot(l, vb[j] - va[i]);
+      const F op = max(zero, sa[j]) - min(zero, sb[i]) - d;
+      const F on = d + max(zero, sb[i]) - min(zero, sa[j]);
+      const F o = min(op, on) * inv;
+      min_all = select(ok, min(min_all, o), min_all);
+      const Mask take = ok & (o < lim_face - edge_round * fla[i] * flb[j] * inv) & (o < best);
+      best = select(take, o, best);
+      axis = select(take, F(static_cast<float>(2 + 3 * i + j)), axis);
+      const Mask p = op <= on;
+      pos = select(take, p, pos);
+      // A's support along n: its max (n = +l) or min; B's: the other way
+      vert_a = select(take, select(p, sa[j] > zero, sa[j] < zero), vert_a);
+      vert_b = select(take, select(p, sb[i] < zero, sb[i] > zero), vert_b);
+      edge_l = select(take, l * inv, edge_l);
+    }
+  }
+  const Mask hit = min_all > zero;
+  if (simd::none(hit)) {
+    store_no_contact<F>(out, k);
+    return;
+  }
+  const Mask is_edge = axis >= F(2.0f);
+  const Mask ref_a = axis == zero;
+
+  // Normal, A to B.
+  V3<F> nl = select(is_edge, edge_l, select(ref_a, na, nb));
+  nl = select(pos, nl, -nl);
+  Lanes<F, 4> m;
+  m.n = nl;
+  m.depth = best;
+  for (int q = 0; q < 4; ++q) {
+    m.point[q] = zv;
+    m.pdepth[q] = zero;
+  }
+  m.count = Int(0);
+
+  // --- 4. edge axis: one point between A's and B's support features ---
+  const Mask edge = hit & is_edge;
+  if (simd::any(edge)) {
+    const F e_idx = axis - F(2.0f);
+    const F ei = select(e_idx < F(3.0f), zero, select(e_idx < F(6.0f), one, F(2.0f)));
+    const F ej = e_idx - F(3.0f) * ei;
+    F la, lb;
+    const V3<F> fai = pick3(ei, fa[0], fa[1], fa[2]);
+    const V3<F> ua = normalize_or(fai, V3<F>{one, zero, zero}, la);
+    const V3<F> ca = select(vert_a, pick3(ei, va[2], va[0], va[1]), pick3(ei, va[0], va[1], va[2]) + fai * half);
+    const F ha = select(vert_a, zero, half * la);
+    const V3<F> fbj = pick3(ej, fb[0], fb[1], fb[2]);
+    const V3<F> ub = normalize_or(fbj, V3<F>{one, zero, zero}, lb);
+    const V3<F> cb = select(vert_b, pick3(ej, vb[2], vb[0], vb[1]), pick3(ej, vb[0], vb[1], vb[2]) + fbj * half);
+    const F hb = select(vert_b, zero, half * lb);
+    F s, u;
+    closest_segment_segment(ca, ua, ha, cb, ub, hb, s, u);
+    const V3<F> p = (madd(ca, s, ua) + madd(cb, u, ub)) * half;
+    m.point[0] = select(edge, p, m.point[0]);
+    m.pdepth[0] = select(edge, best, m.pdepth[0]);
+    m.count = select(edge, Int(1), m.count);
+  }
+
+  // --- 3. face axis: both triangles projected along n, 15 candidates ---
+  const Mask face = hit & ~is_edge;
+  if (simd::any(face)) {
+    const V3<F> t1 = any_perpendicular(nl);
+    const V3<F> t2 = cross(nl, t1);
+    Proj<F> A, B;
+    for (int q = 0; q < 3; ++q) {
+      A.x[q] = dot(t1, va[q]), A.y[q] = dot(t2, va[q]), A.h[q] = dot(nl, va[q]);
+      B.x[q] = dot(t1, vb[q]), B.y[q] = dot(t2, vb[q]), B.h[q] = dot(nl, vb[q]);
+    }
+    A.setup();
+    B.setup();
+    const F lo_s(-1e-6f), hi_s(1.0f + 1e-6f);
+    constexpr int M = 15;
+    F cx[M], cy[M], cd[M];
+    Mask cv[M];
+    int c = 0;
+    // (1) A's vertices inside B, (2) B's inside A
+    for (int q = 0; q < 3; ++q, ++c) {
+      F hb;
+      cv[c] = B.inside(A.x[q], A.y[q], lo_s, hb);
+      cx[c] = A.x[q], cy[c] = A.y[q], cd[c] = A.h[q] - hb;
+    }
+    for (int q = 0; q < 3; ++q, ++c) {
+      F ha;
+      cv[c] = A.inside(B.x[q], B.y[q], lo_s, ha);
+      cx[c] = B.x[q], cy[c] = B.y[q], cd[c] = ha - B.h[q];
+    }
+    // (3) A's edge i crossing B's edge j: A.v[i] + s dA = B.v[j] + u dB
+    for (int i = 0; i < 3; ++i) {
+      const int i1 = (i + 1) % 3;
+      const F dax = A.x[i1] - A.x[i], day = A.y[i1] - A.y[i], dah = A.h[i1] - A.h[i];
+      const F la2 = dax * dax + day * day;
+      for (int j = 0; j < 3; ++j, ++c) {
+        const int j1 = (j + 1) % 3;
+        const F dbx = B.x[j1] - B.x[j], dby = B.y[j1] - B.y[j], dbh = B.h[j1] - B.h[j];
+        const F rx = B.x[j] - A.x[i], ry = B.y[j] - A.y[i];
+        const F den = dax * dby - day * dbx;
+        const Mask ok = den * den > F(kParallelSq) * la2 * (dbx * dbx + dby * dby);
+        const F inv = one / select(ok, den, one);
+        const F s = (rx * dby - ry * dbx) * inv;
+        const F u = (rx * day - ry * dax) * inv;
+        cx[c] = mul_add(s, dax, A.x[i]);
+        cy[c] = mul_add(s, day, A.y[i]);
+        cd[c] = mul_add(s, dah, A.h[i]) - mul_add(u, dbh, B.h[j]);
+        cv[c] = ok & (s >= lo_s) & (s <= hi_s) & (u >= lo_s) & (u <= hi_s);
+      }
+    }
+    const F band = -F(kBand) * size;
+    for (int i = 0; i < M; ++i) cv[i] = cv[i] & (cd[i] > band);
+    F ox[4], oy[4], od[4];
+    Int cnt;
+    reduce4<F, M>(cx, cy, cd, cv, F(1e-5f) * size, ox, oy, od, cnt);
+    // the reference triangle's height (its plane; B's when B's normal won)
+    const F third(1.0f / 3.0f);
+    const F h_ref = select(ref_a, (A.h[0] + A.h[1] + A.h[2]) * third, (B.h[0] + B.h[1] + B.h[2]) * third);
+    const F side = select(ref_a, F(-0.5f), half);  // midway: from A's plane down, from B's up
+    for (int i = 0; i < 4; ++i) {
+      const F dc = max(od[i], zero);
+      const V3<F> p = madd(t1 * ox[i] + t2 * oy[i], mul_add(side, dc, h_ref), nl);
+      m.point[i] = select(face, p, m.point[i]);
+      m.pdepth[i] = select(face, min(dc, best), m.pdepth[i]);
+    }
+    // no candidate survived rounding (grazing contact): the incident triangle's deepest vertex
+    const Mask none_left = face & (cnt == Int(0));
+    const F hb_min = min(B.h[0], min(B.h[1], B.h[2]));
+    const F ha_max = max(A.h[0], max(A.h[1], A.h[2]));
+    const V3<F> deep_b = select(B.h[0] == hb_min, vb[0], select(B.h[1] == hb_min, vb[1], vb[2]));
+    const V3<F> deep_a = select(A.h[0] == ha_max, va[0], select(A.h[1] == ha_max, va[1], va[2]));
+    const V3<F> fallback = select(ref_a, madd(deep_b, half * best, nl), madd(deep_a, F(-0.5f) * best, nl));
+    m.point[0] = select(none_left, fallback, m.point[0]);
+    m.pdepth[0] = select(none_left, best, m.pdepth[0]);
+    m.count = select(face, select(none_left, Int(1), cnt), m.count);
+  }
+  m.count = select(hit, m.count, Int(0));
+  store(out, k, m, pa);
+}
+
+}  // namespace
+
+IMPACT_LANE_KERNEL(collide_triangle_triangle, triangle_triangle_block, 4)
+
+}  // namespace impact::kernels
