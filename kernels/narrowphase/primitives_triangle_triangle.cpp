@@ -12,13 +12,19 @@
 //      translation. Along an edge axis each triangle's interval is {its edge, its
 //      opposite vertex}; the vertex's offset from the edge is a triple product that
 //      does not depend on the edge (-fb_j.NA for A, fa_i.NB for B, NA / NB the
-//      unnormalised normals), so an edge axis costs one cross and one dot. A cross is
-//      skipped where |L| < 1e-6 |fa_i| |fb_j| (within 1e-6 rad of parallel: the face
+//      unnormalised normals), so an edge axis costs one cross and two dots: the offset
+//      d of B's edge from A's along L is taken from their vertices' difference with its
+//      part along fa_i removed (L's own rounding, ~eps |fa| |fb| in any direction, would
+//      otherwise bring eps |r| / sin(angle) into d for near-parallel edges). A cross is
+//      skipped where |L| < 1e-6 |fa_i| |fb_j| (within 1e-6 rad of parallel: the other
 //      axes decide). Separated or exactly touching on any axis -> count 0.
 //   2. Least overlap with the box-triangle tie rule: B's normal beats A's, and an edge
 //      beats the best face, only when shallower by more than
 //      tie = 1e-5 * overlap + 1e-6 * size (size: the longest edge of A plus B's); an
-//      edge also by its own rounding, ~2e-7 * size * |fa_i| |fb_j| / |L|.
+//      edge also by its own rounding, 2e-7 (size + |d| / (|L| sin(angle))). A winning
+//      edge axis of edges within 0.05 rad of parallel (rare) is redone per lane in double
+//      from the world floats: its float direction is off by ~eps / sin(angle), enough
+//      for B moved along it by the depth to stay overlapping.
 //   3. Face axis (n = +-A's or +-B's normal): both triangles projected along n onto a
 //      plane (frame t1 = any_perpendicular(n), t2 = n x t1; heights h = n.x). At a
 //      projected point where both exist the local penetration is hA - hB (A reaches
@@ -27,23 +33,34 @@
 //      vertices inside B's projection and B's inside A's (the other's height by
 //      barycentric interpolation; skipped where that triangle is within ~0.6 deg of
 //      edge-on to n), and the 9 crossings of A's edges with B's. Candidates with
-//      penetration > -1e-6 size are reduced to 4 (reduce4), pdepth = the penetration
-//      clamped to [0, depth]; each point lies midway between the two triangles.
+//      penetration > 0 are reduced to 4 (reduce4), pdepth = the penetration (<= depth);
+//      each point lies midway between the two triangles. None left (grazing, rounding):
+//      the incident triangle's deepest vertex.
 //   4. Edge axis: one point midway between the closest points of A's support feature
-//      and B's (each the edge of the axis or, when it reaches further, the opposite
-//      vertex), pdepth = depth.
-// Coplanar triangles: A - B is flat, the least overlap (along +-the common normal) is
+//      and B's (each the edge of the axis or, when it reaches further than 1e-6 size
+//      beyond it, the opposite vertex; a degenerate triangle's longest edge), pdepth =
+//      depth. Two edges: the closest points of their lines by triple products with the
+//      axis, conditioned as 1 / sin(angle) (near-parallel edges keep their points on both
+//      edges within rounding), clamped to the edges.
+// Coplanar triangles: A - B is flat, its least overlap (along +-the common normal) is
 // 0: they touch, count 0, as GJK/EPA (gjk_epa.cpp) and the reference
-// (tests/support/narrow_reference.h) have it. Float inputs are rarely exactly
-// coplanar: within rounding the overlap is a few ulps of the size either way; when it
-// is > 0 the pair is a contact with n = the winning face's normal, depth = that overlap
-// and the points = the overlap polygon of the two triangles in that plane (all its
-// candidates sit in the -1e-6 size band). Swapping A and B flips n and keeps the depth
-// (the tie rule may pick the other, equally deep face).
-// Preconditions: finite inputs. Degenerate triangles give finite output
-// (triangle_normal's fallback normal is a valid, if useless, SAT axis; zero edges skip
-// their crosses). Cost: ~330 flops SAT, ~550 flops face manifold, ~120 edge point
-// (each run only for blocks where some lane needs it).
+// (tests/support/narrow_reference.h) have it. Float inputs are rarely exactly coplanar,
+// and within rounding the overlap's sign (and the normal's) is noise; so a pair whose
+// triangles both lie within 1e-6 size of one triangle's plane (their width along A's or
+// B's normal) counts as coplanar: count 0 in either order, whatever the rounding. That
+// drops contacts only of depth <= 1e-6 size. Tilted further (crossing at an angle above
+// ~1e-6 rad), n is +-A's (or B's) normal, depth the SAT overlap and the points the part
+// of the two triangles' overlap polygon in that plane where they interpenetrate, as for
+// any face contact. Swapping A and B flips n and keeps the depth (the tie rule may pick
+// the other, equally deep face). Two degenerate triangles (zero area within 1e-6 of the
+// longest edge squared): their difference is flat too, count 0.
+// Preconditions: finite inputs. A degenerate triangle against a proper one keeps a
+// complete axis set (its segment's crosses with the other's edges; triangle_normal's
+// fallback normal is a valid, if useless, extra axis; zero edges skip their crosses).
+// Cost: ~450 flops SAT, ~550 flops face manifold, ~150 edge point (each run only for
+// blocks where some lane needs it); ~40 ns per pair on one AVX2 core (FCL ~450 ns).
+#include <algorithm>
+#include <cmath>
 #include <cstdint>
 
 #include "kernels/narrowphase/pair_kernels.h"
@@ -59,7 +76,7 @@ using simd::length_sq;
 
 inline constexpr float kTieRel = 1e-5f;       // tie tolerance, relative to the overlap
 inline constexpr float kTieSize = 1e-6f;      // tie tolerance floor, relative to the size
-inline constexpr float kEdgeRound = 2e-7f;    // edge axis rounding, relative to size |fa||fb| / |L|
+inline constexpr float kEdgeRound = 2e-7f;    // edge axis rounding, relative to its length scale
 inline constexpr float kEdgeSkipSq = 1e-12f;  // |L|^2 / (|fa|^2 |fb|^2) below this: skip the axis
 /// Points inside a projected triangle need its barycentric coordinates; below this
 /// |twice area|, relative to the squared edge lengths, they are not used.
@@ -67,8 +84,12 @@ inline constexpr float kFlatTri = 1e-2f;
 /// Edge crossings of nearly parallel projected edges (|sin| below 1e-6) are skipped:
 /// the overlap's ends are then vertex candidates.
 inline constexpr float kParallelSq = 1e-12f;
-/// Candidates this far (relative to the size) below zero penetration still count: the
-/// rounding band of the heights (coplanar triangles' overlap polygon).
+/// Winning edge axes of edges within asin(kFixSin) of parallel are redone in double.
+inline constexpr float kFixSin = 0.05f;
+/// The rounding band of lengths along an axis, relative to the size: a pair whose
+/// triangles both lie within it of one triangle's plane is coplanar (touching, count 0),
+/// a triangle whose height over its longest edge is below it degenerate, and an edge
+/// axis's opposite vertex must reach beyond its edge by more than it to be the support.
 inline constexpr float kBand = 1e-6f;
 
 /// A projected triangle: 2-D vertices, heights along n, and its barycentric setup.
@@ -94,6 +115,36 @@ struct Proj {
     return ok & (l0 >= lo) & (l1 >= lo) & (l2 >= lo);
   }
 };
+
+/// The edge axis fa_i x fb_j of lane k, from the world floats in double (their
+/// differences are exact there): the unit axis l, and the SAT overlap of the pair along
+/// it (depth) with its side (pos: B is pushed along +l). For near-parallel edges, whose
+/// float cross product points within ~eps / sin(angle) of the true axis.
+void edge_axis_double(const LeafSoA& a, const LeafSoA& b, uint32_t k, int i, int j, float* l, float* depth,
+                      float* pos) {
+  double va[3][3], vb[3][3];
+  for (int c = 0; c < 3; ++c) {
+    const double o = a.p[c][k];
+    va[0][c] = 0.0, va[1][c] = a.w[c][k] - o, va[2][c] = a.w[3 + c][k] - o;
+    vb[0][c] = b.p[c][k] - o, vb[1][c] = b.w[c][k] - o, vb[2][c] = b.w[3 + c][k] - o;
+  }
+  double fa[3], fb[3];
+  for (int c = 0; c < 3; ++c) fa[c] = va[(i + 1) % 3][c] - va[i][c], fb[c] = vb[(j + 1) % 3][c] - vb[j][c];
+  double n[3] = {fa[1] * fb[2] - fa[2] * fb[1], fa[2] * fb[0] - fa[0] * fb[2], fa[0] * fb[1] - fa[1] * fb[0]};
+  const double len = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+  if (!(len > 0)) return;  // keep the float axis
+  for (double& c : n) c /= len;
+  double amin = 1e300, amax = -1e300, bmin = 1e300, bmax = -1e300;
+  for (int q = 0; q < 3; ++q) {
+    const double ta = n[0] * va[q][0] + n[1] * va[q][1] + n[2] * va[q][2];
+    const double tb = n[0] * vb[q][0] + n[1] * vb[q][1] + n[2] * vb[q][2];
+    amin = std::min(amin, ta), amax = std::max(amax, ta), bmin = std::min(bmin, tb), bmax = std::max(bmax, tb);
+  }
+  const double op = amax - bmin, on = bmax - amin;
+  for (int c = 0; c < 3; ++c) l[c] = static_cast<float>(n[c]);
+  *depth = static_cast<float>(std::min(op, on));
+  *pos = op <= on ? 1.0f : 0.0f;
+}
 
 template <class F>
 IMPACT_INLINE void triangle_triangle_block(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out,
@@ -123,6 +174,7 @@ IMPACT_INLINE void triangle_triangle_block(const LeafSoA& a, const LeafSoA& b, c
   F best, min_all;
   F axis;    // 0 A's normal, 1 B's normal, 2 + 3i + j edge fa_i x fb_j
   Mask pos;  // n = +axis (B is pushed along +axis)
+  F flat;    // the smaller width of both along a triangle normal: ~0 when coplanar
   {
     // A's normal: A's interval is ~a point (its rounding), B's its vertices'
     const F ta1 = dot(na, va[1]), ta2 = dot(na, va[2]);
@@ -133,6 +185,7 @@ IMPACT_INLINE void triangle_triangle_block(const LeafSoA& a, const LeafSoA& b, c
     min_all = best;
     axis = zero;
     pos = op <= on;
+    flat = max(op, on);
   }
   {
     const F ta1 = dot(nb, va[1]), ta2 = dot(nb, va[2]);
@@ -142,18 +195,20 @@ IMPACT_INLINE void triangle_triangle_block(const LeafSoA& a, const LeafSoA& b, c
     const F o = min(op, on);
     const F lim = best - mul_add(F(kTieRel), abs(best), tie_floor);
     min_all = min(min_all, o);
+    flat = min(flat, max(op, on));
     const Mask take = (o < lim) & (o < best);
     best = select(take, o, best);
     axis = select(take, one, axis);
     pos = select(take, op <= on, pos);
   }
   const F lim_face = best - mul_add(F(kTieRel), abs(best), tie_floor);
-  const F edge_round = F(kEdgeRound) * size;
+  const F edge_round(kEdgeRound);
+  const F ilfa[3] = {one / max(lfa[0], F(kTinySq)), one / max(lfa[1], F(kTinySq)), one / max(lfa[2], F(kTinySq))};
   // offsets of the opposite vertex from the axis's edge: A's by B's edge j, B's by A's edge i
   const F sa[3] = {-dot(fb[0], big_na), -dot(fb[1], big_na), -dot(fb[2], big_na)};
   const F sb[3] = {dot(fa[0], big_nb), dot(fa[1], big_nb), dot(fa[2], big_nb)};
   V3<F> edge_l = zv;  // the winning edge axis (unit)
-  Mask vert_a = Mask(false), vert_b = Mask(false);  // its support features are the opposite vertices
+  F edge_inv = zero;  // its 1 / |l|
   for (int i = 0; i < 3; ++i) {
     for (int j = 0; j < 3; ++j) {
       const V3<F> l = cross(fa[i], fb[j]);
@@ -161,29 +216,66 @@ IMPACT_INLINE void triangle_triangle_block(const LeafSoA& a, const LeafSoA& b, c
       const Mask ok = ll > F(kEdgeSkipSq) * lfa[i] * lfb[j];
       const F inv = one / sqrt(select(ok, ll, one));
       // A's interval {0, sa_j}, B's {d, d + sb_i} (times |l|)
-      const F d = dot(l, vb[j] - va[i]);
+      // B's edge start relative to A's edge line, across it (l is computed with an error
+      // of ~eps |fa| |fb| in any direction: the part of r along the edges would bring
+      // eps |r| / sin(angle) into d for near-parallel edges)
+      const V3<F> r = vb[j] - va[i];
+      const F d = dot(l, madd(r, -dot(r, fa[i]) * ilfa[i], fa[i]));
       const F op = max(zero, sa[j]) - min(zero, sb[i]) - d;
       const F on = d + max(zero, sb[i]) - min(zero, sa[j]);
       const F o = min(op, on) * inv;
       min_all = select(ok, min(min_all, o), min_all);
-      const Mask take = ok & (o < lim_face - edge_round * fla[i] * flb[j] * inv) & (o < best);
+      // rounding of o: ~eps (size + |r across| / sin(angle)), |r across| ~ |d| / |l| + size sin
+      const F amp = fla[i] * flb[j] * inv;  // 1 / sin(angle)
+      const F round = edge_round * mul_add(abs(d) * inv, amp, size);
+      const Mask take = ok & (o < lim_face - round) & (o < best);
       best = select(take, o, best);
       axis = select(take, F(static_cast<float>(2 + 3 * i + j)), axis);
-      const Mask p = op <= on;
-      pos = select(take, p, pos);
-      // A's support along n: its max (n = +l) or min; B's: the other way
-      vert_a = select(take, select(p, sa[j] > zero, sa[j] < zero), vert_a);
-      vert_b = select(take, select(p, sb[i] < zero, sb[i] > zero), vert_b);
+      pos = select(take, op <= on, pos);
       edge_l = select(take, l * inv, edge_l);
+      edge_inv = select(take, inv, edge_inv);
     }
   }
-  const Mask hit = min_all > zero;
+  // coplanar within rounding (one triangle within kBand * size of the other's plane): the
+  // least overlap is 0 up to rounding, touching
+  // both degenerate (zero area within rounding: the height over the longest edge below
+  // kBand of it): A - B is flat, s <= 0, and the fallback normals are no SAT axes for it
+  const F lma = max(lfa[0], max(lfa[1], lfa[2])), lmb = max(lfb[0], max(lfb[1], lfb[2]));
+  const Mask deg_a = length_sq(big_na) <= F(kBand * kBand) * lma * lma;
+  const Mask deg_b = length_sq(big_nb) <= F(kBand * kBand) * lmb * lmb;
+  Mask hit = andnot((min_all > zero) & (flat > F(kBand) * size), deg_a & deg_b);
   if (simd::none(hit)) {
     store_no_contact<F>(out, k);
     return;
   }
   const Mask is_edge = axis >= F(2.0f);
   const Mask ref_a = axis == zero;
+  const F e_idx = axis - F(2.0f);
+  F ei = select(e_idx < F(3.0f), zero, select(e_idx < F(6.0f), one, F(2.0f)));
+  F ej = e_idx - F(3.0f) * ei;
+  // A near-parallel edge pair's float axis is off by ~eps / sin(angle): moving B along it
+  // by the depth (exact for the true axis) may not separate them. Those lanes take the
+  // axis and its overlap from the world floats in double (rare: 1 / sin > 20).
+  {
+    const F amp = edge_inv * pick3(ei, fla[0], fla[1], fla[2]) * pick3(ej, flb[0], flb[1], flb[2]);
+    const Mask fix = hit & is_edge & (amp > F(1.0f / kFixSin));
+    if (simd::any(fix)) {
+      constexpr uint32_t W = F::kWidth;
+      float lx[W], ly[W], lz[W], dep[W], pp[W], fi[W], fj[W];
+      edge_l.x.store(lx), edge_l.y.store(ly), edge_l.z.store(lz), best.store(dep), ei.store(fi), ej.store(fj);
+      select(pos, one, zero).store(pp);
+      for (uint32_t q = 0; q < W; ++q) {
+        if (!fix.lane(q)) continue;
+        float l[3] = {lx[q], ly[q], lz[q]};
+        edge_axis_double(a, b, k + q, static_cast<int>(fi[q]), static_cast<int>(fj[q]), l, &dep[q], &pp[q]);
+        lx[q] = l[0], ly[q] = l[1], lz[q] = l[2];
+      }
+      edge_l = V3<F>{F::load(lx), F::load(ly), F::load(lz)};
+      best = F::load(dep);
+      pos = F::load(pp) > half;
+      hit = andnot(hit, fix & (best <= zero));  // separated along the exact axis
+    }
+  }
 
   // Normal, A to B.
   V3<F> nl = select(is_edge, edge_l, select(ref_a, na, nb));
@@ -200,21 +292,43 @@ IMPACT_INLINE void triangle_triangle_block(const LeafSoA& a, const LeafSoA& b, c
   // --- 4. edge axis: one point between A's and B's support features ---
   const Mask edge = hit & is_edge;
   if (simd::any(edge)) {
-    const F e_idx = axis - F(2.0f);
-    const F ei = select(e_idx < F(3.0f), zero, select(e_idx < F(6.0f), one, F(2.0f)));
-    const F ej = e_idx - F(3.0f) * ei;
-    F la, lb;
-    const V3<F> fai = pick3(ei, fa[0], fa[1], fa[2]);
-    const V3<F> ua = normalize_or(fai, V3<F>{one, zero, zero}, la);
-    const V3<F> ca = select(vert_a, pick3(ei, va[2], va[0], va[1]), pick3(ei, va[0], va[1], va[2]) + fai * half);
-    const F ha = select(vert_a, zero, half * la);
-    const V3<F> fbj = pick3(ej, fb[0], fb[1], fb[2]);
-    const V3<F> ub = normalize_or(fbj, V3<F>{one, zero, zero}, lb);
-    const V3<F> cb = select(vert_b, pick3(ej, vb[2], vb[0], vb[1]), pick3(ej, vb[0], vb[1], vb[2]) + fbj * half);
-    const F hb = select(vert_b, zero, half * lb);
-    F s, u;
-    closest_segment_segment(ca, ua, ha, cb, ub, hb, s, u);
-    const V3<F> p = (madd(ca, s, ua) + madd(cb, u, ub)) * half;
+    // A's support along n is its max along +l (pos) or its min: the opposite vertex where
+    // it lies beyond the edge by more than the rounding band, else the edge; B's the other
+    // way. A degenerate triangle's support is its longest edge (its three edges are
+    // collinear, and the axis's edge may be the shorter part).
+    const F band = F(kBand) * size;
+    const F sai = pick3(ej, sa[0], sa[1], sa[2]) * edge_inv, sbi = pick3(ei, sb[0], sb[1], sb[2]) * edge_inv;
+    const Mask vert_a = andnot(select(pos, sai > band, sai < -band), deg_a);
+    const Mask vert_b = andnot(select(pos, sbi < -band, sbi > band), deg_b);
+    auto longest = [&](const F (&lf)[3]) {
+      return select((lf[0] >= lf[1]) & (lf[0] >= lf[2]), zero, select(lf[1] >= lf[2], one, F(2.0f)));
+    };
+    ei = select(deg_a, longest(lfa), ei);
+    ej = select(deg_b, longest(lfb), ej);
+    const V3<F> fai = pick3(ei, fa[0], fa[1], fa[2]), fbj = pick3(ej, fb[0], fb[1], fb[2]);
+    const V3<F> a0 = pick3(ei, va[0], va[1], va[2]), b0 = pick3(ej, vb[0], vb[1], vb[2]);
+    // Both edges: the closest points of their lines, a0 + s fa and b0 + u fb, by
+    // s = ((b0 - a0) x fb).l / |l|^2 (error ~eps / sin(angle) along the edges: stable for
+    // near-parallel ones, where the usual normal equations lose eps / sin^2), clamped.
+    const V3<F> l = cross(fai, fbj);
+    const F il2 = one / max(length_sq(l), F(kTinySq));
+    const V3<F> r = b0 - a0;
+    const F s_line = clamp(dot(cross(r, fbj), l) * il2, zero, one);
+    const F u_line = clamp(dot(cross(r, fai), l) * il2, zero, one);
+    V3<F> p = (madd(a0, s_line, fai) + madd(b0, u_line, fbj)) * half;
+    // A vertex on either side: closest points of segment and point (or two points).
+    const Mask vert = vert_a | vert_b;
+    if (simd::any(edge & vert)) {
+      F la, lb;
+      const V3<F> ua = normalize_or(fai, V3<F>{one, zero, zero}, la);
+      const V3<F> ub = normalize_or(fbj, V3<F>{one, zero, zero}, lb);
+      const V3<F> ca = select(vert_a, pick3(ei, va[2], va[0], va[1]), a0 + fai * half);
+      const V3<F> cb = select(vert_b, pick3(ej, vb[2], vb[0], vb[1]), b0 + fbj * half);
+      const F ha = select(vert_a, zero, half * la), hb = select(vert_b, zero, half * lb);
+      F s, u;
+      closest_segment_segment(ca, ua, ha, cb, ub, hb, s, u);
+      p = select(vert, (madd(ca, s, ua) + madd(cb, u, ub)) * half, p);
+    }
     m.point[0] = select(edge, p, m.point[0]);
     m.pdepth[0] = select(edge, best, m.pdepth[0]);
     m.count = select(edge, Int(1), m.count);
@@ -268,8 +382,7 @@ IMPACT_INLINE void triangle_triangle_block(const LeafSoA& a, const LeafSoA& b, c
         cv[c] = ok & (s >= lo_s) & (s <= hi_s) & (u >= lo_s) & (u <= hi_s);
       }
     }
-    const F band = -F(kBand) * size;
-    for (int i = 0; i < M; ++i) cv[i] = cv[i] & (cd[i] > band);
+    for (int i = 0; i < M; ++i) cv[i] = cv[i] & (cd[i] > zero);
     F ox[4], oy[4], od[4];
     Int cnt;
     reduce4<F, M>(cx, cy, cd, cv, F(1e-5f) * size, ox, oy, od, cnt);
@@ -278,10 +391,9 @@ IMPACT_INLINE void triangle_triangle_block(const LeafSoA& a, const LeafSoA& b, c
     const F h_ref = select(ref_a, (A.h[0] + A.h[1] + A.h[2]) * third, (B.h[0] + B.h[1] + B.h[2]) * third);
     const F side = select(ref_a, F(-0.5f), half);  // midway: from A's plane down, from B's up
     for (int i = 0; i < 4; ++i) {
-      const F dc = max(od[i], zero);
-      const V3<F> p = madd(t1 * ox[i] + t2 * oy[i], mul_add(side, dc, h_ref), nl);
+      const V3<F> p = madd(t1 * ox[i] + t2 * oy[i], mul_add(side, od[i], h_ref), nl);
       m.point[i] = select(face, p, m.point[i]);
-      m.pdepth[i] = select(face, min(dc, best), m.pdepth[i]);
+      m.pdepth[i] = select(face, min(od[i], best), m.pdepth[i]);
     }
     // no candidate survived rounding (grazing contact): the incident triangle's deepest vertex
     const Mask none_left = face & (cnt == Int(0));
