@@ -681,6 +681,36 @@ TEST(TriangleTriangle, NearParallelEdgesCrossing) {
   EXPECT_GT(hits, cases.size() / 8);
 }
 
+TEST(TriangleTriangle, NearParallelKnifeEdges) {
+  // Two steep triangles, A hanging below its edge along x, B standing above its edge,
+  // which is turned by theta = 1e-5 .. 3e-2 rad about z and lowered by delta below A's:
+  // the edges cross like two knife edges and, for delta below ~theta, the least
+  // translation is along their common perpendicular (z): the near-parallel edge axis
+  // itself wins (its float cross product points ~eps / theta off; theta < 0.05 takes
+  // the double path).
+  std::mt19937 g(53);
+  std::uniform_real_distribution<double> u(-1, 1);
+  std::vector<Case> cases;
+  std::vector<Ref> refs;
+  const double thetas[] = {1e-5, 1e-4, 1e-3, 1e-2, 3e-2};
+  uint32_t edge_wins = 0;
+  for (uint32_t i = 0; i < test::scaled(200); ++i) {
+    const double th = thetas[i % 5];
+    const double delta = (0.3 * u(g) + 0.1) * th;  // mostly overlapping
+    const Eigen::Matrix3d rz(Eigen::AngleAxisd(th, Vec3d::UnitZ()));
+    const Vec3d c(0.3 * u(g), 0, -delta);
+    const Case local{tri({-1, 0, 0}, {1, 0, 0}, {0.3 * u(g), 0.2 * u(g), -1}),
+                     tri(rz * Vec3d(-1.1, 0, 0) + c, rz * Vec3d(0.9, 0, 0) + c, rz * Vec3d(0.3 * u(g), 0.2 * u(g), 1) + c)};
+    const Eigen::Matrix3d R = test::random_rotation(g);
+    const Case cs = posed(local, R, Vec3d(u(g), u(g), u(g)));
+    cases.push_back(cs);
+    refs.push_back(reference(cs));
+    edge_wins += (refs.back().r.s > 0 && angle(ev(refs.back().r.n), R * Vec3d::UnitZ()) < 1e-3) ? 1 : 0;
+  }
+  EXPECT_EQ(check_all(cases, refs, "knife edges near-parallel"), 0);
+  EXPECT_GT(edge_wins, cases.size() / 3);
+}
+
 TEST(TriangleTriangle, SliversAgainstReference) {
   // B a sliver: base p..q, apex off the base's middle by h |pq|, h = 1e-3 .. 1e-7.
   std::mt19937 g(61);
