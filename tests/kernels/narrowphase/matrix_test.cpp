@@ -929,6 +929,9 @@ TEST(NarrowMatrix, ExactTouchingIsNoContact) {
       {leaf(k::kLeafBox, {0, 0, 0}, {1, 1, 1}), leaf(k::kLeafBox, {2, 0.5f, 0}, {1, 1, 1})},
       {leaf(k::kLeafSphere, {0.25f, 0.25f, 0.5f}, {0.5f}), tri({0, 0, 0, 1, 0, 0, 0, 1, 0})},
       {along_x(leaf(k::kLeafCapsule, {0.25f, 0.25f, 0.5f}, {0.5f, 0.125f})), tri({0, 0, 0, 1, 0, 0, 0, 1, 0})},
+      {tri({0, 0, 0, 2, 0, 0, 0, 2, 0}), tri({0.5f, 0.5f, 0, 1, 0.5f, 1, 0.5f, 1, 1})},    // vertex on a face
+      {tri({0, 0, 0, 0, 2, 0, 1, 1, 0}), tri({0, 0, 0, 0, 2, 0, 0, 1, 1})},                // hinged on an edge
+      {tri({0, 0, 0, 2, 0, 0, 0, 2, 0}), tri({0.5f, 0.5f, 0, 3, 0.5f, 0, 0.5f, 3, 0})},  // coplanar overlap
       {leaf(k::kLeafSphere, {0, 0, 1}, {1}), leaf(k::kLeafHalfSpace, {0, 0, 0}, {0, 0, 1})},
       {along_x(leaf(k::kLeafCapsule, {0, 0, 0.5f}, {0.5f, 2})), leaf(k::kLeafHalfSpace, {0, 0, 0}, {0, 0, 1})},
       {leaf(k::kLeafBox, {0, 0, 1}, {1, 2, 1}), leaf(k::kLeafHalfSpace, {0, 0, 0}, {0, 0, 1})},
