@@ -47,6 +47,7 @@ struct Table {
     k[kLeafSphere][kLeafTriangle] = &collide_sphere_triangle;
     k[kLeafCapsule][kLeafTriangle] = &collide_capsule_triangle;
     k[kLeafBox][kLeafTriangle] = &collide_box_triangle;
+    k[kLeafTriangle][kLeafTriangle] = &collide_triangle_triangle;
     k[kLeafSphere][kLeafHalfSpace] = &collide_sphere_halfspace;
     k[kLeafCapsule][kLeafHalfSpace] = &collide_capsule_halfspace;
     k[kLeafBox][kLeafHalfSpace] = &collide_box_halfspace;

@@ -5,11 +5,11 @@
 // Specialised, vectorised across pairs (kernels/narrowphase/primitives_*.cpp): the
 // sphere / capsule / box / cylinder / triangle / half-space pairs below, with the
 // closed-form cylinder, ellipsoid and triangle against half-space kernels
-// (primitives_halfspace.cpp). Sphere-hull has its own exact per-lane kernel
-// (kernels/narrowphase/sphere_convex.cpp), sphere-ellipsoid a lane kernel
-// (kernels/narrowphase/sphere_ellipsoid.cpp). Everything else goes through the general
-// convex path (kernels/narrowphase/gjk_epa.cpp): GJK + EPA on the
-// leaves' support functions, with face clipping for polytope manifolds, and a
+// (primitives_halfspace.cpp) and triangle-triangle (primitives_triangle_triangle.cpp).
+// Sphere-hull has its own exact per-lane kernel (kernels/narrowphase/sphere_convex.cpp),
+// sphere-ellipsoid a lane kernel (kernels/narrowphase/sphere_ellipsoid.cpp). Everything
+// else goes through the general convex path (kernels/narrowphase/gjk_epa.cpp): GJK + EPA
+// on the leaves' support functions, with face clipping for polytope manifolds, and a
 // support-function kernel against half-spaces.
 #pragma once
 
@@ -28,6 +28,9 @@ void collide_box_box(const LeafSoA&, const LeafSoA&, const ManifoldSoA&, Range, 
 void collide_sphere_triangle(const LeafSoA&, const LeafSoA&, const ManifoldSoA&, Range, const NarrowConfig&);
 void collide_capsule_triangle(const LeafSoA&, const LeafSoA&, const ManifoldSoA&, Range, const NarrowConfig&);
 void collide_box_triangle(const LeafSoA&, const LeafSoA&, const ManifoldSoA&, Range, const NarrowConfig&);
+/// Triangle against triangle: SAT on 11 axes, face manifold by clipping candidates
+/// (primitives_triangle_triangle.cpp), SIMD across pairs.
+void collide_triangle_triangle(const LeafSoA&, const LeafSoA&, const ManifoldSoA&, Range, const NarrowConfig&);
 void collide_sphere_halfspace(const LeafSoA&, const LeafSoA&, const ManifoldSoA&, Range, const NarrowConfig&);
 void collide_capsule_halfspace(const LeafSoA&, const LeafSoA&, const ManifoldSoA&, Range, const NarrowConfig&);
 void collide_box_halfspace(const LeafSoA&, const LeafSoA&, const ManifoldSoA&, Range, const NarrowConfig&);

@@ -20,8 +20,8 @@
 //      (o(n) <= depth + tol), and moving it by n*(depth - 2 tol) leaves it overlapping
 //      by the reference (a fresh reference solve for the moved B).
 // tol = rel * L, L = the larger bounding radius, rel = 1e-4 for the specialised kernels
-// (sphere/capsule/box/triangle/half-space pairs of pair_kernels.h, sphere-hull and
-// sphere-ellipsoid),
+// (sphere/capsule/box/triangle/half-space pairs of pair_kernels.h, triangle-triangle,
+// sphere-hull and sphere-ellipsoid),
 // 1e-3 for the general GJK/EPA and support kernels (100x cfg.epa_tolerance); the inputs
 // are exact floats, so poses far from the origin get no extra depth tolerance; contact
 // points, being world floats, get one ulp of the largest coordinate on top (0.008 at 1e5).
@@ -413,7 +413,8 @@ bool specialised(LeafType a, LeafType b) {
           kp == &k::collide_sphere_triangle || kp == &k::collide_capsule_triangle ||
           kp == &k::collide_sphere_halfspace || kp == &k::collide_capsule_halfspace ||
           kp == &k::collide_box_halfspace || kp == &k::collide_box_triangle ||
-          kp == &k::collide_sphere_convex || kp == &k::collide_sphere_ellipsoid);
+          kp == &k::collide_triangle_triangle || kp == &k::collide_sphere_convex ||
+          kp == &k::collide_sphere_ellipsoid);
 }
 
 struct Lane {
@@ -928,6 +929,9 @@ TEST(NarrowMatrix, ExactTouchingIsNoContact) {
       {leaf(k::kLeafBox, {0, 0, 0}, {1, 1, 1}), leaf(k::kLeafBox, {2, 0.5f, 0}, {1, 1, 1})},
       {leaf(k::kLeafSphere, {0.25f, 0.25f, 0.5f}, {0.5f}), tri({0, 0, 0, 1, 0, 0, 0, 1, 0})},
       {along_x(leaf(k::kLeafCapsule, {0.25f, 0.25f, 0.5f}, {0.5f, 0.125f})), tri({0, 0, 0, 1, 0, 0, 0, 1, 0})},
+      {tri({0, 0, 0, 2, 0, 0, 0, 2, 0}), tri({0.5f, 0.5f, 0, 1, 0.5f, 1, 0.5f, 1, 1})},    // vertex on a face
+      {tri({0, 0, 0, 0, 2, 0, 1, 1, 0}), tri({0, 0, 0, 0, 2, 0, 0, 1, 1})},                // hinged on an edge
+      {tri({0, 0, 0, 2, 0, 0, 0, 2, 0}), tri({0.5f, 0.5f, 0, 3, 0.5f, 0, 0.5f, 3, 0})},  // coplanar overlap
       {leaf(k::kLeafSphere, {0, 0, 1}, {1}), leaf(k::kLeafHalfSpace, {0, 0, 0}, {0, 0, 1})},
       {along_x(leaf(k::kLeafCapsule, {0, 0, 0.5f}, {0.5f, 2})), leaf(k::kLeafHalfSpace, {0, 0, 0}, {0, 0, 1})},
       {leaf(k::kLeafBox, {0, 0, 1}, {1, 2, 1}), leaf(k::kLeafHalfSpace, {0, 0, 0}, {0, 0, 1})},
