@@ -55,6 +55,7 @@ struct Table {
     k[kLeafEllipsoid][kLeafHalfSpace] = &collide_ellipsoid_halfspace;
     k[kLeafTriangle][kLeafHalfSpace] = &collide_triangle_halfspace;
     k[kLeafSphere][kLeafConvex] = &collide_sphere_convex;
+    k[kLeafCapsule][kLeafConvex] = &collide_capsule_convex;
     k[kLeafSphere][kLeafEllipsoid] = &collide_sphere_ellipsoid;
   }
 };

@@ -6,11 +6,12 @@
 // sphere / capsule / box / cylinder / triangle / half-space pairs below, with the
 // closed-form cylinder, ellipsoid and triangle against half-space kernels
 // (primitives_halfspace.cpp) and triangle-triangle (primitives_triangle_triangle.cpp).
-// Sphere-hull has its own exact per-lane kernel (kernels/narrowphase/sphere_convex.cpp),
-// sphere-ellipsoid a lane kernel (kernels/narrowphase/sphere_ellipsoid.cpp). Everything
-// else goes through the general convex path (kernels/narrowphase/gjk_epa.cpp): GJK + EPA
-// on the leaves' support functions, with face clipping for polytope manifolds, and a
-// support-function kernel against half-spaces.
+// Sphere-hull and capsule-hull have their own exact per-lane kernels
+// (kernels/narrowphase/sphere_convex.cpp, capsule_convex.cpp), sphere-ellipsoid a lane
+// kernel (kernels/narrowphase/sphere_ellipsoid.cpp). Everything else goes through the
+// general convex path (kernels/narrowphase/gjk_epa.cpp): GJK + EPA on the leaves'
+// support functions, with face clipping for polytope manifolds, and a support-function
+// kernel against half-spaces.
 #pragma once
 
 #include "kernels/narrowphase/leaf.h"
@@ -40,6 +41,10 @@ void collide_triangle_halfspace(const LeafSoA&, const LeafSoA&, const ManifoldSo
 /// Sphere against convex hull: exact, by the hull's face planes and, near an edge, its
 /// edge segments (sphere_convex.cpp); one lane at a time, not GJK / EPA.
 void collide_sphere_convex(const LeafSoA&, const LeafSoA&, const ManifoldSoA&, Range, const NarrowConfig&);
+/// Capsule against convex hull: exact, by the hull's face planes and edges (distance of the
+/// core outside, separating axes when the core meets the hull; capsule_convex.cpp); one
+/// lane at a time, not GJK / EPA.
+void collide_capsule_convex(const LeafSoA&, const LeafSoA&, const ManifoldSoA&, Range, const NarrowConfig&);
 /// Sphere against ellipsoid: closest surface point by a fixed-count root solve, SIMD across pairs.
 void collide_sphere_ellipsoid(const LeafSoA&, const LeafSoA&, const ManifoldSoA&, Range, const NarrowConfig&);
 

@@ -283,12 +283,21 @@ IMPACT_INLINE FloatN<N> gather_lanes(const FloatN<N>* arr, IntN<N> idx) {
 }
 
 /// base[idx_i] in lane i (a gather from one array by per-lane indices).
+/// (AVX2: vgatherdps merges into its destination register, so the destination's old
+/// value is an input. With _mm256_i32gather_ps, or a constant all-ones mask, GCC gathers
+/// into whatever register it picks, at times one that holds the previous loop
+/// iteration's last result, and the iterations then run one after the other (measured:
+/// capsule-hull's edge pass at half speed). So the mask is hidden from the optimiser and
+/// the source is a fresh zero, which breaks that dependency.)
 template <uint32_t N>
 IMPACT_INLINE FloatN<N> gather(const float* base, IntN<N> idx) {
 #if defined(__AVX2__)
-  if constexpr (N == 8)
+  if constexpr (N == 8) {
+    __m256 mask = _mm256_castsi256_ps(_mm256_set1_epi32(-1));
+    __asm__("" : "+x"(mask));
     return FloatN<N>(reinterpret_cast<typename FloatN<N>::Raw>(
-        _mm256_i32gather_ps(base, reinterpret_cast<__m256i>(idx.v), 4)));
+        _mm256_mask_i32gather_ps(_mm256_setzero_ps(), base, reinterpret_cast<__m256i>(idx.v), mask, 4)));
+  }
 #endif
   FloatN<N> r;
   for (uint32_t i = 0; i < N; ++i) r.v[i] = base[idx.v[i]];

@@ -1,0 +1,835 @@
+// Capsule against convex hull (kernels/narrowphase/capsule_convex.cpp, collide_capsule_convex)
+// against an independent double-precision reference: the hull's polygons (HullData from
+// build_convex_hull) posed in double relative to the hull position, face planes by
+// Newell's method from the polygon vertices (not the kernel's float planes):
+//  - the signed distance of a point to the hull (outside: the least point-to-polygon
+//    distance over all faces; inside: minus the least plane distance);
+//  - the core segment's least signed distance m = min_t sd(c + t u), by golden-section
+//    search (sd is convex along a line), no closest-feature logic;
+//  - m > 0 (core outside): depth_ref = r - m, normal from the core point at the
+//    minimum to its closest hull point (unique: the offset of two disjoint convex sets'
+//    closest points is);
+//  - m <= 0 (core meets the hull): depth_ref = r + min over the axes n of every face
+//    normal and every polygon edge x u (both signs) of max_S n.x - min_hull n.x, the
+//    supports by brute force over the vertices.
+// Per lane, tol = kRel * L (L = the larger of r + h and the hull's bounding radius):
+//  (a) count > 0 iff depth_ref > 0 (either answer where |depth_ref| <= tol), count <= 2;
+//  (b) |depth - depth_ref| <= tol;
+//  (c) n unit (1e-6), depth is the capsule-hull overlap along n (brute-force supports)
+//      within tol; where the reference normal is unique (core outside by more than
+//      1e-3 L, or the two best axes more than 1e-3 L apart) angle(n, n_ref) <= 1e-3 rad;
+//  (d) every point lies within depth/2 + tol of both surfaces (signed distances), with
+//      0 < pdepth <= depth + tol;
+//  (e) kSimd and kScalar give the same bytes; the general GJK / EPA path agrees on hits
+//      away from touching (1e-3 L) and on depth within 1e-3 L.
+// Scenarios: random poses around random hulls (boxes and 8..40-point clouds, about half
+// overlapping, core outside / through / inside), tiny (1e-4) and huge (1e4) scales,
+// poses 1e5 from the origin, a round hull of ~800 faces, exact features on a box (lying
+// on a face: two points, as capsule-box gives; touching exactly: count 0; along an
+// edge, an end near a vertex, core through and wholly inside, sunk along an edge
+// direction where a face axis and edge axes tie exactly: the face wins), the capsule-box
+// kernel's points for capsules lying on a box hull's face, nearly coplanar faces (plane
+// distances tied up to float rounding), zero-length cores (sphere-hull's answers), a
+// hull view without edge adjacency (the GJK / EPA fallback, same bytes as that path),
+// range partitions.
+#include <gtest/gtest.h>
+
+#include <Eigen/Core>
+#include <algorithm>
+#include <bit>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <iterator>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "host/narrowphase/convex_hull.h"
+#include "host/narrowphase/shape_store.h"
+#include "kernels/narrowphase/pair_kernels.h"
+#include "support/leaf_lanes.h"
+#include "support/random_input.h"
+#include "support/test_support.h"
+
+namespace impact::test {
+namespace {
+
+namespace k = kernels;
+
+constexpr double kRel = 2e-5;  // of L; float arithmetic gives ~1e-6
+
+// --- double geometry ------------------------------------------------------------------------
+
+struct D3 {
+  double x = 0, y = 0, z = 0;
+};
+D3 operator+(D3 a, D3 b) { return {a.x + b.x, a.y + b.y, a.z + b.z}; }
+D3 operator-(D3 a, D3 b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
+D3 operator*(double s, D3 a) { return {s * a.x, s * a.y, s * a.z}; }
+double dot(D3 a, D3 b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
+D3 cross(D3 a, D3 b) { return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x}; }
+double norm(D3 a) { return std::sqrt(dot(a, a)); }
+D3 unit(D3 a) { return (1.0 / norm(a)) * a; }
+
+using Rng = std::mt19937;
+double uni(Rng& g, double a, double b) { return std::uniform_real_distribution<double>(a, b)(g); }
+D3 random_unit(Rng& g) {
+  std::normal_distribution<double> d(0.0, 1.0);
+  for (;;) {
+    const D3 v{d(g), d(g), d(g)};
+    if (norm(v) > 1e-3) return unit(v);
+  }
+}
+void random_rotation(Rng& g, float m[9]) {
+  double r[9];
+  test::random_rotation_rows(g, r);
+  for (int i = 0; i < 9; ++i) m[i] = static_cast<float>(r[i]);
+}
+
+// --- hulls ------------------------------------------------------------------------------------
+
+struct Hulls {
+  HullStore store;
+  std::vector<HullData> data;
+  uint32_t add(const std::vector<Eigen::Vector3f>& pts) {
+    HullData h;
+    EXPECT_TRUE(build_convex_hull(pts, &h).ok());
+    data.push_back(h);
+    return store.add(h);
+  }
+};
+
+std::vector<Eigen::Vector3f> box_corners(float hx, float hy, float hz) {
+  std::vector<Eigen::Vector3f> c;
+  for (int i = 0; i < 8; ++i) c.emplace_back((i & 1) ? hx : -hx, (i & 2) ? hy : -hy, (i & 4) ? hz : -hz);
+  return c;
+}
+
+std::vector<Eigen::Vector3f> ellipsoid_points(Rng& g, int np, double scale) {
+  const double ax[3] = {uni(g, 0.3, 1.0), uni(g, 0.3, 1.0), uni(g, 0.3, 1.0)};
+  std::vector<Eigen::Vector3f> pts;
+  for (int i = 0; i < np; ++i) {
+    const D3 u = random_unit(g);
+    pts.emplace_back(static_cast<float>(scale * ax[0] * u.x), static_cast<float>(scale * ax[1] * u.y),
+                     static_cast<float>(scale * ax[2] * u.z));
+  }
+  return pts;
+}
+
+/// Random hulls of size ~scale: boxes and ellipsoid point clouds of 8..40 points.
+void add_random_hulls(Rng& g, Hulls* hulls, uint32_t count, double scale) {
+  for (uint32_t i = 0; i < count; ++i) {
+    if (i % 4 == 0) {
+      hulls->add(box_corners(static_cast<float>(scale * uni(g, 0.1, 1.0)),
+                             static_cast<float>(scale * uni(g, 0.1, 1.0)),
+                             static_cast<float>(scale * uni(g, 0.1, 1.0))));
+    } else {
+      hulls->add(ellipsoid_points(g, 8 + static_cast<int>(g() % 33), scale));
+    }
+  }
+}
+
+// --- lanes ------------------------------------------------------------------------------------
+
+struct Pair {
+  float c[3];     // capsule centre
+  float Ra[9];    // capsule rotation, row-major (column 2 = axis)
+  float r, h;     // radius, half length
+  float p[3];     // hull position
+  float R[9];     // hull rotation, row-major
+  uint32_t hull;  // index in Hulls
+};
+
+struct Bucket {
+  uint32_t n = 0;
+  std::vector<float> ap[3], ar[9], ae[2], bp[3], br[9];
+  std::vector<uint32_t> ref;
+  explicit Bucket(const std::vector<Pair>& v) : n(static_cast<uint32_t>(v.size())) {
+    for (const Pair& q : v) {
+      for (int j = 0; j < 3; ++j) ap[j].push_back(q.c[j]), bp[j].push_back(q.p[j]);
+      for (int j = 0; j < 9; ++j) ar[j].push_back(q.Ra[j]), br[j].push_back(q.R[j]);
+      ae[0].push_back(q.r);
+      ae[1].push_back(q.h);
+      ref.push_back(q.hull);
+    }
+  }
+  k::LeafSoA a() const {
+    k::LeafSoA s{};
+    for (int j = 0; j < 3; ++j) s.p[j] = ap[j].data();
+    for (int j = 0; j < 9; ++j) s.r[j] = ar[j].data();
+    s.e[0] = ae[0].data();
+    s.e[1] = ae[1].data();
+    return s;
+  }
+  k::LeafSoA b() const {
+    k::LeafSoA s{};
+    for (int j = 0; j < 3; ++j) s.p[j] = bp[j].data();
+    for (int j = 0; j < 9; ++j) s.r[j] = br[j].data();
+    s.ref = ref.data();
+    return s;
+  }
+};
+
+/// The bytes the contract defines for lane i.
+std::vector<uint32_t> lane_bits(const ManifoldLanes& o, uint32_t i) {
+  std::vector<uint32_t> b{o.count[i]};
+  if (o.count[i] == 0 || o.count[i] > 4) return b;
+  for (const auto& v : o.n) b.push_back(std::bit_cast<uint32_t>(v[i]));
+  b.push_back(std::bit_cast<uint32_t>(o.depth[i]));
+  for (uint32_t j = 0; j < o.count[i]; ++j) {
+    for (const auto& v : o.pt[j]) b.push_back(std::bit_cast<uint32_t>(v[i]));
+    b.push_back(std::bit_cast<uint32_t>(o.pd[j][i]));
+  }
+  return b;
+}
+
+ManifoldLanes run(k::PairKernel kern, const Bucket& bk, const k::HullView& hv, k::KernelPath path) {
+  ManifoldLanes o(bk.n);
+  k::NarrowConfig cfg;
+  cfg.path = path;
+  cfg.hulls = hv;
+  const k::LeafSoA a = bk.a(), b = bk.b();
+  kern(a, b, o.view(), k::Range{0, bk.n}, cfg);
+  return o;
+}
+
+ManifoldLanes run_gjk(const Bucket& bk, const k::HullView& hv) {
+  ManifoldLanes o(bk.n);
+  k::NarrowConfig cfg;
+  cfg.hulls = hv;
+  const k::LeafSoA a = bk.a(), b = bk.b();
+  k::collide_gjk_epa(a, b, o.view(), k::Range{0, bk.n}, cfg, k::kLeafCapsule, k::kLeafConvex);
+  return o;
+}
+
+// --- the reference ---------------------------------------------------------------------------
+
+/// A hull posed in double relative to its position: vertices, polygons, Newell planes.
+struct RefHull {
+  D3 origin;
+  std::vector<D3> v;
+  std::vector<std::vector<uint32_t>> faces;
+  std::vector<D3> fn;
+  std::vector<double> fd;
+  double radius = 0;
+};
+
+RefHull pose(const HullData& h, const Pair& q) {
+  RefHull out;
+  out.origin = D3{q.p[0], q.p[1], q.p[2]};
+  for (const auto& l : h.vertices) {
+    const double x = l.x(), y = l.y(), z = l.z();
+    const D3 w{q.R[0] * x + q.R[1] * y + q.R[2] * z, q.R[3] * x + q.R[4] * y + q.R[5] * z,
+               q.R[6] * x + q.R[7] * y + q.R[8] * z};
+    out.radius = std::max(out.radius, norm(w));
+    out.v.push_back(w);
+  }
+  out.faces = h.faces;
+  for (const auto& f : h.faces) {
+    D3 nn, m;
+    for (size_t i = 0; i < f.size(); ++i) {
+      nn = nn + cross(out.v[f[i]], out.v[f[(i + 1) % f.size()]]);
+      m = m + out.v[f[i]];
+    }
+    nn = unit(nn);
+    m = (1.0 / static_cast<double>(f.size())) * m;
+    out.fn.push_back(nn);
+    out.fd.push_back(dot(nn, m));
+  }
+  return out;
+}
+
+D3 closest_on_segment(D3 a, D3 b, D3 c) {
+  const D3 d = b - a;
+  if (!(dot(d, d) > 0)) return a;
+  const double t = std::clamp(dot(c - a, d) / dot(d, d), 0.0, 1.0);
+  return a + t * d;
+}
+
+/// Signed distance of y to the hull (> 0 outside) and, outside, the closest hull point.
+double signed_distance(const RefHull& H, D3 y, D3* closest = nullptr) {
+  double best = -1e300;
+  for (size_t f = 0; f < H.faces.size(); ++f) best = std::max(best, dot(H.fn[f], y) - H.fd[f]);
+  if (best <= 0) return best;
+  double dmin = 1e300;
+  D3 x;
+  for (size_t f = 0; f < H.faces.size(); ++f) {
+    const auto& poly = H.faces[f];
+    bool in = true;
+    for (size_t i = 0; i < poly.size(); ++i) {
+      const D3 p = H.v[poly[i]], q = H.v[poly[(i + 1) % poly.size()]];
+      if (dot(cross(q - p, H.fn[f]), y - p) > 0) in = false;
+    }
+    if (in) {
+      const double s = dot(H.fn[f], y) - H.fd[f];
+      if (std::fabs(s) < dmin) dmin = std::fabs(s), x = y - s * H.fn[f];
+    }
+    for (size_t i = 0; i < poly.size(); ++i) {
+      const D3 e = closest_on_segment(H.v[poly[i]], H.v[poly[(i + 1) % poly.size()]], y);
+      if (norm(e - y) < dmin) dmin = norm(e - y), x = e;
+    }
+  }
+  if (closest != nullptr) *closest = x;
+  return dmin;
+}
+
+struct RefAnswer {
+  double depth = 0;  // r - distance (outside) or r + penetration (core meets the hull)
+  bool meets = false;
+  D3 n;              // unit, capsule to hull
+  bool unique = false;
+};
+
+/// Overlap of the capsule (core c -+ h u, radius r) and the hull along unit n (capsule to
+/// hull): how far the hull must move along n to separate.
+double overlap_along(const RefHull& H, D3 c, D3 u, double h, double r, D3 n) {
+  double lo = 1e300;
+  for (const D3& v : H.v) lo = std::min(lo, dot(n, v));
+  return dot(n, c) + h * std::fabs(dot(n, u)) + r - lo;
+}
+
+RefAnswer reference(const RefHull& H, D3 c, D3 u, double h, double r) {
+  RefAnswer a;
+  const double L = std::max(r + h, H.radius);
+  // Golden-section search of the least signed distance along the core.
+  auto sd = [&](double t) { return signed_distance(H, c + t * u); };
+  double lo = -h, hi = h;
+  const double phi = 0.5 * (std::sqrt(5.0) - 1.0);
+  double x1 = hi - phi * (hi - lo), x2 = lo + phi * (hi - lo), f1 = sd(x1), f2 = sd(x2);
+  for (int it = 0; it < 90 && hi - lo > 1e-15 * L; ++it) {
+    if (f1 <= f2) {
+      hi = x2, x2 = x1, f2 = f1, x1 = hi - phi * (hi - lo), f1 = sd(x1);
+    } else {
+      lo = x1, x1 = x2, f1 = f2, x2 = lo + phi * (hi - lo), f2 = sd(x2);
+    }
+  }
+  double tm = 0.5 * (lo + hi), m = sd(tm);
+  for (const double t : {-h, h}) {
+    const double s = sd(t);
+    if (s < m) m = s, tm = t;
+  }
+  if (m > 0) {
+    D3 y;
+    signed_distance(H, c + tm * u, &y);
+    a.depth = r - m;
+    a.n = unit(y - (c + tm * u));
+    a.unique = m > 1e-3 * L;
+    return a;
+  }
+  // The core meets the hull: least overlap over face normals and edge x axis.
+  std::vector<D3> axes = H.fn;
+  for (const auto& poly : H.faces)
+    for (size_t i = 0; i < poly.size(); ++i) {
+      const D3 l = cross(u, H.v[poly[(i + 1) % poly.size()]] - H.v[poly[i]]);
+      if (norm(l) > 1e-9 * L * L) axes.push_back(unit(l));
+    }
+  double best = 1e300, second = 1e300;
+  for (const D3& ax : axes)
+    for (const double sgn : {1.0, -1.0}) {
+      const D3 n = sgn * ax;
+      const double o = overlap_along(H, c, u, h, r, n);
+      if (o < best - 1e-12 * L) {
+        if (norm(n - a.n) > 1e-6) second = best;
+        best = o, a.n = n;
+      } else if (o < second && norm(n - a.n) > 1e-6) {
+        second = o;
+      }
+    }
+  a.meets = true;
+  a.depth = best;
+  a.unique = second - best > 1e-3 * L;
+  return a;
+}
+
+/// Signed distance of y to the capsule.
+double capsule_sd(D3 c, D3 u, double h, double r, D3 y) {
+  return norm(y - closest_on_segment(c - h * u, c + h * u, y)) - r;
+}
+
+// --- the checks ------------------------------------------------------------------------------
+
+struct Stats {
+  uint32_t hits = 0, misses = 0, meets = 0, two = 0;
+  double worst_depth = 0;  // / L
+};
+
+std::string lane_text(const Pair& q) {
+  char buf[640];
+  std::snprintf(buf, sizeof buf,
+                "capsule c={%.9g, %.9g, %.9g} axis={%.9g, %.9g, %.9g} r=%.9g h=%.9g; hull %u p={%.9g, %.9g, "
+                "%.9g} R={%.9g, %.9g, %.9g, %.9g, %.9g, %.9g, %.9g, %.9g, %.9g}",
+                q.c[0], q.c[1], q.c[2], q.Ra[2], q.Ra[5], q.Ra[8], q.r, q.h, q.hull, q.p[0], q.p[1], q.p[2], q.R[0],
+                q.R[1], q.R[2], q.R[3], q.R[4], q.R[5], q.R[6], q.R[7], q.R[8]);
+  return buf;
+}
+
+int failure_parts() {
+  return ::testing::UnitTest::GetInstance()->current_test_info()->result()->total_part_count();
+}
+
+/// Runs both paths and GJK / EPA on `pairs` and checks every lane; returns the counts.
+Stats check_pairs(const std::string& name, const std::vector<Pair>& pairs, const Hulls& hulls) {
+  SCOPED_TRACE(name);
+  Stats st;
+  const Bucket bk(pairs);
+  const k::HullView hv = hulls.store.view();
+  const k::PairKernel kern = k::pair_kernel(k::kLeafCapsule, k::kLeafConvex);
+  EXPECT_EQ(kern, &k::collide_capsule_convex);
+  const ManifoldLanes simd = run(kern, bk, hv, k::KernelPath::kSimd);
+  const ManifoldLanes scalar = run(kern, bk, hv, k::KernelPath::kScalar);
+  const ManifoldLanes gjk = run_gjk(bk, hv);
+  int failures = 0;
+  for (uint32_t i = 0; i < bk.n && failures < 10; ++i) {
+    const Pair& q = pairs[i];
+    const RefHull H = pose(hulls.data[q.hull], q);
+    const D3 c = D3{q.c[0], q.c[1], q.c[2]} - H.origin;  // exact in double
+    const D3 u{q.Ra[2], q.Ra[5], q.Ra[8]};
+    const double r = q.r, h = q.h;
+    const double L = std::max(r + h, H.radius);
+    const double tol = kRel * L;
+    const RefAnswer ref = reference(H, c, u, h, r);
+    const int before = failure_parts();
+    SCOPED_TRACE("lane " + std::to_string(i) + ": " + lane_text(q) + "; depth_ref=" + std::to_string(ref.depth) +
+                 (ref.meets ? " (core meets)" : " (core outside)"));
+
+    EXPECT_EQ(lane_bits(simd, i), lane_bits(scalar, i)) << "paths differ";
+    const PairResult res = simd.result(i);
+    EXPECT_LE(res.count, 2u);
+    if (std::fabs(ref.depth) > tol) {
+      EXPECT_EQ(res.count > 0, ref.depth > 0) << "hit disagrees";
+    }
+    if (res.count > 0 && res.count <= 2) {
+      ++st.hits;
+      st.meets += ref.meets ? 1 : 0;
+      st.two += res.count == 2 ? 1 : 0;
+      const D3 n{res.n.x(), res.n.y(), res.n.z()};
+      const double depth = res.depth;
+      EXPECT_TRUE(std::isfinite(n.x) && std::isfinite(n.y) && std::isfinite(n.z) && std::isfinite(depth));
+      EXPECT_NEAR(norm(n), 1.0, 1e-6);
+      EXPECT_NEAR(depth, ref.depth, tol);
+      st.worst_depth = std::max(st.worst_depth, std::fabs(depth - ref.depth) / L);
+      EXPECT_NEAR(overlap_along(H, c, u, h, r, n), depth, tol) << "depth is not the overlap along n";
+      if (ref.unique) {
+        EXPECT_GE(dot(n, ref.n), std::cos(1e-3))
+            << "normal; reference " << ref.n.x << ", " << ref.n.y << ", " << ref.n.z;
+      }
+      for (uint32_t j = 0; j < res.count; ++j) {
+        const D3 pw{res.pt[j].x(), res.pt[j].y(), res.pt[j].z()};
+        const double ulp = std::max({std::fabs(pw.x), std::fabs(pw.y), std::fabs(pw.z)}) * 0x1p-23;
+        const D3 pt = pw - H.origin;
+        const double lim = 0.5 * depth + tol + 2 * ulp;
+        EXPECT_LE(std::fabs(capsule_sd(c, u, h, r, pt)), lim) << "point " << j << " off the capsule's surface";
+        EXPECT_LE(std::fabs(signed_distance(H, pt)), lim) << "point " << j << " off the hull's surface";
+        EXPECT_GT(res.pd[j], 0.0) << "pdepth " << j;
+        EXPECT_LE(res.pd[j], depth + tol) << "pdepth " << j;
+      }
+    } else {
+      ++st.misses;
+    }
+    // The general path: same hits away from touching, depth within 1e-3 L.
+    const double tg = 1e-3 * L;
+    if (std::fabs(ref.depth) > tg) {
+      EXPECT_EQ(gjk.count[i] > 0, res.count > 0) << "GJK/EPA disagrees on the hit";
+    }
+    if (gjk.count[i] > 0 && res.count > 0) {
+      EXPECT_NEAR(gjk.depth[i], res.depth, tg) << "GJK/EPA depth";
+    }
+    if (failure_parts() != before) ++failures;  // stop after 10 failing lanes
+  }
+  return st;
+}
+
+/// World position of local point l under pair q's hull pose.
+D3 to_world(const Pair& q, const Eigen::Vector3f& l) {
+  const double x = l.x(), y = l.y(), z = l.z();
+  return D3{q.p[0] + q.R[0] * x + q.R[1] * y + q.R[2] * z, q.p[1] + q.R[3] * x + q.R[4] * y + q.R[5] * z,
+            q.p[2] + q.R[6] * x + q.R[7] * y + q.R[8] * z};
+}
+
+void set_c(Pair* q, D3 c) {
+  q->c[0] = static_cast<float>(c.x), q->c[1] = static_cast<float>(c.y), q->c[2] = static_cast<float>(c.z);
+}
+
+/// A row-major rotation whose column 2 is the unit axis a (float rounded).
+void axis_rotation(D3 a, float m[9]) {
+  a = unit(a);
+  const D3 t = unit(cross(a, std::fabs(a.x) < 0.6 ? D3{1, 0, 0} : D3{0, 1, 0}));
+  const D3 b = cross(a, t);
+  const D3 col[3] = {t, b, a};
+  for (int r = 0; r < 3; ++r)
+    for (int cc = 0; cc < 3; ++cc) {
+      const D3& v = col[cc];
+      m[3 * r + cc] = static_cast<float>(r == 0 ? v.x : (r == 1 ? v.y : v.z));
+    }
+}
+
+/// Random lanes around hulls [h0, h1) of size ~scale at ~offset from the origin: the
+/// capsule centre anywhere near the hull, near a vertex, an edge or a face; random axes.
+std::vector<Pair> random_pairs(Rng& g, const Hulls& hulls, uint32_t h0, uint32_t h1, uint32_t n, double scale,
+                               double offset) {
+  std::vector<Pair> out;
+  for (uint32_t i = 0; i < n; ++i) {
+    Pair q;
+    q.hull = h0 + static_cast<uint32_t>(g() % (h1 - h0));
+    random_rotation(g, q.R);
+    random_rotation(g, q.Ra);
+    const D3 p =
+        offset * random_unit(g) + D3{uni(g, -scale, scale), uni(g, -scale, scale), uni(g, -scale, scale)};
+    q.p[0] = static_cast<float>(p.x), q.p[1] = static_cast<float>(p.y), q.p[2] = static_cast<float>(p.z);
+    q.r = static_cast<float>(scale * uni(g, 0.05, 0.8));
+    q.h = static_cast<float>(scale * (g() % 8 == 0 ? 0.0 : uni(g, 0.0, 1.0)));
+    const HullData& h = hulls.data[q.hull];
+    const double reach = q.r + q.h;
+    D3 c;
+    switch (g() % 4) {
+      case 0:
+        c = to_world(q, Eigen::Vector3f::Zero()) +
+            D3{uni(g, -2 * scale, 2 * scale), uni(g, -2 * scale, 2 * scale), uni(g, -2 * scale, 2 * scale)};
+        break;
+      case 1:
+        c = to_world(q, h.vertices[g() % h.vertices.size()]) + (reach * uni(g, 0.0, 1.3)) * random_unit(g);
+        break;
+      case 2: {
+        const auto& f = h.faces[g() % h.faces.size()];
+        const size_t j = g() % f.size();
+        const D3 a = to_world(q, h.vertices[f[j]]), b = to_world(q, h.vertices[f[(j + 1) % f.size()]]);
+        c = a + uni(g, 0, 1) * (b - a) + (reach * uni(g, 0.0, 1.3)) * random_unit(g);
+        break;
+      }
+      default: {
+        const size_t fi = g() % h.faces.size();
+        const auto& f = h.faces[fi];
+        D3 m;
+        for (uint32_t v : f) m = m + to_world(q, h.vertices[v]);
+        m = (1.0 / static_cast<double>(f.size())) * m;
+        const D3 nw = to_world(q, h.face_normals[fi]) - to_world(q, Eigen::Vector3f::Zero());
+        c = m + (reach * uni(g, -1.3, 1.3)) * nw;
+        // Half of these lie (nearly) parallel to the face.
+        if (g() & 1) axis_rotation(cross(nw, random_unit(g)) + uni(g, -0.03, 0.03) * nw, q.Ra);
+        break;
+      }
+    }
+    set_c(&q, c);
+    out.push_back(q);
+  }
+  return out;
+}
+
+// --- tests ------------------------------------------------------------------------------------
+
+TEST(CapsuleConvex, RegisteredForTheBucket) {
+  EXPECT_EQ(k::pair_kernel(k::kLeafCapsule, k::kLeafConvex), &k::collide_capsule_convex);
+}
+
+TEST(CapsuleConvex, RandomPosesAgreeWithReference) {
+  Rng g(12345);
+  Hulls hulls;
+  add_random_hulls(g, &hulls, 24, 1.0);
+  const auto pairs = random_pairs(g, hulls, 0, 24, scaled(3000), 1.0, 10.0);
+  const Stats st = check_pairs("random", pairs, hulls);
+  // Every branch exercised: misses, hits with the core outside and meeting the hull,
+  // two-point contacts.
+  EXPECT_GT(st.misses, pairs.size() / 10);
+  EXPECT_GT(st.hits - st.meets, pairs.size() / 10);
+  EXPECT_GT(st.meets, pairs.size() / 20);
+  EXPECT_GT(st.two, pairs.size() / 50);
+  RecordProperty("worst_depth_rel", std::to_string(st.worst_depth));
+}
+
+TEST(CapsuleConvex, TinyHugeAndFarScales) {
+  for (const double scale : {1e-4, 1e4}) {
+    Rng g(777 + static_cast<uint32_t>(scale > 1));
+    Hulls hulls;
+    add_random_hulls(g, &hulls, 12, scale);
+    const Stats st = check_pairs("scale " + std::to_string(scale),
+                                 random_pairs(g, hulls, 0, 12, scaled(800), scale, 0.0), hulls);
+    EXPECT_GT(st.hits, 100u);
+    EXPECT_GT(st.misses, 100u);
+  }
+  Rng g(4242);
+  Hulls hulls;
+  add_random_hulls(g, &hulls, 12, 1.0);
+  const Stats st = check_pairs("far 1e5", random_pairs(g, hulls, 0, 12, scaled(800), 1.0, 1e5), hulls);
+  EXPECT_GT(st.hits, 100u);
+  EXPECT_GT(st.misses, 100u);
+}
+
+TEST(CapsuleConvex, ManyFaceHull) {
+  Rng g(99);
+  Hulls hulls;
+  hulls.add(ellipsoid_points(g, 400, 1.0));
+  ASSERT_GT(hulls.data[0].faces.size(), 500u);
+  const Stats st = check_pairs("400-point hull", random_pairs(g, hulls, 0, 1, scaled(300), 1.0, 3.0), hulls);
+  EXPECT_GT(st.hits, 50u);
+  EXPECT_GT(st.misses, 30u);
+}
+
+/// A capsule lane in a box hull's frame (identity rotation, hull at p).
+Pair box_lane(D3 p, D3 c, D3 axis, double r, double h) {
+  Pair q;
+  const float I[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};
+  std::copy(I, I + 9, q.R);
+  axis_rotation(axis, q.Ra);
+  q.p[0] = static_cast<float>(p.x), q.p[1] = static_cast<float>(p.y), q.p[2] = static_cast<float>(p.z);
+  set_c(&q, p + c);
+  q.r = static_cast<float>(r);
+  q.h = static_cast<float>(h);
+  q.hull = 0;
+  return q;
+}
+
+TEST(CapsuleConvex, ExactFeaturesOnABox) {
+  // Box hull 1 x 0.5 x 0.25 (half extents), exact floats; capsule r = 0.3125, h = 0.5.
+  Hulls hulls;
+  hulls.add(box_corners(1.0f, 0.5f, 0.25f));
+  const D3 p{3.0, -2.0, 1.0};
+  const double r = 0.3125, h = 0.5, e = 1.0 / 1024;
+  std::vector<Pair> pairs;
+  // 0: lying on the top face (+y), 1/1024 deep: two points, each 1/1024 deep.
+  pairs.push_back(box_lane(p, {0.125, 0.5 + r - e, 0.0}, {1, 0, 0}, r, h));
+  // 1: touching the top face exactly: count 0.
+  pairs.push_back(box_lane(p, {0.125, 0.5 + r, 0.0}, {1, 0, 0}, r, h));
+  // 2: lying on the top face, overhanging the +x edge: two points, the outer one at
+  //    the edge (clipped to the face).
+  pairs.push_back(box_lane(p, {1.0, 0.5 + r - e, 0.0}, {1, 0, 0}, r, h));
+  // 3: along the edge (+y, +z), parallel to it, touching it at 45 degrees, 1/1024 deep.
+  pairs.push_back(box_lane(p, D3{0.0, 0.5, 0.25} + (r - e) * unit(D3{0, 1, 1}), {1, 0, 0}, r, h));
+  // 4: an end point near the vertex (1, 0.5, 0.25), the core pointing away from it.
+  pairs.push_back(box_lane(p, D3{1.0, 0.5, 0.25} + (r - e + h) * unit(D3{1, 1, 1}), {1, 1, 1}, r, h));
+  // 5: standing on the top face, 1/16 deep: one point (below the lower end).
+  pairs.push_back(box_lane(p, {0.25, 0.5 + h + r - 1.0 / 16, 0.0}, {0, 1, 0}, r, h));
+  // 6: core through the box along z (deep): exit by the +y face (the least overlap:
+  //    0.5 - 0.375 + r) or push along y.
+  pairs.push_back(box_lane(p, {0.0, 0.375, 0.0}, {0, 0, 1}, r, h));
+  // 7: core wholly inside, along x, at the centre: out through +-z: depth 0.25 + r.
+  pairs.push_back(box_lane(p, {0.0, 0.0, 0.0}, {1, 0, 0}, r, 0.25));
+  // 8: core crossing the box diagonally in the xy plane (an edge axis may win).
+  pairs.push_back(box_lane(p, {0.9, 0.45, 0.0}, {1, -1, 0.3}, 0.0625, h));
+  // 9: sunk 1/16 below the top face along x: the face axis +y ties with the edge axes
+  //    x x z (= -+y) exactly and must win the tie: two points, depth r + 1/16.
+  pairs.push_back(box_lane(p, {0.125, 0.5 - 1.0 / 16, 0.0}, {1, 0, 0}, r, h));
+  const Stats st = check_pairs("box features", pairs, hulls);
+  EXPECT_EQ(st.hits, 9u);
+  const Bucket bk(pairs);
+  const ManifoldLanes o = run(&k::collide_capsule_convex, bk, hulls.store.view(), k::KernelPath::kSimd);
+  // 0: n = -y, depth 1/1024, two points at x = 3 +- 0.375 (+0.125), y = p.y + 0.5 - e/2.
+  ASSERT_EQ(o.count[0], 2);
+  EXPECT_EQ(o.n[1][0], -1.0f);
+  EXPECT_NEAR(o.depth[0], e, 1e-6);
+  EXPECT_NEAR(std::min(o.pt[0][0][0], o.pt[1][0][0]), 3.0 + 0.125 - h, 1e-6);
+  EXPECT_NEAR(std::max(o.pt[0][0][0], o.pt[1][0][0]), 3.0 + 0.125 + h, 1e-6);
+  EXPECT_NEAR(o.pt[0][1][0], -2.0 + 0.5 - e / 2, 1e-6);
+  EXPECT_NEAR(o.pd[0][0], e, 1e-6);
+  EXPECT_NEAR(o.pd[1][0], e, 1e-6);
+  EXPECT_EQ(o.count[1], 0);
+  // 2: clipped to the face: the outer point at the edge x = 1 (world 4).
+  ASSERT_EQ(o.count[2], 2);
+  EXPECT_NEAR(std::max(o.pt[0][0][2], o.pt[1][0][2]), 4.0, 1e-6);
+  EXPECT_NEAR(std::min(o.pt[0][0][2], o.pt[1][0][2]), 3.5, 1e-6);
+  // 3: the edge normal (0, -1, -1)/sqrt 2, depth 1/1024.
+  ASSERT_GE(o.count[3], 1);
+  EXPECT_NEAR(o.n[1][3], -std::sqrt(0.5), 1e-5);
+  EXPECT_NEAR(o.n[2][3], -std::sqrt(0.5), 1e-5);
+  EXPECT_NEAR(o.depth[3], e, 1e-6);
+  // 4: the vertex normal -(1, 1, 1)/sqrt 3.
+  ASSERT_EQ(o.count[4], 1);
+  EXPECT_NEAR(o.n[0][4], -1 / std::sqrt(3.0), 1e-5);
+  EXPECT_NEAR(o.depth[4], e, 1e-5);
+  // 5: standing: one point, depth 1/16.
+  ASSERT_EQ(o.count[5], 1);
+  EXPECT_NEAR(o.depth[5], 1.0 / 16, 1e-6);
+  // 7: through +-z.
+  ASSERT_GE(o.count[7], 1);
+  EXPECT_NEAR(o.depth[7], 0.25 + r, 1e-6);
+  EXPECT_EQ(std::fabs(o.n[2][7]), 1.0f);
+  // 9: the face wins the tie.
+  ASSERT_EQ(o.count[9], 2);
+  EXPECT_EQ(o.n[1][9], -1.0f);
+  EXPECT_NEAR(o.depth[9], r + 1.0 / 16, 1e-6);
+}
+
+/// HullData from vertices and convex polygons given in cyclic order (either
+/// orientation): planes by Newell's method in double, polygons turned counter-clockwise
+/// seen from outside, offsets = the largest n.v over the hull (sphere_convex_test.cpp).
+HullData hull_from_polygons(const std::vector<Eigen::Vector3f>& v, std::vector<std::vector<uint32_t>> polys) {
+  HullData h;
+  h.vertices = v;
+  D3 centre;
+  for (const auto& q : v) centre = centre + D3{q.x(), q.y(), q.z()};
+  centre = (1.0 / static_cast<double>(v.size())) * centre;
+  auto at = [&](uint32_t i) { return D3{v[i].x(), v[i].y(), v[i].z()}; };
+  for (auto& poly : polys) {
+    D3 nn, m;
+    for (size_t i = 0; i < poly.size(); ++i) {
+      nn = nn + cross(at(poly[i]), at(poly[(i + 1) % poly.size()]));
+      m = m + at(poly[i]);
+    }
+    m = (1.0 / static_cast<double>(poly.size())) * m;
+    if (dot(nn, m - centre) < 0) {
+      std::reverse(poly.begin(), poly.end());
+      nn = -1.0 * nn;
+    }
+    nn = unit(nn);
+    double off = -1e300;
+    for (uint32_t i = 0; i < v.size(); ++i) off = std::max(off, dot(nn, at(i)));
+    h.faces.push_back(poly);
+    h.face_normals.emplace_back(static_cast<float>(nn.x), static_cast<float>(nn.y), static_cast<float>(nn.z));
+    h.face_offsets.push_back(static_cast<float>(off));
+  }
+  return h;
+}
+
+TEST(CapsuleConvex, NearlyCoplanarFaces) {
+  // A cube whose top corner (1, 1, 1) is raised by 2^-22: the top becomes two triangles
+  // whose planes differ by ~1e-7 rad, the float rounding of the plane distances. An end
+  // point's deepest plane in float is then often the wrong triangle, while it projects
+  // into the other: the near-tie faces must be tried (else the nearest point falls to
+  // the ridge edge, farther away).
+  std::vector<Eigen::Vector3f> v = box_corners(1.0f, 1.0f, 1.0f);
+  v[7].z() = 1.0f + 0x1p-22f;
+  Hulls hulls;
+  hulls.data.push_back(hull_from_polygons(
+      v, {{0, 1, 3, 2}, {0, 2, 6, 4}, {1, 3, 7, 5}, {0, 1, 5, 4}, {2, 3, 7, 6}, {4, 5, 7}, {4, 7, 6}}));
+  hulls.store.add(hulls.data.back());
+  Rng g(8);
+  std::vector<Pair> pairs;
+  for (int i = 0; i < 400; ++i) {
+    const D3 p{uni(g, -3, 3), uni(g, -3, 3), uni(g, -3, 3)};
+    // Standing on the top (the lower end point nearest), or tilted steeply.
+    const D3 axis = unit(D3{uni(g, -0.5, 0.5), uni(g, -0.5, 0.5), 1.0});
+    const double r = 0.6, h = uni(g, 0.0, 0.5);
+    const D3 c = D3{uni(g, -0.9, 0.9), uni(g, -0.9, 0.9), 1.0 + uni(g, 0.05, 0.5)} + h * axis;
+    pairs.push_back(box_lane(p, c, axis, r, h));
+  }
+  const Stats st = check_pairs("nearly coplanar", pairs, hulls);
+  EXPECT_GT(st.hits, 200u);
+}
+
+TEST(CapsuleConvex, TwoPointsAsCapsuleBox) {
+  // A box hull and the same box as a box leaf: a capsule lying on (or sunk into) a face
+  // gets the same count, normal, depth and points from both kernels.
+  Rng g(606);
+  Hulls hulls;
+  const float ex = 0.75f, ey = 0.5f, ez = 0.625f;
+  hulls.add(box_corners(ex, ey, ez));
+  std::vector<Pair> pairs;
+  for (int i = 0; i < 200; ++i) {
+    Pair q;
+    random_rotation(g, q.R);
+    const D3 p{uni(g, -5, 5), uni(g, -5, 5), uni(g, -5, 5)};
+    q.p[0] = static_cast<float>(p.x), q.p[1] = static_cast<float>(p.y), q.p[2] = static_cast<float>(p.z);
+    q.hull = 0;
+    q.r = static_cast<float>(uni(g, 0.1, 0.4));
+    q.h = static_cast<float>(uni(g, 0.1, 0.6));
+    // Above the +y face, axis within ~1.5 degrees of the face, depth up to 0.2.
+    const D3 cl{uni(g, -0.5, 0.5), ey + q.r - uni(g, 0.001, 0.2), uni(g, -0.4, 0.4)};
+    const double ang = uni(g, 0, 6.28);
+    const D3 al{std::cos(ang), uni(g, -0.025, 0.025), std::sin(ang)};
+    Pair world = q;
+    set_c(&world, to_world(q, Eigen::Vector3f(static_cast<float>(cl.x), static_cast<float>(cl.y),
+                                              static_cast<float>(cl.z))));
+    const D3 aw = to_world(q, Eigen::Vector3f(static_cast<float>(al.x), static_cast<float>(al.y),
+                                              static_cast<float>(al.z))) -
+                  to_world(q, Eigen::Vector3f::Zero());
+    axis_rotation(aw, world.Ra);
+    pairs.push_back(world);
+  }
+  const Stats st = check_pairs("on a face", pairs, hulls);
+  EXPECT_GT(st.two, 150u);
+  const Bucket bk(pairs);
+  const ManifoldLanes hull = run(&k::collide_capsule_convex, bk, hulls.store.view(), k::KernelPath::kSimd);
+  // The box leaf: same pose, half extents.
+  std::vector<float> be[3];
+  for (uint32_t i = 0; i < bk.n; ++i) be[0].push_back(ex), be[1].push_back(ey), be[2].push_back(ez);
+  k::LeafSoA b = bk.b();
+  for (int j = 0; j < 3; ++j) b.e[j] = be[j].data();
+  ManifoldLanes box(bk.n);
+  k::NarrowConfig cfg;
+  const k::LeafSoA a = bk.a();
+  k::collide_capsule_box(a, b, box.view(), k::Range{0, bk.n}, cfg);
+  for (uint32_t i = 0; i < bk.n; ++i) {
+    SCOPED_TRACE("lane " + std::to_string(i) + ": " + lane_text(pairs[i]));
+    const PairResult x = hull.result(i), y = box.result(i);
+    ASSERT_EQ(x.count, y.count);
+    if (x.count == 0) continue;
+    EXPECT_LT((x.n - y.n).norm(), 1e-5);
+    EXPECT_NEAR(x.depth, y.depth, 2e-6);
+    // Same points, in either order.
+    for (uint32_t j = 0; j < x.count; ++j) {
+      double dmin = 1e300;
+      for (uint32_t l = 0; l < y.count; ++l) dmin = std::min(dmin, (x.pt[j] - y.pt[l]).norm());
+      EXPECT_LT(dmin, 2e-5) << "point " << j;
+    }
+  }
+}
+
+TEST(CapsuleConvex, ZeroLengthCoreIsSphereHull) {
+  // h = 0: the sphere-hull kernel's answer (same planes, same edge rule), on random lanes.
+  Rng g(31337);
+  Hulls hulls;
+  add_random_hulls(g, &hulls, 12, 1.0);
+  auto pairs = random_pairs(g, hulls, 0, 12, scaled(1500), 1.0, 0.0);
+  for (Pair& q : pairs) q.h = 0.0f;
+  const Stats st = check_pairs("zero length", pairs, hulls);
+  EXPECT_GT(st.hits, 200u);
+  const Bucket bk(pairs);
+  const ManifoldLanes caps = run(&k::collide_capsule_convex, bk, hulls.store.view(), k::KernelPath::kSimd);
+  const ManifoldLanes sph = run(&k::collide_sphere_convex, bk, hulls.store.view(), k::KernelPath::kSimd);
+  for (uint32_t i = 0; i < bk.n; ++i) {
+    SCOPED_TRACE("lane " + std::to_string(i) + ": " + lane_text(pairs[i]));
+    const PairResult x = caps.result(i), y = sph.result(i);
+    ASSERT_EQ(x.count, y.count);
+    if (x.count == 0) continue;
+    EXPECT_LT((x.n - y.n).norm(), 1e-5);
+    EXPECT_NEAR(x.depth, y.depth, 1e-6);
+    EXPECT_LT((x.pt[0] - y.pt[0]).norm(), 1e-5);
+  }
+}
+
+TEST(CapsuleConvex, WithoutEdgeAdjacencyTakesTheGeneralPath) {
+  Rng g(2024);
+  Hulls hulls;
+  add_random_hulls(g, &hulls, 8, 1.0);
+  const auto pairs = random_pairs(g, hulls, 0, 8, scaled(400), 1.0, 0.0);
+  const Bucket bk(pairs);
+  k::HullView no_adj = hulls.store.view();
+  no_adj.adj_begin = nullptr;
+  const ManifoldLanes o = run(&k::collide_capsule_convex, bk, no_adj, k::KernelPath::kSimd);
+  const ManifoldLanes gjk = run_gjk(bk, no_adj);
+  uint32_t hits = 0;
+  for (uint32_t i = 0; i < bk.n; ++i) {
+    EXPECT_EQ(lane_bits(o, i), lane_bits(gjk, i)) << i;
+    hits += o.count[i] > 0 ? 1 : 0;
+  }
+  EXPECT_GT(hits, 50u);
+}
+
+TEST(CapsuleConvex, RangePartitionAndPadding) {
+  Rng g(5);
+  Hulls hulls;
+  add_random_hulls(g, &hulls, 6, 1.0);
+  const auto pairs = random_pairs(g, hulls, 0, 6, 200, 1.0, 0.0);
+  const Bucket bk(pairs);
+  const k::HullView hv = hulls.store.view();
+  const ManifoldLanes whole = run(&k::collide_capsule_convex, bk, hv, k::KernelPath::kSimd);
+  ManifoldLanes part(bk.n);
+  k::NarrowConfig cfg;
+  cfg.hulls = hv;
+  const k::LeafSoA a = bk.a(), b = bk.b();
+  const uint32_t cuts[] = {0, 1, 7, 8, 50, 133, 199, 200};
+  for (size_t i = 0; i + 1 < std::size(cuts); ++i) {
+    if (i == 3) continue;  // [8, 50) left out: must stay untouched
+    k::collide_capsule_convex(a, b, part.view(), k::Range{cuts[i], cuts[i + 1]}, cfg);
+  }
+  for (uint32_t i = 0; i < bk.n; ++i) {
+    if (i >= 8 && i < 50) {
+      EXPECT_EQ(part.count[i], 0xff) << i;
+    } else {
+      EXPECT_EQ(lane_bits(whole, i), lane_bits(part, i)) << i;
+    }
+  }
+}
+
+}  // namespace
+}  // namespace impact::test
