@@ -243,9 +243,10 @@ Status LbvhBroadPhase::cache_build(const Executor& exec, kernels::AabbSoA boxes,
 }
 
 Status LbvhBroadPhase::cache_update(const Executor& exec, kernels::AabbSoA boxes, kernels::PairFilter filter,
-                                    bool* rebuild) {
+                                    bool* rebuild, bool* swamped) {
   const uint32_t n = info_.leaves;
   *rebuild = false;
+  *swamped = false;
   if (!same_filter(filter)) {
     *rebuild = true;
     return Status();
@@ -265,7 +266,12 @@ Status LbvhBroadPhase::cache_update(const Executor& exec, kernels::AabbSoA boxes
   if (m == 0) return Status();
   // A re-query per mover costs more than a share of the traversal once many moved; a
   // grow-only tree loosens as movers add up.
-  if (m > n / 4 || info_.movers_since_build + m > n) {
+  if (m > n / 4) {
+    *rebuild = true;
+    *swamped = true;
+    return Status();
+  }
+  if (info_.movers_since_build + m > n) {
     *rebuild = true;
     return Status();
   }
@@ -332,6 +338,25 @@ Status LbvhBroadPhase::cache_pairs(const Executor& exec, Buffer<kernels::Pair>* 
       out);
 }
 
+Status LbvhBroadPhase::sorted_traverse(const Executor& exec, Buffer<kernels::Pair>* out) {
+  if (Status s = traverse(exec, out); !s.ok()) return s;
+  const uint64_t m = out->size();
+  if (m < 2) return Status();
+  const uint32_t w = std::max(1u, bits_for(info_.leaves - 1));
+  uint64_t* keys = scratch(new_keys_, m);
+  kernels::Pair* p = out->data();
+  exec.for_each_chunk(m, kKeyGrain, [&](uint32_t b, uint32_t e, uint32_t) {
+    for (uint32_t i = b; i < e; ++i) keys[i] = (static_cast<uint64_t>(p[i].a) << w) | p[i].b;
+  });
+  sorter_.sort(exec, keys, static_cast<uint32_t>(m), 0, 2 * w);
+  const uint64_t low = (uint64_t{1} << w) - 1;
+  exec.for_each_chunk(m, kKeyGrain, [&](uint32_t b, uint32_t e, uint32_t) {
+    for (uint32_t i = b; i < e; ++i)
+      p[i] = kernels::Pair{static_cast<uint32_t>(keys[i] >> w), static_cast<uint32_t>(keys[i] & low)};
+  });
+  return Status();
+}
+
 kernels::LbvhView LbvhBroadPhase::query_view(const Executor& exec) {
   kernels::LbvhView v = view();
   if (!(cache_mode() && cache_valid_)) return v;
@@ -352,17 +377,40 @@ kernels::LbvhView LbvhBroadPhase::query_view(const Executor& exec) {
 Status LbvhBroadPhase::update(const Executor& exec, kernels::AabbSoA boxes, kernels::PairFilter filter,
                               uint32_t n, const kernels::BoundsSummary* summary) {
   if (cache_mode()) {
-    if (cache_valid_ && built_ && info_.leaves == n && n >= 2 && info_.refits_since_build < options_.max_refits) {
-      bool rebuild = false;
-      if (Status s = cache_update(exec, boxes, filter, &rebuild); !s.ok()) {
+    const bool same_tree = built_ && info_.leaves == n && n >= 2 && info_.refits_since_build < options_.max_refits;
+    auto refit_instead = [&] {  // exact leaves again; pairs() traverses
+      cache_valid_ = false;
+      exact_leaves_valid_ = false;
+      refit_bounds(exec, boxes, filter);
+      info_.rebuilt = false;
+      ++info_.refits_since_build;
+      info_.cache_backoff = backoff_left_;
+      return Status();
+    };
+    if (same_tree && !cache_valid_ && backoff_left_ > 0) {
+      --backoff_left_;
+      return refit_instead();
+    }
+    if (same_tree && cache_valid_) {
+      bool rebuild = false, swamped = false;
+      if (Status s = cache_update(exec, boxes, filter, &rebuild, &swamped); !s.ok()) {
         built_ = false;
         cache_valid_ = false;
         return s;
       }
       if (!rebuild) {
+        backoff_ = 0;
         info_.rebuilt = false;
+        info_.cache_backoff = 0;
         ++info_.refits_since_build;
         return Status();
+      }
+      if (swamped) {
+        // Boxes move too far for their margins: a cache rebuild would not last. Refit
+        // for a while (1, 2, 4, ... 64 updates), then try the cache again.
+        backoff_ = std::min<uint32_t>(kMaxCacheBackoff, std::max<uint32_t>(1, 2 * backoff_));
+        backoff_left_ = backoff_;
+        return refit_instead();
       }
     }
     return build(exec, boxes, filter, n, summary);
@@ -391,6 +439,7 @@ Status LbvhBroadPhase::pairs(const Executor& exec, Buffer<kernels::Pair>* out) {
     return Status();
   }
   if (cache_valid_) return cache_pairs(exec, out);
+  if (cache_mode()) return sorted_traverse(exec, out);
   return traverse(exec, out);
 }
 
@@ -425,7 +474,7 @@ Status LbvhBroadPhase::refit(const Executor& exec, kernels::AabbSoA boxes, kerne
   refit_bounds(exec, boxes, filter);
   info_.rebuilt = false;
   ++info_.refits_since_build;
-  return traverse(exec, out);
+  return cache_mode() ? sorted_traverse(exec, out) : traverse(exec, out);
 }
 
 }  // namespace impact::host

@@ -58,6 +58,8 @@ struct LbvhInfo {
   uint32_t movers = 0;           ///< kPairCache: boxes that left their fat box in the last update
   uint64_t movers_since_build = 0;  ///< kPairCache: their sum since the last build
   uint64_t cached_pairs = 0;     ///< kPairCache: fat-overlapping pairs held
+  uint32_t cache_backoff = 0;    ///< kPairCache: refits left before the cache is tried again
+  bool cached = false;           ///< kPairCache: pairs() filters the cache (false: it traverses)
 };
 
 /// The 30/63-bit rule: 63-bit codes when n > 2^24, or when a 30-bit cell (largest
@@ -108,7 +110,10 @@ class LbvhBroadPhase {
     }
     options_ = o;
   }
-  const LbvhInfo& info() const { return info_; }
+  const LbvhInfo& info() const {
+    info_.cached = cache_valid_;
+    return info_;
+  }
 
   /// Boxes of the current tree (0 when none).
   uint32_t size() const { return built_ ? info_.leaves : 0; }
@@ -141,12 +146,14 @@ class LbvhBroadPhase {
   Status cache_build(const Executor& exec, kernels::AabbSoA boxes, kernels::PairFilter filter);
   /// One coherent update; *rebuild set when the movers call for a rebuild instead.
   Status cache_update(const Executor& exec, kernels::AabbSoA boxes, kernels::PairFilter filter,
-                      bool* rebuild);
+                      bool* rebuild, bool* swamped);
   bool same_filter(kernels::PairFilter filter) const;
   Status cache_pairs(const Executor& exec, Buffer<kernels::Pair>* out);
+  /// traverse(), then sorted by (a, b): kPairCache's order when it refits instead.
+  Status sorted_traverse(const Executor& exec, Buffer<kernels::Pair>* out);
 
   LbvhOptions options_;
-  LbvhInfo info_;
+  mutable LbvhInfo info_;
   bool filtered_ = false;
   bool built_ = false;  // a tree (possibly of 0 or 1 leaves) exists
   RadixSorter sorter_;
@@ -166,6 +173,11 @@ class LbvhBroadPhase {
   // (lo << key_shift_) | hi, one sorted buffer per kLbvhCacheGrain lo indices, double
   // buffered), the filter it was built with, and exact sorted leaves for queries.
   bool cache_valid_ = false;
+  // kPairCache after an update with more than n / 4 movers: refit instead for
+  // backoff_left_ more updates; backoff_ doubles on each such failure (at most
+  // kMaxCacheBackoff) and resets once an update keeps the cache.
+  static constexpr uint32_t kMaxCacheBackoff = 64;
+  uint32_t backoff_ = 0, backoff_left_ = 0;
   bool exact_leaves_valid_ = false;
   uint32_t key_shift_ = 1;
   kernels::LbvhFatMargin margin_{};

@@ -100,6 +100,7 @@ struct RunStats {
   int incremental = 0;  // updates that kept the cache (no rebuild)
   int with_movers = 0;  // ... among them, with at least one mover
   int rebuilds = 0;
+  int refits = 0;       // updates that fell back to a refit (too many movers)
 };
 
 // Build, then `frames` updates of motion; every frame equals the reference.
@@ -116,6 +117,7 @@ RunStats run_frames(Boxes b, const std::string& what, int frames, float step, do
     } else {
       IMPACT_EXPECT_OK(bp.update(serial(), soa(b), filter_of(b), count(b)));
       if (bp.info().rebuilt) ++st.rebuilds;
+      else if (!bp.info().cached) ++st.refits;
       else {
         ++st.incremental;
         st.with_movers += bp.info().movers > 0;
@@ -158,14 +160,16 @@ TEST(LbvhPairCache, UniformHundredFrames) {
 
 TEST(LbvhPairCache, SeveralChunksAndLargeMotion) {
   // Several cache chunks (kLbvhCacheGrain lo indices) and mover chunks; then motion
-  // big enough that most frames rebuild.
+  // big enough that most updates refit instead (backing off 1, 2, 4, 8 updates between
+  // cache rebuilds).
   const uint32_t n = scaled(40000);
   const RunStats slow = run_frames(test::uniform_boxes(n, 12, 0.2f, 0.6f), "uniform large", 12, 0.01f, 0.001,
                                    side_of(n, 0.6f));
   EXPECT_GT(slow.with_movers, 6);
   const RunStats fast = run_frames(test::uniform_boxes(scaled(3000), 13, 0.2f, 0.6f), "uniform fast", 20, 0.5f,
                                    0.05, side_of(scaled(3000), 0.6f));
-  EXPECT_GT(fast.rebuilds, 10);
+  EXPECT_GT(fast.refits, 10);
+  EXPECT_GE(fast.rebuilds, 3);
 }
 
 TEST(LbvhPairCache, Clustered) {
@@ -269,12 +273,25 @@ TEST(LbvhPairCache, PolicyRebuilds) {
   }
   IMPACT_ASSERT_OK(bp.find_pairs(serial(), soa(b), filter_of(b), n, &out));
   EXPECT_TRUE(bp.info().rebuilt);
-  // More than a quarter moving out at once: a rebuild.
+  // More than a quarter moving out at once: a refit instead, and once more (back-off
+  // 1), then the cache is rebuilt.
   std::mt19937 rng(62);
   move(b, rng, 1.0f, 0.0, 1.0f, 0.0f);
   IMPACT_ASSERT_OK(bp.find_pairs(serial(), soa(b), filter_of(b), n, &out));
-  EXPECT_TRUE(bp.info().rebuilt);
+  EXPECT_FALSE(bp.info().rebuilt);
+  EXPECT_FALSE(bp.info().cached);
+  EXPECT_EQ(bp.info().cache_backoff, 1u);
   expect_same_set(out, reference_pairs(b), n, "after a big move");
+  move(b, rng, 0.01f, 0.0, 1.0f, 0.0f);
+  IMPACT_ASSERT_OK(bp.find_pairs(serial(), soa(b), filter_of(b), n, &out));
+  EXPECT_FALSE(bp.info().rebuilt);
+  EXPECT_FALSE(bp.info().cached);
+  EXPECT_EQ(bp.info().cache_backoff, 0u);
+  expect_same_set(out, reference_pairs(b), n, "backing off");
+  IMPACT_ASSERT_OK(bp.find_pairs(serial(), soa(b), filter_of(b), n, &out));
+  EXPECT_TRUE(bp.info().rebuilt);
+  EXPECT_TRUE(bp.info().cached);
+  expect_same_set(out, reference_pairs(b), n, "cache rebuilt");
   // One box teleported: one mover, no rebuild.
   const float d = 5.0f;
   b.min_x[9] += d, b.max_x[9] += d;
