@@ -89,6 +89,7 @@
 #include <cstdint>
 
 #include "kernels/narrowphase/gjk_epa.h"
+#include "kernels/narrowphase/hull_scan.h"
 #include "kernels/narrowphase/pair_kernels.h"
 #include "kernels/simd/lanes.h"
 
@@ -98,10 +99,7 @@ namespace {
 using cvx::V3;
 using simd::FloatW;
 using simd::kSimdWidth;
-
-/// Hulls of up to this many faces (edges) keep their pass values on the stack for the
-/// second look (2 KiB per buffer); larger hulls compute them again.
-constexpr uint32_t kKeep = 512;
+using namespace hull_scan;  // NOLINT: the hull kernels' shared passes
 
 /// SAT tie rule (as capsule-box): an edge axis wins over the best face only when it
 /// separates more by kTieRel * |overlap| + kTieSize * size + its own rounding,
@@ -114,29 +112,9 @@ constexpr float kEdgeRound = 2e-7f;
 constexpr float kFaceCos = 0.99999f;
 constexpr float kParallelSin = 0.05f;
 
-/// The first block start of a kSimdWidth-wide pass over [b, e) (e - b >= kSimdWidth) is
-/// b; the next is i + kSimdWidth, or e - kSimdWidth for the last (overlapping) block,
-/// which revisits some items: harmless for a max / min with the lowest index among ties.
-IMPACT_INLINE uint32_t next_block(uint32_t i, uint32_t e) {
-  return i + 2 * kSimdWidth <= e ? i + kSimdWidth : e - kSimdWidth;
-}
-
-IMPACT_INLINE float lanes_min(FloatW v) {
-  float m = v.lane(0);
-  for (uint32_t l = 1; l < kSimdWidth; ++l) m = simd::fmin_nn(m, v.lane(l));
-  return m;
-}
-IMPACT_INLINE float lanes_max(FloatW v) {
-  float m = v.lane(0);
-  for (uint32_t l = 1; l < kSimdWidth; ++l) m = simd::fmax_nn(m, v.lane(l));
-  return m;
-}
 IMPACT_INLINE float clampf(float x, float lo, float hi) { return simd::fmin_nn(simd::fmax_nn(x, lo), hi); }
 IMPACT_INLINE double clampd(double x, double lo, double hi) { return x < lo ? lo : (x > hi ? hi : x); }
 IMPACT_INLINE float l1(V3 a) { return std::fabs(a.x) + std::fabs(a.y) + std::fabs(a.z); }
-
-IMPACT_INLINE V3 vertex(const HullView& h, uint32_t i) { return V3{h.vx[i], h.vy[i], h.vz[i]}; }
-IMPACT_INLINE V3 face_normal(const HullView& h, uint32_t f) { return V3{h.fnx[f], h.fny[f], h.fnz[f]}; }
 
 // ---------------------------------------------------------------------------------------
 // Step 1: the face pass
@@ -253,22 +231,6 @@ IMPACT_INLINE bool core_meets_hull(const HullView& h, uint32_t fb, uint32_t fe, 
     if (i + kSimdWidth == fe) break;
   }
   return lanes_max(lo) <= lanes_min(hi);
-}
-
-/// Whether p projects into face f's polygon (on its boundary counts as inside): p is
-/// behind every side plane through a polygon edge, perpendicular to the face.
-IMPACT_INLINE bool projects_into_face(const HullView& h, uint32_t f, V3 p) {
-  const uint32_t b = h.face_vert_begin[f], e = h.face_vert_begin[f + 1];
-  if (e - b < 3) return false;
-  const V3 n = face_normal(h, f);
-  V3 a = vertex(h, h.face_verts[e - 1]);
-  for (uint32_t j = b; j < e; ++j) {
-    const V3 q = vertex(h, h.face_verts[j]);
-    // Counter-clockwise seen from outside: (q - a) x n points out of the polygon.
-    if (cvx::dot(cvx::cross(q - a, n), p - a) > 0.0f) return false;
-    a = q;
-  }
-  return true;
 }
 
 /// The lowest face g in [fb, fe), g != skip, whose plane distance of end point

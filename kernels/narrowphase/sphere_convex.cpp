@@ -61,6 +61,7 @@
 #include <cstdint>
 
 #include "kernels/narrowphase/gjk_epa.h"
+#include "kernels/narrowphase/hull_scan.h"
 #include "kernels/narrowphase/pair_kernels.h"
 #include "kernels/simd/lanes.h"
 
@@ -70,29 +71,7 @@ namespace {
 using cvx::V3;
 using simd::FloatW;
 using simd::kSimdWidth;
-
-/// The first block start of a kSimdWidth-wide pass over [b, e) (e - b >= kSimdWidth) is
-/// b; the next is i + kSimdWidth, or e - kSimdWidth for the last (overlapping) block,
-/// which revisits some items: harmless for a max with the lowest index among ties.
-IMPACT_INLINE uint32_t next_block(uint32_t i, uint32_t e) {
-  return i + 2 * kSimdWidth <= e ? i + kSimdWidth : e - kSimdWidth;
-}
-
-/// Hulls of up to this many faces (edges) keep their pass values on the stack for the
-/// second look at near ties (2 KiB per buffer); larger hulls compute them again.
-constexpr uint32_t kKeep = 512;
-
-/// Horizontal min / max of the lanes.
-IMPACT_INLINE float lanes_min(FloatW v) {
-  float m = v.lane(0);
-  for (uint32_t l = 1; l < kSimdWidth; ++l) m = simd::fmin_nn(m, v.lane(l));
-  return m;
-}
-IMPACT_INLINE float lanes_max(FloatW v) {
-  float m = v.lane(0);
-  for (uint32_t l = 1; l < kSimdWidth; ++l) m = simd::fmax_nn(m, v.lane(l));
-  return m;
-}
+using namespace hull_scan;  // NOLINT: the hull kernels' shared passes
 
 /// fn.c - fd of faces i .. i + kSimdWidth.
 IMPACT_INLINE FloatW plane_dist(const HullView& h, uint32_t i, FloatW X, FloatW Y, FloatW Z) {
@@ -135,26 +114,6 @@ IMPACT_INLINE float deepest_plane(const HullView& h, uint32_t b, uint32_t e, V3 
   }
   *out_f = best;
   return best_s;
-}
-
-IMPACT_INLINE V3 vertex(const HullView& h, uint32_t i) {
-  return V3{h.vx[i], h.vy[i], h.vz[i]};
-}
-
-/// Whether c projects into face f's polygon (on its boundary counts as inside): c is
-/// behind every side plane through a polygon edge, perpendicular to the face.
-IMPACT_INLINE bool projects_into_face(const HullView& h, uint32_t f, V3 c) {
-  const uint32_t b = h.face_vert_begin[f], e = h.face_vert_begin[f + 1];
-  if (e - b < 3) return false;
-  const V3 n{h.fnx[f], h.fny[f], h.fnz[f]};
-  V3 a = vertex(h, h.face_verts[e - 1]);
-  for (uint32_t j = b; j < e; ++j) {
-    const V3 q = vertex(h, h.face_verts[j]);
-    // Counter-clockwise seen from outside: (q - a) x n points out of the polygon.
-    if (cvx::dot(cvx::cross(q - a, n), c - a) > 0.0f) return false;
-    a = q;
-  }
-  return true;
 }
 
 /// The lowest face g in [b, e), g != skip, with fn_g.c - fd_g >= s_min (the faces that

@@ -163,6 +163,21 @@ inline Boxes uniform_boxes(uint32_t n, uint32_t seed, float half_lo, float half_
   return b;
 }
 
+/// n points on a 13^3 lattice of step 0.5 (touching = same point), many repeated, with
+/// every 50th a unit box instead.
+inline Boxes point_lattice_boxes(uint32_t n, uint32_t seed) {
+  std::mt19937 rng(seed);
+  std::uniform_int_distribution<int> cell(0, 12);
+  Boxes b;
+  for (uint32_t i = 0; i < n; ++i) {
+    const float x = 0.5f * static_cast<float>(cell(rng)), y = 0.5f * static_cast<float>(cell(rng)),
+                z = 0.5f * static_cast<float>(cell(rng));
+    if (i % 50 == 0) b.add(x, y, z, 0.5f, 0.5f, 0.5f);
+    else b.add(x, y, z, 0, 0, 0);
+  }
+  return b;
+}
+
 /// n boxes (half extents 0.05 .. 0.4) in 6 gaussian blobs (sigma 1.5) in [-50, 50]^3.
 inline Boxes clustered_boxes(uint32_t n, uint32_t seed) {
   std::mt19937 rng(seed);

@@ -194,15 +194,7 @@ TEST(LbvhPairCache, AllBoxesAtOnePointAndZeroSizeBoxes) {
   run_frames(one, "one point, unit boxes", 20, 0.01f, 0.0, 1.0f, 3.0f);
   // Points on a lattice (touching = same point), some repeated, some unit boxes: the
   // points' margin comes from the largest edge / 1024 floor.
-  std::mt19937 rng(5);
-  std::uniform_int_distribution<int> cell(0, 12);
-  Boxes z;
-  for (uint32_t i = 0; i < 2000; ++i) {
-    const float x = 0.5f * static_cast<float>(cell(rng)), y = 0.5f * static_cast<float>(cell(rng)),
-                w = 0.5f * static_cast<float>(cell(rng));
-    if (i % 50 == 0) z.add(x, y, w, 0.5f, 0.5f, 0.5f);
-    else z.add(x, y, w, 0, 0, 0);
-  }
+  const Boxes z = test::point_lattice_boxes(2000, 5);
   run_frames(z, "zero-size, still", 5, 0.0f, 0.0, 6.0f);
   run_frames(z, "zero-size, moving", 30, 0.0005f, 0.01, 6.0f, 3.0f);
 }

@@ -282,16 +282,7 @@ TEST(Lbvh, DeepTreeFromExponentialSpacing) {
 
 TEST(Lbvh, ZeroSizeBoxes) {
   // Points on a lattice (touching = same point), some repeated, plus a few unit boxes.
-  std::mt19937 rng(5);
-  std::uniform_int_distribution<int> cell(0, 12);
-  Boxes b;
-  for (uint32_t i = 0; i < 2500; ++i) {
-    const float x = 0.5f * static_cast<float>(cell(rng)), y = 0.5f * static_cast<float>(cell(rng)),
-                z = 0.5f * static_cast<float>(cell(rng));
-    if (i % 50 == 0) b.add(x, y, z, 0.5f, 0.5f, 0.5f);
-    else b.add(x, y, z, 0, 0, 0);
-  }
-  check_all(b, "zero-size");
+  check_all(test::point_lattice_boxes(2500, 5), "zero-size");
 }
 
 TEST(Lbvh, Scales) {

@@ -1,0 +1,90 @@
+// Inputs of the exact hull-kernel tests (sphere_convex_test, capsule_convex_test): a
+// small double vector, random draws, and hulls built by the library's quickhull into one
+// HullStore (boxes, ellipsoid point clouds).
+#pragma once
+
+#include <gtest/gtest.h>
+
+#include <Eigen/Core>
+#include <cmath>
+#include <cstdint>
+#include <random>
+#include <vector>
+
+#include "host/narrowphase/convex_hull.h"
+#include "host/narrowphase/shape_store.h"
+#include "support/random_input.h"
+
+namespace impact::test::hull_input {
+
+struct D3 {
+  double x = 0, y = 0, z = 0;
+};
+inline D3 operator+(D3 a, D3 b) { return {a.x + b.x, a.y + b.y, a.z + b.z}; }
+inline D3 operator-(D3 a, D3 b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
+inline D3 operator*(double s, D3 a) { return {s * a.x, s * a.y, s * a.z}; }
+inline double dot(D3 a, D3 b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
+inline D3 cross(D3 a, D3 b) { return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x}; }
+inline double norm(D3 a) { return std::sqrt(dot(a, a)); }
+inline D3 unit(D3 a) { return (1.0 / norm(a)) * a; }
+
+using Rng = std::mt19937;
+inline double uni(Rng& g, double a, double b) { return std::uniform_real_distribution<double>(a, b)(g); }
+inline D3 random_unit(Rng& g) {
+  std::normal_distribution<double> d(0.0, 1.0);
+  for (;;) {
+    const D3 v{d(g), d(g), d(g)};
+    if (norm(v) > 1e-3) return unit(v);
+  }
+}
+/// Row-major rotation (test::random_rotation_rows) in float.
+inline void random_rotation(Rng& g, float m[9]) {
+  double r[9];
+  test::random_rotation_rows(g, r);
+  for (int i = 0; i < 9; ++i) m[i] = static_cast<float>(r[i]);
+}
+
+/// Hulls in one store, with their HullData for the references.
+struct Hulls {
+  HullStore store;
+  std::vector<HullData> data;
+  uint32_t add(const std::vector<Eigen::Vector3f>& pts) {
+    HullData h;
+    EXPECT_TRUE(build_convex_hull(pts, &h).ok());
+    data.push_back(h);
+    return store.add(h);
+  }
+};
+
+inline std::vector<Eigen::Vector3f> box_corners(float hx, float hy, float hz) {
+  std::vector<Eigen::Vector3f> c;
+  for (int i = 0; i < 8; ++i) c.emplace_back((i & 1) ? hx : -hx, (i & 2) ? hy : -hy, (i & 4) ? hz : -hz);
+  return c;
+}
+
+/// np points on an ellipsoid with half axes in [0.3, 1] * scale.
+inline std::vector<Eigen::Vector3f> ellipsoid_points(Rng& g, int np, double scale) {
+  const double ax[3] = {uni(g, 0.3, 1.0), uni(g, 0.3, 1.0), uni(g, 0.3, 1.0)};
+  std::vector<Eigen::Vector3f> pts;
+  for (int i = 0; i < np; ++i) {
+    const D3 u = random_unit(g);
+    pts.emplace_back(static_cast<float>(scale * ax[0] * u.x), static_cast<float>(scale * ax[1] * u.y),
+                     static_cast<float>(scale * ax[2] * u.z));
+  }
+  return pts;
+}
+
+/// Random hulls of size ~scale: boxes and ellipsoid point clouds of 8..40 points.
+inline void add_random_hulls(Rng& g, Hulls* hulls, uint32_t count, double scale) {
+  for (uint32_t i = 0; i < count; ++i) {
+    if (i % 4 == 0) {
+      hulls->add(box_corners(static_cast<float>(scale * uni(g, 0.1, 1.0)),
+                             static_cast<float>(scale * uni(g, 0.1, 1.0)),
+                             static_cast<float>(scale * uni(g, 0.1, 1.0))));
+    } else {
+      hulls->add(ellipsoid_points(g, 8 + static_cast<int>(g() % 33), scale));
+    }
+  }
+}
+
+}  // namespace impact::test::hull_input
