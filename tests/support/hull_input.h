@@ -1,11 +1,14 @@
-// Inputs of the exact hull-kernel tests (sphere_convex_test, capsule_convex_test): a
-// small double vector, random draws, and hulls built by the library's quickhull into one
-// HullStore (boxes, ellipsoid point clouds).
+// Inputs and double-precision geometry of the exact hull-kernel tests
+// (sphere_convex_test, capsule_convex_test): a small double vector, random draws, hulls
+// built by the library's quickhull into one HullStore (boxes, ellipsoid point clouds),
+// and hulls posed in double for the references. A lane is any struct with the hull's
+// position p[3] and row-major rotation R[9].
 #pragma once
 
 #include <gtest/gtest.h>
 
 #include <Eigen/Core>
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <random>
@@ -85,6 +88,68 @@ inline void add_random_hulls(Rng& g, Hulls* hulls, uint32_t count, double scale)
       hulls->add(ellipsoid_points(g, 8 + static_cast<int>(g() % 33), scale));
     }
   }
+}
+
+/// Hull-local point l in world coordinates for lane q (double).
+template <class Lane>
+D3 to_world(const Lane& q, const Eigen::Vector3f& l) {
+  const double x = l.x(), y = l.y(), z = l.z();
+  return D3{q.p[0] + q.R[0] * x + q.R[1] * y + q.R[2] * z, q.p[1] + q.R[3] * x + q.R[4] * y + q.R[5] * z,
+            q.p[2] + q.R[6] * x + q.R[7] * y + q.R[8] * z};
+}
+
+/// A hull posed in double, relative to its position (exact for the float inputs, and
+/// no cancellation far from the origin): vertices, polygons, Newell planes.
+struct RefHull {
+  D3 origin;  // the hull position (world)
+  std::vector<D3> v;
+  std::vector<std::vector<uint32_t>> faces;
+  std::vector<D3> fn;
+  std::vector<double> fd;
+  double radius = 0;  // about the position
+  D3 centroid;
+};
+
+template <class Lane>
+RefHull pose(const HullData& h, const Lane& q) {
+  RefHull out;
+  out.origin = D3{q.p[0], q.p[1], q.p[2]};
+  for (const auto& l : h.vertices) {
+    const double x = l.x(), y = l.y(), z = l.z();
+    const D3 w{q.R[0] * x + q.R[1] * y + q.R[2] * z, q.R[3] * x + q.R[4] * y + q.R[5] * z,
+               q.R[6] * x + q.R[7] * y + q.R[8] * z};
+    out.radius = std::max(out.radius, norm(w));
+    out.v.push_back(w);
+    out.centroid = out.centroid + out.v.back();
+  }
+  out.centroid = (1.0 / static_cast<double>(out.v.size())) * out.centroid;
+  out.faces = h.faces;
+  for (const auto& f : h.faces) {
+    D3 nn, m;
+    for (size_t i = 0; i < f.size(); ++i) {
+      const D3 a = out.v[f[i]], b = out.v[f[(i + 1) % f.size()]];
+      nn = nn + cross(a, b);  // Newell: 2 * area * normal (counter-clockwise from outside)
+      m = m + a;
+    }
+    nn = unit(nn);
+    m = (1.0 / static_cast<double>(f.size())) * m;
+    out.fn.push_back(nn);
+    out.fd.push_back(dot(nn, m));
+  }
+  return out;
+}
+
+/// The point of segment [a, b] closest to c (a when the segment has no length).
+inline D3 closest_on_segment(D3 a, D3 b, D3 c) {
+  const D3 d = b - a;
+  if (!(dot(d, d) > 0)) return a;
+  const double t = std::clamp(dot(c - a, d) / dot(d, d), 0.0, 1.0);
+  return a + t * d;
+}
+
+/// Test part results (failures) recorded so far in the running test.
+inline int failure_parts() {
+  return ::testing::UnitTest::GetInstance()->current_test_info()->result()->total_part_count();
 }
 
 }  // namespace impact::test::hull_input

@@ -136,48 +136,6 @@ ManifoldLanes run_gjk(const Bucket& bk, const k::HullView& hv) {
 
 // --- the reference ---------------------------------------------------------------------------
 
-/// A hull posed in double relative to its position: vertices, polygons, Newell planes.
-struct RefHull {
-  D3 origin;
-  std::vector<D3> v;
-  std::vector<std::vector<uint32_t>> faces;
-  std::vector<D3> fn;
-  std::vector<double> fd;
-  double radius = 0;
-};
-
-RefHull pose(const HullData& h, const Pair& q) {
-  RefHull out;
-  out.origin = D3{q.p[0], q.p[1], q.p[2]};
-  for (const auto& l : h.vertices) {
-    const double x = l.x(), y = l.y(), z = l.z();
-    const D3 w{q.R[0] * x + q.R[1] * y + q.R[2] * z, q.R[3] * x + q.R[4] * y + q.R[5] * z,
-               q.R[6] * x + q.R[7] * y + q.R[8] * z};
-    out.radius = std::max(out.radius, norm(w));
-    out.v.push_back(w);
-  }
-  out.faces = h.faces;
-  for (const auto& f : h.faces) {
-    D3 nn, m;
-    for (size_t i = 0; i < f.size(); ++i) {
-      nn = nn + cross(out.v[f[i]], out.v[f[(i + 1) % f.size()]]);
-      m = m + out.v[f[i]];
-    }
-    nn = unit(nn);
-    m = (1.0 / static_cast<double>(f.size())) * m;
-    out.fn.push_back(nn);
-    out.fd.push_back(dot(nn, m));
-  }
-  return out;
-}
-
-D3 closest_on_segment(D3 a, D3 b, D3 c) {
-  const D3 d = b - a;
-  if (!(dot(d, d) > 0)) return a;
-  const double t = std::clamp(dot(c - a, d) / dot(d, d), 0.0, 1.0);
-  return a + t * d;
-}
-
 /// Signed distance of y to the hull (> 0 outside) and, outside, the closest hull point.
 double signed_distance(const RefHull& H, D3 y, D3* closest = nullptr) {
   double best = -1e300;
@@ -295,10 +253,6 @@ std::string lane_text(const Pair& q) {
   return buf;
 }
 
-int failure_parts() {
-  return ::testing::UnitTest::GetInstance()->current_test_info()->result()->total_part_count();
-}
-
 /// Runs both paths and GJK / EPA on `pairs` and checks every lane; returns the counts.
 Stats check_pairs(const std::string& name, const std::vector<Pair>& pairs, const Hulls& hulls) {
   SCOPED_TRACE(name);
@@ -372,12 +326,6 @@ Stats check_pairs(const std::string& name, const std::vector<Pair>& pairs, const
 }
 
 /// World position of local point l under pair q's hull pose.
-D3 to_world(const Pair& q, const Eigen::Vector3f& l) {
-  const double x = l.x(), y = l.y(), z = l.z();
-  return D3{q.p[0] + q.R[0] * x + q.R[1] * y + q.R[2] * z, q.p[1] + q.R[3] * x + q.R[4] * y + q.R[5] * z,
-            q.p[2] + q.R[6] * x + q.R[7] * y + q.R[8] * z};
-}
-
 void set_c(Pair* q, D3 c) {
   q->c[0] = static_cast<float>(c.x), q->c[1] = static_cast<float>(c.y), q->c[2] = static_cast<float>(c.z);
 }

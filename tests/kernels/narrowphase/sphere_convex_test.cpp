@@ -147,52 +147,6 @@ Out run_gjk(const Bucket& bk, const k::HullView& hv) {
 
 // --- the reference ---------------------------------------------------------------------------
 
-/// A hull posed in double, relative to its position (exact for the float inputs, and
-/// no cancellation far from the origin): vertices, polygons, Newell planes.
-struct RefHull {
-  D3 origin;  // the hull position (world)
-  std::vector<D3> v;
-  std::vector<std::vector<uint32_t>> faces;
-  std::vector<D3> fn;
-  std::vector<double> fd;
-  double radius = 0;  // about the position
-  D3 centroid;
-};
-
-RefHull pose(const HullData& h, const Pair& q) {
-  RefHull out;
-  out.origin = D3{q.p[0], q.p[1], q.p[2]};
-  for (const auto& l : h.vertices) {
-    const double x = l.x(), y = l.y(), z = l.z();
-    const D3 w{q.R[0] * x + q.R[1] * y + q.R[2] * z, q.R[3] * x + q.R[4] * y + q.R[5] * z,
-               q.R[6] * x + q.R[7] * y + q.R[8] * z};
-    out.radius = std::max(out.radius, norm(w));
-    out.v.push_back(w);
-    out.centroid = out.centroid + out.v.back();
-  }
-  out.centroid = (1.0 / static_cast<double>(out.v.size())) * out.centroid;
-  out.faces = h.faces;
-  for (const auto& f : h.faces) {
-    D3 nn, m;
-    for (size_t i = 0; i < f.size(); ++i) {
-      const D3 a = out.v[f[i]], b = out.v[f[(i + 1) % f.size()]];
-      nn = nn + cross(a, b);  // Newell: 2 * area * normal (counter-clockwise from outside)
-      m = m + a;
-    }
-    nn = unit(nn);
-    m = (1.0 / static_cast<double>(f.size())) * m;
-    out.fn.push_back(nn);
-    out.fd.push_back(dot(nn, m));
-  }
-  return out;
-}
-
-D3 closest_on_segment(D3 a, D3 b, D3 c) {
-  const D3 d = b - a;
-  const double t = std::clamp(dot(c - a, d) / dot(d, d), 0.0, 1.0);
-  return a + t * d;
-}
-
 struct RefAnswer {
   bool inside = false;
   double dist = 0;  // outside: distance to the hull; inside: distance to the boundary
@@ -281,11 +235,6 @@ std::string lane_text(const Pair& q) {
       q.c[0], q.c[1], q.c[2], q.r, q.hull, q.p[0], q.p[1], q.p[2], q.R[0], q.R[1], q.R[2], q.R[3], q.R[4],
       q.R[5], q.R[6], q.R[7], q.R[8]);
   return buf;
-}
-
-/// Test part results (failures) recorded so far in the running test.
-int failure_parts() {
-  return ::testing::UnitTest::GetInstance()->current_test_info()->result()->total_part_count();
 }
 
 /// Runs both paths and GJK / EPA on `pairs` and checks every lane; returns the counts.
@@ -379,12 +328,6 @@ Pair make_pair(D3 c, double r, D3 p, const float R[9], uint32_t hull) {
 }
 
 /// World position of local point l under pair q's hull pose.
-D3 to_world(const Pair& q, const Eigen::Vector3f& l) {
-  const double x = l.x(), y = l.y(), z = l.z();
-  return D3{q.p[0] + q.R[0] * x + q.R[1] * y + q.R[2] * z, q.p[1] + q.R[3] * x + q.R[4] * y + q.R[5] * z,
-            q.p[2] + q.R[6] * x + q.R[7] * y + q.R[8] * z};
-}
-
 /// Random lanes around the hulls [h0, h1) of size ~scale at distance ~offset from the
 /// origin: centres uniform in a box, near vertices, near edges and near faces.
 std::vector<Pair> random_pairs(Rng& g, const Hulls& hulls, uint32_t h0, uint32_t h1, uint32_t n, double scale,
