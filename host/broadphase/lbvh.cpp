@@ -216,22 +216,16 @@ Status LbvhBroadPhase::cache_build(const Executor& exec, kernels::AabbSoA boxes,
   if (Status s = traverse(exec, &fat_pairs_); !s.ok()) return s;
   key_shift_ = std::max(1u, bits_for(n - 1));
   const uint64_t m = fat_pairs_.size();
-  uint64_t* keys = scratch(new_keys_, m);
-  const kernels::Pair* fp = fat_pairs_.data();
   const uint32_t w = key_shift_;
-  exec.for_each_chunk(m, kKeyGrain, [&](uint32_t b, uint32_t e, uint32_t) {
-    for (uint32_t p = b; p < e; ++p) keys[p] = (static_cast<uint64_t>(fp[p].a) << w) | fp[p].b;
-  });
-  sorter_.sort(exec, keys, static_cast<uint32_t>(m), 0, 2 * w);
+  const uint64_t* keys = sorted_keys(exec, fat_pairs_.data(), m, w);
   // One buffer per kLbvhCacheGrain lo indices.
   const uint32_t chunks = chunk_count(n, kernels::kLbvhCacheGrain);
   cur_ = 0;
   cache_[0].resize(std::max<size_t>(cache_[0].size(), chunks));
   cache_count_[0].assign(chunks, 0);
   exec.for_each_chunk(n, kernels::kLbvhCacheGrain, [&](uint32_t b, uint32_t e, uint32_t c) {
-    const uint64_t* all = keys;
-    const uint64_t* lo = std::lower_bound(all, all + m, static_cast<uint64_t>(b) << w);
-    const uint64_t* hi = std::lower_bound(lo, all + m, static_cast<uint64_t>(e) << w);
+    const uint64_t* lo = std::lower_bound(keys, keys + m, static_cast<uint64_t>(b) << w);
+    const uint64_t* hi = std::lower_bound(lo, keys + m, static_cast<uint64_t>(e) << w);
     const size_t count = static_cast<size_t>(hi - lo);
     if (count > 0) std::memcpy(scratch(cache_[0][c], count), lo, count * sizeof(uint64_t));
     cache_count_[0][c] = count;
@@ -338,17 +332,23 @@ Status LbvhBroadPhase::cache_pairs(const Executor& exec, Buffer<kernels::Pair>* 
       out);
 }
 
+const uint64_t* LbvhBroadPhase::sorted_keys(const Executor& exec, const kernels::Pair* pairs, uint64_t m,
+                                            uint32_t w) {
+  uint64_t* keys = scratch(new_keys_, m);
+  exec.for_each_chunk(m, kKeyGrain, [&](uint32_t b, uint32_t e, uint32_t) {
+    for (uint32_t i = b; i < e; ++i) keys[i] = (static_cast<uint64_t>(pairs[i].a) << w) | pairs[i].b;
+  });
+  sorter_.sort(exec, keys, static_cast<uint32_t>(m), 0, 2 * w);
+  return keys;
+}
+
 Status LbvhBroadPhase::sorted_traverse(const Executor& exec, Buffer<kernels::Pair>* out) {
   if (Status s = traverse(exec, out); !s.ok()) return s;
   const uint64_t m = out->size();
   if (m < 2) return Status();
   const uint32_t w = std::max(1u, bits_for(info_.leaves - 1));
-  uint64_t* keys = scratch(new_keys_, m);
   kernels::Pair* p = out->data();
-  exec.for_each_chunk(m, kKeyGrain, [&](uint32_t b, uint32_t e, uint32_t) {
-    for (uint32_t i = b; i < e; ++i) keys[i] = (static_cast<uint64_t>(p[i].a) << w) | p[i].b;
-  });
-  sorter_.sort(exec, keys, static_cast<uint32_t>(m), 0, 2 * w);
+  const uint64_t* keys = sorted_keys(exec, p, m, w);
   const uint64_t low = (uint64_t{1} << w) - 1;
   exec.for_each_chunk(m, kKeyGrain, [&](uint32_t b, uint32_t e, uint32_t) {
     for (uint32_t i = b; i < e; ++i)

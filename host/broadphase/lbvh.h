@@ -149,6 +149,8 @@ class LbvhBroadPhase {
                       bool* rebuild, bool* swamped);
   bool same_filter(kernels::PairFilter filter) const;
   Status cache_pairs(const Executor& exec, Buffer<kernels::Pair>* out);
+  /// The m pairs as keys (a << w) | b, radix-sorted, in new_keys_.
+  const uint64_t* sorted_keys(const Executor& exec, const kernels::Pair* pairs, uint64_t m, uint32_t w);
   /// traverse(), then sorted by (a, b): kPairCache's order when it refits instead.
   Status sorted_traverse(const Executor& exec, Buffer<kernels::Pair>* out);
 
