@@ -26,6 +26,25 @@ namespace impact::test {
 /// none needs to today).
 inline constexpr bool kSanitized = IMPACT_TEST_SANITIZE != 0;
 
+/// x rounded to float and back: what a kernel sees of a double input. Through a
+/// volatile float, because GCC 12 at -O3 folds (double)(float) of two adjacent
+/// values (SLP vectorisation of a cvtpd2ps / cvtps2pd pair) into a plain copy: seen
+/// with Eigen's test::round_to_float(v) and with a Vector3d built from three
+/// static_cast<float> (x and y kept unrounded, z rounded) on every -march tried,
+/// which left triangle_triangle_test's "rounded" inputs unrounded 1e5 from the
+/// origin (the kernel and the reference then saw different triangles).
+inline double round_to_float(double x) {
+  volatile float f = static_cast<float>(x);
+  return f;
+}
+/// round_to_float of every coefficient.
+template <class M>
+auto round_to_float(const Eigen::MatrixBase<M>& m) {
+  typename M::PlainObject r = m;
+  for (Eigen::Index i = 0; i < r.size(); ++i) r.data()[i] = round_to_float(r.data()[i]);
+  return r;
+}
+
 /// IMPACT_TEST_INTENSITY (default 1, clamped to [1, 1000]): multiplies problem sizes.
 /// Only scales up: the default sizes are the smallest that still exercise every
 /// chunking path (several 2^11..2^16-element chunks) and the tests' thresholds.

@@ -406,7 +406,7 @@ class Builder {
     IMPACT_EXPECT_OK(set.add_half_space(n.cast<float>(), static_cast<float>(off), &t.id));
     RefLeaf l;
     l.type = ShapeType::kHalfSpace;
-    l.n = n.cast<float>().cast<double>().normalized();
+    l.n = test::round_to_float(n).normalized();
     l.off = static_cast<float>(off);
     t.ref = single(l);
     return t;
@@ -547,7 +547,7 @@ Posed posed(const RefShape& s, const Pose& pose) {
   return q;
 }
 
-Vector3d unit_dir(const Vector3f& d) { return d.cast<double>().normalized().cast<float>().cast<double>(); }
+Vector3d unit_dir(const Vector3f& d) { return test::round_to_float(d.cast<double>().normalized()); }
 
 struct Stats {
   int hits = 0, misses = 0, inside = 0, grazing = 0, total = 0;

@@ -138,11 +138,11 @@ Shape triangle(Vec3d v0, Vec3d v1, Vec3d v2) {
 /// The shape as the float lanes see it (pose rounded to float), for references.
 Shape rounded(const Shape& s) {
   Shape t = s;
-  t.p = s.p.cast<float>().cast<double>();
-  t.R = s.R.cast<float>().cast<double>();
-  t.e = s.e.cast<float>().cast<double>();
-  t.v1 = s.v1.cast<float>().cast<double>();
-  t.v2 = s.v2.cast<float>().cast<double>();
+  t.p = test::round_to_float(s.p);
+  t.R = test::round_to_float(s.R);
+  t.e = test::round_to_float(s.e);
+  t.v1 = test::round_to_float(s.v1);
+  t.v2 = test::round_to_float(s.v2);
   return t;
 }
 

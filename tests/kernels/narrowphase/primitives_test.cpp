@@ -102,7 +102,7 @@ struct Shape {
   }
 };
 
-double rf(double x) { return static_cast<double>(static_cast<float>(x)); }
+double rf(double x) { return test::round_to_float(x); }
 
 Shape rounded(Shape s) {
   for (auto* v : {&s.p, &s.e, &s.v1, &s.v2})

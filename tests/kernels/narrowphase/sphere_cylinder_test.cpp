@@ -114,13 +114,13 @@ TEST_P(SphereCylinder, RandomPosesAgainstDoubleReference) {
   int hits = 0, inside = 0;
   for (int k = 0; k < trials; ++k) {
     Cyl cy;
-    cy.p = (Vec3d(offset, -offset, 0.5 * offset) + Vec3d(u(g), u(g), u(g)) * size).cast<float>().cast<double>();
-    cy.R = test::random_rotation(g).cast<float>().cast<double>();
-    cy.r = double(float(s(g) * size));
-    cy.h = double(float(s(g) * size));
-    const double ra = double(float(s(g) * size));
+    cy.p = test::round_to_float((Vec3d(offset, -offset, 0.5 * offset) + Vec3d(u(g), u(g), u(g)) * size));
+    cy.R = test::round_to_float(test::random_rotation(g));
+    cy.r = test::round_to_float(s(g) * size);
+    cy.h = test::round_to_float(s(g) * size);
+    const double ra = test::round_to_float(s(g) * size);
     // centres from deep inside to well outside
-    const Vec3d c = (cy.p + Vec3d(u(g), u(g), u(g)) * (1.3 * size)).cast<float>().cast<double>();
+    const Vec3d c = test::round_to_float((cy.p + Vec3d(u(g), u(g), u(g)) * (1.3 * size)));
     Vec3d dir;
     const double want = reference(c, ra, cy, &dir);
     for (KernelPath path : {KernelPath::kSimd, KernelPath::kScalar}) {

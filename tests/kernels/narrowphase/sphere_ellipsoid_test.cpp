@@ -79,11 +79,11 @@ struct Hit {
 
 /// The query as the kernel sees it: every input rounded to float.
 Query rounded(Query q) {
-  q.c = q.c.cast<float>().cast<double>();
-  q.r = double(float(q.r));
-  q.b.p = q.b.p.cast<float>().cast<double>();
-  q.b.R = q.b.R.cast<float>().cast<double>();
-  q.b.e = q.b.e.cast<float>().cast<double>();
+  q.c = test::round_to_float(q.c);
+  q.r = test::round_to_float(q.r);
+  q.b.p = test::round_to_float(q.b.p);
+  q.b.R = test::round_to_float(q.b.R);
+  q.b.e = test::round_to_float(q.b.e);
   return q;
 }
 

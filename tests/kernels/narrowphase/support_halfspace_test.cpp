@@ -68,11 +68,11 @@ Arrays arrays_of(const Leaf1& l) {
 
 /// The leaf as the kernel sees it (float).
 Leaf1 rounded(Leaf1 l) {
-  l.p = l.p.cast<float>().cast<double>();
-  l.R = l.R.cast<float>().cast<double>();
-  l.e = l.e.cast<float>().cast<double>();
-  l.v1 = l.v1.cast<float>().cast<double>();
-  l.v2 = l.v2.cast<float>().cast<double>();
+  l.p = test::round_to_float(l.p);
+  l.R = test::round_to_float(l.R);
+  l.e = test::round_to_float(l.e);
+  l.v1 = test::round_to_float(l.v1);
+  l.v2 = test::round_to_float(l.v2);
   return l;
 }
 
@@ -228,8 +228,8 @@ TEST_P(SupportHalfspace, DeepestPointAndManifoldAgreeWithClosedForms) {
       Plane pl;
       pl.n = Vec3d(v(rng), v(rng), v(rng)).normalized();
       if (k % 5 == 0) pl.n = l.R.col(k % 3);  // axis-aligned with the shape: flat contacts
-      pl.n = pl.n.cast<float>().cast<double>();
-      pl.p = (Vec3d(1, -2, 0.5) * offset + Vec3d(v(rng), v(rng), v(rng)) * size * 0.5).cast<float>().cast<double>();
+      pl.n = test::round_to_float(pl.n);
+      pl.p = test::round_to_float((Vec3d(1, -2, 0.5) * offset + Vec3d(v(rng), v(rng), v(rng)) * size * 0.5));
       const double depth = -lowest(l, pl);
       if (std::fabs(depth) < tol * 4) continue;
       for (KernelPath path : {KernelPath::kSimd, KernelPath::kScalar}) {
@@ -435,7 +435,7 @@ TEST(SupportHalfspaceManifold, ManyVertexHullAtEverySinking) {
     l.p = Vec3d(v(rng), v(rng), v(rng)) * (k % 2 == 0 ? 1.0 : 1e5);
     l = rounded(l);
     Plane pl;
-    pl.n = Vec3d(v(rng), v(rng), v(rng)).normalized().cast<float>().cast<double>();
+    pl.n = test::round_to_float(Vec3d(v(rng), v(rng), v(rng)).normalized());
     // The lowest vertex, then the plane `sink` above it.
     std::vector<Vec3d> w;
     double lo = INFINITY;
@@ -443,7 +443,7 @@ TEST(SupportHalfspaceManifold, ManyVertexHullAtEverySinking) {
       w.push_back(l.p + l.R * x.cast<double>());
       lo = std::min(lo, pl.n.dot(w.back()));
     }
-    pl.p = (l.p + pl.n * (lo - pl.n.dot(l.p) + sink(rng))).cast<float>().cast<double>();
+    pl.p = test::round_to_float((l.p + pl.n * (lo - pl.n.dot(l.p) + sink(rng))));
     const double off = pl.n.dot(pl.p);
     // Float rounding: the hull's (size 1) and the world coordinates' (ulp of |p|).
     const double tol = 1e-5 + 1e-7 * l.p.norm();

@@ -71,9 +71,7 @@ struct Tri {
   Vec3d v(int i) const { return i == 0 ? p : (i == 1 ? v1 : v2); }
 };
 
-Vec3d to_float(const Vec3d& v) {
-  return {static_cast<float>(v.x()), static_cast<float>(v.y()), static_cast<float>(v.z())};
-}
+Vec3d to_float(const Vec3d& v) { return test::round_to_float(v); }
 /// The triangle as the kernel sees it: every coordinate rounded to float.
 Tri tri(const Vec3d& a, const Vec3d& b, const Vec3d& c) {
   Tri t;

@@ -8,6 +8,7 @@
 
 #include "kernels/raycast/ray_primitives.h"
 #include "kernels/raycast/ray_reference.h"
+#include "support/test_support.h"
 
 namespace impact::test {
 namespace {
@@ -52,7 +53,7 @@ TEST(RayPrimitives, RandomAgainstReference) {
       const V3 o = o_of(q), d = d_of(q);
       const double S = std::max(1.0, o.cwiseAbs().maxCoeff() + 10.0);
       const float r = static_cast<float>(0.2 + 2.0 * u01(rng));
-      const V3 cf = c.cast<float>().cast<double>();
+      const V3 cf = test::round_to_float(c);
       // Sphere.
       const float ts = kernels::ray_sphere(q, static_cast<float>(c.x()), static_cast<float>(c.y()), static_cast<float>(c.z()), r);
       expect_agrees(ref_sphere(o, d, q.tmax, cf, r), ts, S, "sphere " + std::to_string(i));
