@@ -11,8 +11,8 @@
 //              per-chunk lists concatenated in chunk order
 //   bucket     key = (type_a * 8 + type_b) << 32 | record, LSD radix sort on the
 //              type bits: buckets are contiguous and keep record order inside
-//   gather     both sides of every record into LeafSoA arrays (sorted position)
-//   kernels    pair_kernel(ta, tb) over each bucket
+//   gather + kernels  per block of up to 512 sorted positions of one bucket: both
+//              sides into a thread's LeafSoA scratch, then pair_kernel(ta, tb) on it
 //   output     manifolds of touching records in record order = (pair, child_a,
 //              child_b) order
 #include <algorithm>
@@ -35,6 +35,13 @@ using kernels::LeafType;
 
 constexpr uint32_t kExpandGrain = 2048;
 constexpr uint32_t kLaneGrain = 1024;
+/// Lanes gathered and run together (both sides' scratch: ~90 KB, in L2).
+constexpr uint32_t kLaneBlock = 512;
+
+/// Sorted positions [begin, end) of one bucket.
+struct Block {
+  uint32_t begin, end;
+};
 
 /// One leaf pair: pair index, children (kNoChild for plain shapes), the leaf types
 /// as stored (side 0 = the pair's a), and whether the kernel sees b as its A.
@@ -123,9 +130,10 @@ struct host::NarrowRunner::State {
   std::vector<uint64_t> keys;
   std::vector<uint32_t> order;     // sorted position -> record
   std::vector<uint32_t> position;  // record -> sorted position
-  SideArrays side[2];
+  std::vector<Block> blocks;
   OutArrays manifold;
   std::vector<uint32_t> chunk_hits;
+  std::vector<uint32_t> chunk_bad;  // per expansion chunk: its first bad pair (checked runs)
 
   // Inputs of the current call.
   const ShapeStore* store = nullptr;
@@ -137,7 +145,7 @@ struct host::NarrowRunner::State {
 
   Status run(const host::Executor& exec, const ShapeStore& store_in, std::span<const ShapeRecord* const> rec_in,
              std::span<const Posed> posed_in, std::span<const ShapePair> pairs_in, const kernels::NarrowConfig& cfg_in,
-             std::vector<Manifold>* result);
+             std::vector<Manifold>* result, size_t* bad_pair);
 
   // --- expansion ---------------------------------------------------------------------
   Box3 leaf_bounds(uint32_t obj, uint32_t child) const;
@@ -330,9 +338,44 @@ void host::NarrowRunner::State::expand(uint32_t pair_index, std::vector<LeafPair
 
 void host::NarrowRunner::State::fill(SideArrays& s, size_t k, uint32_t obj, uint32_t child) const {
   const ShapeRecord* r = &shape(obj);
-  Eigen::Matrix3f R = posed[obj].R;
-  Eigen::Vector3f p = posed[obj].p;
-  float w[6] = {0, 0, 0, 0, 0, 0};
+  const Posed& P = posed[obj];
+  // Only the fields the leaf type uses (leaf.h's table): a sphere lane writes 4 of the
+  // 22 arrays. Unused fields keep stale values that no kernel reads.
+  auto put_p = [&](const Eigen::Vector3f& p) {
+    for (int i = 0; i < 3; ++i) s.f[i][k] = p[i];
+  };
+  auto put_r = [&](const Eigen::Matrix3f& R) {
+    for (int i = 0; i < 3; ++i) {
+      for (int j = 0; j < 3; ++j) s.f[3 + 3 * i + j][k] = R(i, j);
+    }
+  };
+  auto put_e = [&](const float* e) {
+    for (int i = 0; i < 3; ++i) s.f[12 + i][k] = e[i];
+  };
+  // Plain shapes (every leaf of a pair list without meshes or compounds): the pose as it is.
+  switch (r->type) {
+    case ShapeType::kSphere:
+      put_p(P.p);
+      s.f[12][k] = r->e[0];
+      return;
+    case ShapeType::kCapsule:
+    case ShapeType::kBox:
+    case ShapeType::kCylinder:
+    case ShapeType::kEllipsoid:
+      put_p(P.p);
+      put_r(P.R);
+      put_e(r->e);
+      return;
+    case ShapeType::kConvex:
+      put_p(P.p);
+      put_r(P.R);
+      s.ref[k] = r->ref;
+      return;
+    default:
+      break;
+  }
+  Eigen::Matrix3f R = P.R;
+  Eigen::Vector3f p = P.p;
   if (r->type == ShapeType::kCompound) {
     const CompoundChild& c = store->children[store->child_begin[r->ref] + child];
     p = R * c.local.position + p;
@@ -340,88 +383,98 @@ void host::NarrowRunner::State::fill(SideArrays& s, size_t k, uint32_t obj, uint
     r = &store->shapes[c.shape.index];
   }
   float e[3] = {r->e[0], r->e[1], r->e[2]};
-  uint32_t ref = 0;
   switch (r->type) {
+    case ShapeType::kSphere:
+      put_p(p);
+      s.f[12][k] = e[0];
+      return;
     case ShapeType::kAabb:
-      R.setIdentity();
-      break;
+      put_p(p);
+      put_r(Eigen::Matrix3f::Identity());
+      put_e(e);
+      return;
     case ShapeType::kConvex:
-      ref = r->ref;
-      break;
+      put_p(p);
+      put_r(R);
+      s.ref[k] = r->ref;
+      return;
     case ShapeType::kHalfSpace: {
-      const Eigen::Vector3f n = R * Eigen::Vector3f(r->e[0], r->e[1], r->e[2]);
+      const Eigen::Vector3f n = R * Eigen::Vector3f(e[0], e[1], e[2]);
       const Eigen::Vector3f nn = n / n.norm();
-      p = p + R * (Eigen::Vector3f(r->e[0], r->e[1], r->e[2]) * r->offset);
-      e[0] = nn[0];
-      e[1] = nn[1];
-      e[2] = nn[2];
-      break;
+      put_p(p + R * (Eigen::Vector3f(e[0], e[1], e[2]) * r->offset));
+      const float ne[3] = {nn[0], nn[1], nn[2]};
+      put_e(ne);
+      return;
     }
     case ShapeType::kMesh: {
       const MeshData& m = store->meshes[r->ref];
       const Eigen::Vector3f v0 = R * m.vertices[m.indices[3 * child]] + p;
       const Eigen::Vector3f v1 = R * m.vertices[m.indices[3 * child + 1]] + p;
       const Eigen::Vector3f v2 = R * m.vertices[m.indices[3 * child + 2]] + p;
-      p = v0;
+      put_p(v0);
       for (int i = 0; i < 3; ++i) {
-        w[i] = v1[i];
-        w[3 + i] = v2[i];
+        s.f[15 + i][k] = v1[i];
+        s.f[18 + i][k] = v2[i];
       }
-      R.setIdentity();
-      e[0] = e[1] = e[2] = 0.0f;
-      break;
+      return;
     }
-    default:
-      break;
-  }
-  // Only the fields the leaf type uses (leaf.h's table): a sphere lane writes 4 of the
-  // 22 arrays. Unused fields keep stale values that no kernel reads.
-  const ShapeType t = r->type;
-  for (int i = 0; i < 3; ++i) s.f[i][k] = p[i];
-  if (t != ShapeType::kSphere && t != ShapeType::kMesh && t != ShapeType::kHalfSpace) {
-    for (int i = 0; i < 3; ++i) {
-      for (int j = 0; j < 3; ++j) s.f[3 + 3 * i + j][k] = R(i, j);
-    }
-  }
-  if (t == ShapeType::kMesh) {
-    for (int i = 0; i < 6; ++i) s.f[15 + i][k] = w[i];
-  } else if (t == ShapeType::kConvex) {
-    s.ref[k] = ref;
-  } else {
-    s.f[12][k] = e[0];
-    if (t != ShapeType::kSphere) {
-      s.f[13][k] = e[1];
-      s.f[14][k] = e[2];
-    }
+    default:  // capsule, box, cylinder, ellipsoid (compound children)
+      put_p(p);
+      put_r(R);
+      put_e(e);
+      return;
   }
 }
 
 Status host::NarrowRunner::State::run(const host::Executor& exec, const ShapeStore& store_in,
                                       std::span<const ShapeRecord* const> rec_in, std::span<const Posed> posed_in,
                                       std::span<const ShapePair> pairs_in, const kernels::NarrowConfig& cfg_in,
-                                      std::vector<Manifold>* result) {
+                                      std::vector<Manifold>* result, size_t* bad_pair) {
   store = &store_in;
   rec = rec_in.data();
   posed = posed_in.data();
   pairs = pairs_in.data();
-  result->clear();
+  if (bad_pair != nullptr) *bad_pair = pairs_in.size();
   if (pairs_in.size() >= 0xffffffffu) {
+    result->clear();
     return Status(StatusCode::kCapacityExceeded, "narrow phase: more than 2^32 - 2 pairs");
   }
 
-  // Expansion into leaf-pair records, per chunk, concatenated in chunk order.
+  // Expansion into leaf-pair records, per chunk, concatenated in chunk order. A checked
+  // run checks each pair first and stops its chunk at the first bad one.
   const auto np = static_cast<uint32_t>(pairs_in.size());
+  const auto objects = static_cast<uint32_t>(rec_in.size());
   const uint32_t chunks = host::chunk_count(np, kExpandGrain);
   chunk_records.resize(chunks);
+  chunk_bad.assign(chunks, 0xffffffffu);
   exec.for_each_chunk(np, kExpandGrain, [&](uint32_t b, uint32_t e, uint32_t chunk) {
     std::vector<LeafPair>& out = chunk_records[chunk];
     out.clear();
     std::vector<uint32_t> ca, cb;
-    for (uint32_t k = b; k < e; ++k) expand(k, &out, &ca, &cb);
+    for (uint32_t k = b; k < e; ++k) {
+      if (bad_pair != nullptr) {
+        const ShapePair& pr = pairs[k];
+        if (pr.a >= objects || pr.b >= objects || pr.a == pr.b ||
+            (rec[pr.a]->type == ShapeType::kHalfSpace && rec[pr.b]->type == ShapeType::kHalfSpace)) {
+          chunk_bad[chunk] = k;
+          return;
+        }
+      }
+      expand(k, &out, &ca, &cb);
+    }
   });
+  if (bad_pair != nullptr) {
+    for (uint32_t c = 0; c < chunks; ++c) {
+      if (chunk_bad[c] != 0xffffffffu) {
+        *bad_pair = chunk_bad[c];  // *result untouched, as after the object checks
+        return Status(StatusCode::kInvalidArgument, "narrow phase: bad pair");
+      }
+    }
+  }
   size_t total = 0;
   for (uint32_t c = 0; c < chunks; ++c) total += chunk_records[c].size();
   if (total >= 0xffffffffu) {
+    result->clear();
     return Status(StatusCode::kCapacityExceeded,
                   "narrow phase: more than 2^32 - 2 leaf pairs after expanding meshes and compounds");
   }
@@ -455,43 +508,49 @@ Status host::NarrowRunner::State::run(const host::Executor& exec, const ShapeSto
     }
   });
 
-  // Gather both sides in sorted order; side 0 is the kernel's A (the lower leaf type).
-  side[0].resize(nr);
-  side[1].resize(nr);
+  // Gather and kernels, fused per block: a block is up to kLaneBlock consecutive
+  // sorted positions of one bucket (blocks depend on the buckets alone, so the bytes
+  // do not depend on the thread count; a kernel's lane gives the same bytes for any
+  // range partition, leaf.h). Both sides of a block are gathered into this thread's
+  // scratch (side 0 is the kernel's A, the lower leaf type) and the kernel runs on it
+  // at once, while the inputs are in cache: the gathered inputs never go to memory.
   manifold.resize(nr);
-  exec.for_each_chunk(nr, kLaneGrain, [&](uint32_t b, uint32_t e, uint32_t) {
-    for (uint32_t s = b; s < e; ++s) {
-      const LeafPair& lp = records[order[s]];
-      const ShapePair& pr = pairs[lp.pair];
-      if (lp.swapped) {
-        fill(side[0], s, pr.b, lp.child_b);
-        fill(side[1], s, pr.a, lp.child_a);
-      } else {
-        fill(side[0], s, pr.a, lp.child_a);
-        fill(side[1], s, pr.b, lp.child_b);
-      }
-    }
-  });
-
-  // Kernels, bucket by bucket.
-  kernels::NarrowConfig cfg = cfg_in;
-  cfg.hulls = store->hulls.view();
+  blocks.clear();
   for (uint32_t begin = 0; begin < nr;) {
     const uint64_t bucket = keys[begin] >> 32;
     uint32_t end = begin + 1;
     while (end < nr && (keys[end] >> 32) == bucket) ++end;
-    const auto ta = static_cast<LeafType>(bucket / kernels::kLeafTypeCount);
-    const auto tb = static_cast<LeafType>(bucket % kernels::kLeafTypeCount);
-    const kernels::PairKernel kernel = kernels::pair_kernel(ta, tb);
-    IMPACT_ASSERT(kernel != nullptr);
-    const kernels::LeafSoA A = side[0].view(begin);
-    const kernels::LeafSoA B = side[1].view(begin);
-    const kernels::ManifoldSoA M = manifold.view(begin);
-    exec.for_each_chunk(end - begin, kLaneGrain, [&](uint32_t b, uint32_t e, uint32_t) {
-      kernel(A, B, M, kernels::Range{b, e}, cfg);
-    });
+    for (uint32_t b = begin; b < end; b += kLaneBlock) blocks.push_back({b, std::min(end, b + kLaneBlock)});
     begin = end;
   }
+  kernels::NarrowConfig cfg = cfg_in;
+  cfg.hulls = store->hulls.view();
+  exec.for_each_chunk(blocks.size(), 1, [&](uint32_t bi, uint32_t, uint32_t) {
+    const Block blk = blocks[bi];
+    const uint64_t bucket = keys[blk.begin] >> 32;
+    const kernels::PairKernel kernel = kernels::pair_kernel(static_cast<LeafType>(bucket / kernels::kLeafTypeCount),
+                                                            static_cast<LeafType>(bucket % kernels::kLeafTypeCount));
+    IMPACT_ASSERT(kernel != nullptr);
+    thread_local SideArrays scratch[2];
+    if (scratch[0].ref.size() < kLaneBlock) {
+      scratch[0].resize(kLaneBlock);
+      scratch[1].resize(kLaneBlock);
+    }
+    for (uint32_t s = blk.begin; s < blk.end; ++s) {
+      const LeafPair& lp = records[order[s]];
+      const ShapePair& pr = pairs[lp.pair];
+      const uint32_t k = s - blk.begin;
+      if (lp.swapped) {
+        fill(scratch[0], k, pr.b, lp.child_b);
+        fill(scratch[1], k, pr.a, lp.child_a);
+      } else {
+        fill(scratch[0], k, pr.a, lp.child_a);
+        fill(scratch[1], k, pr.b, lp.child_b);
+      }
+    }
+    kernel(scratch[0].view(0), scratch[1].view(0), manifold.view(blk.begin), kernels::Range{0, blk.end - blk.begin},
+           cfg);
+  });
 
   // Output in record order.
   const uint32_t out_chunks = host::chunk_count(nr, kLaneGrain * 4);
@@ -502,6 +561,8 @@ Status host::NarrowRunner::State::run(const host::Executor& exec, const ShapeSto
     chunk_hits[chunk + 1] = hits;
   });
   for (uint32_t c = 0; c < out_chunks; ++c) chunk_hits[c + 1] += chunk_hits[c];
+  // Every field of every manifold is written below: a result vector kept from an
+  // earlier call is only resized (no construction of the elements it already has).
   result->resize(chunk_hits[out_chunks]);
   exec.for_each_chunk(nr, kLaneGrain * 4, [&](uint32_t b, uint32_t e, uint32_t chunk) {
     uint32_t at = chunk_hits[chunk];
@@ -538,8 +599,8 @@ host::NarrowRunner::~NarrowRunner() = default;
 Status host::NarrowRunner::run(const Executor& exec, const ShapeStore& store,
                                std::span<const ShapeRecord* const> rec, std::span<const PosedObject> poses,
                                std::span<const ShapePair> pairs, const kernels::NarrowConfig& cfg,
-                               std::vector<Manifold>* out) {
-  return s_->run(exec, store, rec, poses, pairs, cfg, out);
+                               std::vector<Manifold>* out, size_t* bad_pair) {
+  return s_->run(exec, store, rec, poses, pairs, cfg, out, bad_pair);
 }
 
 // --- public ------------------------------------------------------------------------------
@@ -551,7 +612,7 @@ struct NarrowPhase::Impl {
   host::NarrowRunner runner;
   std::vector<Posed> posed;
   std::vector<const ShapeRecord*> rec;
-  std::vector<uint32_t> first_bad;  // per chunk of objects, then of pairs
+  std::vector<uint32_t> first_bad;  // per chunk of objects: its first bad object
 
   Status collide(const ShapeSet& shapes, std::span<const ShapeId> shape_of_in,
                  std::span<const Pose> poses, std::span<const ShapePair> pairs_in,
@@ -571,16 +632,13 @@ Status NarrowPhase::Impl::collide(const ShapeSet& shapes, std::span<const ShapeI
   }
   const ShapeStore* store = &shapes.store();
   const auto n = static_cast<uint32_t>(shape_of_in.size());
-  // A parallel pass finds the first bad object and the first bad pair (lowest index:
-  // the same error for every thread count); the messages come from the serial checks
-  // below, run from there.
-  const auto np_in = static_cast<uint32_t>(pairs_in.size());
+  // One parallel pass checks and poses the objects and finds the first bad one (lowest
+  // index: the same error for every thread count); its message comes from the serial
+  // check below, run from there. After a bad object the rest of its chunk is left
+  // unposed, and the call fails. The pairs are checked as the runner expands them.
   const uint32_t obj_chunks = host::chunk_count(n, kExpandGrain);
-  const uint32_t pair_chunks = host::chunk_count(np_in, kExpandGrain);
-  first_bad.assign(static_cast<size_t>(obj_chunks) + pair_chunks, 0xffffffffu);
+  first_bad.assign(obj_chunks, 0xffffffffu);
   const size_t shape_count = store->shapes.size();
-  // Objects are checked and posed in one pass (one read of the poses); after a bad
-  // object the rest of its chunk is left unposed, and the call fails below.
   rec.resize(n);
   posed.resize(n);
   exec.for_each_chunk(n, kExpandGrain, [&](uint32_t b, uint32_t e, uint32_t chunk) {
@@ -590,29 +648,20 @@ Status NarrowPhase::Impl::collide(const ShapeSet& shapes, std::span<const ShapeI
         first_bad[chunk] = i;
         return;
       }
-      rec[i] = &store->shapes[shape_of_in[i].index];
-      posed[i].R = pose.orientation.normalized().toRotationMatrix();
+      const ShapeRecord* r = &store->shapes[shape_of_in[i].index];
+      rec[i] = r;
+      // A sphere's rotation is never read (leaf.h: p and e0 only).
+      if (r->type == ShapeType::kSphere) {
+        posed[i].R.setIdentity();
+      } else {
+        posed[i].R = host::rotation_of(pose.orientation);
+      }
       posed[i].p = pose.position;
     }
   });
-  exec.for_each_chunk(np_in, kExpandGrain, [&](uint32_t b, uint32_t e, uint32_t chunk) {
-    for (uint32_t k = b; k < e; ++k) {
-      const ShapePair& pr = pairs_in[k];
-      // (An unknown shape id is reported as an object error first: flag, don't read.)
-      if (pr.a >= n || pr.b >= n || pr.a == pr.b || shape_of_in[pr.a].index >= shape_count ||
-          shape_of_in[pr.b].index >= shape_count ||
-          (store->shapes[shape_of_in[pr.a].index].type == ShapeType::kHalfSpace &&
-           store->shapes[shape_of_in[pr.b].index].type == ShapeType::kHalfSpace)) {
-        first_bad[obj_chunks + chunk] = k;
-        return;
-      }
-    }
-  });
-  uint32_t bad_obj = n, bad_pair = np_in;
+  uint32_t bad_obj = n;
   for (uint32_t c = 0; c < obj_chunks && bad_obj == n; ++c)
     if (first_bad[c] != 0xffffffffu) bad_obj = first_bad[c];
-  for (uint32_t c = 0; c < pair_chunks && bad_pair == np_in; ++c)
-    if (first_bad[obj_chunks + c] != 0xffffffffu) bad_pair = first_bad[obj_chunks + c];
   for (uint32_t i = bad_obj; i < n; ++i) {
     if (shape_of_in[i].index >= store->shapes.size()) {
       return Status(StatusCode::kInvalidArgument,
@@ -623,7 +672,10 @@ Status NarrowPhase::Impl::collide(const ShapeSet& shapes, std::span<const ShapeI
       return host::check_pose(poses[i], who.c_str());
     }
   }
-  for (size_t k = bad_pair; k < pairs_in.size(); ++k) {
+  size_t bad_pair = pairs_in.size();
+  const Status st = runner.run(exec, *store, rec, posed, pairs_in, host::config_of(options), result, &bad_pair);
+  if (bad_pair < pairs_in.size()) {
+    const size_t k = bad_pair;
     const ShapePair& pr = pairs_in[k];
     if (pr.a >= n || pr.b >= n) {
       return Status(StatusCode::kInvalidArgument, "pair " + std::to_string(k) + ": index out of range (" +
@@ -633,14 +685,10 @@ Status NarrowPhase::Impl::collide(const ShapeSet& shapes, std::span<const ShapeI
       return Status(StatusCode::kInvalidArgument,
                     "pair " + std::to_string(k) + ": an object cannot collide with itself");
     }
-    if (store->shapes[shape_of_in[pr.a].index].type == ShapeType::kHalfSpace &&
-        store->shapes[shape_of_in[pr.b].index].type == ShapeType::kHalfSpace) {
-      return Status(StatusCode::kInvalidArgument,
-                    "pair " + std::to_string(k) + ": two half-spaces have no finite collision data");
-    }
+    return Status(StatusCode::kInvalidArgument,
+                  "pair " + std::to_string(k) + ": two half-spaces have no finite collision data");
   }
-  result->clear();
-  return runner.run(exec, *store, rec, posed, pairs_in, host::config_of(options), result);
+  return st;
 }
 
 kernels::NarrowConfig host::config_of(const NarrowPhaseOptions& o) {

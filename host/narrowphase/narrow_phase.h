@@ -41,9 +41,14 @@ class NarrowRunner {
   /// point outside store, e.g. a sphere or half-space record of the caller's own;
   /// convex/mesh/compound records index into store), poses[i] its rotation and
   /// position, pairs index objects (a != b, not two half-spaces). cfg.hulls is set here.
+  /// bad_pair: null, or the pairs are checked as they are expanded (indices in range,
+  /// a != b, not two half-spaces): when one fails, *bad_pair is the lowest failing
+  /// index, *out is left empty and the call returns kInvalidArgument (the caller words
+  /// the message); else *bad_pair = pairs.size(). The check rides on the expansion,
+  /// which reads the same records, instead of costing a pass of its own.
   Status run(const Executor& exec, const ShapeStore& store, std::span<const ShapeRecord* const> rec,
              std::span<const PosedObject> poses, std::span<const ShapePair> pairs,
-             const kernels::NarrowConfig& cfg, std::vector<Manifold>* out);
+             const kernels::NarrowConfig& cfg, std::vector<Manifold>* out, size_t* bad_pair = nullptr);
 
  private:
   struct State;

@@ -38,6 +38,22 @@ inline Status check_pose(const Pose& p, const char* who) {
   return {};
 }
 
+/// The rotation of q / |q| (q finite, not zero), without the square root of
+/// normalising first: with s = 2 / |q|^2, R = I + s (w [v]x + [v]x^2) term by term.
+inline Eigen::Matrix3f rotation_of(const Eigen::Quaternionf& q) {
+  const float x = q.x(), y = q.y(), z = q.z(), w = q.w();
+  const float s = 2.0f / (x * x + y * y + z * z + w * w);
+  const float xs = x * s, ys = y * s, zs = z * s;
+  const float wx = w * xs, wy = w * ys, wz = w * zs;
+  const float xx = x * xs, xy = x * ys, xz = x * zs;
+  const float yy = y * ys, yz = y * zs, zz = z * zs;
+  Eigen::Matrix3f R;
+  R << 1.0f - (yy + zz), xy - wz, xz + wy,  //
+      xy + wz, 1.0f - (xx + zz), yz - wx,   //
+      xz - wy, yz + wx, 1.0f - (xx + yy);
+  return R;
+}
+
 inline Pose normalized(const Pose& p) {
   Pose out;
   out.position = p.position;
