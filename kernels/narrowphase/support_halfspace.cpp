@@ -19,11 +19,14 @@
 // per-lane code on both paths.
 // Cost: O(1) per lane, O(vertex count) for convex hulls: the plane is moved into the
 // hull's frame once, then one SIMD pass finds the deepest vertex (all a separated pair
-// costs) and three more, masked to the vertices below, pick the manifold (first_max,
+// costs), a second lists the vertices below, and the other three picks walk that list
+// (more than 32 below: three masked passes over every vertex instead; first_max,
 // hull_below); only the chosen points are transformed to the world frame. No
 // allocation. impact_narrowbench (24-point hulls, half the pairs touching), A/B in one
-// run: ~71 ns per pair (was 78 with a candidate list and world-frame selection passes,
-// 130 before that; FCL ~190, one contact point).
+// run on a loaded machine: SIMD ~55 -> ~46 ns per pair, scalar ~115 -> ~77 (the three
+// masked passes over all vertices before; earlier ~71 on an idle machine, 78 with a
+// world-frame candidate list, 130 before that; FCL ~190, one contact point).
+#include <bit>
 #include <cmath>
 
 #include "kernels/narrowphase/pair_kernels.h"
@@ -168,11 +171,17 @@ IMPACT_INLINE float first_max(const HullView& h, uint32_t vb, uint32_t ve, Score
 
 /// Up to 4 vertices of hull [vb, ve) below the plane nl.x = offl (the hull's frame),
 /// the same rule as pick_below: the deepest (pd > 0), the farthest from it, the one
-/// adding the largest area, the one farthest outside that triangle. Four passes over
-/// the vertices (one when none is below), each a first_max of a masked score; the
-/// area terms are triple products with nl precomputed as one dot per vertex:
-/// nl.((p1 - p0) x (x - p0)) = (x - p0).(nl x (p1 - p0)). Outputs local vertices v[]
-/// and their depths pd[]; returns the count.
+/// adding the largest area, the one farthest outside that triangle (each the first
+/// maximum in vertex order). One first_max pass finds the deepest vertex (a separated
+/// pair stops there); a second SIMD pass lists the vertices below in vertex order, and
+/// the other three picks walk only that list (a resting hull has a face's few vertices
+/// below). More than kBelowList vertices below: those picks are masked first_max passes
+/// over all vertices instead. Same picks either way. The area terms are triple
+/// products with nl precomputed as one dot per vertex: nl.((p1 - p0) x (x - p0)) =
+/// (x - p0).(nl x (p1 - p0)). Outputs local vertices v[] and their depths pd[];
+/// returns the count.
+inline constexpr uint32_t kBelowList = 32;
+
 template <class F>
 uint32_t hull_below(const HullView& h, uint32_t vb, uint32_t ve, V3 nl, float offl, V3* v, float* pd) {
   const float nx = nl.x, ny = nl.y, nz = nl.z;
@@ -181,26 +190,78 @@ uint32_t hull_below(const HullView& h, uint32_t vb, uint32_t ve, V3 nl, float of
     return G(offl) - (G(nx) * x + G(ny) * y + G(nz) * z);
   };
   auto local = [&](uint32_t i) { return V3{h.vx[i], h.vy[i], h.vz[i]}; };
+  auto depth1 = [&](V3 p) { return depth(simd::Float1(p.x), simd::Float1(p.y), simd::Float1(p.z)).lane(0); };
+  // Pass 1: the deepest vertex (a separated pair stops here).
   uint32_t i0 = vb;
   const float d0 = first_max<F>(h, vb, ve, depth, 0.0f, &i0);
   if (!(d0 > 0.0f)) return 0;
   const V3 p0 = local(i0);
   v[0] = p0;
   pd[0] = d0;
+  // Pass 2: the vertices below, in vertex order (up to kBelowList; more: not listed).
+  uint32_t list[kBelowList];
+  uint32_t nlist = 0;
+  bool listed = true;
+  {
+    constexpr uint32_t kW = F::kWidth;
+    uint32_t i = vb;
+    for (; i + kW <= ve && listed; i += kW) {
+      uint32_t bits = simd::bits(depth(F::load(h.vx + i), F::load(h.vy + i), F::load(h.vz + i)) > F(0.0f));
+      for (; bits != 0; bits &= bits - 1) {
+        if (nlist == kBelowList) {
+          listed = false;
+          break;
+        }
+        list[nlist++] = i + static_cast<uint32_t>(std::countr_zero(bits));
+      }
+    }
+    for (; i < ve && listed; ++i) {
+      if (depth1(local(i)) > 0.0f) {
+        if (nlist == kBelowList) {
+          listed = false;
+          break;
+        }
+        list[nlist++] = i;
+      }
+    }
+  }
+  // First strict maximum of score over the vertices below (list order = vertex order).
+  auto list_max = [&](auto score, float above, uint32_t* at) {
+    float best = -INFINITY;
+    for (uint32_t q = 0; q < nlist; ++q) {
+      const V3 x = local(list[q]);
+      const float s = score(simd::Float1(x.x), simd::Float1(x.y), simd::Float1(x.z)).lane(0);
+      if (s > best) {
+        best = s;
+        *at = list[q];
+      }
+    }
+    (void)above;  // *at is read only when best > above, as first_max's
+    return best;
+  };
+  auto pick = [&](auto score, float above, uint32_t* at) {
+    if (listed) return list_max(score, above, at);
+    return first_max<F>(
+        h, vb, ve,
+        [=](auto x, auto y, auto z) {
+          using G = decltype(x);
+          return select(depth(x, y, z) > G(0.0f), score(x, y, z), G(-INFINITY));
+        },
+        above, at);
+  };
   // Farthest from p0 among the vertices below.
   uint32_t i1 = vb;
-  const float far = first_max<F>(
-      h, vb, ve,
+  const float far = pick(
       [=](auto x, auto y, auto z) {
         using G = decltype(x);
         const G dx = x - G(p0.x), dy = y - G(p0.y), dz = z - G(p0.z);
-        return select(depth(x, y, z) > G(0.0f), dx * dx + dy * dy + dz * dz, G(-INFINITY));
+        return dx * dx + dy * dy + dz * dz;
       },
       0.0f, &i1);
   if (!(far > 0.0f)) return 1;
   const V3 p1 = local(i1);
   v[1] = p1;
-  pd[1] = depth(simd::Float1(p1.x), simd::Float1(p1.y), simd::Float1(p1.z)).lane(0);
+  pd[1] = depth1(p1);
   // Largest |area| with p0, p1 (about nl): a = (x - p0).c with c = nl x (p1 - p0).
   const V3 c = cvx::cross(nl, p1 - p0);
   auto area = [=](auto x, auto y, auto z) {
@@ -211,35 +272,27 @@ uint32_t hull_below(const HullView& h, uint32_t vb, uint32_t ve, V3 nl, float of
   // collinear point.
   const float tiny = 1e-6f * cvx::len2(p1 - p0);
   uint32_t i2 = vb;
-  const float amax = first_max<F>(
-      h, vb, ve,
-      [=](auto x, auto y, auto z) {
-        using G = decltype(x);
-        return select(depth(x, y, z) > G(0.0f), abs(area(x, y, z)), G(-INFINITY));
-      },
-      tiny, &i2);
+  const float amax = pick([=](auto x, auto y, auto z) { return abs(area(x, y, z)); }, tiny, &i2);
   if (!(amax > tiny)) return 2;
   const V3 p2 = local(i2);
   v[2] = p2;
-  pd[2] = depth(simd::Float1(p2.x), simd::Float1(p2.y), simd::Float1(p2.z)).lane(0);
+  pd[2] = depth1(p2);
   // Farthest outside the triangle p0 p1 p2: the largest of its three edge distances
   // (times the edge lengths), each (x - pj).gj with gj = -sgn nl x (pj+1 - pj).
   const float sgn = area(simd::Float1(p2.x), simd::Float1(p2.y), simd::Float1(p2.z)).lane(0) >= 0.0f ? -1.0f : 1.0f;
   const V3 g0 = cvx::cross(nl, p1 - p0) * sgn, g1 = cvx::cross(nl, p2 - p1) * sgn, g2 = cvx::cross(nl, p0 - p2) * sgn;
   uint32_t i3 = vb;
-  const float omax = first_max<F>(
-      h, vb, ve,
+  const float omax = pick(
       [=](auto x, auto y, auto z) {
         using G = decltype(x);
         auto edge = [&](V3 p, V3 g) { return (x - G(p.x)) * G(g.x) + (y - G(p.y)) * G(g.y) + (z - G(p.z)) * G(g.z); };
-        const G o = max(edge(p0, g0), max(edge(p1, g1), edge(p2, g2)));
-        return select(depth(x, y, z) > G(0.0f), o, G(-INFINITY));
+        return max(edge(p0, g0), max(edge(p1, g1), edge(p2, g2)));
       },
       tiny, &i3);
   if (!(omax > tiny)) return 3;
   const V3 p3 = local(i3);
   v[3] = p3;
-  pd[3] = depth(simd::Float1(p3.x), simd::Float1(p3.y), simd::Float1(p3.z)).lane(0);
+  pd[3] = depth1(p3);
   return 4;
 }
 

@@ -402,7 +402,7 @@ TEST(SupportHalfspaceManifold, SunkHullKeepsDeepestAndSpreadPoints) {
 
 /// A hull of ~400 vertices (points on an ellipsoid) sunk from barely to entirely below
 /// the plane, so that the vertices below range from one to all of them: both the
-/// candidate list of the kernel (up to 64 vertices below) and its fallback over all
+/// candidate list of the kernel (up to 32 vertices below, kBelowList) and its fallback over all
 /// vertices. Against a brute force over the vertices in double: depth = the deepest
 /// vertex's, pd[0] is it, count = min(4, vertices below) where they span an area,
 /// every point is a vertex below moved up by pd/2, and point 1 is the vertex below
@@ -455,7 +455,7 @@ TEST(SupportHalfspaceManifold, ManyVertexHullAtEverySinking) {
       depth = std::max(depth, d);
     }
     if (below.size() < 5) continue;  // few points: ties at the threshold
-    (below.size() <= 64 ? few : many)++;
+    (below.size() <= 32 ? few : many)++;
     const Result r = run(l, pl);
     ASSERT_EQ(r.count, 4u) << k << " below " << below.size();
     EXPECT_NEAR(r.depth, depth, tol) << k;
