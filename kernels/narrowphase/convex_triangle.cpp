@@ -1,0 +1,532 @@
+// HEADER (written below, once measured)
+#include <cfloat>
+#include <cmath>
+#include <cstdint>
+
+#include "kernels/narrowphase/gjk_epa.h"
+#include "kernels/narrowphase/pair_kernels.h"
+#include "kernels/simd/lanes.h"
+
+namespace impact::kernels {
+namespace {
+
+using cvx::cross;
+using cvx::dot;
+using cvx::V3;
+
+/// Tie rule (as box-triangle, primitives_box_triangle.cpp): the triangle's normal beats
+/// the best hull face, and an edge axis the best face, only when it separates more by
+/// kTieRel * |separation| + kTieSize * size; an edge axis also by its own rounding,
+/// kEdgeRound * (size + |coordinates|) / sin(angle of the two edges).
+constexpr float kTieRel = 1e-5f;
+constexpr float kTieSize = 1e-6f;
+constexpr float kEdgeRound = 2e-7f;
+/// Edge pairs within asin(1e-6) of parallel are skipped: their Minkowski face is a
+/// sliver whose neighbours (other axes of the test) hold the depth to ~1e-6 of the size.
+constexpr float kEdgeSkipSq = 1e-12f;
+/// Clip buffers: a face polygon of up to kMaxFaceVerts vertices clipped by a triangle
+/// (or a triangle by such a face) has at most kMaxFaceVerts + 3 vertices.
+constexpr uint32_t kMaxFaceVerts = 64;
+constexpr uint32_t kMaxClip = kMaxFaceVerts + 4;
+
+IMPACT_INLINE float l1(V3 a) { return std::fabs(a.x) + std::fabs(a.y) + std::fabs(a.z); }
+IMPACT_INLINE V3 vertex(const HullView& h, uint32_t i) { return V3{h.vx[i], h.vy[i], h.vz[i]}; }
+IMPACT_INLINE V3 face_normal(const HullView& h, uint32_t f) { return V3{h.fnx[f], h.fny[f], h.fnz[f]}; }
+
+/// Block starts of a W-wide pass over [0, n), n >= W: 0, W, ..., and n - W for the last
+/// (overlapping) block, which revisits items: harmless for min / max and for an argmax
+/// that keeps the lowest index among ties.
+template <uint32_t W>
+IMPACT_INLINE uint32_t next_block(uint32_t i, uint32_t n) {
+  return i + 2 * W <= n ? i + W : n - W;
+}
+
+template <class F>
+IMPACT_INLINE float lanes_max(F v) {
+  float m = v.lane(0);
+  for (uint32_t l = 1; l < F::kWidth; ++l) m = simd::fmax_nn(m, v.lane(l));
+  return m;
+}
+template <class F>
+IMPACT_INLINE float lanes_min(F v) {
+  float m = v.lane(0);
+  for (uint32_t l = 1; l < F::kWidth; ++l) m = simd::fmin_nn(m, v.lane(l));
+  return m;
+}
+
+/// The triangle in the hull's frame.
+struct Tri {
+  V3 v[3];
+  V3 fu[3];          // unit direction of edge j = v[j] -> v[j + 1] (0 for a zero-length edge)
+  float inv_len[3];  // 1 / |edge j| (0 for a zero-length edge)
+  V3 nraw;           // (v1 - v0) x (v2 - v0): twice the area times the unit normal
+};
+
+// ---------------------------------------------------------------------------------------
+// Passes over the hull, W = F::kWidth items per step
+// ---------------------------------------------------------------------------------------
+
+/// Over the hull's vertices (n of them, n >= W): max and min of a.x, max of u.x.
+template <class F>
+IMPACT_INLINE void vertex_pass(const float* vx, const float* vy, const float* vz, uint32_t n, V3 a, V3 u,
+                               float* amax, float* amin, float* umax) {
+  constexpr uint32_t W = F::kWidth;
+  const F ax(a.x), ay(a.y), az(a.z), ux(u.x), uy(u.y), uz(u.z);
+  F mx(-INFINITY), mn(INFINITY), mu(-INFINITY);
+  for (uint32_t i = 0;; i = next_block<W>(i, n)) {
+    const F x = F::load(vx + i), y = F::load(vy + i), z = F::load(vz + i);
+    const F s = ax * x + ay * y + az * z;
+    mx = simd::max(mx, s);
+    mn = simd::min(mn, s);
+    mu = simd::max(mu, ux * x + uy * y + uz * z);
+    if (i + W == n) break;
+  }
+  *amax = lanes_max(mx);
+  *amin = lanes_min(mn);
+  *umax = lanes_max(mu);
+}
+
+/// Over the hull's vertices (n >= W): the index of the largest a.x (lowest among ties).
+template <class F>
+IMPACT_INLINE uint32_t vertex_argmax(const float* vx, const float* vy, const float* vz, uint32_t n, V3 a) {
+  constexpr uint32_t W = F::kWidth;
+  const F ax(a.x), ay(a.y), az(a.z), lane = simd::lane_index<F>();
+  F m(-INFINITY), mi(0.0f);
+  for (uint32_t i = 0;; i = next_block<W>(i, n)) {
+    const F s = ax * F::load(vx + i) + ay * F::load(vy + i) + az * F::load(vz + i);
+    const auto g = s > m;
+    m = simd::select(g, s, m);
+    mi = simd::select(g, lane + F(static_cast<float>(i)), mi);
+    if (i + W == n) break;
+  }
+  float bi;
+  simd::max_lowest_index(m, mi, static_cast<float>(n), &bi);
+  return static_cast<uint32_t>(bi);
+}
+
+struct FacePass {
+  float sep = -INFINITY;  // max over faces of (min over the triangle's vertices of fn.v) - fd
+  uint32_t face = 0;      // its face (hull-local index, the lowest among ties)
+  float dmax = 0.0f;      // max |fd|: the hull's size
+};
+
+/// Over faces [0, n) of the hull's face arrays (already offset), n >= W.
+template <class F>
+IMPACT_INLINE FacePass face_pass(const float* fnx, const float* fny, const float* fnz, const float* fd, uint32_t n,
+                                 const Tri& T) {
+  constexpr uint32_t W = F::kWidth;
+  const F lane = simd::lane_index<F>();
+  const F x0(T.v[0].x), y0(T.v[0].y), z0(T.v[0].z), x1(T.v[1].x), y1(T.v[1].y), z1(T.v[1].z), x2(T.v[2].x),
+      y2(T.v[2].y), z2(T.v[2].z);
+  F m(-INFINITY), mi(0.0f), dm(0.0f);
+  for (uint32_t i = 0;; i = next_block<W>(i, n)) {
+    const F nx = F::load(fnx + i), ny = F::load(fny + i), nz = F::load(fnz + i), d = F::load(fd + i);
+    const F a0 = nx * x0 + ny * y0 + nz * z0, a1 = nx * x1 + ny * y1 + nz * z1, a2 = nx * x2 + ny * y2 + nz * z2;
+    const F s = simd::min(a0, simd::min(a1, a2)) - d;
+    const auto g = s > m;
+    m = simd::select(g, s, m);
+    mi = simd::select(g, lane + F(static_cast<float>(i)), mi);
+    dm = simd::max(dm, simd::abs(d));
+    if (i + W == n) break;
+  }
+  FacePass fp;
+  float bi;
+  fp.sep = simd::max_lowest_index(m, mi, static_cast<float>(n), &bi);
+  fp.face = static_cast<uint32_t>(bi);
+  fp.dmax = lanes_max(dm);
+  return fp;
+}
+
+/// Over faces [0, n) (n >= W): the index of the largest fn.a (lowest among ties).
+template <class F>
+IMPACT_INLINE uint32_t face_argmax(const float* fnx, const float* fny, const float* fnz, uint32_t n, V3 a) {
+  return vertex_argmax<F>(fnx, fny, fnz, n, a);
+}
+
+struct EdgeBest {
+  float q = -INFINITY;  // key |key| * |L|^2 ... see edge_pass; -inf: no candidate
+  uint32_t edge = 0;    // adjacency index relative to the hull's first edge
+  uint32_t tri_edge = 0;
+};
+
+/// The edge axes: every hull edge (adjacency list [0, ne), padded to a multiple of 8)
+/// against the triangle's three edges, W hull edges per step. A pair (a, j) is a
+/// candidate when the great circle perpendicular to triangle edge j crosses hull edge
+/// a's normal arc (the arc from bisector m within angle theta: the arc's two ends lie
+/// on either side of the circle, |m.f| cos(theta) <= |w.f| sin(theta) / |e| with
+/// w = m x e); the axis is then n = L / |L|, L = e x f oriented along m (sign of
+/// m.L = w.f): hull edge a is the hull's support along n, so the separation is
+/// min over the triangle's vertices of n.(v - p_a), of which v_j and the opposite vertex
+/// suffice (v_j+1 projects as v_j). The key is that separation less its rounding
+/// (pen / |L|); candidates are ranked by key |key| (monotone in the key, and no square
+/// root): q = k |k| / |L|^2 with k the key times |L|. stop: return once a candidate's key
+/// is positive (a separating axis, to be confirmed by the caller).
+template <class F>
+IMPACT_INLINE EdgeBest edge_pass(const HullView& h, uint32_t eb, uint32_t ne, uint32_t vb, const Tri& T, float rs,
+                                 bool stop, bool* stopped) {
+  constexpr uint32_t W = F::kWidth;
+  using I = typename F::Int;
+  const F zero(0.0f), one(1.0f), skip(kEdgeSkipSq), RS(rs), lane4 = simd::lane_index<F>() * F(4.0f);
+  const F nx(T.nraw.x), ny(T.nraw.y), nz(T.nraw.z);
+  const float* bx = h.vx + vb;
+  const float* by = h.vy + vb;
+  const float* bz = h.vz + vb;
+  F best(-INFINITY), bidx(0.0f);
+  *stopped = false;
+  for (uint32_t i = 0; i < ne; i += W) {
+    const uint32_t g = eb + i;
+    const F px = F::load(h.epx + g), py = F::load(h.epy + g), pz = F::load(h.epz + g);
+    const I j1 = I::load(reinterpret_cast<const int32_t*>(h.ev1 + g));
+    const F ex = simd::gather(bx, j1) - px, ey = simd::gather(by, j1) - py, ez = simd::gather(bz, j1) - pz;
+    const F mx = F::load(h.emx + g), my = F::load(h.emy + g), mz = F::load(h.emz + g);
+    const F c = F::load(h.ecos + g), s = F::load(h.esin + g);
+    const F ee = ex * ex + ey * ey + ez * ez;
+    const F wx = my * ez - mz * ey, wy = mz * ex - mx * ez, wz = mx * ey - my * ex;
+    const F en = ex * nx + ey * ny + ez * nz;
+    const F pen = RS * simd::sqrt(ee);
+    const F idx0 = lane4 + F(static_cast<float>(4 * i));
+    for (uint32_t j = 0; j < 3; ++j) {
+      const F fx(T.fu[j].x), fy(T.fu[j].y), fz(T.fu[j].z);
+      const F mf = mx * fx + my * fy + mz * fz, wf = wx * fx + wy * fy + wz * fz;
+      const F mc = mf * c, ws = wf * s;
+      const auto arc = mc * mc * ee <= ws * ws;
+      const F lx = ey * fz - ez * fy, ly = ez * fx - ex * fz, lz = ex * fy - ey * fx;
+      const F ll = lx * lx + ly * ly + lz * lz;
+      const F t0 = lx * (F(T.v[j].x) - px) + ly * (F(T.v[j].y) - py) + lz * (F(T.v[j].z) - pz);
+      const F t1 = t0 + en * F(T.inv_len[j]);  // at the opposite vertex
+      const F sn = simd::select(wf < zero, -simd::max(t0, t1), simd::min(t0, t1));
+      const F kn = sn - pen;
+      const auto ok = arc & (ll > skip * ee);
+      const F q = simd::select(ok, kn * simd::abs(kn) / simd::select(ok, ll, one), F(-INFINITY));
+      const auto gt = q > best;
+      best = simd::select(gt, q, best);
+      bidx = simd::select(gt, idx0 + F(static_cast<float>(j)), bidx);
+    }
+    if (stop && simd::any(best > zero)) {
+      *stopped = true;
+      break;
+    }
+  }
+  EdgeBest out;
+  float bi;
+  out.q = simd::max_lowest_index(best, bidx, INFINITY, &bi);
+  const uint32_t key = static_cast<uint32_t>(bi);
+  out.edge = key / 4;
+  out.tri_edge = key % 4;
+  return out;
+}
+
+// ---------------------------------------------------------------------------------------
+// One edge axis, again in double
+// ---------------------------------------------------------------------------------------
+
+struct EdgeAxis {
+  V3 n;           // unit, hull to triangle
+  float sep;      // min over the triangle's vertices of n.v - n.p_a
+  float key;      // sep less its rounding
+  V3 pa, ea;      // the hull edge: start, vector
+};
+
+EdgeAxis edge_axis(const HullView& h, uint32_t g, uint32_t vb, const Tri& T, uint32_t j, float rs) {
+  EdgeAxis ax;
+  ax.pa = V3{h.epx[g], h.epy[g], h.epz[g]};
+  ax.ea = vertex(h, vb + h.ev1[g]) - ax.pa;
+  const V3 a = T.v[j], b = T.v[j == 2 ? 0 : j + 1];
+  const double e[3] = {ax.ea.x, ax.ea.y, ax.ea.z};
+  const double f[3] = {static_cast<double>(b.x) - a.x, static_cast<double>(b.y) - a.y,
+                       static_cast<double>(b.z) - a.z};
+  double l[3] = {e[1] * f[2] - e[2] * f[1], e[2] * f[0] - e[0] * f[2], e[0] * f[1] - e[1] * f[0]};
+  const double ml = l[0] * h.emx[g] + l[1] * h.emy[g] + l[2] * h.emz[g];
+  const double ll = l[0] * l[0] + l[1] * l[1] + l[2] * l[2];
+  const double inv = (ml < 0.0 ? -1.0 : 1.0) / std::sqrt(ll);
+  for (double& x : l) x *= inv;
+  double sep = INFINITY;
+  for (const V3& v : T.v) {
+    const double s = l[0] * (static_cast<double>(v.x) - ax.pa.x) + l[1] * (static_cast<double>(v.y) - ax.pa.y) +
+                     l[2] * (static_cast<double>(v.z) - ax.pa.z);
+    sep = s < sep ? s : sep;
+  }
+  const double el = std::sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2]);
+  const double fl = std::sqrt(f[0] * f[0] + f[1] * f[1] + f[2] * f[2]);
+  ax.n = V3{static_cast<float>(l[0]), static_cast<float>(l[1]), static_cast<float>(l[2])};
+  ax.sep = static_cast<float>(sep);
+  ax.key = static_cast<float>(sep - rs * el * fl / std::sqrt(ll));
+  return ax;
+}
+
+/// Closest points of segments p1 + s d1 and p2 + t d2, s, t in [0, 1] (Ericson 5.1.9).
+void closest_segments(V3 p1, V3 d1, V3 p2, V3 d2, V3* c1, V3* c2) {
+  const V3 r = p1 - p2;
+  const float a = dot(d1, d1), e = dot(d2, d2), f = dot(d2, r), c = dot(d1, r), b = dot(d1, d2);
+  const auto clamp01 = [](float x) { return simd::fmin_nn(simd::fmax_nn(x, 0.0f), 1.0f); };
+  const float denom = a * e - b * b;
+  float s = denom > 1e-12f * a * e ? clamp01((b * f - c * e) / denom) : 0.0f;
+  float t = e > 0.0f ? (b * s + f) / e : 0.0f;
+  if (t < 0.0f) {
+    t = 0.0f;
+    s = a > 0.0f ? clamp01(-c / a) : 0.0f;
+  } else if (t > 1.0f) {
+    t = 1.0f;
+    s = a > 0.0f ? clamp01((b - c) / a) : 0.0f;
+  }
+  *c1 = p1 + d1 * s;
+  *c2 = p2 + d2 * t;
+}
+
+// ---------------------------------------------------------------------------------------
+// Face manifold
+// ---------------------------------------------------------------------------------------
+
+/// Keeps the part of polygon in[0, n) with o.x <= od (Sutherland-Hodgman, one plane).
+uint32_t clip_plane(const V3* in, uint32_t n, V3 o, float od, V3* out) {
+  uint32_t m = 0;
+  for (uint32_t i = 0; i < n; ++i) {
+    const V3 p = in[i], q = in[i + 1 == n ? 0 : i + 1];
+    const float dp = dot(o, p) - od, dq = dot(o, q) - od;
+    if (dp <= 0.0f) out[m++] = p;
+    if ((dp < 0.0f && dq > 0.0f) || (dp > 0.0f && dq < 0.0f)) out[m++] = p + (q - p) * (dp / (dp - dq));
+  }
+  return m;
+}
+
+struct Manifold {
+  uint32_t count = 0;
+  V3 p[kMaxClip];
+  float d[kMaxClip];
+};
+
+/// Reference face f of the hull (n = its normal): the triangle clipped by the face's
+/// side planes; points below the face plane, midway between the triangle and the plane.
+void hull_face_manifold(const HullView& h, uint32_t f, const Tri& T, float depth, Manifold* mf) {
+  const uint32_t b = h.face_vert_begin[f], e = h.face_vert_begin[f + 1];
+  if (e - b < 3 || e - b > kMaxFaceVerts) return;
+  const V3 n = face_normal(h, f);
+  V3 buf[2][kMaxClip];
+  uint32_t cnt = 3;
+  for (uint32_t i = 0; i < 3; ++i) buf[0][i] = T.v[i];
+  uint32_t cur = 0;
+  V3 a = vertex(h, h.face_verts[e - 1]);
+  for (uint32_t i = b; i < e && cnt > 0; ++i) {
+    const V3 q = vertex(h, h.face_verts[i]);
+    const V3 o = cross(q - a, n);  // out of the polygon (counter-clockwise from outside)
+    cnt = clip_plane(buf[cur], cnt, o, dot(o, a), buf[1 - cur]);
+    cur = 1 - cur;
+    a = q;
+  }
+  const float fd = h.fd[f];
+  for (uint32_t i = 0; i < cnt; ++i) {
+    const float s = fd - dot(n, buf[cur][i]);
+    if (!(s > 0.0f)) continue;
+    const float pd = simd::fmin_nn(s, depth);
+    mf->p[mf->count] = buf[cur][i] + n * (0.5f * pd);
+    mf->d[mf->count] = pd;
+    ++mf->count;
+  }
+}
+
+/// Reference face: the triangle (n = +-its normal, hull to triangle); incident: hull face
+/// g, clipped by the triangle's side planes; points beyond the triangle's plane, midway.
+void triangle_face_manifold(const HullView& h, uint32_t g, const Tri& T, V3 n, float depth, Manifold* mf) {
+  const uint32_t b = h.face_vert_begin[g], e = h.face_vert_begin[g + 1];
+  if (e - b < 3 || e - b > kMaxFaceVerts) return;
+  V3 buf[2][kMaxClip];
+  uint32_t cnt = e - b;
+  for (uint32_t i = b; i < e; ++i) buf[0][i - b] = vertex(h, h.face_verts[i]);
+  uint32_t cur = 0;
+  for (uint32_t j = 0; j < 3 && cnt > 0; ++j) {
+    const V3 a = T.v[j], q = T.v[j == 2 ? 0 : j + 1], opp = T.v[j == 0 ? 2 : j - 1];
+    V3 o = cross(q - a, T.nraw);  // out of the triangle for counter-clockwise about nraw
+    if (dot(o, opp - a) > 0.0f) o = -o;
+    cnt = clip_plane(buf[cur], cnt, o, dot(o, a), buf[1 - cur]);
+    cur = 1 - cur;
+  }
+  const float nd = dot(n, T.v[0]);
+  for (uint32_t i = 0; i < cnt; ++i) {
+    const float s = dot(n, buf[cur][i]) - nd;
+    if (!(s > 0.0f)) continue;
+    const float pd = simd::fmin_nn(s, depth);
+    mf->p[mf->count] = buf[cur][i] - n * (0.5f * pd);
+    mf->d[mf->count] = pd;
+    ++mf->count;
+  }
+}
+
+// ---------------------------------------------------------------------------------------
+// One lane
+// ---------------------------------------------------------------------------------------
+
+template <class F>
+void convex_triangle_lane(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out, uint32_t k,
+                          const NarrowConfig& cfg) {
+  constexpr uint32_t W = F::kWidth;
+  using F1 = simd::Float1;
+  const HullView& h = cfg.hulls;
+  const uint32_t hull = a.ref[k];
+  const uint32_t fb = h.face_begin != nullptr ? h.face_begin[hull] : 0u;
+  const uint32_t fe = h.face_begin != nullptr ? h.face_begin[hull + 1] : 0u;
+  const uint32_t eb = h.adj_begin != nullptr ? h.adj_begin[hull] : 0u;
+  const uint32_t ee = h.adj_begin != nullptr ? h.adj_begin[hull + 1] : 0u;
+  if (fe == fb || ee == eb) {  // no faces or no edge adjacency: the general path, this lane
+    collide_gjk_epa(a, b, out, Range{k, k + 1}, cfg, kLeafConvex, kLeafTriangle);
+    return;
+  }
+  const uint32_t vb = h.vert_begin[hull], nv = h.vert_begin[hull + 1] - vb, nf = fe - fb;
+  const V3 pw{a.p[0][k], a.p[1][k], a.p[2][k]};
+  V3 ax[3];  // hull axes (R's columns)
+  for (int col = 0; col < 3; ++col) ax[col] = V3{a.r[col][k], a.r[3 + col][k], a.r[6 + col][k]};
+  const auto to_local = [&](float x, float y, float z) {
+    const V3 d{x - pw.x, y - pw.y, z - pw.z};
+    return V3{dot(ax[0], d), dot(ax[1], d), dot(ax[2], d)};
+  };
+  Tri T;
+  T.v[0] = to_local(b.p[0][k], b.p[1][k], b.p[2][k]);
+  T.v[1] = to_local(b.w[0][k], b.w[1][k], b.w[2][k]);
+  T.v[2] = to_local(b.w[3][k], b.w[4][k], b.w[5][k]);
+  float fmax = 0.0f;
+  for (uint32_t j = 0; j < 3; ++j) {
+    const V3 f = T.v[j == 2 ? 0 : j + 1] - T.v[j];
+    const float l2 = dot(f, f);
+    const float l = std::sqrt(l2);
+    T.inv_len[j] = l > 0.0f ? 1.0f / l : 0.0f;
+    T.fu[j] = f * T.inv_len[j];
+    fmax = simd::fmax_nn(fmax, l);
+  }
+  T.nraw = cross(T.v[1] - T.v[0], T.v[2] - T.v[0]);
+  const auto no_contact = [&]() { out.count[k] = 0; };
+
+  // --- 1. the triangle's normal (both signs) and the line from the hull's origin to the
+  // triangle's centroid: one pass over the hull's vertices ---
+  const float n2 = dot(T.nraw, T.nraw);
+  const bool has_normal = n2 > 0.0f;
+  const V3 nu = has_normal ? T.nraw * (1.0f / std::sqrt(n2)) : V3{0, 0, 1};
+  const V3 cen = (T.v[0] + T.v[1] + T.v[2]) * (1.0f / 3.0f);
+  const float c2 = dot(cen, cen);
+  const V3 cu = c2 > 0.0f ? cen * (1.0f / std::sqrt(c2)) : V3{0, 0, 1};
+  float hmax, hmin, cmax;
+  if (nv >= W)
+    vertex_pass<F>(h.vx + vb, h.vy + vb, h.vz + vb, nv, nu, cu, &hmax, &hmin, &cmax);
+  else
+    vertex_pass<F1>(h.vx + vb, h.vy + vb, h.vz + vb, nv, nu, cu, &hmax, &hmin, &cmax);
+  float tmin = INFINITY, tmax = -INFINITY, cmin = INFINITY;
+  for (const V3& v : T.v) {
+    const float s = dot(nu, v), sc = dot(cu, v);
+    tmin = simd::fmin_nn(tmin, s), tmax = simd::fmax_nn(tmax, s), cmin = simd::fmin_nn(cmin, sc);
+  }
+  if (!(cmin - cmax < 0.0f)) return no_contact();
+  const float s_np = has_normal ? tmin - hmax : -INFINITY;  // n = +nu
+  const float s_nm = has_normal ? hmin - tmax : -INFINITY;  // n = -nu
+  if (!(s_np < 0.0f) || !(s_nm < 0.0f)) return no_contact();
+
+  // --- 2. the hull's faces ---
+  const FacePass fp = nf >= W ? face_pass<F>(h.fnx + fb, h.fny + fb, h.fnz + fb, h.fd + fb, nf, T)
+                              : face_pass<F1>(h.fnx + fb, h.fny + fb, h.fnz + fb, h.fd + fb, nf, T);
+  if (!(fp.sep < 0.0f)) return no_contact();
+  const float size = fp.dmax + fmax;
+  const float tie_size = kTieSize * size;
+  // The better face axis: the hull's face unless the triangle's normal beats it.
+  const float s_n = simd::fmax_nn(s_np, s_nm);
+  const bool tri_face = s_n > fp.sep + kTieRel * std::fabs(fp.sep) + tie_size;
+  float s_best = tri_face ? s_n : fp.sep;
+  const float s_top = simd::fmax_nn(s_n, fp.sep);
+
+  // --- 3. edge axes ---
+  const float rs = kEdgeRound * (size + l1(T.v[0]) + l1(T.v[1]) + l1(T.v[2]));
+  bool stopped;
+  EdgeBest be = edge_pass<F>(h, eb, ee - eb, vb, T, rs, true, &stopped);
+  int feature = tri_face ? 1 : 0;  // 0: hull face, 1: triangle face, 2: edge pair
+  EdgeAxis ea{};
+  const auto confirm = [&](const EdgeAxis& x) {  // the exact separation along x.n
+    float amax, amin_unused, umax_unused;
+    if (nv >= W)
+      vertex_pass<F>(h.vx + vb, h.vy + vb, h.vz + vb, nv, x.n, x.n, &amax, &amin_unused, &umax_unused);
+    else
+      vertex_pass<F1>(h.vx + vb, h.vy + vb, h.vz + vb, nv, x.n, x.n, &amax, &amin_unused, &umax_unused);
+    float bmin = INFINITY;
+    for (const V3& v : T.v) bmin = simd::fmin_nn(bmin, dot(x.n, v));
+    return bmin - amax;
+  };
+  if (stopped) {
+    ea = edge_axis(h, eb + be.edge, vb, T, be.tri_edge, rs);
+    if (!(confirm(ea) < 0.0f)) return no_contact();
+    be = edge_pass<F>(h, eb, ee - eb, vb, T, rs, false, &stopped);
+  }
+  if (be.q > -INFINITY) {
+    ea = edge_axis(h, eb + be.edge, vb, T, be.tri_edge, rs);
+    const bool wins = ea.key > s_top + kTieRel * std::fabs(s_top) + tie_size;
+    if (wins || !(ea.sep < 0.0f)) {
+      const float sv = confirm(ea);
+      if (!(sv < 0.0f)) return no_contact();
+      if (wins && sv > s_best) {
+        s_best = sv;
+        feature = 2;
+      }
+    }
+  }
+  const float depth = -s_best;
+
+  // --- 4. normal and points (hull frame) ---
+  V3 nl;
+  Manifold mf;
+  if (feature == 0) {
+    nl = face_normal(h, fb + fp.face);
+    hull_face_manifold(h, fb + fp.face, T, depth, &mf);
+    if (mf.count == 0) {  // nothing below the face after rounding: the deepest vertex
+      uint32_t i = 0;
+      for (uint32_t q = 1; q < 3; ++q)
+        if (dot(nl, T.v[q]) < dot(nl, T.v[i])) i = q;
+      mf.count = 1;
+      mf.p[0] = T.v[i] + nl * (0.5f * depth);
+      mf.d[0] = depth;
+    }
+  } else if (feature == 1) {
+    nl = s_np >= s_nm ? nu : -nu;
+    const uint32_t g = nf >= W ? face_argmax<F>(h.fnx + fb, h.fny + fb, h.fnz + fb, nf, nl)
+                               : face_argmax<F1>(h.fnx + fb, h.fny + fb, h.fnz + fb, nf, nl);
+    triangle_face_manifold(h, fb + g, T, nl, depth, &mf);
+    if (mf.count == 0) {  // the hull's deepest vertex
+      const uint32_t i = nv >= W ? vertex_argmax<F>(h.vx + vb, h.vy + vb, h.vz + vb, nv, nl)
+                                 : vertex_argmax<F1>(h.vx + vb, h.vy + vb, h.vz + vb, nv, nl);
+      mf.count = 1;
+      mf.p[0] = vertex(h, vb + i) - nl * (0.5f * depth);
+      mf.d[0] = depth;
+    }
+  } else {
+    nl = ea.n;
+    const uint32_t j = be.tri_edge;
+    const V3 va = T.v[j], vq = T.v[j == 2 ? 0 : j + 1];
+    V3 on_a, on_b;
+    closest_segments(ea.pa, ea.ea, va, vq - va, &on_a, &on_b);
+    mf.count = 1;
+    mf.p[0] = (on_a + on_b) * 0.5f;
+    mf.d[0] = depth;
+  }
+  if (mf.count > kMaxManifoldPoints) mf.count = cvx::reduce_manifold(mf.p, mf.d, mf.count, nl);
+
+  // --- world frame ---
+  const V3 n = ax[0] * nl.x + ax[1] * nl.y + ax[2] * nl.z;
+  out.count[k] = static_cast<uint8_t>(mf.count);
+  out.n[0][k] = n.x;
+  out.n[1][k] = n.y;
+  out.n[2][k] = n.z;
+  out.depth[k] = depth;
+  for (uint32_t i = 0; i < mf.count; ++i) {
+    const V3 q = mf.p[i];
+    out.point[i][0][k] = pw.x + (ax[0].x * q.x + ax[1].x * q.y + ax[2].x * q.z);
+    out.point[i][1][k] = pw.y + (ax[0].y * q.x + ax[1].y * q.y + ax[2].y * q.z);
+    out.point[i][2][k] = pw.z + (ax[0].z * q.x + ax[1].z * q.y + ax[2].z * q.z);
+    out.pdepth[i][k] = mf.d[i];
+  }
+}
+
+}  // namespace
+
+void collide_convex_triangle(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out, Range r,
+                             const NarrowConfig& cfg) {
+  if (cfg.path == KernelPath::kScalar) {
+    for (uint32_t k = r.begin; k < r.end; ++k) convex_triangle_lane<simd::Float1>(a, b, out, k, cfg);
+  } else {
+    for (uint32_t k = r.begin; k < r.end; ++k) convex_triangle_lane<simd::FloatW>(a, b, out, k, cfg);
+  }
+}
+
+}  // namespace impact::kernels
