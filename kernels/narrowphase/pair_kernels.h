@@ -45,6 +45,11 @@ void collide_sphere_convex(const LeafSoA&, const LeafSoA&, const ManifoldSoA&, R
 /// core outside, separating axes when the core meets the hull; capsule_convex.cpp); one
 /// lane at a time, not GJK / EPA.
 void collide_capsule_convex(const LeafSoA&, const LeafSoA&, const ManifoldSoA&, Range, const NarrowConfig&);
+/// Convex hull (A) against triangle (B): exact, by the separating axis test in the hull's
+/// frame (hull faces, the triangle's normal, hull edge x triangle edge axes pruned by the
+/// Gauss map), a clipped face manifold or one edge point (convex_triangle.cpp); one lane
+/// at a time, not GJK / EPA.
+void collide_convex_triangle(const LeafSoA&, const LeafSoA&, const ManifoldSoA&, Range, const NarrowConfig&);
 /// Sphere against ellipsoid: closest surface point by a fixed-count root solve, SIMD across pairs.
 void collide_sphere_ellipsoid(const LeafSoA&, const LeafSoA&, const ManifoldSoA&, Range, const NarrowConfig&);
 
