@@ -24,6 +24,8 @@ constexpr float kEdgeRound = 2e-7f;
 /// Edge pairs within asin(1e-6) of parallel are skipped: their Minkowski face is a
 /// sliver whose neighbours (other axes of the test) hold the depth to ~1e-6 of the size.
 constexpr float kEdgeSkipSq = 1e-12f;
+/// Triangle edges shorter than this times the local coordinates' magnitude get no axes.
+constexpr float kTinyEdge = 1e-6f;
 /// Clip buffers: a face polygon of up to kMaxFaceVerts vertices clipped by a triangle
 /// (or a triangle by such a face) has at most kMaxFaceVerts + 3 vertices.
 constexpr uint32_t kMaxFaceVerts = 64;
@@ -57,9 +59,10 @@ IMPACT_INLINE float lanes_min(F v) {
 /// The triangle in the hull's frame.
 struct Tri {
   V3 v[3];
-  V3 fu[3];          // unit direction of edge j = v[j] -> v[j + 1] (0 for a zero-length edge)
-  float inv_len[3];  // 1 / |edge j| (0 for a zero-length edge)
-  V3 nraw;           // (v1 - v0) x (v2 - v0): twice the area times the unit normal
+  V3 f[3];                 // edge j = v[j + 1] - v[j]
+  float ff[3], fl[3];      // |f_j|^2, |f_j|
+  float gx[3], gy[3], gz[3];  // f_j x v_j
+  V3 nraw;                 // (v1 - v0) x (v2 - v0): twice the area times the unit normal
 };
 
 // ---------------------------------------------------------------------------------------
@@ -144,65 +147,96 @@ IMPACT_INLINE uint32_t face_argmax(const float* fnx, const float* fny, const flo
 }
 
 struct EdgeBest {
-  float q = -INFINITY;  // key |key| * |L|^2 ... see edge_pass; -inf: no candidate
-  uint32_t edge = 0;    // adjacency index relative to the hull's first edge
-  uint32_t tri_edge = 0;
+  float q = -INFINITY;   // key |key| of the candidate of largest key (-inf: none)
+  uint32_t edge = 0;     // its hull edge (adjacency index relative to the hull's first)
+  uint32_t tri_edge = 0; // its triangle edge
+  float qs = -INFINITY;  // s |s| of the candidate of largest separation s
+  uint32_t sep_edge = 0, sep_tri_edge = 0;
 };
 
 /// The edge axes: every hull edge (adjacency list [0, ne), padded to a multiple of 8)
 /// against the triangle's three edges, W hull edges per step. A pair (a, j) is a
-/// candidate when the great circle perpendicular to triangle edge j crosses hull edge
+/// candidate when the great circle perpendicular to triangle edge f_j crosses hull edge
 /// a's normal arc (the arc from bisector m within angle theta: the arc's two ends lie
 /// on either side of the circle, |m.f| cos(theta) <= |w.f| sin(theta) / |e| with
 /// w = m x e); the axis is then n = L / |L|, L = e x f oriented along m (sign of
-/// m.L = w.f): hull edge a is the hull's support along n, so the separation is
-/// min over the triangle's vertices of n.(v - p_a), of which v_j and the opposite vertex
-/// suffice (v_j+1 projects as v_j). The key is that separation less its rounding
-/// (pen / |L|); candidates are ranked by key |key| (monotone in the key, and no square
-/// root): q = k |k| / |L|^2 with k the key times |L|. stop: return once a candidate's key
-/// is positive (a separating axis, to be confirmed by the caller).
+/// m.L = w.f): hull edge a is the hull's support along n, so the separation is the
+/// least of n.(v - p_a) over the triangle's vertices, of which v_j and the opposite
+/// vertex suffice (v_j+1 projects as v_j). With K = p_a x e and G_j = f_j x v_j,
+/// L.(v_j - p_a) = e.G_j - f_j.K, and at the opposite vertex e.N more (N = the
+/// triangle's unnormalised normal: f_j x (v_opp - v_j) = N for every j); the dot
+/// products with f_2 = -(f_0 + f_1) come from those with f_0 and f_1. The key is that
+/// separation less its rounding (pen |f_j| / |L|, pen ~ |e|); candidates are ranked by
+/// key |key| (monotone in the key, no square root): q = k |k| / |L|^2, k = key |L|, and
+/// separately by their separation (qs = s |s|, for a separating axis).
+/// Blocks whose every edge is ruled out by the bound max over the cone of n.(c - p_a)
+/// <= thr (c the triangle's centroid: min over the triangle of n.x <= n.c; the cone
+/// bound as sat.cpp's) are skipped: no candidate of theirs beats thr (<= 0).
+/// stop: return once a candidate's separation is positive (a separating axis, to be
+/// confirmed by the caller).
 template <class F>
 IMPACT_INLINE EdgeBest edge_pass(const HullView& h, uint32_t eb, uint32_t ne, uint32_t vb, const Tri& T, float rs,
-                                 bool stop, bool* stopped) {
-  constexpr uint32_t W = F::kWidth;
+                                 float thr, bool stop, bool* stopped) {
   using I = typename F::Int;
-  const F zero(0.0f), one(1.0f), skip(kEdgeSkipSq), RS(rs), lane4 = simd::lane_index<F>() * F(4.0f);
+  constexpr uint32_t W = F::kWidth;
+  const F zero(0.0f), one(1.0f), skip(kEdgeSkipSq), RS(rs), TH(thr), lane4 = simd::lane_index<F>() * F(4.0f);
   const F nx(T.nraw.x), ny(T.nraw.y), nz(T.nraw.z);
+  const V3 cen = (T.v[0] + T.v[1] + T.v[2]) * (1.0f / 3.0f);
+  const F cx(cen.x), cy(cen.y), cz(cen.z);
+  const F f0x(T.f[0].x), f0y(T.f[0].y), f0z(T.f[0].z), f1x(T.f[1].x), f1y(T.f[1].y), f1z(T.f[1].z);
   const float* bx = h.vx + vb;
   const float* by = h.vy + vb;
   const float* bz = h.vz + vb;
-  F best(-INFINITY), bidx(0.0f);
+  F best(-INFINITY), bidx(0.0f), sbest(-INFINITY), sidx(0.0f);
   *stopped = false;
   for (uint32_t i = 0; i < ne; i += W) {
     const uint32_t g = eb + i;
     const F px = F::load(h.epx + g), py = F::load(h.epy + g), pz = F::load(h.epz + g);
-    const I j1 = I::load(reinterpret_cast<const int32_t*>(h.ev1 + g));
-    const F ex = simd::gather(bx, j1) - px, ey = simd::gather(by, j1) - py, ez = simd::gather(bz, j1) - pz;
     const F mx = F::load(h.emx + g), my = F::load(h.emy + g), mz = F::load(h.emz + g);
     const F c = F::load(h.ecos + g), s = F::load(h.esin + g);
+    {
+      const F dx = cx - px, dy = cy - py, dz = cz - pz;
+      const F md = mx * dx + my * dy + mz * dz, dd = dx * dx + dy * dy + dz * dz;
+      const F r = TH - simd::max(md, c * md);
+      if (simd::none((r < zero) | (s * s * dd > r * r))) continue;
+    }
+    const I j1 = I::load(reinterpret_cast<const int32_t*>(h.ev1 + g));
+    const F ex = simd::gather(bx, j1) - px, ey = simd::gather(by, j1) - py, ez = simd::gather(bz, j1) - pz;
     const F ee = ex * ex + ey * ey + ez * ez;
     const F wx = my * ez - mz * ey, wy = mz * ex - mx * ez, wz = mx * ey - my * ex;
+    const F kx = py * ez - pz * ey, ky = pz * ex - px * ez, kz = px * ey - py * ex;
     const F en = ex * nx + ey * ny + ez * nz;
-    const F pen = RS * simd::sqrt(ee);
+    const F pen = RS * (simd::abs(ex) + simd::abs(ey) + simd::abs(ez));  // >= rs |e|
+    const F cee = c * c * ee, s2 = s * s, skee = skip * ee;
     const F idx0 = lane4 + F(static_cast<float>(4 * i));
+    // dot products with f_0, f_1 (f_2 = -(f_0 + f_1))
+    const F mf0 = mx * f0x + my * f0y + mz * f0z, mf1 = mx * f1x + my * f1y + mz * f1z;
+    const F wf0 = wx * f0x + wy * f0y + wz * f0z, wf1 = wx * f1x + wy * f1y + wz * f1z;
+    const F ef0 = ex * f0x + ey * f0y + ez * f0z, ef1 = ex * f1x + ey * f1y + ez * f1z;
+    const F kf0 = kx * f0x + ky * f0y + kz * f0z, kf1 = kx * f1x + ky * f1y + kz * f1z;
+    const F mfs[3] = {mf0, mf1, -(mf0 + mf1)}, wfs[3] = {wf0, wf1, -(wf0 + wf1)};
+    const F efs[3] = {ef0, ef1, -(ef0 + ef1)}, kfs[3] = {kf0, kf1, -(kf0 + kf1)};
     for (uint32_t j = 0; j < 3; ++j) {
-      const F fx(T.fu[j].x), fy(T.fu[j].y), fz(T.fu[j].z);
-      const F mf = mx * fx + my * fy + mz * fz, wf = wx * fx + wy * fy + wz * fz;
-      const F mc = mf * c, ws = wf * s;
-      const auto arc = mc * mc * ee <= ws * ws;
-      const F lx = ey * fz - ez * fy, ly = ez * fx - ex * fz, lz = ex * fy - ey * fx;
-      const F ll = lx * lx + ly * ly + lz * lz;
-      const F t0 = lx * (F(T.v[j].x) - px) + ly * (F(T.v[j].y) - py) + lz * (F(T.v[j].z) - pz);
-      const F t1 = t0 + en * F(T.inv_len[j]);  // at the opposite vertex
+      const F mf = mfs[j], wf = wfs[j], ef = efs[j];
+      const auto arc = mf * mf * cee <= wf * wf * s2;
+      const F ff(T.ff[j]);
+      const F ll = ee * ff - ef * ef;  // |e x f_j|^2
+      const F t0 = ex * F(T.gx[j]) + ey * F(T.gy[j]) + ez * F(T.gz[j]) - kfs[j];
+      const F t1 = t0 + en;  // at the opposite vertex
       const F sn = simd::select(wf < zero, -simd::max(t0, t1), simd::min(t0, t1));
-      const F kn = sn - pen;
-      const auto ok = arc & (ll > skip * ee);
-      const F q = simd::select(ok, kn * simd::abs(kn) / simd::select(ok, ll, one), F(-INFINITY));
-      const auto gt = q > best;
+      const F kn = sn - pen * F(T.fl[j]);
+      const auto ok = arc & (ll > skee * ff);
+      const F inv = one / simd::select(ok, ll, one);
+      const F q = simd::select(ok, kn * simd::abs(kn) * inv, F(-INFINITY));
+      const F qs = simd::select(ok, sn * simd::abs(sn) * inv, F(-INFINITY));
+      const F idx = idx0 + F(static_cast<float>(j));
+      const auto gt = q > best, gs = qs > sbest;
       best = simd::select(gt, q, best);
-      bidx = simd::select(gt, idx0 + F(static_cast<float>(j)), bidx);
+      bidx = simd::select(gt, idx, bidx);
+      sbest = simd::select(gs, qs, sbest);
+      sidx = simd::select(gs, idx, sidx);
     }
-    if (stop && simd::any(best > zero)) {
+    if (stop && simd::any(sbest > zero)) {
       *stopped = true;
       break;
     }
@@ -210,9 +244,11 @@ IMPACT_INLINE EdgeBest edge_pass(const HullView& h, uint32_t eb, uint32_t ne, ui
   EdgeBest out;
   float bi;
   out.q = simd::max_lowest_index(best, bidx, INFINITY, &bi);
-  const uint32_t key = static_cast<uint32_t>(bi);
-  out.edge = key / 4;
-  out.tri_edge = key % 4;
+  out.edge = static_cast<uint32_t>(bi) / 4;
+  out.tri_edge = static_cast<uint32_t>(bi) % 4;
+  out.qs = simd::max_lowest_index(sbest, sidx, INFINITY, &bi);
+  out.sep_edge = static_cast<uint32_t>(bi) / 4;
+  out.sep_tri_edge = static_cast<uint32_t>(bi) % 4;
   return out;
 }
 
@@ -231,10 +267,8 @@ EdgeAxis edge_axis(const HullView& h, uint32_t g, uint32_t vb, const Tri& T, uin
   EdgeAxis ax;
   ax.pa = V3{h.epx[g], h.epy[g], h.epz[g]};
   ax.ea = vertex(h, vb + h.ev1[g]) - ax.pa;
-  const V3 a = T.v[j], b = T.v[j == 2 ? 0 : j + 1];
   const double e[3] = {ax.ea.x, ax.ea.y, ax.ea.z};
-  const double f[3] = {static_cast<double>(b.x) - a.x, static_cast<double>(b.y) - a.y,
-                       static_cast<double>(b.z) - a.z};
+  const double f[3] = {T.f[j].x, T.f[j].y, T.f[j].z};
   double l[3] = {e[1] * f[2] - e[2] * f[1], e[2] * f[0] - e[0] * f[2], e[0] * f[1] - e[1] * f[0]};
   const double ml = l[0] * h.emx[g] + l[1] * h.emy[g] + l[2] * h.emz[g];
   const double ll = l[0] * l[0] + l[1] * l[1] + l[2] * l[2];
@@ -382,14 +416,25 @@ void convex_triangle_lane(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA&
   T.v[0] = to_local(b.p[0][k], b.p[1][k], b.p[2][k]);
   T.v[1] = to_local(b.w[0][k], b.w[1][k], b.w[2][k]);
   T.v[2] = to_local(b.w[3][k], b.w[4][k], b.w[5][k]);
+  // Edges: f_2 = -(f_0 + f_1) (the edge pass derives its dot products so). An edge
+  // within 1e-6 of the coordinates of zero length is rounding noise in direction (two
+  // coincident vertices, after the transform): it gets no axes (the ones it would give
+  // are slivers of the Minkowski difference, within its length of their neighbours).
+  const float cmag = simd::fmax_nn(l1(T.v[0]), simd::fmax_nn(l1(T.v[1]), l1(T.v[2])));
+  const float tiny2 = (kTinyEdge * cmag) * (kTinyEdge * cmag);
+  T.f[0] = T.v[1] - T.v[0];
+  T.f[1] = T.v[2] - T.v[1];
+  for (uint32_t j = 0; j < 2; ++j)
+    if (!(dot(T.f[j], T.f[j]) > tiny2)) T.f[j] = V3{0, 0, 0};
+  T.f[2] = -(T.f[0] + T.f[1]);
   float fmax = 0.0f;
   for (uint32_t j = 0; j < 3; ++j) {
-    const V3 f = T.v[j == 2 ? 0 : j + 1] - T.v[j];
-    const float l2 = dot(f, f);
-    const float l = std::sqrt(l2);
-    T.inv_len[j] = l > 0.0f ? 1.0f / l : 0.0f;
-    T.fu[j] = f * T.inv_len[j];
-    fmax = simd::fmax_nn(fmax, l);
+    const V3 g = cross(T.f[j], T.v[j]);
+    const float ff = dot(T.f[j], T.f[j]);
+    T.ff[j] = ff > tiny2 ? ff : 0.0f;
+    T.fl[j] = std::sqrt(T.ff[j]);
+    T.gx[j] = g.x, T.gy[j] = g.y, T.gz[j] = g.z;
+    fmax = simd::fmax_nn(fmax, T.fl[j]);
   }
   T.nraw = cross(T.v[1] - T.v[0], T.v[2] - T.v[0]);
   const auto no_contact = [&]() { out.count[k] = 0; };
@@ -431,10 +476,13 @@ void convex_triangle_lane(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA&
 
   // --- 3. edge axes ---
   const float rs = kEdgeRound * (size + l1(T.v[0]) + l1(T.v[1]) + l1(T.v[2]));
+  // A candidate of positive separation: confirmed by the exact supports along its
+  // axis (in double), the pair is apart; else that candidate was rounding noise (a
+  // nearly parallel edge pair) that may hide another: the lane goes to GJK / EPA.
   bool stopped;
-  EdgeBest be = edge_pass<F>(h, eb, ee - eb, vb, T, rs, true, &stopped);
+  const float thr = simd::fmin_nn(s_top + kTieRel * std::fabs(s_top) + tie_size, 0.0f);
+  const EdgeBest be = edge_pass<F>(h, eb, ee - eb, vb, T, rs, thr, true, &stopped);
   int feature = tri_face ? 1 : 0;  // 0: hull face, 1: triangle face, 2: edge pair
-  EdgeAxis ea{};
   const auto confirm = [&](const EdgeAxis& x) {  // the exact separation along x.n
     float amax, amin_unused, umax_unused;
     if (nv >= W)
@@ -445,18 +493,19 @@ void convex_triangle_lane(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA&
     for (const V3& v : T.v) bmin = simd::fmin_nn(bmin, dot(x.n, v));
     return bmin - amax;
   };
-  if (stopped) {
-    ea = edge_axis(h, eb + be.edge, vb, T, be.tri_edge, rs);
-    if (!(confirm(ea) < 0.0f)) return no_contact();
-    be = edge_pass<F>(h, eb, ee - eb, vb, T, rs, false, &stopped);
+  if (be.qs > 0.0f) {
+    if (!(confirm(edge_axis(h, eb + be.sep_edge, vb, T, be.sep_tri_edge, rs)) < 0.0f)) return no_contact();
+    collide_gjk_epa(a, b, out, Range{k, k + 1}, cfg, kLeafConvex, kLeafTriangle);
+    return;
   }
+  EdgeAxis ea{};
   if (be.q > -INFINITY) {
+    // The edge axis of largest key beats the faces by the tie rule: its exact separation.
     ea = edge_axis(h, eb + be.edge, vb, T, be.tri_edge, rs);
-    const bool wins = ea.key > s_top + kTieRel * std::fabs(s_top) + tie_size;
-    if (wins || !(ea.sep < 0.0f)) {
+    if (ea.key > s_top + kTieRel * std::fabs(s_top) + tie_size) {
       const float sv = confirm(ea);
       if (!(sv < 0.0f)) return no_contact();
-      if (wins && sv > s_best) {
+      if (sv > s_best) {
         s_best = sv;
         feature = 2;
       }
@@ -492,8 +541,25 @@ void convex_triangle_lane(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA&
     }
   } else {
     nl = ea.n;
-    const uint32_t j = be.tri_edge;
-    const V3 va = T.v[j], vq = T.v[j == 2 ? 0 : j + 1];
+    // The triangle's support feature along -n: its vertices within rounding of the
+    // least n.v (edge j for a proper edge pair; a vertex, or the longest edge of a
+    // collinear triangle, where rounding chose a neighbouring candidate).
+    float tv[3];
+    for (uint32_t q = 0; q < 3; ++q) tv[q] = dot(nl, T.v[q]);
+    const float lo = simd::fmin_nn(tv[0], simd::fmin_nn(tv[1], tv[2]));
+    const float tol = 1e-6f * (size + l1(T.v[0]) + l1(T.v[1]) + l1(T.v[2]));
+    uint32_t sup[3], ns = 0;
+    for (uint32_t q = 0; q < 3; ++q)
+      if (tv[q] <= lo + tol) sup[ns++] = q;
+    V3 va = T.v[sup[0]], vq = va;
+    if (ns == 2) vq = T.v[sup[1]];
+    if (ns == 3) {
+      float best = -1.0f;
+      for (uint32_t q = 0; q < 3; ++q) {
+        const V3 d = T.v[q == 2 ? 0 : q + 1] - T.v[q];
+        if (dot(d, d) > best) best = dot(d, d), va = T.v[q], vq = T.v[q == 2 ? 0 : q + 1];
+      }
+    }
     V3 on_a, on_b;
     closest_segments(ea.pa, ea.ea, va, vq - va, &on_a, &on_b);
     mf.count = 1;
