@@ -169,9 +169,9 @@ struct EdgeBest {
 /// separation less its rounding (pen |f_j| / |L|, pen ~ |e|); candidates are ranked by
 /// key |key| (monotone in the key, no square root): q = k |k| / |L|^2, k = key |L|, and
 /// separately by their separation (qs = s |s|, for a separating axis).
-/// Blocks whose every edge is ruled out by the bound max over the cone of n.(c - p_a)
-/// <= thr (c the triangle's centroid: min over the triangle of n.x <= n.c; the cone
-/// bound as sat.cpp's) are skipped: no candidate of theirs beats thr (<= 0).
+/// Blocks whose every edge is ruled out by the bound min over the triangle's vertices v
+/// of the max over the cone of n.(v - p_a) <= thr (the cone bound as sat.cpp's) are
+/// skipped: no candidate of theirs beats thr (<= 0).
 /// stop: return once a candidate's separation is positive (a separating axis, to be
 /// confirmed by the caller).
 template <class F>
@@ -179,26 +179,39 @@ IMPACT_INLINE EdgeBest edge_pass(const HullView& h, uint32_t eb, uint32_t ne, ui
                                  float thr, bool stop, bool* stopped) {
   using I = typename F::Int;
   constexpr uint32_t W = F::kWidth;
-  const F zero(0.0f), one(1.0f), skip(kEdgeSkipSq), RS(rs), TH(thr), lane4 = simd::lane_index<F>() * F(4.0f);
+  const F zero(0.0f), one(1.0f), skip(kEdgeSkipSq), RS(rs), TH(thr), step(static_cast<float>(4 * W));
   const F nx(T.nraw.x), ny(T.nraw.y), nz(T.nraw.z);
-  const V3 cen = (T.v[0] + T.v[1] + T.v[2]) * (1.0f / 3.0f);
-  const F cx(cen.x), cy(cen.y), cz(cen.z);
   const F f0x(T.f[0].x), f0y(T.f[0].y), f0z(T.f[0].z), f1x(T.f[1].x), f1y(T.f[1].y), f1z(T.f[1].z);
+  // Lane constants, broadcast once.
+  F vx[3], vy[3], vz[3], gx[3], gy[3], gz[3], ff[3], fl[3], jo[3];
+  for (uint32_t j = 0; j < 3; ++j) {
+    vx[j] = F(T.v[j].x), vy[j] = F(T.v[j].y), vz[j] = F(T.v[j].z);
+    gx[j] = F(T.gx[j]), gy[j] = F(T.gy[j]), gz[j] = F(T.gz[j]);
+    ff[j] = F(T.ff[j]), fl[j] = F(T.fl[j]), jo[j] = F(static_cast<float>(j));
+  }
   const float* bx = h.vx + vb;
   const float* by = h.vy + vb;
   const float* bz = h.vz + vb;
   F best(-INFINITY), bidx(0.0f), sbest(-INFINITY), sidx(0.0f);
+  F idx0 = simd::lane_index<F>() * F(4.0f);  // 4 x the edge index
   *stopped = false;
-  for (uint32_t i = 0; i < ne; i += W) {
+  for (uint32_t i = 0; i < ne; i += W, idx0 = idx0 + step) {
     const uint32_t g = eb + i;
     const F px = F::load(h.epx + g), py = F::load(h.epy + g), pz = F::load(h.epz + g);
     const F mx = F::load(h.emx + g), my = F::load(h.emy + g), mz = F::load(h.emz + g);
-    const F c = F::load(h.ecos + g), s = F::load(h.esin + g);
+    const F c = F::load(h.ecos + g), s = F::load(h.esin + g), s2 = s * s;
     {
-      const F dx = cx - px, dy = cy - py, dz = cz - pz;
-      const F md = mx * dx + my * dy + mz * dz, dd = dx * dx + dy * dy + dz * dz;
-      const F r = TH - simd::max(md, c * md);
-      if (simd::none((r < zero) | (s * s * dd > r * r))) continue;
+      // Bound: for n in the cone, the separation is at most n.(v - p) for each vertex v,
+      // and n.d <= max(m.d, cos m.d) + sin |d| (without the root: r = thr - max(..),
+      // the bound exceeds thr iff r < 0 or sin^2 |d|^2 > r^2).
+      auto live = zero <= zero;
+      for (uint32_t v = 0; v < 3; ++v) {
+        const F dx = vx[v] - px, dy = vy[v] - py, dz = vz[v] - pz;
+        const F md = mx * dx + my * dy + mz * dz, dd = dx * dx + dy * dy + dz * dz;
+        const F r = TH - simd::max(md, c * md);
+        live = live & ((r < zero) | (s2 * dd > r * r));
+      }
+      if (simd::none(live)) continue;
     }
     const I j1 = I::load(reinterpret_cast<const int32_t*>(h.ev1 + g));
     const F ex = simd::gather(bx, j1) - px, ey = simd::gather(by, j1) - py, ez = simd::gather(bz, j1) - pz;
@@ -207,8 +220,7 @@ IMPACT_INLINE EdgeBest edge_pass(const HullView& h, uint32_t eb, uint32_t ne, ui
     const F kx = py * ez - pz * ey, ky = pz * ex - px * ez, kz = px * ey - py * ex;
     const F en = ex * nx + ey * ny + ez * nz;
     const F pen = RS * (simd::abs(ex) + simd::abs(ey) + simd::abs(ez));  // >= rs |e|
-    const F cee = c * c * ee, s2 = s * s, skee = skip * ee;
-    const F idx0 = lane4 + F(static_cast<float>(4 * i));
+    const F cee = c * c * ee, skee = skip * ee;
     // dot products with f_0, f_1 (f_2 = -(f_0 + f_1))
     const F mf0 = mx * f0x + my * f0y + mz * f0z, mf1 = mx * f1x + my * f1y + mz * f1z;
     const F wf0 = wx * f0x + wy * f0y + wz * f0z, wf1 = wx * f1x + wy * f1y + wz * f1z;
@@ -219,17 +231,16 @@ IMPACT_INLINE EdgeBest edge_pass(const HullView& h, uint32_t eb, uint32_t ne, ui
     for (uint32_t j = 0; j < 3; ++j) {
       const F mf = mfs[j], wf = wfs[j], ef = efs[j];
       const auto arc = mf * mf * cee <= wf * wf * s2;
-      const F ff(T.ff[j]);
-      const F ll = ee * ff - ef * ef;  // |e x f_j|^2
-      const F t0 = ex * F(T.gx[j]) + ey * F(T.gy[j]) + ez * F(T.gz[j]) - kfs[j];
+      const F ll = ee * ff[j] - ef * ef;  // |e x f_j|^2
+      const F t0 = ex * gx[j] + ey * gy[j] + ez * gz[j] - kfs[j];
       const F t1 = t0 + en;  // at the opposite vertex
       const F sn = simd::select(wf < zero, -simd::max(t0, t1), simd::min(t0, t1));
-      const F kn = sn - pen * F(T.fl[j]);
-      const auto ok = arc & (ll > skee * ff);
+      const F kn = sn - pen * fl[j];
+      const auto ok = arc & (ll > skee * ff[j]);
       const F inv = one / simd::select(ok, ll, one);
       const F q = simd::select(ok, kn * simd::abs(kn) * inv, F(-INFINITY));
       const F qs = simd::select(ok, sn * simd::abs(sn) * inv, F(-INFINITY));
-      const F idx = idx0 + F(static_cast<float>(j));
+      const F idx = idx0 + jo[j];
       const auto gt = q > best, gs = qs > sbest;
       best = simd::select(gt, q, best);
       bidx = simd::select(gt, idx, bidx);
