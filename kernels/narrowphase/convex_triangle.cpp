@@ -26,6 +26,9 @@ constexpr float kEdgeRound = 2e-7f;
 constexpr float kEdgeSkipSq = 1e-12f;
 /// Triangle edges shorter than this times the local coordinates' magnitude get no axes.
 constexpr float kTinyEdge = 1e-6f;
+/// The float pass's key of the best edge axis is within this times (size + coordinates)
+/// of the double one (only a near-winner is computed again in double).
+constexpr float kKeySlack = 1e-4f;
 /// Clip buffers: a face polygon of up to kMaxFaceVerts vertices clipped by a triangle
 /// (or a triangle by such a face) has at most kMaxFaceVerts + 3 vertices.
 constexpr uint32_t kMaxFaceVerts = 64;
@@ -280,22 +283,23 @@ EdgeAxis edge_axis(const HullView& h, uint32_t g, uint32_t vb, const Tri& T, uin
   ax.ea = vertex(h, vb + h.ev1[g]) - ax.pa;
   const double e[3] = {ax.ea.x, ax.ea.y, ax.ea.z};
   const double f[3] = {T.f[j].x, T.f[j].y, T.f[j].z};
+  // L = e x f (exact products of floats), oriented along the bisector.
   double l[3] = {e[1] * f[2] - e[2] * f[1], e[2] * f[0] - e[0] * f[2], e[0] * f[1] - e[1] * f[0]};
-  const double ml = l[0] * h.emx[g] + l[1] * h.emy[g] + l[2] * h.emz[g];
-  const double ll = l[0] * l[0] + l[1] * l[1] + l[2] * l[2];
-  const double inv = (ml < 0.0 ? -1.0 : 1.0) / std::sqrt(ll);
-  for (double& x : l) x *= inv;
-  double sep = INFINITY;
+  if (l[0] * h.emx[g] + l[1] * h.emy[g] + l[2] * h.emz[g] < 0.0)
+    for (double& x : l) x = -x;
+  // The separation times |L| (no root on this chain), then one root and one division.
+  double sl = INFINITY;
   for (const V3& v : T.v) {
     const double s = l[0] * (static_cast<double>(v.x) - ax.pa.x) + l[1] * (static_cast<double>(v.y) - ax.pa.y) +
                      l[2] * (static_cast<double>(v.z) - ax.pa.z);
-    sep = s < sep ? s : sep;
+    sl = s < sl ? s : sl;
   }
-  const double el = std::sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2]);
-  const double fl = std::sqrt(f[0] * f[0] + f[1] * f[1] + f[2] * f[2]);
-  ax.n = V3{static_cast<float>(l[0]), static_cast<float>(l[1]), static_cast<float>(l[2])};
-  ax.sep = static_cast<float>(sep);
-  ax.key = static_cast<float>(sep - rs * el * fl / std::sqrt(ll));
+  const double ll = l[0] * l[0] + l[1] * l[1] + l[2] * l[2];
+  const double ef = std::sqrt((e[0] * e[0] + e[1] * e[1] + e[2] * e[2]) * (f[0] * f[0] + f[1] * f[1] + f[2] * f[2]));
+  const double inv = 1.0 / std::sqrt(ll);
+  ax.n = V3{static_cast<float>(l[0] * inv), static_cast<float>(l[1] * inv), static_cast<float>(l[2] * inv)};
+  ax.sep = static_cast<float>(sl * inv);
+  ax.key = static_cast<float>((sl - rs * ef) * inv);
   return ax;
 }
 
@@ -510,16 +514,17 @@ void convex_triangle_lane(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA&
     return;
   }
   EdgeAxis ea{};
-  if (be.q > -INFINITY) {
-    // The edge axis of largest key beats the faces by the tie rule: its exact separation.
+  // The edge axis of largest key, where it may beat the faces by the tie rule (its key
+  // from the float pass, within kKeySlack of the size of it): again in double. Its
+  // separation is exact along its axis (hull edge a is the hull's support there).
+  const float win = s_top + kTieRel * std::fabs(s_top) + tie_size;
+  const float key_est = be.q >= 0.0f ? std::sqrt(be.q) : -std::sqrt(-be.q);
+  if (be.q > -INFINITY && key_est > win - kKeySlack * (size + cmag)) {
     ea = edge_axis(h, eb + be.edge, vb, T, be.tri_edge, rs);
-    if (ea.key > s_top + kTieRel * std::fabs(s_top) + tie_size) {
-      const float sv = confirm(ea);
-      if (!(sv < 0.0f)) return no_contact();
-      if (sv > s_best) {
-        s_best = sv;
-        feature = 2;
-      }
+    if (!(ea.sep < 0.0f)) return no_contact();  // touching along it (rounding)
+    if (ea.key > win && ea.sep > s_best) {
+      s_best = ea.sep;
+      feature = 2;
     }
   }
   const float depth = -s_best;
