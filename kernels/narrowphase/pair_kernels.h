@@ -6,9 +6,10 @@
 // sphere / capsule / box / cylinder / triangle / half-space pairs below, with the
 // closed-form cylinder, ellipsoid and triangle against half-space kernels
 // (primitives_halfspace.cpp) and triangle-triangle (primitives_triangle_triangle.cpp).
-// Sphere-hull and capsule-hull have their own exact per-lane kernels
-// (kernels/narrowphase/sphere_convex.cpp, capsule_convex.cpp), sphere-ellipsoid a lane
-// kernel (kernels/narrowphase/sphere_ellipsoid.cpp). Everything else goes through the
+// Sphere-hull, capsule-hull and hull-triangle have their own exact per-lane kernels
+// (kernels/narrowphase/sphere_convex.cpp, capsule_convex.cpp, convex_triangle.cpp: a
+// separating axis test with Gauss-map pruned edge axes), sphere-ellipsoid a lane kernel
+// (kernels/narrowphase/sphere_ellipsoid.cpp). Everything else goes through the
 // general convex path (kernels/narrowphase/gjk_epa.cpp): GJK + EPA on the leaves'
 // support functions, with face clipping for polytope manifolds, and a support-function
 // kernel against half-spaces.
