@@ -545,6 +545,17 @@ TEST(ConvexTriangle, ExactFacesOnABox) {
       EXPECT_NEAR(r.pd[j], dz, 1e-7);
     }
   }
+  // Tilted by 1e-6 about x: the triangle's normal axis separates less than the top
+  // face's by ~5e-7, within the tie tolerance: the face keeps the contact (its normal
+  // exactly).
+  {
+    const double z = 0.75 - dz;
+    const auto o = w.run1(w.pair({-0.2, -0.1, z}, {0.3, -0.1, z}, {0.0, 0.2, z + 1e-6}));
+    const PairResult r = o.result();
+    ASSERT_EQ(r.count, 3u);
+    EXPECT_EQ(r.n, Eigen::Vector3d(0, 0, 1));
+    EXPECT_NEAR(r.depth, dz, 1e-7);
+  }
   // A large triangle under the box, its plane dz above the bottom face: the bottom face
   // (clipped: its four corners), normal -z from the box to the triangle.
   {
