@@ -106,6 +106,9 @@ constexpr float kTinyEdge = 1e-6f;
 /// The float pass's key of the best edge axis is within this times (size + coordinates)
 /// of the double one (only a near-winner is computed again in double).
 constexpr float kKeySlack = 1e-4f;
+/// An edge contact's point: the triangle's feature moved by depth along n touches the
+/// hull within this times (size + coordinates) of its face planes.
+constexpr float kTouchSlack = 2e-6f;
 /// Clip buffers: a face polygon of up to kMaxFaceVerts vertices clipped by a triangle
 /// (or a triangle by such a face) has at most kMaxFaceVerts + 3 vertices.
 constexpr uint32_t kMaxFaceVerts = 64;
@@ -224,6 +227,29 @@ IMPACT_INLINE FacePass face_pass(const float* fnx, const float* fny, const float
 template <class F>
 IMPACT_INLINE uint32_t face_argmax(const float* fnx, const float* fny, const float* fnz, uint32_t n, V3 a) {
   return vertex_argmax<F>(fnx, fny, fnz, n, a);
+}
+
+/// The part [*lo, *hi] of the segment p + t d, t in [0, 1], within `slack` of every face
+/// plane of [0, n) (n >= W): Cyrus-Beck, fn.(p + t d) - fd - slack <= 0 bounds t from
+/// above where fn.d > 0, from below where fn.d < 0. Empty: *lo > *hi.
+template <class F>
+IMPACT_INLINE void clip_segment(const float* fnx, const float* fny, const float* fnz, const float* fd, uint32_t n, V3 p,
+                                V3 d, float slack, float* lo, float* hi) {
+  constexpr uint32_t W = F::kWidth;
+  const F zero(0.0f), one(1.0f), px(p.x), py(p.y), pz(p.z), dx(d.x), dy(d.y), dz(d.z), sl(slack);
+  F tlo(0.0f), thi(1.0f);
+  for (uint32_t i = 0;; i = next_block<W>(i, n)) {
+    const F nx = F::load(fnx + i), ny = F::load(fny + i), nz = F::load(fnz + i);
+    const F a = nx * px + ny * py + nz * pz - F::load(fd + i) - sl, b = nx * dx + ny * dy + nz * dz;
+    const auto pos = b > zero, neg = b < zero;
+    const F cut = -a / simd::select(pos | neg, b, one);
+    thi = simd::select(pos, simd::min(thi, cut), thi);
+    tlo = simd::select(neg, simd::max(tlo, cut), tlo);
+    tlo = simd::select(andnot(a > zero, pos | neg), F(INFINITY), tlo);  // parallel and outside
+    if (i + W == n) break;
+  }
+  *lo = lanes_max(tlo);
+  *hi = lanes_min(thi);
 }
 
 struct EdgeBest {
@@ -653,11 +679,32 @@ void convex_triangle_lane(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA&
         if (dot(d, d) > best) best = dot(d, d), va = T.v[q], vq = T.v[q == 2 ? 0 : q + 1];
       }
     }
+    // One point midway between the closest points of hull edge a and that feature,
+    // where they are depth apart along n (a proper edge crossing). Else (the edge axis
+    // won among nearly tied neighbours whose edge pairs do not meet there, as on a face
+    // nearly parallel to a triangle edge): the feature moved by depth along n touches
+    // the hull, at a vertex or along the part of the segment within rounding of every
+    // face plane; one point at its middle, moved back halfway.
     V3 on_a, on_b;
     closest_segments(ea.pa, ea.ea, va, vq - va, &on_a, &on_b);
+    const float slack = kTouchSlack * (size + cmag);
+    const V3 gap = on_a - on_b - nl * depth;
     mf.count = 1;
-    mf.p[0] = (on_a + on_b) * 0.5f;
     mf.d[0] = depth;
+    mf.p[0] = (on_a + on_b) * 0.5f;
+    if (!(dot(gap, gap) <= 16.0f * slack * slack)) {
+      if (ns == 1) {
+        mf.p[0] = va + nl * (0.5f * depth);
+      } else {
+        float t_lo, t_hi;
+        const V3 d = vq - va, q0 = va + nl * depth;
+        if (nf >= W)
+          clip_segment<F>(h.fnx + fb, h.fny + fb, h.fnz + fb, h.fd + fb, nf, q0, d, slack, &t_lo, &t_hi);
+        else
+          clip_segment<F1>(h.fnx + fb, h.fny + fb, h.fnz + fb, h.fd + fb, nf, q0, d, slack, &t_lo, &t_hi);
+        if (t_lo <= t_hi) mf.p[0] = va + d * (0.5f * (t_lo + t_hi)) + nl * (0.5f * depth);
+      }
+    }
   }
   if (mf.count > kMaxManifoldPoints) mf.count = cvx::reduce_manifold(mf.p, mf.d, mf.count, nl);
 

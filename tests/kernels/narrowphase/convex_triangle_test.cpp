@@ -752,6 +752,25 @@ TEST(ConvexTriangle, NeedlePancakeAndLargeFaces) {
   EXPECT_NEAR(r.depth, 1.1e-3, 1e-6);
 }
 
+TEST(ConvexTriangle, EdgeAxisAmongNearTies) {
+  // A triangle edge nearly parallel to a hull face: the three edge axes of that face's
+  // edges lie within 1e-4 rad of each other and separate within 2e-6; the winner's two
+  // edges need not meet where the triangle touches (their closest points 0.013 apart,
+  // depth 0.012), so the point comes from where the moved triangle edge touches the hull.
+  // (Found by the random test at IMPACT_TEST_INTENSITY=10.)
+  const Hulls& hulls = shared_hulls();
+  Pair q{};
+  q.hull = 6;
+  const float R[9] = {0.862498283f, 0.255927533f, 0.436575115f, -0.483454734f, 0.161743909f,
+                      0.860296726f, 0.149560258f, -0.953068733f, 0.263233215f};
+  std::copy(R, R + 9, q.R);
+  set_v(&q, 0, {-1.55485225, -0.0603146963, 0.501388371});
+  set_v(&q, 1, {-0.531383216, 0.122595489, -0.994282961});
+  set_v(&q, 2, {-0.00481640548, 0.519059598, 0.872050345});
+  const Stats st = check_pairs("edge axis among near ties", {q}, hulls);
+  EXPECT_EQ(st.hits, 1u);
+}
+
 TEST(ConvexTriangle, WindingDoesNotMatter) {
   Rng g(38);
   const Hulls& hulls = shared_hulls();
