@@ -64,8 +64,9 @@
 // are valid axes too and never beat the true ones); three coincident vertices: a point
 // (hull faces only). Exact zero area: no normal axes.
 // Precision: face and vertex passes in float (~1e-7 of the local coordinates); the
-// winning edge axis in double; depth and normal within ~2e-7 of the size on the tests'
-// random poses (asserted 1e-5 L, normals 1e-4 rad against a brute-force double SAT).
+// winning edge axis in double; depth within ~2e-7 of the size on the tests' random
+// poses, ~5e-6 at worst where edge axes tie within the rounding band (asserted 1e-5 L,
+// normals 1e-4 rad where unique, against a brute-force double SAT).
 // No division without a guard: no NaN for finite input. No allocation (stack buffers:
 // the clip polygons, 2 x 68 points).
 // Paths: cfg.path kSimd runs the hull passes kSimdWidth faces / vertices / edges per
@@ -119,9 +120,15 @@ constexpr float kTouchSlack = 2e-6f;
 constexpr uint32_t kMaxFaceVerts = 64;
 constexpr uint32_t kMaxClip = kMaxFaceVerts + 4;
 
-IMPACT_INLINE float l1(V3 a) { return std::fabs(a.x) + std::fabs(a.y) + std::fabs(a.z); }
-IMPACT_INLINE V3 vertex(const HullView& h, uint32_t i) { return V3{h.vx[i], h.vy[i], h.vz[i]}; }
-IMPACT_INLINE V3 face_normal(const HullView& h, uint32_t f) { return V3{h.fnx[f], h.fny[f], h.fnz[f]}; }
+IMPACT_INLINE float l1(V3 a) {
+  return std::fabs(a.x) + std::fabs(a.y) + std::fabs(a.z);
+}
+IMPACT_INLINE V3 vertex(const HullView& h, uint32_t i) {
+  return V3{h.vx[i], h.vy[i], h.vz[i]};
+}
+IMPACT_INLINE V3 face_normal(const HullView& h, uint32_t f) {
+  return V3{h.fnx[f], h.fny[f], h.fnz[f]};
+}
 
 /// Block starts of a W-wide pass over [0, n), n >= W: 0, W, ..., and n - W for the last
 /// (overlapping) block, which revisits items: harmless for min / max and for an argmax
@@ -147,10 +154,10 @@ IMPACT_INLINE float lanes_min(F v) {
 /// The triangle in the hull's frame.
 struct Tri {
   V3 v[3];
-  V3 f[3];                 // edge j = v[j + 1] - v[j]
-  float ff[3], fl[3];      // |f_j|^2, |f_j|
+  V3 f[3];                    // edge j = v[j + 1] - v[j]
+  float ff[3], fl[3];         // |f_j|^2, |f_j|
   float gx[3], gy[3], gz[3];  // f_j x v_j
-  V3 nraw;                 // (v1 - v0) x (v2 - v0): twice the area times the unit normal
+  V3 nraw;                    // (v1 - v0) x (v2 - v0): twice the area times the unit normal
 };
 
 // ---------------------------------------------------------------------------------------
@@ -203,8 +210,8 @@ struct FacePass {
 
 /// Over faces [0, n) of the hull's face arrays (already offset), n >= W.
 template <class F>
-IMPACT_INLINE FacePass face_pass(const float* fnx, const float* fny, const float* fnz, const float* fd, uint32_t n,
-                                 const Tri& T) {
+IMPACT_INLINE FacePass face_pass(const float* fnx, const float* fny, const float* fnz, const float* fd,
+                                 uint32_t n, const Tri& T) {
   constexpr uint32_t W = F::kWidth;
   const F lane = simd::lane_index<F>();
   const F x0(T.v[0].x), y0(T.v[0].y), z0(T.v[0].z), x1(T.v[1].x), y1(T.v[1].y), z1(T.v[1].z), x2(T.v[2].x),
@@ -212,7 +219,8 @@ IMPACT_INLINE FacePass face_pass(const float* fnx, const float* fny, const float
   F m(-INFINITY), mi(0.0f), dm(0.0f);
   for (uint32_t i = 0;; i = next_block<W>(i, n)) {
     const F nx = F::load(fnx + i), ny = F::load(fny + i), nz = F::load(fnz + i), d = F::load(fd + i);
-    const F a0 = nx * x0 + ny * y0 + nz * z0, a1 = nx * x1 + ny * y1 + nz * z1, a2 = nx * x2 + ny * y2 + nz * z2;
+    const F a0 = nx * x0 + ny * y0 + nz * z0, a1 = nx * x1 + ny * y1 + nz * z1,
+            a2 = nx * x2 + ny * y2 + nz * z2;
     const F s = simd::min(a0, simd::min(a1, a2)) - d;
     const auto g = s > m;
     m = simd::select(g, s, m);
@@ -238,8 +246,8 @@ IMPACT_INLINE uint32_t face_argmax(const float* fnx, const float* fny, const flo
 /// plane of [0, n) (n >= W): Cyrus-Beck, fn.(p + t d) - fd - slack <= 0 bounds t from
 /// above where fn.d > 0, from below where fn.d < 0. Empty: *lo > *hi.
 template <class F>
-IMPACT_INLINE void clip_segment(const float* fnx, const float* fny, const float* fnz, const float* fd, uint32_t n, V3 p,
-                                V3 d, float slack, float* lo, float* hi) {
+IMPACT_INLINE void clip_segment(const float* fnx, const float* fny, const float* fnz, const float* fd,
+                                uint32_t n, V3 p, V3 d, float slack, float* lo, float* hi) {
   constexpr uint32_t W = F::kWidth;
   const F zero(0.0f), one(1.0f), px(p.x), py(p.y), pz(p.z), dx(d.x), dy(d.y), dz(d.z), sl(slack);
   F tlo(0.0f), thi(1.0f);
@@ -258,10 +266,10 @@ IMPACT_INLINE void clip_segment(const float* fnx, const float* fny, const float*
 }
 
 struct EdgeBest {
-  float q = -INFINITY;   // key |key| of the candidate of largest key (-inf: none)
-  uint32_t edge = 0;     // its hull edge (adjacency index relative to the hull's first)
-  uint32_t tri_edge = 0; // its triangle edge
-  float qs = -INFINITY;  // s |s| of the candidate of largest separation s
+  float q = -INFINITY;    // key |key| of the candidate of largest key (-inf: none)
+  uint32_t edge = 0;      // its hull edge (adjacency index relative to the hull's first)
+  uint32_t tri_edge = 0;  // its triangle edge
+  float qs = -INFINITY;   // s |s| of the candidate of largest separation s
   uint32_t sep_edge = 0, sep_tri_edge = 0;
 };
 
@@ -286,8 +294,8 @@ struct EdgeBest {
 /// stop: return once a candidate's separation is positive (a separating axis, to be
 /// confirmed by the caller).
 template <class F>
-IMPACT_INLINE EdgeBest edge_pass(const HullView& h, uint32_t eb, uint32_t ne, uint32_t vb, const Tri& T, float rs,
-                                 float thr, bool stop, bool* stopped) {
+IMPACT_INLINE EdgeBest edge_pass(const HullView& h, uint32_t eb, uint32_t ne, uint32_t vb, const Tri& T,
+                                 float rs, float thr, bool stop, bool* stopped) {
   using I = typename F::Int;
   constexpr uint32_t W = F::kWidth;
   const F zero(0.0f), one(1.0f), skip(kEdgeSkipSq), RS(rs), TH(thr), step(static_cast<float>(4 * W));
@@ -379,10 +387,10 @@ IMPACT_INLINE EdgeBest edge_pass(const HullView& h, uint32_t eb, uint32_t ne, ui
 // ---------------------------------------------------------------------------------------
 
 struct EdgeAxis {
-  V3 n;           // unit, hull to triangle
-  float sep;      // min over the triangle's vertices of n.v - n.p_a
-  float key;      // sep less its rounding
-  V3 pa, ea;      // the hull edge: start, vector
+  V3 n;       // unit, hull to triangle
+  float sep;  // min over the triangle's vertices of n.v - n.p_a
+  float key;  // sep less its rounding
+  V3 pa, ea;  // the hull edge: start, vector
 };
 
 EdgeAxis edge_axis(const HullView& h, uint32_t g, uint32_t vb, const Tri& T, uint32_t j, float rs) {
@@ -398,12 +406,14 @@ EdgeAxis edge_axis(const HullView& h, uint32_t g, uint32_t vb, const Tri& T, uin
   // The separation times |L| (no root on this chain), then one root and one division.
   double sl = INFINITY;
   for (const V3& v : T.v) {
-    const double s = l[0] * (static_cast<double>(v.x) - ax.pa.x) + l[1] * (static_cast<double>(v.y) - ax.pa.y) +
+    const double s = l[0] * (static_cast<double>(v.x) - ax.pa.x) +
+                     l[1] * (static_cast<double>(v.y) - ax.pa.y) +
                      l[2] * (static_cast<double>(v.z) - ax.pa.z);
     sl = s < sl ? s : sl;
   }
   const double ll = l[0] * l[0] + l[1] * l[1] + l[2] * l[2];
-  const double ef = std::sqrt((e[0] * e[0] + e[1] * e[1] + e[2] * e[2]) * (f[0] * f[0] + f[1] * f[1] + f[2] * f[2]));
+  const double ef =
+      std::sqrt((e[0] * e[0] + e[1] * e[1] + e[2] * e[2]) * (f[0] * f[0] + f[1] * f[1] + f[2] * f[2]));
   const double inv = 1.0 / std::sqrt(ll);
   ax.n = V3{static_cast<float>(l[0] * inv), static_cast<float>(l[1] * inv), static_cast<float>(l[2] * inv)};
   ax.sep = static_cast<float>(sl * inv);
@@ -605,7 +615,7 @@ void convex_triangle_lane(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA&
   bool stopped;
   const float thr = simd::fmin_nn(s_top + kTieRel * std::fabs(s_top) + tie_size, 0.0f);
   const EdgeBest be = edge_pass<F>(h, eb, ee - eb, vb, T, rs, thr, true, &stopped);
-  int feature = tri_face ? 1 : 0;  // 0: hull face, 1: triangle face, 2: edge pair
+  int feature = tri_face ? 1 : 0;                // 0: hull face, 1: triangle face, 2: edge pair
   const auto confirm = [&](const EdgeAxis& x) {  // the exact separation along x.n
     float amax, amin_unused, umax_unused;
     if (nv >= W)

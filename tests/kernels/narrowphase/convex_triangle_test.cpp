@@ -65,8 +65,8 @@ namespace k = kernels;
 using namespace hull_input;  // NOLINT: the hull tests' shared inputs
 namespace nref = test::nref;
 
-constexpr double kRel = 1e-5;     // of L; float arithmetic gives ~1e-6
-constexpr double kAngle = 1e-4;   // rad, where the minimum is unique
+constexpr double kRel = 1e-5;    // of L; float arithmetic gives ~1e-6
+constexpr double kAngle = 1e-4;  // rad, where the minimum is unique
 
 // --- lanes ------------------------------------------------------------------------------------
 
@@ -137,7 +137,9 @@ ManifoldLanes run_gjk(const Bucket& bk, const k::HullView& hv) {
 // --- the reference ---------------------------------------------------------------------------
 
 /// Angle between two nonzero vectors (accurate near 0, unlike acos of a float dot).
-double angle(D3 a, D3 b) { return std::atan2(norm(cross(a, b)), dot(a, b)); }
+double angle(D3 a, D3 b) {
+  return std::atan2(norm(cross(a, b)), dot(a, b));
+}
 
 /// The triangle relative to the hull position (exact in double).
 struct RefTri {
@@ -251,7 +253,9 @@ double tri_radius(const RefTri& T) {
   return r;
 }
 
-bool degenerate(const RefTri& T) { return !(norm(cross(T.v[1] - T.v[0], T.v[2] - T.v[0])) > 0); }
+bool degenerate(const RefTri& T) {
+  return !(norm(cross(T.v[1] - T.v[0], T.v[2] - T.v[0])) > 0);
+}
 
 // --- the checks ------------------------------------------------------------------------------
 
@@ -265,15 +269,16 @@ std::string lane_text(const Pair& q) {
   std::snprintf(buf, sizeof buf,
                 "hull %u p={%.9g, %.9g, %.9g} R={%.9g, %.9g, %.9g, %.9g, %.9g, %.9g, %.9g, %.9g, %.9g}; "
                 "triangle {%.9g, %.9g, %.9g}, {%.9g, %.9g, %.9g}, {%.9g, %.9g, %.9g}",
-                q.hull, q.p[0], q.p[1], q.p[2], q.R[0], q.R[1], q.R[2], q.R[3], q.R[4], q.R[5], q.R[6], q.R[7],
-                q.R[8], q.v[0][0], q.v[0][1], q.v[0][2], q.v[1][0], q.v[1][1], q.v[1][2], q.v[2][0], q.v[2][1],
-                q.v[2][2]);
+                q.hull, q.p[0], q.p[1], q.p[2], q.R[0], q.R[1], q.R[2], q.R[3], q.R[4], q.R[5], q.R[6],
+                q.R[7], q.R[8], q.v[0][0], q.v[0][1], q.v[0][2], q.v[1][0], q.v[1][1], q.v[1][2], q.v[2][0],
+                q.v[2][1], q.v[2][2]);
   return buf;
 }
 
 /// Runs both paths and GJK / EPA on `pairs` and checks every lane; returns the counts.
 /// rel: the depth tolerance relative to L.
-Stats check_pairs(const std::string& name, const std::vector<Pair>& pairs, const Hulls& hulls, double rel = kRel) {
+Stats check_pairs(const std::string& name, const std::vector<Pair>& pairs, const Hulls& hulls,
+                  double rel = kRel) {
   SCOPED_TRACE(name);
   Stats st;
   const Bucket bk(pairs);
@@ -291,7 +296,8 @@ Stats check_pairs(const std::string& name, const std::vector<Pair>& pairs, const
     const SatRef ref = brute_sat(H, T, L, !degenerate(T));
     const double depth_ref = -ref.s;
     const int before = failure_parts();
-    SCOPED_TRACE("lane " + std::to_string(i) + ": " + lane_text(q) + "; depth_ref=" + std::to_string(depth_ref));
+    SCOPED_TRACE("lane " + std::to_string(i) + ": " + lane_text(q) +
+                 "; depth_ref=" + std::to_string(depth_ref));
 
     // Both paths against the reference (they may round differently where FMAs fuse
     // differently: nearly tied candidates can go either way, each a valid answer).
@@ -316,7 +322,8 @@ Stats check_pairs(const std::string& name, const std::vector<Pair>& pairs, const
       st.worst_depth = std::max(st.worst_depth, std::fabs(depth - depth_ref) / L);
       EXPECT_NEAR(separation(H, T, n), -depth, tol) << "depth is not the overlap along n";
       if (ref.unique) {
-        EXPECT_LE(angle(n, ref.n), kAngle) << "normal; reference " << ref.n.x << ", " << ref.n.y << ", " << ref.n.z;
+        EXPECT_LE(angle(n, ref.n), kAngle)
+            << "normal; reference " << ref.n.x << ", " << ref.n.y << ", " << ref.n.z;
       }
       // Which feature: a hull face normal, the triangle's normal, else an edge pair.
       bool face = false;
@@ -336,8 +343,9 @@ Stats check_pairs(const std::string& name, const std::vector<Pair>& pairs, const
         const double ulp = std::max({std::fabs(pw.x), std::fabs(pw.y), std::fabs(pw.z)}) * 0x1p-23;
         const D3 pt = pw - H.origin;
         const double lim = 0.5 * res.pd[j] + tol + 2 * ulp;
-        EXPECT_LE(tri_distance(T, pt), lim) << "point " << j << " of " << res.count << " off the triangle ("
-                                            << (face ? "hull face" : (tface ? "triangle face" : "edges")) << ")";
+        EXPECT_LE(tri_distance(T, pt), lim)
+            << "point " << j << " of " << res.count << " off the triangle ("
+            << (face ? "hull face" : (tface ? "triangle face" : "edges")) << ")";
         EXPECT_LE(std::fabs(hull_sd(H, pt)), lim) << "point " << j << " off the hull's surface";
         EXPECT_GT(res.pd[j], 0.0) << "pdepth " << j;
         EXPECT_LE(res.pd[j], depth + tol) << "pdepth " << j;
@@ -358,12 +366,15 @@ Stats check_pairs(const std::string& name, const std::vector<Pair>& pairs, const
 }
 
 void set_v(Pair* q, int i, D3 x) {
-  q->v[i][0] = static_cast<float>(x.x), q->v[i][1] = static_cast<float>(x.y), q->v[i][2] = static_cast<float>(x.z);
+  q->v[i][0] = static_cast<float>(x.x), q->v[i][1] = static_cast<float>(x.y),
+  q->v[i][2] = static_cast<float>(x.z);
 }
 void set_p(Pair* q, D3 x) {
   q->p[0] = static_cast<float>(x.x), q->p[1] = static_cast<float>(x.y), q->p[2] = static_cast<float>(x.z);
 }
-D3 get_v(const Pair& q, int i) { return D3{q.v[i][0], q.v[i][1], q.v[i][2]}; }
+D3 get_v(const Pair& q, int i) {
+  return D3{q.v[i][0], q.v[i][1], q.v[i][2]};
+}
 
 /// Moves the triangle by t (world, rounded to float).
 Pair shifted(Pair q, D3 t) {
@@ -434,7 +445,8 @@ void add_bench_hulls(Rng& g, Hulls* hulls, uint32_t count) {
     std::vector<Eigen::Vector3f> pts;
     for (int j = 0; j < 24; ++j) {
       const D3 u = random_unit(g);
-      pts.emplace_back(static_cast<float>(sx * u.x), static_cast<float>(sy * u.y), static_cast<float>(sz * u.z));
+      pts.emplace_back(static_cast<float>(sx * u.x), static_cast<float>(sy * u.y),
+                       static_cast<float>(sz * u.z));
     }
     hulls->add(pts);
   }
@@ -445,7 +457,7 @@ Hulls& shared_hulls() {
     auto* hs = new Hulls;
     Rng g(7);
     add_random_hulls(g, hs, 16, 1.0);  // 0..15: boxes and 8..40-point clouds
-    add_bench_hulls(g, hs, 8);          // 16..23
+    add_bench_hulls(g, hs, 8);         // 16..23
     hs->add({Eigen::Vector3f(0, 0, 0), Eigen::Vector3f(1, 0, 0), Eigen::Vector3f(0, 1, 0),
              Eigen::Vector3f(0.2f, 0.3f, 0.9f)});  // 24: tetrahedron (4 faces, 4 vertices)
     return hs;
@@ -475,8 +487,8 @@ TEST(ConvexTriangle, RandomPosesAgreeWithReference) {
   // The two paths run the same per-lane code over different widths: nearly always the
   // same bytes.
   EXPECT_GT(st.same_bytes, pairs.size() * 95 / 100);
-  std::printf("random: hits %u misses %u face %u tri_face %u edge %u multi %u same bytes %u worst %.3g\n", st.hits,
-              st.misses, st.face, st.tri_face, st.edge, st.multi, st.same_bytes, st.worst_depth);
+  std::printf("random: hits %u misses %u face %u tri_face %u edge %u multi %u same bytes %u worst %.3g\n",
+              st.hits, st.misses, st.face, st.tri_face, st.edge, st.multi, st.same_bytes, st.worst_depth);
 }
 
 TEST(ConvexTriangle, TinyHugeAndFar) {
@@ -504,7 +516,8 @@ TEST(ConvexTriangle, DeepCoincidentCentresAndTouching) {
   const Hulls& hulls = shared_hulls();
   const uint32_t n = scaled(500);
   check_pairs("deep", random_pairs(g, hulls, 0, kHullsRandom + 1, n, 1.0, 0.0, 0.0, 0.0, 0.3), hulls);
-  check_pairs("coincident centres", random_pairs(g, hulls, 0, kHullsRandom + 1, n, 1.0, 0.0, 0.0, 0.0, 0.0), hulls);
+  check_pairs("coincident centres", random_pairs(g, hulls, 0, kHullsRandom + 1, n, 1.0, 0.0, 0.0, 0.0, 0.0),
+              hulls);
   // Moved to the brute force's touching distance (then rounded to float): either
   // answer, a hit of depth within tol.
   check_pairs("touching", random_pairs(g, hulls, 0, kHullsRandom + 1, n, 1.0, 0.0, 1.0, 1.0), hulls);
@@ -524,7 +537,9 @@ struct BoxWorld {
     set_v(&q, 0, a), set_v(&q, 1, b), set_v(&q, 2, c);
     return q;
   }
-  ManifoldLanes run1(const Pair& q) const { return run(Bucket({q}), hulls.store.view(), k::KernelPath::kSimd); }
+  ManifoldLanes run1(const Pair& q) const {
+    return run(Bucket({q}), hulls.store.view(), k::KernelPath::kSimd);
+  }
 };
 
 TEST(ConvexTriangle, ExactFacesOnABox) {
@@ -611,7 +626,8 @@ TEST(ConvexTriangle, FaceAndEdgeFeaturesOnRandomBoxes) {
   const Bucket bk(pairs);
   std::vector<float> be[3];
   for (const Pair& q : pairs)
-    for (int c = 0; c < 3; ++c) be[c].push_back(static_cast<float>(c == 0 ? ext[q.hull].x : (c == 1 ? ext[q.hull].y : ext[q.hull].z)));
+    for (int c = 0; c < 3; ++c)
+      be[c].push_back(static_cast<float>(c == 0 ? ext[q.hull].x : (c == 1 ? ext[q.hull].y : ext[q.hull].z)));
   k::LeafSoA box = bk.a();
   for (int c = 0; c < 3; ++c) box.e[c] = be[c].data();
   ManifoldLanes bt(bk.n);
@@ -648,7 +664,14 @@ TEST(ConvexTriangle, NearParallelEdges) {
       Pair q{};
       q.hull = box;
       const double c = std::cos(M_PI / 4 + kk * ang), sn = std::sin(M_PI / 4 + kk * ang);
-      const float R[9] = {1, 0, 0, 0, static_cast<float>(c), static_cast<float>(-sn), 0, static_cast<float>(sn),
+      const float R[9] = {1,
+                          0,
+                          0,
+                          0,
+                          static_cast<float>(c),
+                          static_cast<float>(-sn),
+                          0,
+                          static_cast<float>(sn),
                           static_cast<float>(c)};
       std::copy(R, R + 9, q.R);
       const double h = std::sqrt(2.0) - 0.01 * (kk + 1);
@@ -715,7 +738,8 @@ TEST(ConvexTriangle, NeedlePancakeAndLargeFaces) {
     std::vector<Eigen::Vector3f> pts;  // 2: needle cloud, 3: pancake cloud
     for (int i = 0; i < 24; ++i) {
       const D3 u = random_unit(g);
-      pts.emplace_back(static_cast<float>(u.x), static_cast<float>(1e-4 * u.y), static_cast<float>(1e-4 * u.z));
+      pts.emplace_back(static_cast<float>(u.x), static_cast<float>(1e-4 * u.y),
+                       static_cast<float>(1e-4 * u.z));
     }
     hulls.add(pts);
     pts.clear();
@@ -761,7 +785,7 @@ TEST(ConvexTriangle, EdgeAxisAmongNearTies) {
   const Hulls& hulls = shared_hulls();
   Pair q{};
   q.hull = 6;
-  const float R[9] = {0.862498283f, 0.255927533f, 0.436575115f, -0.483454734f, 0.161743909f,
+  const float R[9] = {0.862498283f, 0.255927533f, 0.436575115f,  -0.483454734f, 0.161743909f,
                       0.860296726f, 0.149560258f, -0.953068733f, 0.263233215f};
   std::copy(R, R + 9, q.R);
   set_v(&q, 0, {-1.55485225, -0.0603146963, 0.501388371});
@@ -847,9 +871,9 @@ TEST(ConvexTriangle, BruteForceAgreesWithTheSampledReference) {
     std::vector<nref::V3> pts;
     for (const D3& v : H.v) pts.push_back(nref::V3{v.x, v.y, v.z});
     const nref::Shape a = nref::make_convex(pts);
-    const nref::Shape b = nref::make_triangle(nref::V3{T.v[0].x, T.v[0].y, T.v[0].z},
-                                              nref::V3{T.v[1].x, T.v[1].y, T.v[1].z},
-                                              nref::V3{T.v[2].x, T.v[2].y, T.v[2].z});
+    const nref::Shape b =
+        nref::make_triangle(nref::V3{T.v[0].x, T.v[0].y, T.v[0].z}, nref::V3{T.v[1].x, T.v[1].y, T.v[1].z},
+                            nref::V3{T.v[2].x, T.v[2].y, T.v[2].z});
     const nref::PairResult r = nref::solve_pair(a, b, {}, opt);
     const SatRef s = brute_sat(H, T, std::max(H.radius, tri_radius(T)));
     const double L = std::max(H.radius, tri_radius(T));
