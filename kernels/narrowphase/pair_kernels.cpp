@@ -56,6 +56,7 @@ struct Table {
     k[kLeafTriangle][kLeafHalfSpace] = &collide_triangle_halfspace;
     k[kLeafSphere][kLeafConvex] = &collide_sphere_convex;
     k[kLeafCapsule][kLeafConvex] = &collide_capsule_convex;
+    k[kLeafConvex][kLeafTriangle] = &collide_convex_triangle;
     k[kLeafSphere][kLeafEllipsoid] = &collide_sphere_ellipsoid;
   }
 };

@@ -6,9 +6,10 @@
 // sphere / capsule / box / cylinder / triangle / half-space pairs below, with the
 // closed-form cylinder, ellipsoid and triangle against half-space kernels
 // (primitives_halfspace.cpp) and triangle-triangle (primitives_triangle_triangle.cpp).
-// Sphere-hull and capsule-hull have their own exact per-lane kernels
-// (kernels/narrowphase/sphere_convex.cpp, capsule_convex.cpp), sphere-ellipsoid a lane
-// kernel (kernels/narrowphase/sphere_ellipsoid.cpp). Everything else goes through the
+// Sphere-hull, capsule-hull and hull-triangle have their own exact per-lane kernels
+// (kernels/narrowphase/sphere_convex.cpp, capsule_convex.cpp, convex_triangle.cpp: a
+// separating axis test with Gauss-map pruned edge axes), sphere-ellipsoid a lane kernel
+// (kernels/narrowphase/sphere_ellipsoid.cpp). Everything else goes through the
 // general convex path (kernels/narrowphase/gjk_epa.cpp): GJK + EPA on the leaves'
 // support functions, with face clipping for polytope manifolds, and a support-function
 // kernel against half-spaces.
@@ -45,6 +46,11 @@ void collide_sphere_convex(const LeafSoA&, const LeafSoA&, const ManifoldSoA&, R
 /// core outside, separating axes when the core meets the hull; capsule_convex.cpp); one
 /// lane at a time, not GJK / EPA.
 void collide_capsule_convex(const LeafSoA&, const LeafSoA&, const ManifoldSoA&, Range, const NarrowConfig&);
+/// Convex hull (A) against triangle (B): exact, by the separating axis test in the hull's
+/// frame (hull faces, the triangle's normal, hull edge x triangle edge axes pruned by the
+/// Gauss map), a clipped face manifold or one edge point (convex_triangle.cpp); one lane
+/// at a time, not GJK / EPA.
+void collide_convex_triangle(const LeafSoA&, const LeafSoA&, const ManifoldSoA&, Range, const NarrowConfig&);
 /// Sphere against ellipsoid: closest surface point by a fixed-count root solve, SIMD across pairs.
 void collide_sphere_ellipsoid(const LeafSoA&, const LeafSoA&, const ManifoldSoA&, Range, const NarrowConfig&);
 
