@@ -616,7 +616,7 @@ TEST(ConvexTriangle, FaceAndEdgeFeaturesOnRandomBoxes) {
   for (int i = 0; i < 8; ++i) {
     const D3 e{uni(g, 0.1, 1.0), uni(g, 0.1, 1.0), uni(g, 0.1, 1.0)};
     hulls.add(box_corners(static_cast<float>(e.x), static_cast<float>(e.y), static_cast<float>(e.z)));
-    ext.push_back(D3{static_cast<float>(e.x), static_cast<float>(e.y), static_cast<float>(e.z)});
+    ext.push_back(D3{test::round_to_float(e.x), test::round_to_float(e.y), test::round_to_float(e.z)});
   }
   const auto pairs = random_pairs(g, hulls, 0, 8, scaled(1000), 1.0, 0.0);
   const Stats st = check_pairs("boxes", pairs, hulls);
