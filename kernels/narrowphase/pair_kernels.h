@@ -53,6 +53,10 @@ void collide_capsule_convex(const LeafSoA&, const LeafSoA&, const ManifoldSoA&, 
 void collide_convex_triangle(const LeafSoA&, const LeafSoA&, const ManifoldSoA&, Range, const NarrowConfig&);
 /// Sphere against ellipsoid: closest surface point by a fixed-count root solve, SIMD across pairs.
 void collide_sphere_ellipsoid(const LeafSoA&, const LeafSoA&, const ManifoldSoA&, Range, const NarrowConfig&);
+/// Capsule against ellipsoid: exact, the least of five candidate normals (each end point's
+/// nearest and far local minimum on the ellipsoid, the shadow's nearest point to the
+/// core; capsule_ellipsoid.cpp), SIMD across pairs.
+void collide_capsule_ellipsoid(const LeafSoA&, const LeafSoA&, const ManifoldSoA&, Range, const NarrowConfig&);
 
 // --- general convex -----------------------------------------------------------------------
 /// GJK + EPA for any two convex leaf types ta <= tb (neither a half-space), one pair
