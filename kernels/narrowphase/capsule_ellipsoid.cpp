@@ -122,15 +122,22 @@ IMPACT_INLINE void capsule_ellipsoid_block(const LeafSoA& a, const LeafSoA& b, c
     consider(ellip::near_normal(sh, q, st), Mask(true));
   }
   // Far minima score > 0: only a core that meets the ellipsoid (least score so far
-  // >= 0) can need them.
-  // (The other lanes ignore them, so a lane's bytes do not depend on its block.)
+  // >= 0) can need them. (The other lanes ignore them, so a lane's bytes do not depend
+  // on its block.)
   const Mask meets = best.value >= zero;
   if (simd::any(meets)) {
-    Mask ok0, ok1;
-    const V3<F> far0 = ellip::far_normal(av, st0, ok0);
-    const V3<F> far1 = ellip::far_normal(av, st1, ok1);
-    consider(far0, ok0 & meets);
-    consider(far1, ok1 & meets);
+    const F fa[2][3] = {{av[0], av[1], av[2]}, {av[0], av[1], av[2]}};
+    const F fz[2][3] = {{st0.z[0], st0.z[1], st0.z[2]}, {st1.z[0], st1.z[1], st1.z[2]}};
+    const F fg[2][3] = {{st0.g_near[0], st0.g_near[1], st0.g_near[2]},
+                        {st1.g_near[0], st1.g_near[1], st1.g_near[2]}};
+    const Mask want[2] = {meets, meets};
+    F g[2][3];
+    Mask ok[2];
+    ellip::far_packed(fa, fz, fg, want, g, ok);
+    const ellip::PointSolve<3, F>* st[2] = {&st0, &st1};
+    for (int c = 0; c < 2; ++c) {
+      consider(V3<F>{st[c]->sign[0] * g[c][0], st[c]->sign[1] * g[c][1], st[c]->sign[2] * g[c][2]}, ok[c]);
+    }
   }
 
   // n from A to B: minus m; B's surface point: its support along m (towards A).

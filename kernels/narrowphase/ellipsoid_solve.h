@@ -153,13 +153,19 @@ IMPACT_INLINE void closest_snapped(const F (&a)[N], const F (&z)[N], F (&x)[N], 
   // Root below the floor: a point on the smallest axis's principal plane whose nearest
   // point is off that plane (Eberly's special case; also the centre itself).
   const Mask off_plane = (lo == F(kFloor)) & (e.Q < one);
+  // A lane whose step leaves (c, lo, hi) unchanged is at a fixed point: it stops there
+  // (state and the terms it returns frozen), so its result depends on its own data
+  // only, not on how many steps its block runs; the block stops when all lanes have.
+  Mask done(false);
+  F r_out[N], qr_out = e.Qr;
+  for (int i = 0; i < N; ++i) r_out[i] = e.r[i];
   for (int k = 0; k < kIterations; ++k) {
     const F n = sqrt(e.Q), nr = sqrt(e.Qr);
     // Newton on psi = 1/|q| - 1 and on the same without term m: both below the root.
     const F s_full = c + (n - one) * e.Q / max(e.D, tiny);
     const F s_red = c + (nr - one) * e.Qr / max(e.Dr, tiny);
-    hi = select(e.Q <= one, min(hi, c), hi);
-    lo = min(max(lo, max(s_full, s_red)), hi);
+    const F hi_new = select(e.Q <= one, min(hi, c), hi);
+    const F lo_new = min(max(lo, max(s_full, s_red)), hi_new);
     // The dominant term p of psi's derivative (lowest index among equal terms), and
     // Newton on v = q_p (s + d_p = w_p / v): v_new = v - (Q - 1) / dQ/dv with
     // dQ/dv = 2 v + 2 (D - h_p) (s + d_p) / v, i.e.
@@ -175,18 +181,23 @@ IMPACT_INLINE void closest_snapped(const F (&a)[N], const F (&z)[N], F (&x)[N], 
     const F den = F(2.0f) * sigma * e.D - qm1;
     const Mask den_ok = den > zero;
     const F s_pole = c + sigma * qm1 / select(den_ok, den, one);
-    const Mask use_pole = den_ok & (hp > F(0.5f) * e.D) & (s_pole > lo) & (s_pole < hi);
-    c = select(use_pole, s_pole, lo);
+    const Mask use_pole = den_ok & (hp > F(0.5f) * e.D) & (s_pole > lo_new) & (s_pole < hi_new);
+    const F c_new = select(use_pole, s_pole, lo_new);
+    done = done | ((c_new == c) & (lo_new == lo) & (hi_new == hi));
+    c = select(done, c, c_new), lo = select(done, lo, lo_new), hi = select(done, hi, hi_new);
+    if (simd::all(done)) break;
     e = secular(c, w, d, is_m);
+    for (int i = 0; i < N; ++i) r_out[i] = select(done, r_out[i], e.r[i]);
+    qr_out = select(done, qr_out, e.Qr);
   }
   F xm_off = zero;
   for (int i = 0; i < N; ++i) {
-    x[i] = a[i] * a[i] * z[i] * e.r[i];
-    g[i] = z[i] * e.r[i];
+    x[i] = a[i] * a[i] * z[i] * r_out[i];
+    g[i] = z[i] * r_out[i];
     xm_off = select(is_m[i], a[i], xm_off);
   }
   // Off the plane: (x_i / a_i)^2 = q_i^2 for i != m, x_m from the surface equation.
-  xm_off = xm_off * sqrt(max(one - e.Qr, zero));
+  xm_off = xm_off * sqrt(max(one - qr_out, zero));
   const F gm_off = xm_off / (am * am);
   for (int i = 0; i < N; ++i) {
     const Mask use = off_plane & is_m[i];
@@ -205,58 +216,186 @@ IMPACT_INLINE void closest_on_ellipsoid(const F (&a)[N], const F (&z_in)[N], typ
   closest_snapped(a, z, x, g);
 }
 
+/// The axes the far minimum involves: m (smallest radius, lowest index among equal), p
+/// (second smallest, lowest index among the rest), and the terms of z there.
+template <int N, class F>
+struct FarAxes {
+  typename F::Mask is_m[N];
+  F w[N], d[N];
+  F wm, wp, dp;
+  F wq, dq;  // the third axis (N = 3; 0 and 1 for N = 2)
+};
+
+template <int N, class F>
+IMPACT_INLINE FarAxes<N, F> far_axes(const F (&a)[N], const F (&z)[N]) {
+  using Mask = typename F::Mask;
+  const F zero(0.0f);
+  FarAxes<N, F> f;
+  const F am = smallest_axis(a, f.is_m);
+  F ap(3.0e38f);
+  for (int i = 0; i < N; ++i) ap = select(f.is_m[i], ap, min(ap, a[i]));
+  f.wm = zero, f.wp = zero, f.wq = zero, f.dq = F(1.0f);
+  Mask taken(false);
+  for (int i = 0; i < N; ++i) {
+    f.w[i] = a[i] * z[i];
+    f.d[i] = (a[i] - am) * (a[i] + am);
+    f.wm = select(f.is_m[i], f.w[i], f.wm);
+    const Mask is_p = andnot(a[i] == ap, taken | f.is_m[i]);
+    taken = taken | is_p;
+    f.wp = select(is_p, f.w[i], f.wp);
+    if constexpr (N == 3) {
+      const Mask is_q = ~(f.is_m[i] | is_p);
+      f.wq = select(is_q, f.w[i], f.wq);
+      f.dq = select(is_q, f.d[i], f.dq);
+    }
+  }
+  f.dp = (ap - am) * (ap + am);
+  return f;
+}
+
+/// Which lanes can have a far minimum: mirror, a point on the smallest axis's plane
+/// (z_m = 0; the far minimum is the nearest point mirrored across that plane, or the
+/// nearest point itself, and needs no solve); solve, the others where a root may exist
+/// (necessary: w_m + w_p < d_p, each pole term below 1 somewhere in between, and
+/// w_q < d_q, the third term below 1 there).
+template <int N, class F>
+IMPACT_INLINE void far_cases(const FarAxes<N, F>& f, typename F::Mask& mirror, typename F::Mask& solve) {
+  mirror = f.wm <= F(0.0f);
+  solve = andnot((f.wm + f.wp < f.dp) & (f.wq < f.dq), mirror);
+}
+
 /// The other local minimum of the distance from z (first orthant, snapped) to the
-/// surface: the right root of Q = 1 in (-d_p, 0), where Q rises back to its pole at 0.
-/// Returns the lanes where it exists; g receives the outward gradient there
-/// (unnormalised; g_m <= 0: across the smallest axis). g_near: closest_snapped's
-/// gradient for the same z, whose mirror across the smallest axis's plane is the far
-/// minimum of a point on that plane (where the pole at 0 vanishes).
-/// Solve: from s = -w_m (where the term m alone is 1, so Q >= 1: right of the root),
-/// each step takes the smaller of two upper bounds of the root: Newton on psi (concave,
+/// surface, for the lanes of `solve` (far_cases): the right root of Q = 1 in (-d_p, 0),
+/// where Q rises back to its pole at 0. Returns the lanes where it exists; g receives the
+/// outward gradient there (unnormalised; g_m < 0: across the smallest axis).
+/// From s = -w_m (where the term m alone is 1, so Q >= 1: right of the root), each step
+/// takes the smaller of two upper bounds of the root: Newton on psi (concave,
 /// decreasing right of the root) and the pole step s = -w_m / sqrt(1 - Q_r) (Q_r, the
 /// other terms, grows as s falls). A lane whose step leaves (-d_p, 0), finds psi
-/// increasing (past its maximum: no root) or Q_r >= 1 has no far minimum. Existence
-/// needs w_m + w_p < d_p (each of the two pole terms below 1 somewhere in between).
+/// increasing (past its maximum: no root) or Q_r >= 1 has no far minimum. Lanes
+/// outside `solve` sit at s = -2 (below every -d_i > -1: finite terms) and return false.
+template <int N, class F>
+IMPACT_INLINE typename F::Mask far_solve(const FarAxes<N, F>& f, typename F::Mask solve, const F (&z)[N],
+                                         F (&g)[N]) {
+  using Mask = typename F::Mask;
+  const F zero(0.0f), one(1.0f);
+  Mask alive = solve;
+  F s = select(alive, -f.wm, F(-2.0f));
+  Secular<N, F> e = secular(s, f.w, f.d, f.is_m);
+  // Lanes stop at a fixed point of the step (see closest_snapped); lanes without a
+  // candidate from the start.
+  Mask done = ~alive;
+  F r_out[N];
+  for (int i = 0; i < N; ++i) r_out[i] = e.r[i];
+  for (int k = 0; k < kFarIterations; ++k) {
+    const Mask live = alive & (e.D < zero) & (e.Qr < one);
+    const F s_newton = s + (sqrt(e.Q) - one) * e.Q / select(live, e.D, -one);
+    const F s_pole = -f.wm / sqrt(select(live, one - e.Qr, one));
+    const F next = min(s_newton, s_pole);
+    const Mask alive_new = live & (next > -f.dp);
+    const F s_new = select(alive_new, next, s);
+    done = done | ((s_new == s) & ~(alive_new ^ alive));
+    s = select(done, s, s_new), alive = select(done, alive, alive_new);
+    if (simd::all(done)) break;
+    e = secular(s, f.w, f.d, f.is_m);
+    for (int i = 0; i < N; ++i) r_out[i] = select(done, r_out[i], e.r[i]);
+  }
+  for (int i = 0; i < N; ++i) g[i] = z[i] * r_out[i];
+  return alive;
+}
+
+/// The far minimum of every lane (far_cases, far_solve and the mirror): valid lanes
+/// returned, g as for far_solve. g_near: closest_snapped's gradient for the same z.
 template <int N, class F>
 IMPACT_INLINE typename F::Mask far_on_ellipsoid(const F (&a)[N], const F (&z)[N], const F (&g_near)[N], F (&g)[N]) {
   using Mask = typename F::Mask;
-  const F zero(0.0f), one(1.0f);
-  Mask is_m[N];
-  const F am = smallest_axis(a, is_m);
-  // The second smallest radius (its axis p: the lowest index among the rest).
-  F ap(3.0e38f);
-  for (int i = 0; i < N; ++i) ap = select(is_m[i], ap, min(ap, a[i]));
-  F w[N], d[N];
-  F wm = zero, wp = zero;
-  Mask taken(false);
-  for (int i = 0; i < N; ++i) {
-    w[i] = a[i] * z[i];
-    d[i] = (a[i] - am) * (a[i] + am);
-    wm = select(is_m[i], w[i], wm);
-    const Mask is_p = andnot(a[i] == ap, taken | is_m[i]);
-    taken = taken | is_p;
-    wp = select(is_p, w[i], wp);
+  const FarAxes<N, F> f = far_axes(a, z);
+  Mask mirror, solve;
+  far_cases(f, mirror, solve);
+  const Mask alive = far_solve(f, solve, z, g);
+  for (int i = 0; i < N; ++i) g[i] = select(mirror, select(f.is_m[i], -g_near[i], g_near[i]), g[i]);
+  return alive | mirror;
+}
+
+/// far_on_ellipsoid for K (3-D) points per lane, solving only the (lane, point) slots
+/// in want that can have a far minimum (far_cases), packed kSimdWidth to a solve: few
+/// slots need one (most points fail the existence test), so the packed solves cost a
+/// fraction of K full ones. A slot's result does not depend on the others packed with
+/// it (the solve is lane-wise), so the bytes match the one-lane path's. A 2-D problem
+/// (an ellipse with semi-axes ax0 >= ax1) enters as radii (ax0, ax1, ax0) and
+/// z = (z0, z1, 0): the third term is 0 (the same roots). Returns in ok the slots of
+/// want with a far minimum.
+template <class F, int K>
+IMPACT_INLINE void far_packed(const F (&a)[K][3], const F (&z)[K][3], const F (&g_near)[K][3],
+                              const typename F::Mask (&want)[K], F (&g)[K][3], typename F::Mask (&ok)[K]) {
+  using Mask = typename F::Mask;
+  constexpr uint32_t W = F::kWidth;
+  FarAxes<3, F> f[K];
+  Mask mirror[K], solve[K], alive[K];
+  F gs[K][3];
+  for (int c = 0; c < K; ++c) {
+    f[c] = far_axes(a[c], z[c]);
+    far_cases(f[c], mirror[c], solve[c]);
+    mirror[c] = mirror[c] & want[c];
+    solve[c] = solve[c] & want[c];
   }
-  const F dp = (ap - am) * (ap + am);
-  const Mask on_plane = wm <= zero;
-  Mask alive = andnot(wm + wp < dp, on_plane);
-  // Lanes without a candidate sit at s = -2 (below every -d_i > -1: finite terms).
-  F s = select(alive, -wm, F(-2.0f));
-  Secular<N, F> e = secular(s, w, d, is_m);
-  for (int k = 0; k < kFarIterations; ++k) {
-    alive = alive & (e.D < zero) & (e.Qr < one);
-    const F s_newton = s + (sqrt(e.Q) - one) * e.Q / select(alive, e.D, -one);
-    const F s_pole = -wm / sqrt(select(alive, one - e.Qr, one));
-    const F next = min(s_newton, s_pole);
-    alive = alive & (next > -dp);
-    s = select(alive, next, s);
-    e = secular(s, w, d, is_m);
+  if constexpr (W == 1) {
+    for (int c = 0; c < K; ++c) {
+      alive[c] = Mask(false);
+      for (int i = 0; i < 3; ++i) gs[c][i] = F(0.0f);
+      if (simd::any(solve[c])) alive[c] = far_solve(f[c], solve[c], z[c], gs[c]);
+    }
+  } else {
+    // Slots to solve, in (point, lane) order.
+    uint8_t slot_c[K * W], slot_l[K * W];
+    uint32_t n = 0;
+    for (int c = 0; c < K; ++c) {
+      for (uint32_t bits = simd::bits(solve[c]); bits != 0; bits &= bits - 1) {
+        slot_c[n] = static_cast<uint8_t>(c);
+        slot_l[n] = static_cast<uint8_t>(__builtin_ctz(bits));
+        ++n;
+      }
+    }
+    float out_g[K][3][W] = {}, out_ok[K][W] = {};
+    if (n > 0) {
+      float la[K][3][W], lz[K][3][W];
+      for (int c = 0; c < K; ++c) {
+        for (int i = 0; i < 3; ++i) {
+          a[c][i].store(la[c][i]);
+          z[c][i].store(lz[c][i]);
+        }
+      }
+      for (uint32_t s0 = 0; s0 < n; s0 += W) {
+        float pa[3][W], pz[3][W];
+        for (uint32_t k = 0; k < W; ++k) {
+          const uint32_t s = s0 + k < n ? s0 + k : n - 1;  // padding repeats the last slot
+          for (int i = 0; i < 3; ++i) {
+            pa[i][k] = la[slot_c[s]][i][slot_l[s]];
+            pz[i][k] = lz[slot_c[s]][i][slot_l[s]];
+          }
+        }
+        F fa[3], fz[3], fg[3];
+        for (int i = 0; i < 3; ++i) fa[i] = F::load(pa[i]), fz[i] = F::load(pz[i]);
+        const FarAxes<3, F> pf = far_axes(fa, fz);
+        const uint32_t got = simd::bits(far_solve(pf, Mask(true), fz, fg));
+        float rg[3][W];
+        for (int i = 0; i < 3; ++i) fg[i].store(rg[i]);
+        for (uint32_t k = 0; k < W && s0 + k < n; ++k) {
+          const uint32_t s = s0 + k;
+          for (int i = 0; i < 3; ++i) out_g[slot_c[s]][i][slot_l[s]] = rg[i][k];
+          out_ok[slot_c[s]][slot_l[s]] = ((got >> k) & 1u) ? 1.0f : 0.0f;
+        }
+      }
+    }
+    for (int c = 0; c < K; ++c) {
+      for (int i = 0; i < 3; ++i) gs[c][i] = F::load(out_g[c][i]);
+      alive[c] = F::load(out_ok[c]) > F(0.0f);
+    }
   }
-  for (int i = 0; i < N; ++i) {
-    const F mirror = select(is_m[i], -g_near[i], g_near[i]);
-    g[i] = select(on_plane, mirror, z[i] * e.r[i]);
+  for (int c = 0; c < K; ++c) {
+    for (int i = 0; i < 3; ++i) g[c][i] = select(mirror[c], select(f[c].is_m[i], -g_near[c][i], g_near[c][i]), gs[c][i]);
+    ok[c] = mirror[c] | (solve[c] & alive[c]);
   }
-  return alive | on_plane;
 }
 
 /// The ellipsoid's shadow on the plane perpendicular to the unit direction v (local
@@ -309,7 +448,7 @@ struct PointSolve {
 };
 
 /// The outward gradient at the nearest point of the ellipsoid (radii a) to the point y
-/// (local, scaled), signs restored; st keeps the solve for far_normal.
+/// (local, scaled), signs restored; st keeps the solve for far_packed.
 template <class F>
 IMPACT_INLINE V3<F> near_normal(const F (&a)[3], const V3<F>& y, PointSolve<3, F>& st) {
   const F ys[3] = {y.x, y.y, y.z};
@@ -324,14 +463,6 @@ IMPACT_INLINE V3<F> near_normal(const F (&a)[3], const V3<F>& y, PointSolve<3, F
   snap(z_in, level < F(1.0f), st.z);
   closest_snapped(a, st.z, x, st.g_near);
   return V3<F>{st.sign[0] * st.g_near[0], st.sign[1] * st.g_near[1], st.sign[2] * st.g_near[2]};
-}
-
-/// The outward gradient at the far local minimum of the same point (valid where ok).
-template <class F>
-IMPACT_INLINE V3<F> far_normal(const F (&a)[3], const PointSolve<3, F>& st, typename F::Mask& ok) {
-  F g[3];
-  ok = far_on_ellipsoid(a, st.z, st.g_near, g);
-  return V3<F>{st.sign[0] * g[0], st.sign[1] * g[1], st.sign[2] * g[2]};
 }
 
 /// The same against the shadow sh (the 2-D problem in its plane: y's component along
@@ -350,13 +481,6 @@ IMPACT_INLINE V3<F> near_normal(const Shadow<F>& sh, const V3<F>& y, PointSolve<
   snap(z_in, level < F(1.0f), st.z);
   closest_snapped(sh.ax, st.z, x, st.g_near);
   return sh.e1 * (st.sign[0] * st.g_near[0]) + sh.e2 * (st.sign[1] * st.g_near[1]);
-}
-
-template <class F>
-IMPACT_INLINE V3<F> far_normal(const Shadow<F>& sh, const PointSolve<2, F>& st, typename F::Mask& ok) {
-  F g[2];
-  ok = far_on_ellipsoid(sh.ax, st.z, st.g_near, g);
-  return sh.e1 * (st.sign[0] * g[0]) + sh.e2 * (st.sign[1] * g[1]);
 }
 
 }  // namespace impact::kernels::ellip
