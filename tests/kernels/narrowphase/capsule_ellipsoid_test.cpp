@@ -32,7 +32,8 @@
 // ellipsoid's centre (coincident centres: finite unit normal); analytic cases (a
 // pancake pierced along its normal, axis-aligned sides and ends); a round ellipsoid
 // against sphere-capsule; a zero-length core against sphere-ellipsoid; the core's two
-// directions (u, -u: same answer); range partitions; GJK / EPA.
+// directions (u, -u: same answer); range partitions and block composition (each lane's
+// bytes whatever its neighbours); GJK / EPA.
 #include <gtest/gtest.h>
 
 #include <Eigen/Core>
@@ -41,6 +42,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
+#include <numeric>
 #include <random>
 #include <vector>
 
@@ -89,13 +91,13 @@ struct Hit {
 };
 
 Query rounded(Query q) {
-  q.a.p = q.a.p.cast<float>().cast<double>();
-  q.a.u = q.a.u.cast<float>().cast<double>();
-  q.a.r = double(float(q.a.r));
-  q.a.h = double(float(q.a.h));
-  q.b.p = q.b.p.cast<float>().cast<double>();
-  q.b.R = q.b.R.cast<float>().cast<double>();
-  q.b.e = q.b.e.cast<float>().cast<double>();
+  q.a.p = test::round_to_float(q.a.p);
+  q.a.u = test::round_to_float(q.a.u);
+  q.a.r = test::round_to_float(q.a.r);
+  q.a.h = test::round_to_float(q.a.h);
+  q.b.p = test::round_to_float(q.b.p);
+  q.b.R = test::round_to_float(q.b.R);
+  q.b.e = test::round_to_float(q.b.e);
   return q;
 }
 
@@ -732,24 +734,32 @@ TEST(CapsuleEllipsoidCases, AxisDirectionDoesNotMatter) {
   }
 }
 
-TEST(CapsuleEllipsoidCases, RangePartitionsAndTail) {
+TEST(CapsuleEllipsoidCases, RangePartitionsAndBlockComposition) {
   std::mt19937 g(41);
-  const std::vector<Query> qs = random_queries(g, 37, 1.0, 0.0);
+  std::vector<Query> qs = random_queries(g, 37, 1.0, 0.0);
+  const std::vector<Query> thin = thin_queries(g, 40);
+  qs.insert(qs.end(), thin.begin(), thin.end());
+  const uint32_t n = static_cast<uint32_t>(qs.size());
   const PairKernel kern = pair_kernel(kLeafCapsule, kLeafEllipsoid);
+  auto same = [](const Hit& x, const Hit& y) {
+    return x.count == y.count && (x.count == 0 || (x.depth == y.depth && x.n == y.n && x.pt == y.pt));
+  };
   for (KernelPath path : {KernelPath::kSimd, KernelPath::kScalar}) {
     const std::vector<Hit> all = run(qs, path, kern);
-    for (uint32_t cut : {1u, 5u, 8u, 13u, 36u}) {
-      const std::vector<Hit> lo = run(qs, path, kern, 0, cut);
-      const std::vector<Hit> hi = run(qs, path, kern, cut, 37);
-      for (uint32_t k = 0; k < 37; ++k) {
-        const Hit& h = k < cut ? lo[k] : hi[k];
-        ASSERT_EQ(h.count, all[k].count) << cut << " " << k;
-        if (h.count == 0) continue;
-        EXPECT_EQ(h.depth, all[k].depth);
-        EXPECT_EQ(h.n, all[k].n);
-        EXPECT_EQ(h.pt, all[k].pt);
-      }
+    for (uint32_t cut : {1u, 5u, 8u, 13u, 36u, 61u}) {
+      const std::vector<Hit> lo = run(qs, path, kern, 0, cut), hi = run(qs, path, kern, cut, n);
+      for (uint32_t k = 0; k < n; ++k) EXPECT_TRUE(same(k < cut ? lo[k] : hi[k], all[k])) << cut << " " << k;
     }
+    // Every lane among other neighbours (the solves stop when a whole block has
+    // converged, and far minima are solved packed): a shuffled bucket gives each
+    // lane's same bytes.
+    std::vector<uint32_t> perm(n);
+    std::iota(perm.begin(), perm.end(), 0u);
+    std::shuffle(perm.begin(), perm.end(), g);
+    std::vector<Query> shuffled(n);
+    for (uint32_t k = 0; k < n; ++k) shuffled[k] = qs[perm[k]];
+    const std::vector<Hit> sh = run(shuffled, path, kern);
+    for (uint32_t k = 0; k < n; ++k) EXPECT_TRUE(same(sh[k], all[perm[k]])) << k;
   }
 }
 
