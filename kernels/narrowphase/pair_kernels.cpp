@@ -59,6 +59,7 @@ struct Table {
     k[kLeafConvex][kLeafTriangle] = &collide_convex_triangle;
     k[kLeafSphere][kLeafEllipsoid] = &collide_sphere_ellipsoid;
     k[kLeafCapsule][kLeafEllipsoid] = &collide_capsule_ellipsoid;
+    k[kLeafEllipsoid][kLeafTriangle] = &collide_ellipsoid_triangle;
   }
 };
 

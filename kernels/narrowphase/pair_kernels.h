@@ -57,6 +57,10 @@ void collide_sphere_ellipsoid(const LeafSoA&, const LeafSoA&, const ManifoldSoA&
 /// nearest and far local minimum on the ellipsoid, the shadow's nearest point to the
 /// core; capsule_ellipsoid.cpp), SIMD across pairs.
 void collide_capsule_ellipsoid(const LeafSoA&, const LeafSoA&, const ManifoldSoA&, Range, const NarrowConfig&);
+/// Ellipsoid against triangle: exact, the least of fourteen candidate normals (the face
+/// normals, each vertex's nearest and far local minimum on the ellipsoid, each edge's on
+/// the ellipsoid's shadow across it; ellipsoid_triangle.cpp), SIMD across pairs.
+void collide_ellipsoid_triangle(const LeafSoA&, const LeafSoA&, const ManifoldSoA&, Range, const NarrowConfig&);
 
 // --- general convex -----------------------------------------------------------------------
 /// GJK + EPA for any two convex leaf types ta <= tb (neither a half-space), one pair
