@@ -28,8 +28,11 @@
 //    over the circle).
 // So the five candidate directions (two per end point, one on the circle) hold the
 // minimiser; each is scored by G itself (every direction's G is >= the minimum, so a
-// candidate that is not a local minimum, or not on its own piece, never wins wrongly)
-// and the least wins (ties: the earlier in that order). Separated cores (min G < 0) are
+// candidate that is not a local minimum never wins wrongly) and the least wins (ties:
+// the earlier in that order). An end point's candidates count only on its own
+// hemisphere (within 1e-5 rad): off it they are no minimum, yet may score within float
+// noise of it (a short core's two ends, 3e-4 rad apart), and the circle's candidate
+// covers the band between. Separated cores (min G < 0) are
 // a convex problem; the far minima (G > 0) matter only for cores that meet the
 // ellipsoid, and a block without such a lane skips their solves. A round ellipsoid or a
 // zero-length core gives capsule-sphere's and sphere-ellipsoid's answers.
@@ -61,6 +64,10 @@ namespace {
 using namespace prim;  // NOLINT: lane helpers of this kernel family
 using simd::dot;
 using simd::length_sq;
+
+/// A candidate of an end point counts where it lies on that end's hemisphere up to this
+/// (sine of the angle past the circle m.v = 0).
+constexpr float kPieceTol = 1e-5f;
 
 /// The least of the candidate directions' scores G(m) (m unnormalised).
 template <class F>
@@ -111,11 +118,20 @@ IMPACT_INLINE void capsule_ellipsoid_block(const LeafSoA& a, const LeafSoA& b, c
     best.len = select(take, len, best.len);
   };
 
+  // An end's candidates only on its own hemisphere (p0 = q - h v is the core's lowest
+  // point along m where m.v >= 0), within kPieceTol: off it a candidate is no local
+  // minimum of G, though it may score within float noise of the minimum (a short core's
+  // two ends), and the circle's candidate covers the band between.
+  auto on_end = [&](const V3<F>& m, float side) {
+    const F mv = dot(m, v) * F(side);
+    return (mv >= zero) | (mv * mv <= F(kPieceTol * kPieceTol) * length_sq(m));
+  };
   // End points and the circle m.v = 0 (the shadow's nearest point to q's projection).
   const V3<F> p0 = madd(q, -h, v), p1 = madd(q, h, v);
   ellip::PointSolve<3, F> st0, st1;
-  consider(ellip::near_normal(av, p0, st0), Mask(true));
-  consider(ellip::near_normal(av, p1, st1), Mask(true));
+  const V3<F> near0 = ellip::near_normal(av, p0, st0), near1 = ellip::near_normal(av, p1, st1);
+  consider(near0, on_end(near0, 1.0f));
+  consider(near1, on_end(near1, -1.0f));
   {
     const ellip::Shadow<F> sh = ellip::shadow(av, v);
     ellip::PointSolve<2, F> st;
@@ -136,7 +152,8 @@ IMPACT_INLINE void capsule_ellipsoid_block(const LeafSoA& a, const LeafSoA& b, c
     ellip::far_packed(fa, fz, fg, want, g, ok);
     const ellip::PointSolve<3, F>* st[2] = {&st0, &st1};
     for (int c = 0; c < 2; ++c) {
-      consider(V3<F>{st[c]->sign[0] * g[c][0], st[c]->sign[1] * g[c][1], st[c]->sign[2] * g[c][2]}, ok[c]);
+      const V3<F> m{st[c]->sign[0] * g[c][0], st[c]->sign[1] * g[c][1], st[c]->sign[2] * g[c][2]};
+      consider(m, ok[c] & on_end(m, c == 0 ? 1.0f : -1.0f));
     }
   }
 

@@ -29,9 +29,11 @@
 //  - +N or -N.
 // So fourteen candidate directions (two faces, three vertices x two, three edges x two)
 // hold the minimiser; each is scored by G itself (every direction's G is >= the
-// minimum, so a candidate that is not a local minimum, or not on its own piece, never
-// wins wrongly) and the least wins (ties: the earlier in that order: faces, vertices'
-// and edges' nearest points, vertices' and edges' far minima). Separated pairs
+// minimum, so a candidate that is not a local minimum never wins wrongly) and the least
+// wins (ties: the earlier in that order: faces, vertices' and edges' nearest points,
+// vertices' and edges' far minima). A vertex's or an edge's candidates count only on
+// its own piece (within 1e-5 rad): off it they are no minimum, yet may score within
+// float noise of it, and the neighbouring pieces' candidates cover the band between. Separated pairs
 // (min G < 0) are a convex problem; the far minima (G > 0) matter only for triangles
 // that meet the ellipsoid, and a block without such a lane skips their solves.
 // Solves: ellipsoid_solve.h (nearest points: Eberly's secular equation by 10
@@ -66,6 +68,10 @@ using namespace prim;  // NOLINT: lane helpers of this kernel family
 using simd::cross;
 using simd::dot;
 using simd::length_sq;
+
+/// A vertex's or an edge's candidate counts where it lies on that piece up to this (sine
+/// of the angle past the piece's boundary).
+constexpr float kPieceTol = 1e-5f;
 
 template <class F>
 IMPACT_INLINE void ellipsoid_triangle_block(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out,
@@ -113,12 +119,39 @@ IMPACT_INLINE void ellipsoid_triangle_block(const LeafSoA& a, const LeafSoA& b, 
     best_len = select(take, len, best_len);
   };
 
+  // A vertex's or an edge's candidates only on its own piece: vertex j lowest along m
+  // (m.(w_j - w_k) <= 0 for the others, within kPieceTol of the angle), an edge's
+  // vertices not above the third. Off it a candidate is no local minimum of G, though it
+  // may score within float noise of the minimum; the neighbouring pieces' candidates
+  // cover the band between.
+  V3<F> dw[3];
+  F dw2[3];
+  for (int j = 0; j < 3; ++j) dw[j] = w[j] - w[(j + 1) % 3], dw2[j] = length_sq(dw[j]);  // w_j - w_{j+1}
+  const F tol2(kPieceTol * kPieceTol);
+  auto not_above = [&](const V3<F>& m, const F& m2, int j, float side) {  // side * m.dw_j <= tol
+    const F dm = dot(m, dw[j]) * F(side);
+    return (dm <= zero) | (dm * dm <= tol2 * m2 * dw2[j]);
+  };
+  // vertex j below w_{j+1} (dw_j) and below w_{j+2} (-dw_{j+2})
+  auto on_vertex = [&](const V3<F>& m, int j) {
+    const F m2 = length_sq(m);
+    return not_above(m, m2, j, 1.0f) & not_above(m, m2, (j + 2) % 3, -1.0f);
+  };
+  // edge (w_j, w_{j+1}) below w_{j+2}: w_{j+1} - w_{j+2} = dw_{j+1}, w_j - w_{j+2} = -dw_{j+2}
+  auto on_edge = [&](const V3<F>& m, int j) {
+    const F m2 = length_sq(m);
+    return not_above(m, m2, (j + 1) % 3, 1.0f) & not_above(m, m2, (j + 2) % 3, -1.0f);
+  };
+
   // Faces, then the vertices' and edges' nearest points.
   const V3<F> nf = triangle_normal(w[0], w[1], w[2]);
   consider(nf, Mask(true));
   consider(-nf, Mask(true));
   ellip::PointSolve<3, F> vs[3];
-  for (int j = 0; j < 3; ++j) consider(ellip::near_normal(av, w[j], vs[j]), Mask(true));
+  for (int j = 0; j < 3; ++j) {
+    const V3<F> m = ellip::near_normal(av, w[j], vs[j]);
+    consider(m, on_vertex(m, j));
+  }
   ellip::Shadow<F> sh[3];
   ellip::PointSolve<2, F> es[3];
   Mask edge_ok[3];
@@ -128,7 +161,8 @@ IMPACT_INLINE void ellipsoid_triangle_block(const LeafSoA& a, const LeafSoA& b, 
     const V3<F> dir = normalize_or(d, any_perpendicular(nf), len);
     edge_ok[j] = len > zero;
     sh[j] = ellip::shadow(av, dir);
-    consider(ellip::near_normal(sh[j], w[j], es[j]), edge_ok[j]);
+    const V3<F> m = ellip::near_normal(sh[j], w[j], es[j]);
+    consider(m, edge_ok[j] & on_edge(m, j));
   }
   // Far minima score > 0: only a triangle that meets the ellipsoid (least score so far
   // >= 0) can need them. (The other lanes ignore them, so a lane's bytes do not depend
@@ -149,11 +183,13 @@ IMPACT_INLINE void ellipsoid_triangle_block(const LeafSoA& a, const LeafSoA& b, 
     }
     ellip::far_packed(fa, fz, fg, want, g, ok);
     for (int j = 0; j < 3; ++j) {
-      consider(V3<F>{vs[j].sign[0] * g[j][0], vs[j].sign[1] * g[j][1], vs[j].sign[2] * g[j][2]}, ok[j]);
+      const V3<F> m{vs[j].sign[0] * g[j][0], vs[j].sign[1] * g[j][1], vs[j].sign[2] * g[j][2]};
+      consider(m, ok[j] & on_vertex(m, j));
     }
     for (int j = 0; j < 3; ++j) {
       const F* gj = g[3 + j];
-      consider(sh[j].e1 * (es[j].sign[0] * gj[0]) + sh[j].e2 * (es[j].sign[1] * gj[1]), ok[3 + j]);
+      const V3<F> m = sh[j].e1 * (es[j].sign[0] * gj[0]) + sh[j].e2 * (es[j].sign[1] * gj[1]);
+      consider(m, ok[3 + j] & on_edge(m, j));
     }
   }
 

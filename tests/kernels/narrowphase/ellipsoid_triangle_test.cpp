@@ -26,14 +26,17 @@
 //  (e) the scalar and SIMD paths agree within tol (depth) and kAngleTol (normal).
 // Well conditioned (triangles that meet the ellipsoid; separated ones have no contact):
 // every direction 0.02 rad or more from n_ref overlaps by more than depth_ref + tol and
-// the overlap rises by >= 1e-6 L at 3e-3 rad from n_ref.
+// the overlap rises by >= 1e-6 L at 3e-3 rad from n_ref in every direction (64
+// samples of the ring, the lowest refined: a needle's flat valley is narrow).
 // Scenarios: random poses (outside, touching, through, deep) at sizes 1, 1e-4, 1e4 and
 // 1e5 from the origin; large triangles against small ellipsoids (terrain); constructed
 // touching (a face, an edge and a vertex on a surface point's normal: exact depth and
 // normal; count 0 at exactly touching within tol); pancakes and needles (ratios 1e-3,
 // 1e-4) pierced by the triangle, lying on it or inside it, a vertex outside while the
 // triangle is deep inside; the ellipsoid's centre on the triangle; sliver, collinear
-// and point triangles; analytic cases (a pancake on a flat triangle, tips and rims);
+// and point triangles; small triangles grazing the surface (their vertices' candidates
+// 1e-4 rad apart, scoring alike); analytic cases (a pancake on a flat triangle, tips
+// and rims);
 // a round ellipsoid against sphere-triangle; vertex order and orientation; range
 // partitions and block composition; GJK / EPA.
 #include <gtest/gtest.h>
@@ -230,6 +233,31 @@ nref::Options dense_options() {
   return o;
 }
 
+/// The least rise of the overlap over its minimum s along the ring 3e-3 rad around n:
+/// 64 samples, the best 4 refined by golden-section search on the ring's angle (a
+/// needle's flat valley is ~1e-4 of the ring wide and slips between samples).
+double ring_rise(const nref::Shape& a, const nref::Shape& b, nref::V3 n) {
+  nref::V3 t1, t2;
+  nref::detail::tangent_basis(n, t1, t2);
+  const double th = std::tan(3e-3), s = nref::overlap(a, b, n);
+  auto f = [&](double ang) {
+    return nref::overlap(a, b, nref::normalized(n + th * std::cos(ang) * t1 + th * std::sin(ang) * t2)) - s;
+  };
+  std::vector<std::pair<double, double>> samples;
+  for (int i = 0; i < 64; ++i) samples.push_back({f(2 * M_PI * i / 64), 2 * M_PI * i / 64});
+  std::partial_sort(samples.begin(), samples.begin() + 4, samples.end());
+  double best = samples[0].first;
+  for (int k = 0; k < 4; ++k) {
+    double lo = samples[k].second - 2 * M_PI / 64, hi = samples[k].second + 2 * M_PI / 64;
+    for (int it = 0; it < 40; ++it) {
+      const double m1 = lo + 0.381966 * (hi - lo), m2 = lo + 0.618034 * (hi - lo);
+      (f(m1) < f(m2) ? hi : lo) = f(m1) < f(m2) ? m2 : m1;
+    }
+    best = std::min(best, f(0.5 * (lo + hi)));
+  }
+  return best;
+}
+
 struct Ref {
   double s;  // depth (> 0 overlapping)
   Vec3d n;   // A to B
@@ -269,16 +297,7 @@ Ref reference(const Query& q) {
   f.n = to_eigen(r.n);
   f.through = true;
   f.conditioned = r.unique(kRel * L);
-  if (f.conditioned) {
-    nref::V3 t1, t2;
-    nref::detail::tangent_basis(r.n, t1, t2);
-    const double th = std::tan(3e-3);
-    for (int i = 0; i < 8 && f.conditioned; ++i) {
-      const double ang = 2 * M_PI * i / 8;
-      const nref::V3 m = nref::normalized(r.n + th * std::cos(ang) * t1 + th * std::sin(ang) * t2);
-      if (nref::overlap(a, b, m) - r.s < 1e-6 * L) f.conditioned = false;
-    }
-  }
+  if (f.conditioned) f.conditioned = ring_rise(a, b, r.n) >= 1e-6 * L;
   return f;
 }
 
@@ -463,6 +482,25 @@ std::vector<Touch> touching_queries(std::mt19937& g, int n) {
   return out;
 }
 
+/// Small triangles (1e-4 .. 1e-2 of the ellipsoid) grazing its surface at a random point:
+/// their vertices' nearest points lie 1e-4 rad or less apart and score alike.
+std::vector<Query> grazing_queries(std::mt19937& g, int n) {
+  std::uniform_real_distribution<double> u(-1, 1), s(0.2, 1.0), ex(2, 4), u01(0, 1);
+  std::vector<Query> qs;
+  for (int k = 0; k < n; ++k) {
+    Query q;
+    q.a = Ell{Vec3d(u(g), u(g), u(g)), test::random_rotation(g), Vec3d(s(g), s(g), s(g))};
+    const Vec3d dir = random_unit(g);
+    const Vec3d xs = dir / std::sqrt(test::eref::level(q.a.e, dir));
+    const Vec3d m = q.a.R * xs.cwiseQuotient(q.a.e.cwiseProduct(q.a.e)).normalized();
+    const double size = std::pow(10.0, -ex(g));
+    const Vec3d c = q.a.p + q.a.R * xs + m * (size * u(g));
+    q.b = random_triangle(g, c, size);
+    qs.push_back(rounded(q));
+  }
+  return qs;
+}
+
 /// Needle and pancake ellipsoids (ratio 1e-3 or 1e-4, axes permuted, rotated) against
 /// triangles through them, lying on them, inside a pancake, a vertex outside while the
 /// triangle is deep inside, and nearby.
@@ -621,6 +659,8 @@ TEST(EllipsoidTriangleCases, TerrainNeedlesPancakesDegenerate) {
   EXPECT_GT(st.through, n_thin / 5);
   check_all(degenerate_queries(g, static_cast<int>(test::scaled(200))), "degenerate triangles", &st);
   EXPECT_GT(st.hits, 30);
+  check_all(grazing_queries(g, static_cast<int>(test::scaled(200))), "small grazing triangles", &st);
+  EXPECT_GT(st.normal_checked, 50);
 }
 
 TEST(EllipsoidTriangleCases, CentreOnTheTriangle) {
