@@ -8,8 +8,10 @@
 // (primitives_halfspace.cpp) and triangle-triangle (primitives_triangle_triangle.cpp).
 // Sphere-hull, capsule-hull and hull-triangle have their own exact per-lane kernels
 // (kernels/narrowphase/sphere_convex.cpp, capsule_convex.cpp, convex_triangle.cpp: a
-// separating axis test with Gauss-map pruned edge axes), sphere-ellipsoid a lane kernel
-// (kernels/narrowphase/sphere_ellipsoid.cpp). Everything else goes through the
+// separating axis test with Gauss-map pruned edge axes); sphere-ellipsoid,
+// capsule-ellipsoid and ellipsoid-triangle exact lane kernels (sphere_ellipsoid.cpp,
+// capsule_ellipsoid.cpp, ellipsoid_triangle.cpp: candidate normals from the point
+// solvers of ellipsoid_solve.h, SIMD across pairs). Everything else goes through the
 // general convex path (kernels/narrowphase/gjk_epa.cpp): GJK + EPA on the leaves'
 // support functions, with face clipping for polytope manifolds, and a support-function
 // kernel against half-spaces.
