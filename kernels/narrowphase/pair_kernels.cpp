@@ -58,6 +58,8 @@ struct Table {
     k[kLeafCapsule][kLeafConvex] = &collide_capsule_convex;
     k[kLeafConvex][kLeafTriangle] = &collide_convex_triangle;
     k[kLeafSphere][kLeafEllipsoid] = &collide_sphere_ellipsoid;
+    k[kLeafCapsule][kLeafEllipsoid] = &collide_capsule_ellipsoid;
+    k[kLeafEllipsoid][kLeafTriangle] = &collide_ellipsoid_triangle;
   }
 };
 

@@ -8,8 +8,10 @@
 // (primitives_halfspace.cpp) and triangle-triangle (primitives_triangle_triangle.cpp).
 // Sphere-hull, capsule-hull and hull-triangle have their own exact per-lane kernels
 // (kernels/narrowphase/sphere_convex.cpp, capsule_convex.cpp, convex_triangle.cpp: a
-// separating axis test with Gauss-map pruned edge axes), sphere-ellipsoid a lane kernel
-// (kernels/narrowphase/sphere_ellipsoid.cpp). Everything else goes through the
+// separating axis test with Gauss-map pruned edge axes); sphere-ellipsoid,
+// capsule-ellipsoid and ellipsoid-triangle exact lane kernels (sphere_ellipsoid.cpp,
+// capsule_ellipsoid.cpp, ellipsoid_triangle.cpp: candidate normals from the point
+// solvers of ellipsoid_solve.h, SIMD across pairs). Everything else goes through the
 // general convex path (kernels/narrowphase/gjk_epa.cpp): GJK + EPA on the leaves'
 // support functions, with face clipping for polytope manifolds, and a support-function
 // kernel against half-spaces.
@@ -53,6 +55,14 @@ void collide_capsule_convex(const LeafSoA&, const LeafSoA&, const ManifoldSoA&, 
 void collide_convex_triangle(const LeafSoA&, const LeafSoA&, const ManifoldSoA&, Range, const NarrowConfig&);
 /// Sphere against ellipsoid: closest surface point by a fixed-count root solve, SIMD across pairs.
 void collide_sphere_ellipsoid(const LeafSoA&, const LeafSoA&, const ManifoldSoA&, Range, const NarrowConfig&);
+/// Capsule against ellipsoid: exact, the least of five candidate normals (each end point's
+/// nearest and far local minimum on the ellipsoid, the shadow's nearest point to the
+/// core; capsule_ellipsoid.cpp), SIMD across pairs.
+void collide_capsule_ellipsoid(const LeafSoA&, const LeafSoA&, const ManifoldSoA&, Range, const NarrowConfig&);
+/// Ellipsoid against triangle: exact, the least of fourteen candidate normals (the face
+/// normals, each vertex's nearest and far local minimum on the ellipsoid, each edge's on
+/// the ellipsoid's shadow across it; ellipsoid_triangle.cpp), SIMD across pairs.
+void collide_ellipsoid_triangle(const LeafSoA&, const LeafSoA&, const ManifoldSoA&, Range, const NarrowConfig&);
 
 // --- general convex -----------------------------------------------------------------------
 /// GJK + EPA for any two convex leaf types ta <= tb (neither a half-space), one pair

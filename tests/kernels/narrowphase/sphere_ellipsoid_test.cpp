@@ -2,7 +2,8 @@
 // against an independent double-precision reference, and against the general GJK / EPA
 // path (collide_gjk_epa) on the same lanes.
 //
-// Reference (double, in the ellipsoid's frame, radii sorted): the closest surface point
+// Reference (double, in the ellipsoid's frame, radii sorted;
+// tests/support/ellipsoid_reference.h): the closest surface point
 // by plain bisection of the secular equation to the last bit, with the cases of a point
 // on a principal plane written out (a zero component has a zero closest coordinate,
 // except an inside point on the smallest axis's plane whose nearest point lies off it;
@@ -39,6 +40,7 @@
 #include <vector>
 
 #include "kernels/narrowphase/pair_kernels.h"
+#include "support/ellipsoid_reference.h"
 #include "support/leaf_lanes.h"
 #include "support/random_input.h"
 #include "support/test_support.h"
@@ -48,6 +50,8 @@ namespace {
 
 using Vec3d = Eigen::Vector3d;
 using Mat3d = Eigen::Matrix3d;
+using test::eref::closest_local;
+using test::eref::level;
 
 constexpr double kRel = 1e-5;       // depth tolerance, of L
 constexpr double kAngleTol = 1e-3;  // rad, where the nearest point is well conditioned
@@ -143,106 +147,12 @@ void gjk_kernel(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out, Rang
 // Reference
 // ---------------------------------------------------------------------------------------
 
-/// Root s in [lo, hi] of sum_i (w_i / (s + dd_i))^2 = 1 (decreasing in s) by bisection
-/// until the interval stops shrinking.
-double bisect_secular(int n, const double* w, const double* dd, double lo, double hi) {
-  for (int it = 0; it < 4000; ++it) {
-    const double mid = 0.5 * (lo + hi);
-    if (!(mid > lo && mid < hi)) break;
-    double f = -1.0;
-    for (int i = 0; i < n; ++i) {
-      const double q = w[i] / (mid + dd[i]);
-      f += q * q;
-    }
-    if (f > 0) {
-      lo = mid;
-    } else if (f < 0) {
-      hi = mid;
-    } else {
-      return mid;
-    }
-  }
-  return 0.5 * (lo + hi);
-}
-
-/// Closest point x (x_i >= 0) to y (y_i >= 0) on sum (x_i / a_i)^2 = 1 in n = 1..3
-/// dimensions, a[0] >= ... >= a[n-1] > 0.
-void octant_closest(int n, const double* a, const double* y, double* x) {
-  if (n == 1) {
-    x[0] = a[0];
-    return;
-  }
-  const int l = n - 1;
-  if (y[l] > 0) {
-    // Components with y_i = 0 have x_i = 0 (every denominator is positive): drop them.
-    int idx[3], m = 0;
-    for (int i = 0; i < n; ++i) {
-      if (i == l || y[i] > 0)
-        idx[m++] = i;
-      else
-        x[i] = 0;
-    }
-    if (m < n) {
-      double as[3] = {}, ys[3] = {}, xs[3] = {};
-      for (int k = 0; k < m; ++k) as[k] = a[idx[k]], ys[k] = y[idx[k]];
-      octant_closest(m, as, ys, xs);
-      for (int k = 0; k < m; ++k) x[idx[k]] = xs[k];
-      return;
-    }
-    double w[3], dd[3], wn = 0;
-    for (int i = 0; i < n; ++i) {
-      w[i] = a[i] * y[i];
-      dd[i] = (a[i] - a[l]) * (a[i] + a[l]);
-      wn += w[i] * w[i];
-    }
-    const double s = bisect_secular(n, w, dd, w[l], std::max(std::sqrt(wn), w[l]));
-    for (int i = 0; i < n; ++i) x[i] = a[i] * a[i] * y[i] / (s + dd[i]);
-    return;
-  }
-  // y_l = 0: an inside point near that plane can have its nearest point off it.
-  bool off = true;
-  double sum = 0, u[3];
-  for (int i = 0; i < l; ++i) {
-    const double den = (a[i] - a[l]) * (a[i] + a[l]);
-    const double num = a[i] * y[i];
-    if (!(num < den)) {
-      off = false;
-      break;
-    }
-    u[i] = num / den;  // x_i / a_i
-    sum += u[i] * u[i];
-  }
-  if (off && sum < 1) {
-    for (int i = 0; i < l; ++i) x[i] = a[i] * u[i];
-    x[l] = a[l] * std::sqrt(1 - sum);
-    return;
-  }
-  x[l] = 0;
-  octant_closest(l, a, y, x);
-}
-
 struct Ref {
   double depth;  // r - signed distance
   Vec3d n;       // world, A to B: minus the outward normal at the nearest point
   Vec3d x;       // nearest surface point, local frame
   bool inside;
 };
-
-/// Nearest point of the ellipsoid with radii e (local frame) to the local point y.
-Vec3d closest_local(const Vec3d& e, const Vec3d& y) {
-  int perm[3] = {0, 1, 2};
-  std::stable_sort(perm, perm + 3, [&](int i, int j) { return e[i] > e[j]; });
-  double a[3], yy[3], xs[3];
-  for (int k = 0; k < 3; ++k) a[k] = e[perm[k]], yy[k] = std::fabs(y[perm[k]]);
-  octant_closest(3, a, yy, xs);
-  Vec3d x;
-  for (int k = 0; k < 3; ++k) x[perm[k]] = std::copysign(xs[k], y[perm[k]] < 0 ? -1.0 : 1.0);
-  return x;
-}
-
-double level(const Vec3d& e, const Vec3d& y) {
-  return y.cwiseQuotient(e).squaredNorm();
-}
 
 Ref reference(const Query& q) {
   const Vec3d y = q.b.R.transpose() * (q.c - q.b.p);

@@ -1,0 +1,824 @@
+// collide_capsule_ellipsoid (kernels/narrowphase/capsule_ellipsoid.cpp) on both paths
+// against independent double-precision references, and against the general GJK / EPA
+// path (collide_gjk_epa) on the same lanes.
+//
+// References (double, no candidate enumeration, no secular-equation solve by steps):
+//  - core outside the ellipsoid: the signed distance of a point to the ellipsoid
+//    (tests/support/ellipsoid_reference.h: bisection of the secular equation) is convex
+//    along the core, so its minimum over the core by golden-section search gives the
+//    distance d and the closest points: depth = r - d, n from the core point to the
+//    ellipsoid's nearest point;
+//  - core meeting the ellipsoid: the support overlap h_A(n) + h_B(-n) minimised over
+//    densely sampled directions and refined by Nelder-Mead
+//    (tests/support/narrow_reference.h, with more samples and starts than its default).
+// The two are checked against each other on separated lanes (ReferencesAgree).
+//
+// Per lane, L = max(largest radius, r + half length), tol = kRel * L:
+//  (a) count > 0 iff the reference depth > 0 (either where |depth_ref| <= tol);
+//  (b) |depth - depth_ref| <= tol;
+//  (c) n finite and unit; as good a separating direction as the reference's (the
+//      reference overlap along n <= depth_ref + tol); angle(n, n_ref) <= kAngleTol where
+//      the minimum is well conditioned (below);
+//  (d) point[0] -+ n depth/2 lie on the ellipsoid and on the capsule (within tol plus
+//      an ulp of the largest world coordinate; on the capsule plus 1e-6 of the
+//      ellipsoid's largest radius of curvature: its support point slides by that much
+//      under the normal's rounding), pdepth[0] == depth;
+//  (e) the scalar and SIMD paths agree within tol (depth) and kAngleTol (normal).
+// Well conditioned: outside, the reference normal turns by < 1e-2 rad when B moves by
+// 1e-5 L, and no core point within 2e-7 L (float noise) of the least distance has a
+// normal more than kAngleTol / 2 away (a short core across the normal: its ends score
+// alike); inside, every direction 0.02 rad or more from n_ref overlaps by more than
+// depth_ref + tol and the overlap rises by >= 1e-6 L at 3e-3 rad from n_ref in every
+// direction (64 samples of the ring, the lowest refined: a needle's flat valley is
+// narrow).
+// Scenarios: random poses (outside, touching, through, deep) at sizes 1, 1e-4, 1e4 and
+// 1e5 from the origin; constructed touching (side and end on a surface point's normal:
+// exact depth and normal; count 0 at exactly touching within tol); pancakes and needles
+// (ratios 1e-3, 1e-4) pierced by the core or lying across them; the core through the
+// ellipsoid's centre (coincident centres: finite unit normal); analytic cases (a
+// pancake pierced along its normal, axis-aligned sides and ends); a round ellipsoid
+// against sphere-capsule; a zero-length core against sphere-ellipsoid; the core's two
+// directions (u, -u: same answer); range partitions and block composition (each lane's
+// bytes whatever its neighbours); GJK / EPA.
+#include <gtest/gtest.h>
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <numeric>
+#include <random>
+#include <vector>
+
+#include "kernels/narrowphase/pair_kernels.h"
+#include "support/ellipsoid_reference.h"
+#include "support/leaf_lanes.h"
+#include "support/narrow_reference.h"
+#include "support/random_input.h"
+#include "support/test_support.h"
+
+namespace impact::kernels {
+namespace {
+
+using Vec3d = Eigen::Vector3d;
+using Mat3d = Eigen::Matrix3d;
+namespace nref = test::nref;
+
+constexpr double kRel = 1e-5;       // depth tolerance, of L
+constexpr double kAngleTol = 1e-4;  // rad, where the minimum is well conditioned
+
+double angle(const Vec3d& a, const Vec3d& b) {
+  return std::atan2(a.cross(b).norm(), a.dot(b));
+}
+
+struct Cap {
+  Vec3d p;
+  Vec3d u;  // unit axis (as rounded to float: not exactly unit)
+  double r, h;
+};
+
+struct Ell {
+  Vec3d p;
+  Mat3d R;  // columns: the axes of e
+  Vec3d e;
+};
+
+struct Query {
+  Cap a;
+  Ell b;
+};
+
+struct Hit {
+  uint32_t count = 0;
+  Vec3d n = Vec3d::Zero(), pt = Vec3d::Zero();
+  double depth = 0, pd = 0;
+};
+
+Query rounded(Query q) {
+  q.a.p = test::round_to_float(q.a.p);
+  q.a.u = test::round_to_float(q.a.u);
+  q.a.r = test::round_to_float(q.a.r);
+  q.a.h = test::round_to_float(q.a.h);
+  q.b.p = test::round_to_float(q.b.p);
+  q.b.R = test::round_to_float(q.b.R);
+  q.b.e = test::round_to_float(q.b.e);
+  return q;
+}
+
+double size_of(const Query& q) {
+  return std::max(q.b.e.maxCoeff(), q.a.r + q.a.h);
+}
+
+/// A rotation whose column 2 is the unit vector u.
+Mat3d frame_of(const Vec3d& u) {
+  const Vec3d w = u.normalized();
+  const Vec3d t = std::fabs(w.x()) < 0.6 ? Vec3d(1, 0, 0) : Vec3d(0, 1, 0);
+  const Vec3d x = t.cross(w).normalized();
+  Mat3d m;
+  m.col(0) = x;
+  m.col(1) = w.cross(x);
+  m.col(2) = w;
+  return m;
+}
+
+/// Runs `kern` on all queries as one bucket (full SIMD blocks and a tail).
+std::vector<Hit> run(const std::vector<Query>& qs, KernelPath path, PairKernel kern, uint32_t begin = 0,
+                     uint32_t end = ~0u) {
+  const size_t n = qs.size();
+  end = std::min<uint32_t>(end, static_cast<uint32_t>(n));
+  std::vector<float> ap[3], ar[9], ae[3], bp[3], br[9], be[3];
+  for (const Query& q : qs) {
+    const Mat3d fa = frame_of(q.a.u);
+    for (int i = 0; i < 3; ++i) {
+      ap[i].push_back(float(q.a.p[i]));
+      ae[i].push_back(i == 0 ? float(q.a.r) : (i == 1 ? float(q.a.h) : 0.0f));
+      bp[i].push_back(float(q.b.p[i]));
+      be[i].push_back(float(q.b.e[i]));
+    }
+    for (int i = 0; i < 9; ++i) {
+      // column 2 exactly the rounded axis the references use
+      ar[i].push_back(i % 3 == 2 ? float(q.a.u[i / 3]) : float(fa(i / 3, i % 3)));
+      br[i].push_back(float(q.b.R(i / 3, i % 3)));
+    }
+  }
+  LeafSoA a{}, b{};
+  for (int i = 0; i < 3; ++i)
+    a.p[i] = ap[i].data(), a.e[i] = ae[i].data(), b.p[i] = bp[i].data(), b.e[i] = be[i].data();
+  for (int i = 0; i < 9; ++i) a.r[i] = ar[i].data(), b.r[i] = br[i].data();
+  test::ManifoldLanes o(static_cast<uint32_t>(n));
+  NarrowConfig cfg;
+  cfg.path = path;
+  kern(a, b, o.view(), Range{begin, end}, cfg);
+  std::vector<Hit> out(n);
+  for (uint32_t k = begin; k < end; ++k) {
+    const test::PairResult r = o.result(k);
+    Hit& h = out[k];
+    h.count = r.count;
+    if (h.count == 0) continue;
+    h.n = r.n;
+    h.pt = r.pt[0];
+    h.depth = r.depth;
+    h.pd = r.pd[0];
+  }
+  return out;
+}
+
+std::vector<Hit> run(const std::vector<Query>& qs, KernelPath path) {
+  const PairKernel k = pair_kernel(kLeafCapsule, kLeafEllipsoid);
+  EXPECT_EQ(k, &collide_capsule_ellipsoid);
+  return run(qs, path, k);
+}
+
+void gjk_kernel(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out, Range r, const NarrowConfig& cfg) {
+  collide_gjk_epa(a, b, out, r, cfg, kLeafCapsule, kLeafEllipsoid);
+}
+
+// ---------------------------------------------------------------------------------------
+// References
+// ---------------------------------------------------------------------------------------
+
+double sd_ellipsoid(const Ell& b, const Vec3d& x) {
+  return test::eref::signed_distance_local(b.e, b.R.transpose() * (x - b.p));
+}
+
+/// Golden-section minimum of the (convex) signed distance along the core: parameter t.
+double core_minimum(const Query& q, double* sd_out) {
+  const double g = 0.5 * (std::sqrt(5.0) - 1.0);
+  double lo = -q.a.h, hi = q.a.h;
+  auto f = [&](double t) { return sd_ellipsoid(q.b, q.a.p + t * q.a.u); };
+  double x1 = hi - g * (hi - lo), x2 = lo + g * (hi - lo), f1 = f(x1), f2 = f(x2);
+  for (int it = 0; it < 200 && hi - lo > 1e-15 * (1 + q.a.h); ++it) {
+    if (f1 < f2) {
+      hi = x2, x2 = x1, f2 = f1, x1 = hi - g * (hi - lo), f1 = f(x1);
+    } else {
+      lo = x1, x1 = x2, f1 = f2, x2 = lo + g * (hi - lo), f2 = f(x2);
+    }
+  }
+  double t = 0.5 * (lo + hi), best = f(t);
+  for (double c : {-q.a.h, q.a.h})
+    if (f(c) < best) best = f(c), t = c;
+  *sd_out = best;
+  return t;
+}
+
+nref::Shape capsule_shape(const Query& q) {
+  nref::Shape s = nref::make_axial(kLeafCapsule, {q.a.p.x(), q.a.p.y(), q.a.p.z()},
+                                   {q.a.u.x(), q.a.u.y(), q.a.u.z()}, q.a.r, q.a.h * q.a.u.norm());
+  return s;
+}
+
+nref::Shape ellipsoid_shape(const Ell& b) {
+  nref::Shape s;
+  s.type = kLeafEllipsoid;
+  s.p = {b.p.x(), b.p.y(), b.p.z()};
+  for (int i = 0; i < 9; ++i) s.r[i] = b.R(i / 3, i % 3);
+  for (int i = 0; i < 3; ++i) s.e[i] = b.e[i];
+  return s;
+}
+
+Vec3d to_eigen(nref::V3 v) {
+  return {v.x, v.y, v.z};
+}
+nref::V3 to_nref(const Vec3d& v) {
+  return {v.x(), v.y(), v.z()};
+}
+
+nref::Options dense_options() {
+  nref::Options o;
+  o.samples = 6000;
+  o.starts = 8;
+  return o;
+}
+
+/// The least rise of the overlap over its minimum s along the ring 3e-3 rad around n:
+/// 64 samples, the best 4 refined by golden-section search on the ring's angle (a
+/// needle's flat valley is ~1e-4 of the ring wide and slips between samples).
+double ring_rise(const nref::Shape& a, const nref::Shape& b, nref::V3 n) {
+  nref::V3 t1, t2;
+  nref::detail::tangent_basis(n, t1, t2);
+  const double th = std::tan(3e-3), s = nref::overlap(a, b, n);
+  auto f = [&](double ang) {
+    return nref::overlap(a, b, nref::normalized(n + th * std::cos(ang) * t1 + th * std::sin(ang) * t2)) - s;
+  };
+  std::vector<std::pair<double, double>> samples;
+  for (int i = 0; i < 64; ++i) samples.push_back({f(2 * M_PI * i / 64), 2 * M_PI * i / 64});
+  std::partial_sort(samples.begin(), samples.begin() + 4, samples.end());
+  double best = samples[0].first;
+  for (int k = 0; k < 4; ++k) {
+    double lo = samples[k].second - 2 * M_PI / 64, hi = samples[k].second + 2 * M_PI / 64;
+    for (int it = 0; it < 40; ++it) {
+      const double m1 = lo + 0.381966 * (hi - lo), m2 = lo + 0.618034 * (hi - lo);
+      (f(m1) < f(m2) ? hi : lo) = f(m1) < f(m2) ? m2 : m1;
+    }
+    best = std::min(best, f(0.5 * (lo + hi)));
+  }
+  return best;
+}
+
+struct Ref {
+  double s;       // depth (> 0 overlapping)
+  Vec3d n;        // A to B
+  bool through;   // the core meets the ellipsoid (support-overlap reference)
+  bool conditioned;
+};
+
+/// The overlap of the two shapes along n (A to B), the reference's function.
+double overlap(const Query& q, const Vec3d& n) {
+  return nref::overlap(capsule_shape(q), ellipsoid_shape(q.b), to_nref(n.normalized()));
+}
+
+/// n = minus the outward normal at the ellipsoid's point nearest the core (not the
+/// difference of the two points: at small distances that would amplify the ~6e-8 by
+/// which the float-rounded R is not orthonormal).
+Ref outside_reference(const Query& q, double sd, double t) {
+  const Vec3d c = q.a.p + t * q.a.u;
+  const Vec3d x = test::eref::closest_local(q.b.e, q.b.R.transpose() * (c - q.b.p));
+  Ref f;
+  f.s = q.a.r - sd;
+  f.n = -(q.b.R * x.cwiseQuotient(q.b.e.cwiseProduct(q.b.e))).normalized();
+  f.through = false;
+  return f;
+}
+
+Ref reference(const Query& q, bool check_conditioning = true) {
+  double sd = 0;
+  const double t = core_minimum(q, &sd);
+  const double L = size_of(q);
+  if (sd > 0) {
+    Ref f = outside_reference(q, sd, t);
+    f.conditioned = true;
+    if (check_conditioning) {
+      // Core points within float noise (2e-7 L) of the least distance whose nearest
+      // points turn the normal by more than kAngleTol / 2: the minimum is a near tie
+      // (a short core across the normal: its two ends score alike), the normal rounding.
+      for (int i = 0; i <= 64 && f.conditioned; ++i) {
+        const double ti = q.a.h * (2.0 * i / 64 - 1);
+        const double sdi = sd_ellipsoid(q.b, q.a.p + ti * q.a.u);
+        if (sdi <= sd + 2e-7 * L && angle(outside_reference(q, sdi, ti).n, f.n) > 0.5 * kAngleTol)
+          f.conditioned = false;
+      }
+      for (int i = 0; i < 6; ++i) {
+        Query p = q;
+        p.b.p[i % 3] += (i < 3 ? 1e-5 : -1e-5) * L;
+        double sd2 = 0;
+        const double t2 = core_minimum(p, &sd2);
+        if (!(sd2 > 0) || angle(outside_reference(p, sd2, t2).n, f.n) > 1e-2) f.conditioned = false;
+      }
+    }
+    return f;
+  }
+  const nref::Shape a = capsule_shape(q), b = ellipsoid_shape(q.b);
+  const nref::PairResult r = nref::solve_pair(a, b, {}, dense_options());
+  Ref f;
+  f.s = r.s;
+  f.n = to_eigen(r.n);
+  f.through = true;
+  f.conditioned = r.unique(kRel * L);
+  if (f.conditioned) f.conditioned = ring_rise(a, b, r.n) >= 1e-6 * L;
+  return f;
+}
+
+// ---------------------------------------------------------------------------------------
+// The per-lane check
+// ---------------------------------------------------------------------------------------
+
+struct Stats {
+  int lanes = 0, hits = 0, through = 0, normal_checked = 0;
+  double worst_depth = 0, worst_angle = 0, worst_path_depth = 0, worst_path_angle = 0;
+};
+
+double coord_ulp(const Query& q) {
+  const double m = std::max(q.a.p.cwiseAbs().maxCoeff(), q.b.p.cwiseAbs().maxCoeff());
+  return (m + size_of(q)) * std::ldexp(1.0, -23);
+}
+
+double sd_capsule(const Query& q, const Vec3d& x) {
+  const double t = std::clamp((x - q.a.p).dot(q.a.u) / q.a.u.squaredNorm(), -q.a.h, q.a.h);
+  return (x - (q.a.p + t * q.a.u)).norm() - q.a.r;
+}
+
+/// Checks (a)-(e) for every lane of qs (already rounded to float).
+void check_all(const std::vector<Query>& qs, const char* what, Stats* st_out = nullptr) {
+  SCOPED_TRACE(what);
+  const std::vector<Hit> simd = run(qs, KernelPath::kSimd), scal = run(qs, KernelPath::kScalar);
+  Stats st;
+  for (size_t k = 0; k < qs.size(); ++k) {
+    const Query& q = qs[k];
+    const Ref f = reference(q);
+    const double L = size_of(q), tol = kRel * L;
+    ++st.lanes;
+    if (std::fabs(f.s) <= tol) continue;
+    for (const Hit* hp : {&simd[k], &scal[k]}) {
+      const Hit& h = *hp;
+      const char* path = hp == &simd[k] ? " simd" : " scalar";
+      ASSERT_EQ(h.count > 0, f.s > 0) << what << " lane " << k << " depth_ref " << f.s << " got " << h.depth
+                                      << path;
+      if (f.s <= 0) continue;
+      ASSERT_EQ(h.count, 1u);
+      if (hp == &simd[k]) {
+        ++st.hits;
+        st.through += f.through;
+      }
+      const double dd = std::fabs(h.depth - f.s);
+      st.worst_depth = std::max(st.worst_depth, dd / L);
+      EXPECT_LE(dd, tol) << what << " lane " << k << path << " depth " << h.depth << " ref " << f.s
+                         << (f.through ? " through" : " outside") << " e " << q.b.e.transpose() << " r " << q.a.r
+                         << " h " << q.a.h;
+      EXPECT_EQ(h.pd, h.depth);
+      ASSERT_TRUE(h.n.allFinite());
+      EXPECT_NEAR(h.n.norm(), 1.0, 1e-6);
+      EXPECT_LE(overlap(q, h.n), f.s + tol) << what << " lane " << k << path;
+      const double slack = tol + coord_ulp(q);
+      const Vec3d on_a = h.pt + h.n * (0.5 * h.depth), on_b = h.pt - h.n * (0.5 * h.depth);
+      // (+ the slide of B's support point under the normal's rounding: 1e-6 of the
+      // largest radius of curvature e_max^2 / e_min; a pancake's face: 1e4 L)
+      const double rho = q.b.e.maxCoeff() * q.b.e.maxCoeff() / q.b.e.minCoeff();
+      EXPECT_NEAR(sd_capsule(q, on_a), 0.0, slack + 1e-6 * rho) << what << " lane " << k << path;
+      EXPECT_NEAR(sd_ellipsoid(q.b, on_b), 0.0, slack) << what << " lane " << k << path;
+      if (f.conditioned) {
+        const double ang = angle(h.n, f.n);
+        st.worst_angle = std::max(st.worst_angle, ang);
+        EXPECT_LE(ang, kAngleTol) << what << " lane " << k << path << " n " << h.n.transpose() << " ref "
+                                  << f.n.transpose() << (f.through ? " through" : " outside");
+      }
+    }
+    if (f.s > tol && f.conditioned) ++st.normal_checked;
+    if (simd[k].count && scal[k].count) {
+      const double pd = std::fabs(simd[k].depth - scal[k].depth), pa = angle(simd[k].n, scal[k].n);
+      st.worst_path_depth = std::max(st.worst_path_depth, pd / L);
+      if (f.conditioned) st.worst_path_angle = std::max(st.worst_path_angle, pa);
+      EXPECT_LE(pd, tol) << what << " lane " << k;
+      if (f.conditioned) {
+        EXPECT_LE(pa, kAngleTol) << what << " lane " << k;
+      }
+    }
+  }
+  std::printf(
+      "  %-30s lanes %5d hits %5d through %5d normals %5d | worst depth %.2g L, angle %.2g; simd-scalar "
+      "%.2g L, %.2g\n",
+      what, st.lanes, st.hits, st.through, st.normal_checked, st.worst_depth, st.worst_angle, st.worst_path_depth,
+      st.worst_path_angle);
+  if (st_out != nullptr) *st_out = st;
+}
+
+// ---------------------------------------------------------------------------------------
+// Generators
+// ---------------------------------------------------------------------------------------
+
+Vec3d random_unit(std::mt19937& g) {
+  std::normal_distribution<double> d;
+  for (;;) {
+    const Vec3d v(d(g), d(g), d(g));
+    if (v.norm() > 1e-3) return v.normalized();
+  }
+}
+
+/// Random poses around an ellipsoid of radii in [0.2, 1] * size at `offset` from the
+/// origin: capsules from deep through it to well outside, about half touching.
+std::vector<Query> random_queries(std::mt19937& g, int n, double size, double offset) {
+  std::uniform_real_distribution<double> u(-1, 1), s(0.2, 1.0), rr(0.05, 0.8), hh(0.0, 1.0);
+  std::vector<Query> qs;
+  for (int k = 0; k < n; ++k) {
+    Query q;
+    const Vec3d p = Vec3d(offset, -offset, 0.5 * offset) + Vec3d(u(g), u(g), u(g)) * size;
+    q.b = Ell{p, test::random_rotation(g), Vec3d(s(g), s(g), s(g)) * size};
+    q.a.r = rr(g) * size;
+    q.a.h = (k % 7 == 0 ? 0.0 : hh(g)) * size;
+    q.a.u = random_unit(g);
+    const Vec3d v(u(g), u(g), u(g));
+    q.a.p = p + (k % 2 ? Vec3d(q.b.R * v.cwiseProduct(q.b.e) * 1.2) : Vec3d(v * (1.6 * size)));
+    qs.push_back(rounded(q));
+  }
+  return qs;
+}
+
+/// Capsules touching the ellipsoid at a random surface point x (outward normal m):
+/// the core's nearest point at x + (r + f) m with the axis across m (side) or leaving
+/// along a direction w with w.m >= 0 (end); depth = -f, n = -m exactly.
+struct Touch {
+  Query q;
+  double depth;
+  Vec3d n;
+};
+std::vector<Touch> touching_queries(std::mt19937& g, int n) {
+  std::uniform_real_distribution<double> u(-1, 1), s(0.2, 1.0), f(-1e-3, 1e-3), u01(0, 1);
+  std::vector<Touch> out;
+  for (int k = 0; k < n; ++k) {
+    Query q;
+    q.b = Ell{Vec3d(u(g), u(g), u(g)), test::random_rotation(g), Vec3d(s(g), s(g), s(g))};
+    const Vec3d dir = random_unit(g);
+    const Vec3d xs = dir / std::sqrt(test::eref::level(q.b.e, dir));
+    const Vec3d m = q.b.R * xs.cwiseQuotient(q.b.e.cwiseProduct(q.b.e)).normalized();
+    const Vec3d x = q.b.p + q.b.R * xs;
+    q.a.r = 0.05 + 0.5 * u01(g);
+    q.a.h = 0.6 * u01(g);
+    const double ff = (k % 5 == 0) ? 0.0 : f(g) * q.a.r;
+    const Vec3d c = x + (q.a.r + ff) * m;  // the core point nearest the ellipsoid
+    Vec3d w = random_unit(g);
+    if (k % 2 == 0) {
+      w = (w - w.dot(m) * m).normalized();  // side: across m
+      q.a.u = w;
+      q.a.p = c + (2 * u01(g) - 1) * q.a.h * w;
+    } else {
+      if (w.dot(m) < 0) w = -w;  // end: leaving the surface
+      q.a.u = w;
+      q.a.p = c + q.a.h * w;
+    }
+    Touch t{rounded(q), -ff, -m};
+    out.push_back(t);
+  }
+  return out;
+}
+
+/// Needle and pancake ellipsoids (ratio 1e-3 or 1e-4, axes permuted, rotated) with cores
+/// through them (along, across, tilted), lying across a flat side, near a rim or tip.
+std::vector<Query> thin_queries(std::mt19937& g, int n) {
+  std::uniform_real_distribution<double> u(-1, 1), u01(0, 1);
+  std::vector<Query> qs;
+  for (int k = 0; k < n; ++k) {
+    const double ratio = (k % 2) ? 1e-3 : 1e-4;
+    const bool needle = (k / 2) % 2;
+    Vec3d e = needle ? Vec3d(1, ratio, ratio * (0.5 + u01(g))) : Vec3d(1, 0.5 + 0.5 * u01(g), ratio);
+    const int sh = k % 3;
+    e = Vec3d(e[sh], e[(sh + 1) % 3], e[(sh + 2) % 3]);
+    Query q;
+    q.b = Ell{Vec3d(u(g), u(g), u(g)), test::random_rotation(g), e};
+    const int thin = e[0] <= e[1] && e[0] <= e[2] ? 0 : (e[1] <= e[2] ? 1 : 2);
+    const int lng = e[0] >= e[1] && e[0] >= e[2] ? 0 : (e[1] >= e[2] ? 1 : 2);
+    Vec3d y, ul;
+    q.a.r = (k % 3 == 0 ? 0.01 : 0.3) * u01(g) + 1e-3;
+    q.a.h = 0.05 + 0.8 * u01(g);
+    switch ((k / 4) % 5) {
+      case 0:  // through, tilted, centre inside
+        y = Vec3d(u(g), u(g), u(g)).cwiseProduct(e) * 0.7;
+        ul = random_unit(g);
+        break;
+      case 1:  // along the thin axis (piercing a pancake), off centre
+        y = Vec3d(u(g), u(g), u(g)).cwiseProduct(e) * 0.8;
+        ul = Vec3d::Unit(thin) + 0.3 * Vec3d(u(g), u(g), u(g));
+        break;
+      case 2:  // near the rim / tip
+        y = Vec3d(u(g), u(g), u(g)).cwiseProduct(e) * 0.1;
+        y[lng] = (0.95 + 0.1 * u01(g)) * (u(g) < 0 ? -1 : 1);
+        ul = random_unit(g);
+        break;
+      case 3:  // lying across the flat side, just above or below it
+        y = Vec3d(u(g), u(g), u(g)).cwiseProduct(e) * 0.6;
+        y[thin] = e[thin] + q.a.r * (1 + 0.2 * u(g));
+        ul = Vec3d(u(g), u(g), u(g));
+        ul[thin] *= 1e-2;
+        break;
+      default:  // anywhere nearby
+        y = Vec3d(u(g), u(g), u(g)) * 1.3;
+        ul = random_unit(g);
+        break;
+    }
+    q.a.u = (q.b.R * ul).normalized();
+    q.a.p = q.b.p + q.b.R * y;
+    qs.push_back(rounded(q));
+  }
+  return qs;
+}
+
+/// Cores through (or ending at) the ellipsoid's centre, and capsule centre = ellipsoid
+/// centre, at several proportions.
+std::vector<Query> centre_queries(std::mt19937& g, int n) {
+  std::uniform_real_distribution<double> u(-1, 1), s(0.2, 1.0), u01(0, 1);
+  std::vector<Query> qs;
+  for (int k = 0; k < n; ++k) {
+    Query q;
+    Vec3d e(s(g), s(g), s(g));
+    if (k % 4 == 1) e = Vec3d(1, 1, 1) * s(g);          // round
+    if (k % 4 == 2) e = Vec3d(s(g), 0.5, 0.5);          // two equal radii
+    q.b = Ell{Vec3d(u(g), u(g), u(g)), k % 3 == 0 ? Mat3d::Identity() : test::random_rotation(g), e};
+    q.a.r = 0.05 + 0.5 * u01(g);
+    q.a.h = (k % 5 == 0) ? 0.0 : 1.5 * u01(g);
+    q.a.u = (k % 3 == 0) ? Vec3d::Unit(k % 3) : random_unit(g);
+    q.a.p = q.b.p + ((k / 2) % 2 ? Vec3d::Zero() : Vec3d(q.a.u * q.a.h * u(g)));
+    qs.push_back(rounded(q));
+  }
+  return qs;
+}
+
+// ---------------------------------------------------------------------------------------
+// Tests
+// ---------------------------------------------------------------------------------------
+
+TEST(CapsuleEllipsoidReference, ReferencesAgree) {
+  // Separated lanes: the golden-section distance and the support-overlap minimum.
+  std::mt19937 g(3);
+  int compared = 0;
+  for (const Query& q : random_queries(g, static_cast<int>(test::scaled(60)), 1.0, 0.0)) {
+    double sd = 0;
+    const double t = core_minimum(q, &sd);
+    if (!(sd > 1e-3)) continue;
+    const Ref f = outside_reference(q, sd, t);
+    const nref::PairResult r = nref::solve_pair(capsule_shape(q), ellipsoid_shape(q.b), {}, dense_options());
+    // (The float-rounded R is orthonormal to ~6e-8: the support function reads it as a
+    // linear map, the point reference inverts it by its transpose.)
+    EXPECT_NEAR(r.s, f.s, 2e-7) << compared;
+    EXPECT_LT(angle(to_eigen(r.n), f.n), 1e-5) << compared;
+    ++compared;
+  }
+  EXPECT_GT(compared, 10);
+}
+
+class CapsuleEllipsoid : public ::testing::TestWithParam<std::tuple<double, double>> {};
+
+TEST_P(CapsuleEllipsoid, RandomPosesAgainstDoubleReference) {
+  const auto [size, offset] = GetParam();
+  std::mt19937 g(17);
+  const int n = static_cast<int>(test::scaled(400));
+  Stats st;
+  check_all(random_queries(g, n, size, offset), "random", &st);
+  EXPECT_GT(st.hits, n / 4);
+  EXPECT_GT(st.through, n / 20);
+  EXPECT_GT(st.normal_checked, st.hits / 2);
+}
+
+INSTANTIATE_TEST_SUITE_P(Scales, CapsuleEllipsoid,
+                         ::testing::Values(std::make_tuple(1.0, 0.0), std::make_tuple(1e-4, 0.0),
+                                           std::make_tuple(1e4, 0.0), std::make_tuple(1.0, 1e5)));
+
+TEST(CapsuleEllipsoidCases, ConstructedTouching) {
+  std::mt19937 g(29);
+  const std::vector<Touch> ts = touching_queries(g, static_cast<int>(test::scaled(400)));
+  std::vector<Query> qs;
+  for (const Touch& t : ts) qs.push_back(t.q);
+  for (KernelPath path : {KernelPath::kSimd, KernelPath::kScalar}) {
+    const std::vector<Hit> hs = run(qs, path);
+    int hits = 0;
+    double worst = 0, worst_angle = 0;
+    for (size_t k = 0; k < ts.size(); ++k) {
+      const double L = size_of(qs[k]), tol = kRel * L;
+      const Hit& h = hs[k];
+      if (std::fabs(ts[k].depth) <= tol) {
+        if (h.count) {
+          EXPECT_LE(h.depth, tol) << k;
+        }
+        continue;
+      }
+      ASSERT_EQ(h.count > 0, ts[k].depth > 0) << k << " depth " << ts[k].depth;
+      if (!h.count) continue;
+      ++hits;
+      worst = std::max(worst, std::fabs(h.depth - ts[k].depth) / L);
+      worst_angle = std::max(worst_angle, angle(h.n, ts[k].n));
+      EXPECT_NEAR(h.depth, ts[k].depth, tol) << k;
+      EXPECT_LE(angle(h.n, ts[k].n), kAngleTol) << k << " n " << h.n.transpose() << " want " << ts[k].n.transpose();
+    }
+    std::printf("  touching: hits %d, worst depth %.2g L, angle %.2g\n", hits, worst, worst_angle);
+    EXPECT_GT(hits, static_cast<int>(ts.size()) / 4);
+  }
+}
+
+TEST(CapsuleEllipsoidCases, NeedlesPancakesAndCentres) {
+  std::mt19937 g(31);
+  Stats st;
+  const int n_thin = static_cast<int>(test::scaled(500));
+  check_all(thin_queries(g, n_thin), "needle / pancake", &st);
+  EXPECT_GT(st.through, n_thin / 5);
+  check_all(centre_queries(g, static_cast<int>(test::scaled(200))), "through the centre", &st);
+  EXPECT_GT(st.through, 50);
+}
+
+TEST(CapsuleEllipsoidCases, Analytic) {
+  // Dyadic sizes and offsets: the float inputs are the exact configurations.
+  for (KernelPath path : {KernelPath::kSimd, KernelPath::kScalar}) {
+    auto one = [&](const Query& q) { return run({q}, path)[0]; };
+    const Ell pancake{Vec3d(1, -2, 3), Mat3d::Identity(), Vec3d(2, 1.5, 0.125)};
+    // Pierced along the normal, the capsule centre 0.0625 above the pancake's centre:
+    // out through the top face (the end caps): depth = r + h + 0.125 - 0.0625, n = -z.
+    Hit h = one(Query{Cap{pancake.p + Vec3d(0, 0, 0.0625), Vec3d(0, 0, 1), 0.25, 0.5}, pancake});
+    ASSERT_EQ(h.count, 1u);
+    EXPECT_NEAR(h.depth, 0.25 + 0.5 + 0.125 - 0.0625, 1e-6);
+    EXPECT_LT((h.n - Vec3d(0, 0, -1)).norm(), 1e-6) << h.n.transpose();
+    // Lying on the top face, 1/64 deep, axis along x: n = -z.
+    h = one(Query{Cap{pancake.p + Vec3d(0.25, 0, 0.125 + 0.25 - 0.015625), Vec3d(1, 0, 0), 0.25, 0.5}, pancake});
+    ASSERT_EQ(h.count, 1u);
+    EXPECT_NEAR(h.depth, 0.015625, 1e-6);
+    EXPECT_LT((h.n - Vec3d(0, 0, -1)).norm(), 1e-5) << h.n.transpose();
+    // End on the x tip, 1/16 deep, axis along x: n = -x.
+    h = one(Query{Cap{pancake.p + Vec3d(2 + 0.25 + 0.5 - 0.0625, 0, 0), Vec3d(1, 0, 0), 0.25, 0.5}, pancake});
+    ASSERT_EQ(h.count, 1u);
+    EXPECT_NEAR(h.depth, 0.0625, 1e-6);
+    EXPECT_LT((h.n - Vec3d(-1, 0, 0)).norm(), 1e-6) << h.n.transpose();
+    // Side against the y rim (axis z, centre beyond the y tip), 1/32 deep: n = -y.
+    h = one(Query{Cap{pancake.p + Vec3d(0, 1.5 + 0.25 - 0.03125, 0), Vec3d(0, 0, 1), 0.25, 0.5}, pancake});
+    ASSERT_EQ(h.count, 1u);
+    EXPECT_NEAR(h.depth, 0.03125, 1e-6);
+    EXPECT_LT((h.n - Vec3d(0, -1, 0)).norm(), 1e-6) << h.n.transpose();
+    // Centred along the smallest axis: the two ends tie (depth r + h + 0.125 either
+    // way). The ends' nearest points (the poles next to them) are off their pieces: the
+    // -z pole's normal makes the end at +h the core's lowest point. The tie goes to the
+    // first candidate on its piece, the end at -h's far minimum, the +z pole: n = -z.
+    h = one(Query{Cap{pancake.p, Vec3d(0, 0, 1), 0.25, 0.5}, pancake});
+    ASSERT_EQ(h.count, 1u);
+    EXPECT_NEAR(h.depth, 0.25 + 0.5 + 0.125, 1e-6);
+    EXPECT_EQ(h.n, Vec3d(0, 0, -1));
+    // Exactly touching (top face, y tip) and separated: no contact.
+    EXPECT_EQ(one(Query{Cap{pancake.p + Vec3d(0, 0, 0.375), Vec3d(1, 0, 0), 0.25, 0.5}, pancake}).count, 0u);
+    EXPECT_EQ(one(Query{Cap{pancake.p + Vec3d(0, 1.75, 0), Vec3d(0, 0, 1), 0.25, 0.5}, pancake}).count, 0u);
+    EXPECT_EQ(one(Query{Cap{pancake.p + Vec3d(0, 0, 1.0), Vec3d(0, 1, 0), 0.25, 0.5}, pancake}).count, 0u);
+  }
+}
+
+TEST(CapsuleEllipsoidCases, RoundEllipsoidIsSphereCapsule) {
+  std::mt19937 g(11);
+  std::uniform_real_distribution<double> u(-1, 1), u01(0, 1);
+  std::vector<Query> qs;
+  for (int k = 0; k < 200; ++k) {
+    Query q;
+    q.b = Ell{Vec3d(u(g), u(g), u(g)), test::random_rotation(g), Vec3d::Constant(0.2 + 0.6 * u01(g))};
+    q.a = Cap{Vec3d(u(g), u(g), u(g)), random_unit(g), 0.05 + 0.4 * u01(g), u01(g)};
+    qs.push_back(rounded(q));
+  }
+  const std::vector<Hit> mine = run(qs, KernelPath::kSimd);
+  // sphere (A) - capsule (B): the same pairs with the roles swapped.
+  const size_t n = qs.size();
+  std::vector<float> sp[3], se[3], cp[3], cr[9], ce[3];
+  for (const Query& q : qs) {
+    const Mat3d fa = frame_of(q.a.u);
+    for (int i = 0; i < 3; ++i) {
+      sp[i].push_back(float(q.b.p[i]));
+      se[i].push_back(i == 0 ? float(q.b.e[0]) : 0.0f);
+      cp[i].push_back(float(q.a.p[i]));
+      ce[i].push_back(i == 0 ? float(q.a.r) : (i == 1 ? float(q.a.h) : 0.0f));
+    }
+    for (int i = 0; i < 9; ++i) cr[i].push_back(i % 3 == 2 ? float(q.a.u[i / 3]) : float(fa(i / 3, i % 3)));
+  }
+  LeafSoA a{}, b{};
+  for (int i = 0; i < 3; ++i) a.p[i] = sp[i].data(), a.e[i] = se[i].data(), b.p[i] = cp[i].data(), b.e[i] = ce[i].data();
+  for (int i = 0; i < 9; ++i) b.r[i] = cr[i].data();
+  test::ManifoldLanes o(static_cast<uint32_t>(n));
+  collide_sphere_capsule(a, b, o.view(), Range{0, static_cast<uint32_t>(n)}, NarrowConfig{});
+  int hits = 0;
+  for (uint32_t k = 0; k < n; ++k) {
+    const test::PairResult r = o.result(k);
+    if (std::fabs(r.count ? r.depth : 0.0) < 1e-5 && mine[k].count == 0) continue;
+    if (r.count == 0 && mine[k].count && mine[k].depth < 1e-5) continue;
+    ASSERT_EQ(mine[k].count, r.count) << k;
+    if (!r.count) continue;
+    ++hits;
+    EXPECT_NEAR(mine[k].depth, r.depth, 2e-6) << k;
+    // sphere-capsule's normal points from the sphere (our B) to the capsule (our A)
+    if (r.depth < 0.9 * (qs[k].a.r + qs[k].b.e[0])) {
+      EXPECT_LT(angle(mine[k].n, -r.n), 1e-5) << k;
+    }
+    EXPECT_LT((mine[k].pt - r.pt[0]).norm(), 1e-5) << k;
+  }
+  EXPECT_GT(hits, 40);
+}
+
+TEST(CapsuleEllipsoidCases, ZeroLengthCoreIsSphereEllipsoid) {
+  std::mt19937 g(13);
+  std::vector<Query> qs = random_queries(g, 200, 1.0, 0.0);
+  for (Query& q : qs) q.a.h = 0;
+  const std::vector<Hit> mine = run(qs, KernelPath::kSimd);
+  const size_t n = qs.size();
+  std::vector<float> sp[3], se[3], bp[3], br[9], be[3];
+  for (const Query& q : qs) {
+    for (int i = 0; i < 3; ++i) {
+      sp[i].push_back(float(q.a.p[i]));
+      se[i].push_back(i == 0 ? float(q.a.r) : 0.0f);
+      bp[i].push_back(float(q.b.p[i]));
+      be[i].push_back(float(q.b.e[i]));
+    }
+    for (int i = 0; i < 9; ++i) br[i].push_back(float(q.b.R(i / 3, i % 3)));
+  }
+  LeafSoA a{}, b{};
+  for (int i = 0; i < 3; ++i) a.p[i] = sp[i].data(), a.e[i] = se[i].data(), b.p[i] = bp[i].data(), b.e[i] = be[i].data();
+  for (int i = 0; i < 9; ++i) b.r[i] = br[i].data();
+  test::ManifoldLanes o(static_cast<uint32_t>(n));
+  collide_sphere_ellipsoid(a, b, o.view(), Range{0, static_cast<uint32_t>(n)}, NarrowConfig{});
+  int hits = 0;
+  for (uint32_t k = 0; k < n; ++k) {
+    const test::PairResult r = o.result(k);
+    const double L = size_of(qs[k]);
+    if ((r.count == 0) != (mine[k].count == 0)) {
+      EXPECT_LT(std::max(r.count ? r.depth : 0.0, mine[k].count ? mine[k].depth : 0.0), 1e-5 * L) << k;
+      continue;
+    }
+    if (!r.count) continue;
+    ++hits;
+    EXPECT_NEAR(mine[k].depth, r.depth, 2e-6 * L) << k;
+    EXPECT_LT(angle(mine[k].n, r.n), 1e-4) << k;
+  }
+  EXPECT_GT(hits, 40);
+}
+
+TEST(CapsuleEllipsoidCases, AxisDirectionDoesNotMatter) {
+  std::mt19937 g(19);
+  std::vector<Query> qs = random_queries(g, 160, 1.0, 0.0);
+  std::vector<Query> flipped = qs;
+  for (Query& q : flipped) q.a.u = -q.a.u;
+  const std::vector<Hit> h0 = run(qs, KernelPath::kSimd), h1 = run(flipped, KernelPath::kSimd);
+  for (size_t k = 0; k < qs.size(); ++k) {
+    const double L = size_of(qs[k]);
+    if (h0[k].count != h1[k].count) {
+      EXPECT_LT(std::max(h0[k].depth * h0[k].count, h1[k].depth * h1[k].count), 1e-5 * L) << k;
+      continue;
+    }
+    if (!h0[k].count) continue;
+    EXPECT_NEAR(h0[k].depth, h1[k].depth, 1e-6 * L) << k;
+    const Ref f = reference(qs[k]);
+    if (f.conditioned) {
+      EXPECT_LT(angle(h0[k].n, h1[k].n), kAngleTol) << k;
+    }
+  }
+}
+
+TEST(CapsuleEllipsoidCases, RangePartitionsAndBlockComposition) {
+  std::mt19937 g(41);
+  std::vector<Query> qs = random_queries(g, 37, 1.0, 0.0);
+  const std::vector<Query> thin = thin_queries(g, 40);
+  qs.insert(qs.end(), thin.begin(), thin.end());
+  const uint32_t n = static_cast<uint32_t>(qs.size());
+  const PairKernel kern = pair_kernel(kLeafCapsule, kLeafEllipsoid);
+  auto same = [](const Hit& x, const Hit& y) {
+    return x.count == y.count && (x.count == 0 || (x.depth == y.depth && x.n == y.n && x.pt == y.pt));
+  };
+  for (KernelPath path : {KernelPath::kSimd, KernelPath::kScalar}) {
+    const std::vector<Hit> all = run(qs, path, kern);
+    for (uint32_t cut : {1u, 5u, 8u, 13u, 36u, 61u}) {
+      const std::vector<Hit> lo = run(qs, path, kern, 0, cut), hi = run(qs, path, kern, cut, n);
+      for (uint32_t k = 0; k < n; ++k) EXPECT_TRUE(same(k < cut ? lo[k] : hi[k], all[k])) << cut << " " << k;
+    }
+    // Every lane among other neighbours (the solves stop when a whole block has
+    // converged, and far minima are solved packed): a shuffled bucket gives each
+    // lane's same bytes.
+    std::vector<uint32_t> perm(n);
+    std::iota(perm.begin(), perm.end(), 0u);
+    std::shuffle(perm.begin(), perm.end(), g);
+    std::vector<Query> shuffled(n);
+    for (uint32_t k = 0; k < n; ++k) shuffled[k] = qs[perm[k]];
+    const std::vector<Hit> sh = run(shuffled, path, kern);
+    for (uint32_t k = 0; k < n; ++k) EXPECT_TRUE(same(sh[k], all[perm[k]])) << k;
+  }
+}
+
+/// The general GJK / EPA path on the same lanes (overlaps of at least 1e-3 L): same
+/// hits, depth within 1e-3 L, normal within 0.02 rad where well conditioned.
+TEST(CapsuleEllipsoidCases, AgreesWithGjkEpa) {
+  std::mt19937 g(23);
+  std::vector<Query> qs = random_queries(g, static_cast<int>(test::scaled(300)), 1.0, 0.0);
+  const std::vector<Hit> mine = run(qs, KernelPath::kSimd), gjk = run(qs, KernelPath::kSimd, &gjk_kernel);
+  int compared = 0;
+  for (size_t k = 0; k < qs.size(); ++k) {
+    const double L = size_of(qs[k]);
+    const Ref f = reference(qs[k]);
+    if (std::fabs(f.s) < 1e-3 * L) continue;
+    ASSERT_EQ(mine[k].count, gjk[k].count) << k << " depth " << f.s;
+    if (mine[k].count == 0) continue;
+    ++compared;
+    EXPECT_NEAR(mine[k].depth, gjk[k].depth, 1e-3 * L) << k;
+    if (f.conditioned) {
+      EXPECT_LT(angle(mine[k].n, gjk[k].n), 0.02) << k;
+    }
+  }
+  EXPECT_GT(compared, static_cast<int>(qs.size()) / 5);
+}
+
+}  // namespace
+}  // namespace impact::kernels

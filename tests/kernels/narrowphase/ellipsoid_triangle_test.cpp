@@ -1,0 +1,846 @@
+// collide_ellipsoid_triangle (kernels/narrowphase/ellipsoid_triangle.cpp) on both paths
+// against independent double-precision references, and against the general GJK / EPA
+// path (collide_gjk_epa) on the same lanes.
+//
+// References (double, no candidate enumeration, no secular-equation solve by steps):
+//  - triangle outside the ellipsoid: the signed distance of a point to the ellipsoid
+//    (tests/support/ellipsoid_reference.h: bisection of the secular equation) is convex,
+//    so its minimum over the triangle by nested golden-section search (over one
+//    barycentric coordinate, the other inside) gives the distance d and the closest
+//    points: depth = -d, n = the outward normal at the ellipsoid's nearest point;
+//  - triangle meeting the ellipsoid: the support overlap h_A(n) + h_B(-n) minimised over
+//    densely sampled directions and refined by Nelder-Mead
+//    (tests/support/narrow_reference.h, with more samples and starts than its default).
+// The two are checked against each other on separated lanes (ReferencesAgree).
+//
+// Per lane, L = max(largest radius, the triangle's bounding radius), tol = kRel * L:
+//  (a) count > 0 iff the reference depth > 0 (either where |depth_ref| <= tol);
+//  (b) |depth - depth_ref| <= tol;
+//  (c) n finite and unit; as good a separating direction as the reference's (the
+//      reference overlap along n <= depth_ref + tol); angle(n, n_ref) <= kAngleTol where
+//      the minimum is well conditioned (below);
+//  (d) point[0] + n depth/2 lies on the ellipsoid, point[0] - n depth/2 on the
+//      triangle where the minimum is well conditioned (within tol + ulp, plus 1e-6 of
+//      the ellipsoid's largest radius of curvature: its support point slides by that
+//      much under the normal's rounding), pdepth[0] == depth;
+//  (e) the scalar and SIMD paths agree within tol (depth) and kAngleTol (normal).
+// Well conditioned (triangles that meet the ellipsoid; separated ones have no contact):
+// every direction 0.02 rad or more from n_ref overlaps by more than depth_ref + tol and
+// the overlap rises by >= 1e-6 L at 3e-3 rad from n_ref in every direction (64
+// samples of the ring, the lowest refined: a needle's flat valley is narrow).
+// Scenarios: random poses (outside, touching, through, deep) at sizes 1, 1e-4, 1e4 and
+// 1e5 from the origin; large triangles against small ellipsoids (terrain); constructed
+// touching (a face, an edge and a vertex on a surface point's normal: exact depth and
+// normal; count 0 at exactly touching within tol); pancakes and needles (ratios 1e-3,
+// 1e-4) pierced by the triangle, lying on it or inside it, a vertex outside while the
+// triangle is deep inside; the ellipsoid's centre on the triangle; sliver, collinear
+// and point triangles; small triangles grazing the surface (their vertices' candidates
+// 1e-4 rad apart, scoring alike); analytic cases (a pancake on a flat triangle, tips
+// and rims);
+// a round ellipsoid against sphere-triangle; vertex order and orientation; range
+// partitions and block composition; GJK / EPA.
+#include <gtest/gtest.h>
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <numeric>
+#include <random>
+#include <vector>
+
+#include "kernels/narrowphase/pair_kernels.h"
+#include "support/ellipsoid_reference.h"
+#include "support/leaf_lanes.h"
+#include "support/narrow_reference.h"
+#include "support/random_input.h"
+#include "support/test_support.h"
+
+namespace impact::kernels {
+namespace {
+
+using Vec3d = Eigen::Vector3d;
+using Mat3d = Eigen::Matrix3d;
+namespace nref = test::nref;
+
+constexpr double kRel = 1e-5;       // depth tolerance, of L
+constexpr double kAngleTol = 1e-4;  // rad, where the minimum is well conditioned
+
+double angle(const Vec3d& a, const Vec3d& b) {
+  return std::atan2(a.cross(b).norm(), a.dot(b));
+}
+
+struct Ell {
+  Vec3d p;
+  Mat3d R;  // columns: the axes of e
+  Vec3d e;
+};
+
+struct Tri {
+  Vec3d v[3];
+};
+
+struct Query {
+  Ell a;
+  Tri b;
+};
+
+struct Hit {
+  uint32_t count = 0;
+  Vec3d n = Vec3d::Zero(), pt = Vec3d::Zero();
+  double depth = 0, pd = 0;
+};
+
+Query rounded(Query q) {
+  q.a.p = test::round_to_float(q.a.p);
+  q.a.R = test::round_to_float(q.a.R);
+  q.a.e = test::round_to_float(q.a.e);
+  for (Vec3d& v : q.b.v) v = test::round_to_float(v);
+  return q;
+}
+
+double tri_radius(const Tri& t) {
+  const Vec3d c = (t.v[0] + t.v[1] + t.v[2]) / 3.0;
+  return std::max({(t.v[0] - c).norm(), (t.v[1] - c).norm(), (t.v[2] - c).norm()});
+}
+
+double size_of(const Query& q) {
+  return std::max(q.a.e.maxCoeff(), tri_radius(q.b));
+}
+
+/// Runs `kern` on all queries as one bucket (full SIMD blocks and a tail).
+std::vector<Hit> run(const std::vector<Query>& qs, KernelPath path, PairKernel kern, uint32_t begin = 0,
+                     uint32_t end = ~0u) {
+  const size_t n = qs.size();
+  end = std::min<uint32_t>(end, static_cast<uint32_t>(n));
+  std::vector<float> ap[3], ar[9], ae[3], bp[3], bw[6];
+  for (const Query& q : qs) {
+    for (int i = 0; i < 3; ++i) {
+      ap[i].push_back(float(q.a.p[i]));
+      ae[i].push_back(float(q.a.e[i]));
+      bp[i].push_back(float(q.b.v[0][i]));
+      bw[i].push_back(float(q.b.v[1][i]));
+      bw[3 + i].push_back(float(q.b.v[2][i]));
+    }
+    for (int i = 0; i < 9; ++i) ar[i].push_back(float(q.a.R(i / 3, i % 3)));
+  }
+  LeafSoA a{}, b{};
+  for (int i = 0; i < 3; ++i) a.p[i] = ap[i].data(), a.e[i] = ae[i].data(), b.p[i] = bp[i].data();
+  for (int i = 0; i < 9; ++i) a.r[i] = ar[i].data();
+  for (int i = 0; i < 6; ++i) b.w[i] = bw[i].data();
+  test::ManifoldLanes o(static_cast<uint32_t>(n));
+  NarrowConfig cfg;
+  cfg.path = path;
+  kern(a, b, o.view(), Range{begin, end}, cfg);
+  std::vector<Hit> out(n);
+  for (uint32_t k = begin; k < end; ++k) {
+    const test::PairResult r = o.result(k);
+    Hit& h = out[k];
+    h.count = r.count;
+    if (h.count == 0) continue;
+    h.n = r.n;
+    h.pt = r.pt[0];
+    h.depth = r.depth;
+    h.pd = r.pd[0];
+  }
+  return out;
+}
+
+std::vector<Hit> run(const std::vector<Query>& qs, KernelPath path) {
+  const PairKernel k = pair_kernel(kLeafEllipsoid, kLeafTriangle);
+  EXPECT_EQ(k, &collide_ellipsoid_triangle);
+  return run(qs, path, k);
+}
+
+void gjk_kernel(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out, Range r, const NarrowConfig& cfg) {
+  collide_gjk_epa(a, b, out, r, cfg, kLeafEllipsoid, kLeafTriangle);
+}
+
+// ---------------------------------------------------------------------------------------
+// References
+// ---------------------------------------------------------------------------------------
+
+double sd_ellipsoid(const Ell& b, const Vec3d& x) {
+  return test::eref::signed_distance_local(b.e, b.R.transpose() * (x - b.p));
+}
+
+template <class Fn>
+double golden(Fn f, double lo, double hi, int iters, double* arg) {
+  const double g = 0.5 * (std::sqrt(5.0) - 1.0);
+  double x1 = hi - g * (hi - lo), x2 = lo + g * (hi - lo), f1 = f(x1), f2 = f(x2);
+  for (int it = 0; it < iters; ++it) {
+    if (f1 < f2) {
+      hi = x2, x2 = x1, f2 = f1, x1 = hi - g * (hi - lo), f1 = f(x1);
+    } else {
+      lo = x1, x1 = x2, f1 = f2, x2 = lo + g * (hi - lo), f2 = f(x2);
+    }
+  }
+  double best = std::min(f1, f2), at = f1 < f2 ? x1 : x2;
+  for (double c : {lo, hi}) {
+    const double fc = f(c);
+    if (fc < best) best = fc, at = c;
+  }
+  *arg = at;
+  return best;
+}
+
+/// The least signed distance to the ellipsoid over the triangle (convex: nested
+/// golden-section search over the barycentric coordinates); y = where.
+double triangle_minimum(const Query& q, Vec3d* where) {
+  const Tri& t = q.b;
+  auto point = [&](double u, double v) { return Vec3d(t.v[0] + u * (t.v[1] - t.v[0]) + v * (t.v[2] - t.v[0])); };
+  auto inner = [&](double u, double* v_at) {
+    return golden([&](double v) { return sd_ellipsoid(q.a, point(u, v)); }, 0.0, 1.0 - u, 44, v_at);
+  };
+  double u = 0, v = 0;
+  const double best = golden(
+      [&](double uu) {
+        double vv;
+        return inner(uu, &vv);
+      },
+      0.0, 1.0, 44, &u);
+  inner(u, &v);
+  *where = point(u, v);
+  return best;
+}
+
+nref::Shape ellipsoid_shape(const Ell& b) {
+  nref::Shape s;
+  s.type = kLeafEllipsoid;
+  s.p = {b.p.x(), b.p.y(), b.p.z()};
+  for (int i = 0; i < 9; ++i) s.r[i] = b.R(i / 3, i % 3);
+  for (int i = 0; i < 3; ++i) s.e[i] = b.e[i];
+  return s;
+}
+
+nref::V3 to_nref(const Vec3d& v) {
+  return {v.x(), v.y(), v.z()};
+}
+Vec3d to_eigen(nref::V3 v) {
+  return {v.x, v.y, v.z};
+}
+
+nref::Shape triangle_shape(const Tri& t) {
+  return nref::make_triangle(to_nref(t.v[0]), to_nref(t.v[1]), to_nref(t.v[2]));
+}
+
+nref::Options dense_options() {
+  nref::Options o;
+  o.samples = 6000;
+  o.starts = 8;
+  return o;
+}
+
+/// The least rise of the overlap over its minimum s along the ring 3e-3 rad around n:
+/// 64 samples, the best 4 refined by golden-section search on the ring's angle (a
+/// needle's flat valley is ~1e-4 of the ring wide and slips between samples).
+double ring_rise(const nref::Shape& a, const nref::Shape& b, nref::V3 n) {
+  nref::V3 t1, t2;
+  nref::detail::tangent_basis(n, t1, t2);
+  const double th = std::tan(3e-3), s = nref::overlap(a, b, n);
+  auto f = [&](double ang) {
+    return nref::overlap(a, b, nref::normalized(n + th * std::cos(ang) * t1 + th * std::sin(ang) * t2)) - s;
+  };
+  std::vector<std::pair<double, double>> samples;
+  for (int i = 0; i < 64; ++i) samples.push_back({f(2 * M_PI * i / 64), 2 * M_PI * i / 64});
+  std::partial_sort(samples.begin(), samples.begin() + 4, samples.end());
+  double best = samples[0].first;
+  for (int k = 0; k < 4; ++k) {
+    double lo = samples[k].second - 2 * M_PI / 64, hi = samples[k].second + 2 * M_PI / 64;
+    for (int it = 0; it < 40; ++it) {
+      const double m1 = lo + 0.381966 * (hi - lo), m2 = lo + 0.618034 * (hi - lo);
+      (f(m1) < f(m2) ? hi : lo) = f(m1) < f(m2) ? m2 : m1;
+    }
+    best = std::min(best, f(0.5 * (lo + hi)));
+  }
+  return best;
+}
+
+struct Ref {
+  double s;  // depth (> 0 overlapping)
+  Vec3d n;   // A to B
+  bool through;
+  bool conditioned;
+};
+
+double overlap(const Query& q, const Vec3d& n) {
+  return nref::overlap(ellipsoid_shape(q.a), triangle_shape(q.b), to_nref(n.normalized()));
+}
+
+/// n = the outward normal at the ellipsoid's point nearest y (see capsule_ellipsoid_test:
+/// not the difference of two nearby points).
+Vec3d outward_normal_nearest(const Ell& a, const Vec3d& y) {
+  const Vec3d x = test::eref::closest_local(a.e, a.R.transpose() * (y - a.p));
+  return (a.R * x.cwiseQuotient(a.e.cwiseProduct(a.e))).normalized();
+}
+
+/// Separated lanes (min signed distance > 0) have no contact, so their normal is never
+/// checked: only the distance is needed.
+Ref reference(const Query& q) {
+  Vec3d y;
+  const double sd = triangle_minimum(q, &y);
+  const double L = size_of(q);
+  if (sd > 0) {
+    Ref f;
+    f.s = -sd;
+    f.n = outward_normal_nearest(q.a, y);
+    f.through = false;
+    f.conditioned = false;
+    return f;
+  }
+  const nref::Shape a = ellipsoid_shape(q.a), b = triangle_shape(q.b);
+  const nref::PairResult r = nref::solve_pair(a, b, {}, dense_options());
+  Ref f;
+  f.s = r.s;
+  f.n = to_eigen(r.n);
+  f.through = true;
+  f.conditioned = r.unique(kRel * L);
+  if (f.conditioned) f.conditioned = ring_rise(a, b, r.n) >= 1e-6 * L;
+  return f;
+}
+
+// ---------------------------------------------------------------------------------------
+// The per-lane check
+// ---------------------------------------------------------------------------------------
+
+struct Stats {
+  int lanes = 0, hits = 0, through = 0, normal_checked = 0;
+  double worst_depth = 0, worst_angle = 0, worst_path_depth = 0, worst_path_angle = 0;
+};
+
+double coord_ulp(const Query& q) {
+  double m = q.a.p.cwiseAbs().maxCoeff();
+  for (const Vec3d& v : q.b.v) m = std::max(m, v.cwiseAbs().maxCoeff());
+  return (m + size_of(q)) * std::ldexp(1.0, -23);
+}
+
+double triangle_distance(const Tri& t, const Vec3d& x) {
+  return nref::triangle_distance(to_nref(x), to_nref(t.v[0]), to_nref(t.v[1]), to_nref(t.v[2]));
+}
+
+void check_all(const std::vector<Query>& qs, const char* what, Stats* st_out = nullptr) {
+  SCOPED_TRACE(what);
+  const std::vector<Hit> simd = run(qs, KernelPath::kSimd), scal = run(qs, KernelPath::kScalar);
+  Stats st;
+  for (size_t k = 0; k < qs.size(); ++k) {
+    const Query& q = qs[k];
+    const Ref f = reference(q);
+    const double L = size_of(q), tol = kRel * L;
+    ++st.lanes;
+    if (std::fabs(f.s) <= tol) continue;
+    for (const Hit* hp : {&simd[k], &scal[k]}) {
+      const Hit& h = *hp;
+      const char* path = hp == &simd[k] ? " simd" : " scalar";
+      ASSERT_EQ(h.count > 0, f.s > 0) << what << " lane " << k << " depth_ref " << f.s << " got " << h.depth
+                                      << path;
+      if (f.s <= 0) continue;
+      ASSERT_EQ(h.count, 1u);
+      if (hp == &simd[k]) {
+        ++st.hits;
+        st.through += f.through;
+      }
+      const double dd = std::fabs(h.depth - f.s);
+      st.worst_depth = std::max(st.worst_depth, dd / L);
+      EXPECT_LE(dd, tol) << what << " lane " << k << path << " depth " << h.depth << " ref " << f.s
+                         << (f.through ? " through" : " outside") << " e " << q.a.e.transpose();
+      EXPECT_EQ(h.pd, h.depth);
+      ASSERT_TRUE(h.n.allFinite());
+      EXPECT_NEAR(h.n.norm(), 1.0, 1e-6);
+      EXPECT_LE(overlap(q, h.n), f.s + tol) << what << " lane " << k << path;
+      const double slack = tol + coord_ulp(q);
+      const Vec3d on_a = h.pt + h.n * (0.5 * h.depth), on_b = h.pt - h.n * (0.5 * h.depth);
+      EXPECT_NEAR(sd_ellipsoid(q.a, on_a), 0.0, slack) << what << " lane " << k << path;
+      // B's point lies on the triangle where the minimiser is unique, up to the slide of
+      // A's support point under the normal's rounding: rho * 1e-6 rad for the largest
+      // radius of curvature rho = e_max^2 / e_min (a pancake's face: 1e4 L).
+      if (f.conditioned) {
+        const double rho = q.a.e.maxCoeff() * q.a.e.maxCoeff() / q.a.e.minCoeff();
+        EXPECT_LE(triangle_distance(q.b, on_b), slack + 1e-6 * rho) << what << " lane " << k << path;
+      }
+      if (f.conditioned) {
+        const double ang = angle(h.n, f.n);
+        st.worst_angle = std::max(st.worst_angle, ang);
+        EXPECT_LE(ang, kAngleTol) << what << " lane " << k << path << " n " << h.n.transpose() << " ref "
+                                  << f.n.transpose() << (f.through ? " through" : " outside");
+      }
+    }
+    if (f.s > tol && f.conditioned) ++st.normal_checked;
+    if (simd[k].count && scal[k].count) {
+      const double pd = std::fabs(simd[k].depth - scal[k].depth), pa = angle(simd[k].n, scal[k].n);
+      st.worst_path_depth = std::max(st.worst_path_depth, pd / L);
+      if (f.conditioned) st.worst_path_angle = std::max(st.worst_path_angle, pa);
+      EXPECT_LE(pd, tol) << what << " lane " << k;
+      if (f.conditioned) {
+        EXPECT_LE(pa, kAngleTol) << what << " lane " << k;
+      }
+    }
+  }
+  std::printf(
+      "  %-30s lanes %5d hits %5d through %5d normals %5d | worst depth %.2g L, angle %.2g; simd-scalar "
+      "%.2g L, %.2g\n",
+      what, st.lanes, st.hits, st.through, st.normal_checked, st.worst_depth, st.worst_angle, st.worst_path_depth,
+      st.worst_path_angle);
+  if (st_out != nullptr) *st_out = st;
+}
+
+// ---------------------------------------------------------------------------------------
+// Generators
+// ---------------------------------------------------------------------------------------
+
+Vec3d random_unit(std::mt19937& g) {
+  std::normal_distribution<double> d;
+  for (;;) {
+    const Vec3d v(d(g), d(g), d(g));
+    if (v.norm() > 1e-3) return v.normalized();
+  }
+}
+
+/// A triangle with vertices around c within `reach` (not too thin).
+Tri random_triangle(std::mt19937& g, const Vec3d& c, double reach) {
+  std::uniform_real_distribution<double> u(-1, 1);
+  for (;;) {
+    Tri t{{c + Vec3d(u(g), u(g), u(g)) * reach, c + Vec3d(u(g), u(g), u(g)) * reach,
+           c + Vec3d(u(g), u(g), u(g)) * reach}};
+    if ((t.v[1] - t.v[0]).cross(t.v[2] - t.v[0]).norm() > 0.05 * reach * reach) return t;
+  }
+}
+
+/// Random poses around an ellipsoid of radii in [0.2, 1] * size at `offset` from the
+/// origin: triangles from deep through it to well outside, about half touching.
+std::vector<Query> random_queries(std::mt19937& g, int n, double size, double offset) {
+  std::uniform_real_distribution<double> u(-1, 1), s(0.2, 1.0), rr(0.2, 1.2);
+  std::vector<Query> qs;
+  for (int k = 0; k < n; ++k) {
+    Query q;
+    const Vec3d p = Vec3d(offset, -offset, 0.5 * offset) + Vec3d(u(g), u(g), u(g)) * size;
+    q.a = Ell{p, test::random_rotation(g), Vec3d(s(g), s(g), s(g)) * size};
+    const Vec3d v(u(g), u(g), u(g));
+    const Vec3d c = p + (k % 2 ? Vec3d(q.a.R * v.cwiseProduct(q.a.e) * 1.1) : Vec3d(v * (1.1 * size)));
+    q.b = random_triangle(g, c, rr(g) * size);
+    qs.push_back(rounded(q));
+  }
+  return qs;
+}
+
+/// Large triangles (10..1e4 times the ellipsoid) through, under and near small ellipsoids.
+std::vector<Query> terrain_queries(std::mt19937& g, int n) {
+  std::uniform_real_distribution<double> u(-1, 1), s(0.2, 1.0), ex(1, 4);
+  std::vector<Query> qs;
+  for (int k = 0; k < n; ++k) {
+    Query q;
+    q.a = Ell{Vec3d(u(g), u(g), u(g)), test::random_rotation(g), Vec3d(s(g), s(g), s(g))};
+    const double big = std::pow(10.0, ex(g));
+    const Vec3d nrm = random_unit(g);
+    const Vec3d t1 = nrm.unitOrthogonal(), t2 = nrm.cross(t1);
+    const double h = 1.2 * u(g);  // plane offset from the ellipsoid's centre
+    const Vec3d c = q.a.p + h * nrm + (k % 3 == 0 ? Vec3d(t1 * (big * 0.3)) : Vec3d::Zero());
+    q.b = Tri{{c + big * t1, c - 0.5 * big * t1 + 0.87 * big * t2, c - 0.5 * big * t1 - 0.87 * big * t2}};
+    qs.push_back(rounded(q));
+  }
+  return qs;
+}
+
+/// Triangles touching the ellipsoid at a random surface point x (outward normal m): a
+/// face in the plane m.(y - x) = f containing x + f m, an edge across m through x + f m
+/// (third vertex above), or a vertex at x + f m (the others above): depth = -f, n = m.
+struct Touch {
+  Query q;
+  double depth;
+  Vec3d n;
+};
+std::vector<Touch> touching_queries(std::mt19937& g, int n) {
+  std::uniform_real_distribution<double> u(-1, 1), s(0.2, 1.0), f(-1e-3, 1e-3), u01(0, 1);
+  std::vector<Touch> out;
+  for (int k = 0; k < n; ++k) {
+    Query q;
+    q.a = Ell{Vec3d(u(g), u(g), u(g)), test::random_rotation(g), Vec3d(s(g), s(g), s(g))};
+    const Vec3d dir = random_unit(g);
+    const Vec3d xs = dir / std::sqrt(test::eref::level(q.a.e, dir));
+    const Vec3d m = q.a.R * xs.cwiseQuotient(q.a.e.cwiseProduct(q.a.e)).normalized();
+    const Vec3d x = q.a.p + q.a.R * xs;
+    const double ff = (k % 5 == 0) ? 0.0 : f(g);
+    const Vec3d c = x + ff * m;
+    const Vec3d t1 = m.unitOrthogonal(), t2 = m.cross(t1);
+    const double r = 0.2 + 0.8 * u01(g);
+    const double a0 = 2 * M_PI * u01(g);
+    auto tan_dir = [&](double a) { return Vec3d(std::cos(a) * t1 + std::sin(a) * t2); };
+    switch (k % 3) {
+      case 0:  // face: c inside the triangle
+        q.b = Tri{{c + r * tan_dir(a0), c + r * tan_dir(a0 + 2.1), c + r * tan_dir(a0 + 4.2)}};
+        break;
+      case 1:  // edge through c across m, third vertex above
+        q.b = Tri{{c + r * tan_dir(a0), c - 0.7 * r * tan_dir(a0), c + r * (0.5 * u01(g) + 0.2) * m + r * tan_dir(a0 + 1.5)}};
+        break;
+      default:  // vertex at c, the others above
+        q.b = Tri{{c, c + r * (tan_dir(a0) + (0.2 + u01(g)) * m), c + r * (tan_dir(a0 + 2.0) + (0.2 + u01(g)) * m)}};
+        break;
+    }
+    out.push_back(Touch{rounded(q), -ff, m});
+  }
+  return out;
+}
+
+/// Small triangles (1e-4 .. 1e-2 of the ellipsoid) grazing its surface at a random point:
+/// their vertices' nearest points lie 1e-4 rad or less apart and score alike.
+std::vector<Query> grazing_queries(std::mt19937& g, int n) {
+  std::uniform_real_distribution<double> u(-1, 1), s(0.2, 1.0), ex(2, 4), u01(0, 1);
+  std::vector<Query> qs;
+  for (int k = 0; k < n; ++k) {
+    Query q;
+    q.a = Ell{Vec3d(u(g), u(g), u(g)), test::random_rotation(g), Vec3d(s(g), s(g), s(g))};
+    const Vec3d dir = random_unit(g);
+    const Vec3d xs = dir / std::sqrt(test::eref::level(q.a.e, dir));
+    const Vec3d m = q.a.R * xs.cwiseQuotient(q.a.e.cwiseProduct(q.a.e)).normalized();
+    const double size = std::pow(10.0, -ex(g));
+    const Vec3d c = q.a.p + q.a.R * xs + m * (size * u(g));
+    q.b = random_triangle(g, c, size);
+    qs.push_back(rounded(q));
+  }
+  return qs;
+}
+
+/// Needle and pancake ellipsoids (ratio 1e-3 or 1e-4, axes permuted, rotated) against
+/// triangles through them, lying on them, inside a pancake, a vertex outside while the
+/// triangle is deep inside, and nearby.
+std::vector<Query> thin_queries(std::mt19937& g, int n) {
+  std::uniform_real_distribution<double> u(-1, 1), u01(0, 1);
+  std::vector<Query> qs;
+  for (int k = 0; k < n; ++k) {
+    const double ratio = (k % 2) ? 1e-3 : 1e-4;
+    const bool needle = (k / 2) % 2;
+    Vec3d e = needle ? Vec3d(1, ratio, ratio * (0.5 + u01(g))) : Vec3d(1, 0.5 + 0.5 * u01(g), ratio);
+    const int sh = k % 3;
+    e = Vec3d(e[sh], e[(sh + 1) % 3], e[(sh + 2) % 3]);
+    Query q;
+    q.a = Ell{Vec3d(u(g), u(g), u(g)), test::random_rotation(g), e};
+    const int thin = e[0] <= e[1] && e[0] <= e[2] ? 0 : (e[1] <= e[2] ? 1 : 2);
+    Tri t;
+    switch ((k / 4) % 5) {
+      case 0:  // through, random orientation, near the centre
+        t = random_triangle(g, Vec3d(u(g), u(g), u(g)).cwiseProduct(e) * 0.5, 0.3 + 0.7 * u01(g));
+        break;
+      case 1: {  // lying across the thin axis just above / below (pancake face down)
+        const double h = e[thin] * (1 + 0.5 * u(g));
+        Vec3d c = Vec3d(u(g), u(g), u(g)).cwiseProduct(e) * 0.5;
+        c[thin] = h;
+        t = random_triangle(g, c, 0.2 + 0.5 * u01(g));
+        for (Vec3d& v : t.v) v[thin] = h + 1e-2 * ratio * u(g);
+        break;
+      }
+      case 2: {  // small triangle inside, one vertex poking out through the thin side
+        Vec3d c = Vec3d(u(g), u(g), u(g)).cwiseProduct(e) * 0.3;
+        t = Tri{{c, c + Vec3d(u(g), u(g), u(g)).cwiseProduct(e) * 0.2, c}};
+        t.v[2][thin] += (u(g) < 0 ? -1 : 1) * e[thin] * (1.5 + u01(g));
+        break;
+      }
+      case 3:  // needle / pancake piercing a small triangle, off centre
+        t = random_triangle(g, Vec3d(u(g), u(g), u(g)).cwiseProduct(e) * 0.9, 0.05 + 0.1 * u01(g));
+        break;
+      default:  // anywhere nearby
+        t = random_triangle(g, Vec3d(u(g), u(g), u(g)) * 1.3, 0.3 + 0.7 * u01(g));
+        break;
+    }
+    for (Vec3d& v : t.v) v = q.a.p + q.a.R * v;
+    q.b = t;
+    qs.push_back(rounded(q));
+  }
+  return qs;
+}
+
+/// Degenerate triangles: slivers (height 1e-3 .. 1e-7 of the base), exactly collinear,
+/// two equal vertices, a point; through and near ellipsoids.
+std::vector<Query> degenerate_queries(std::mt19937& g, int n) {
+  std::uniform_real_distribution<double> u(-1, 1), s(0.2, 1.0), ex(3, 7), u01(0, 1);
+  std::vector<Query> qs;
+  for (int k = 0; k < n; ++k) {
+    Query q;
+    q.a = Ell{Vec3d(u(g), u(g), u(g)), test::random_rotation(g), Vec3d(s(g), s(g), s(g))};
+    const Vec3d c = q.a.p + Vec3d(u(g), u(g), u(g)) * 0.7;
+    const Vec3d d = random_unit(g) * (0.3 + u01(g));
+    switch (k % 4) {
+      case 0: {  // sliver
+        const Vec3d side = d.cross(random_unit(g)).normalized() * (d.norm() * std::pow(10.0, -ex(g)));
+        q.b = Tri{{c - d, c + d, c + 0.3 * d + side}};
+        break;
+      }
+      case 1:  // collinear (the middle vertex exactly on the segment in double)
+        q.b = Tri{{c - d, c + d, c + 0.25 * d}};
+        break;
+      case 2:  // two equal vertices
+        q.b = Tri{{c - d, c + d, c + d}};
+        break;
+      default:  // a point
+        q.b = Tri{{c, c, c}};
+        break;
+    }
+    qs.push_back(rounded(q));
+  }
+  return qs;
+}
+
+// ---------------------------------------------------------------------------------------
+// Tests
+// ---------------------------------------------------------------------------------------
+
+TEST(EllipsoidTriangleReference, ReferencesAgree) {
+  std::mt19937 g(3);
+  int compared = 0;
+  for (const Query& q : random_queries(g, static_cast<int>(test::scaled(50)), 1.0, 0.0)) {
+    Vec3d y;
+    const double sd = triangle_minimum(q, &y);
+    if (!(sd > 1e-3)) continue;
+    const nref::PairResult r = nref::solve_pair(ellipsoid_shape(q.a), triangle_shape(q.b), {}, dense_options());
+    // (The float-rounded R is orthonormal to ~6e-8: see capsule_ellipsoid_test.)
+    EXPECT_NEAR(r.s, -sd, 2e-7) << compared;
+    EXPECT_LT(angle(to_eigen(r.n), outward_normal_nearest(q.a, y)), 1e-5) << compared;
+    ++compared;
+  }
+  EXPECT_GT(compared, 8);
+}
+
+class EllipsoidTriangle : public ::testing::TestWithParam<std::tuple<double, double>> {};
+
+TEST_P(EllipsoidTriangle, RandomPosesAgainstDoubleReference) {
+  const auto [size, offset] = GetParam();
+  std::mt19937 g(17);
+  const int n = static_cast<int>(test::scaled(200));
+  Stats st;
+  check_all(random_queries(g, n, size, offset), "random", &st);
+  EXPECT_GT(st.hits, n / 4);
+  EXPECT_GT(st.through, n / 5);
+  EXPECT_GT(st.normal_checked, st.hits / 2);
+}
+
+INSTANTIATE_TEST_SUITE_P(Scales, EllipsoidTriangle,
+                         ::testing::Values(std::make_tuple(1.0, 0.0), std::make_tuple(1e-4, 0.0),
+                                           std::make_tuple(1e4, 0.0), std::make_tuple(1.0, 1e5)));
+
+TEST(EllipsoidTriangleCases, ConstructedTouching) {
+  std::mt19937 g(29);
+  const std::vector<Touch> ts = touching_queries(g, static_cast<int>(test::scaled(300)));
+  std::vector<Query> qs;
+  for (const Touch& t : ts) qs.push_back(t.q);
+  for (KernelPath path : {KernelPath::kSimd, KernelPath::kScalar}) {
+    const std::vector<Hit> hs = run(qs, path);
+    int hits = 0;
+    double worst = 0, worst_angle = 0;
+    for (size_t k = 0; k < ts.size(); ++k) {
+      const double L = size_of(qs[k]), tol = kRel * L;
+      const Hit& h = hs[k];
+      if (std::fabs(ts[k].depth) <= tol) {
+        if (h.count) {
+          EXPECT_LE(h.depth, tol) << k;
+        }
+        continue;
+      }
+      ASSERT_EQ(h.count > 0, ts[k].depth > 0) << k << " depth " << ts[k].depth;
+      if (!h.count) continue;
+      ++hits;
+      worst = std::max(worst, std::fabs(h.depth - ts[k].depth) / L);
+      worst_angle = std::max(worst_angle, angle(h.n, ts[k].n));
+      EXPECT_NEAR(h.depth, ts[k].depth, tol) << k;
+      EXPECT_LE(angle(h.n, ts[k].n), kAngleTol) << k << " kind " << k % 3 << " n " << h.n.transpose() << " want "
+                                                << ts[k].n.transpose();
+    }
+    std::printf("  touching: hits %d, worst depth %.2g L, angle %.2g\n", hits, worst, worst_angle);
+    EXPECT_GT(hits, static_cast<int>(ts.size()) / 4);
+  }
+}
+
+TEST(EllipsoidTriangleCases, TerrainNeedlesPancakesDegenerate) {
+  std::mt19937 g(31);
+  Stats st;
+  check_all(terrain_queries(g, static_cast<int>(test::scaled(150))), "large triangles", &st);
+  EXPECT_GT(st.hits, 30);
+  const int n_thin = static_cast<int>(test::scaled(300));
+  check_all(thin_queries(g, n_thin), "needle / pancake", &st);
+  EXPECT_GT(st.through, n_thin / 5);
+  check_all(degenerate_queries(g, static_cast<int>(test::scaled(200))), "degenerate triangles", &st);
+  EXPECT_GT(st.hits, 30);
+  check_all(grazing_queries(g, static_cast<int>(test::scaled(200))), "small grazing triangles", &st);
+  EXPECT_GT(st.normal_checked, 50);
+}
+
+TEST(EllipsoidTriangleCases, CentreOnTheTriangle) {
+  // The ellipsoid's centre on the triangle (inside it, on an edge, at a vertex): the
+  // triangle cuts the ellipsoid through its centre; finite unit normal, exact depth.
+  std::mt19937 g(37);
+  std::uniform_real_distribution<double> u(-1, 1), s(0.2, 1.0), u01(0, 1);
+  std::vector<Query> qs;
+  for (int k = 0; k < static_cast<int>(test::scaled(120)); ++k) {
+    Query q;
+    const Vec3d e = k % 4 == 1 ? Vec3d::Constant(s(g)) : Vec3d(s(g), s(g), s(g));
+    q.a = Ell{Vec3d(u(g), u(g), u(g)), k % 3 == 0 ? Mat3d::Identity() : test::random_rotation(g), e};
+    Tri t = random_triangle(g, Vec3d::Zero(), 0.5 + u01(g));
+    const double b0 = u01(g), b1 = (1 - b0) * u01(g);
+    Vec3d at = t.v[0] + b0 * (t.v[1] - t.v[0]) + b1 * (t.v[2] - t.v[0]);
+    if (k % 5 == 1) at = 0.5 * (t.v[0] + t.v[1]);
+    if (k % 5 == 2) at = t.v[2];
+    for (Vec3d& v : t.v) v = v - at + q.a.p;
+    q.b = t;
+    qs.push_back(rounded(q));
+  }
+  Stats st;
+  check_all(qs, "centre on the triangle", &st);
+  EXPECT_EQ(st.hits, static_cast<int>(qs.size()));
+}
+
+TEST(EllipsoidTriangleCases, Analytic) {
+  // Dyadic sizes and offsets: the float inputs are the exact configurations.
+  for (KernelPath path : {KernelPath::kSimd, KernelPath::kScalar}) {
+    auto one = [&](const Query& q) { return run({q}, path)[0]; };
+    const Ell pancake{Vec3d(1, -2, 3), Mat3d::Identity(), Vec3d(2, 1.5, 0.125)};
+    const Vec3d p = pancake.p;
+    // A flat triangle 1/16 below the top face (z = 0.125): n = +z, depth 1/16; the
+    // point midway: 1/32 below the face, above the pancake's pole.
+    Hit h = one(Query{pancake, Tri{{p + Vec3d(-1, -1, 0.0625), p + Vec3d(1, -1, 0.0625), p + Vec3d(0, 1, 0.0625)}}});
+    ASSERT_EQ(h.count, 1u);
+    EXPECT_NEAR(h.depth, 0.0625, 1e-6);
+    EXPECT_LT((h.n - Vec3d(0, 0, 1)).norm(), 1e-6) << h.n.transpose();
+    EXPECT_LT((h.pt - (p + Vec3d(0, 0, 0.09375))).norm(), 1e-6) << h.pt.transpose();
+    // The same through the centre plane (z = 0): out through either face, depth 1/8;
+    // the tie goes to the first candidate, +N (N = (v1 - v0) x (v2 - v0) = +z).
+    h = one(Query{pancake, Tri{{p + Vec3d(-4, -4, 0), p + Vec3d(4, -4, 0), p + Vec3d(0, 4, 0)}}});
+    ASSERT_EQ(h.count, 1u);
+    EXPECT_NEAR(h.depth, 0.125, 1e-6);
+    EXPECT_EQ(h.n, Vec3d(0, 0, 1));
+    // A vertex 1/16 inside the top pole, the triangle leaving upwards: n = +z, 1/16.
+    h = one(Query{pancake, Tri{{p + Vec3d(0, 0, 0.0625), p + Vec3d(1, 0, 1), p + Vec3d(-1, 0.5, 1)}}});
+    ASSERT_EQ(h.count, 1u);
+    EXPECT_NEAR(h.depth, 0.0625, 1e-6);
+    EXPECT_LT((h.n - Vec3d(0, 0, 1)).norm(), 1e-6) << h.n.transpose();
+    // An edge across the y rim, 1/8 inside, parallel to z: n = +y, depth 1/8.
+    h = one(Query{pancake, Tri{{p + Vec3d(0, 1.375, -1), p + Vec3d(0, 1.375, 1), p + Vec3d(0, 3, 0)}}});
+    ASSERT_EQ(h.count, 1u);
+    EXPECT_NEAR(h.depth, 0.125, 1e-6);
+    EXPECT_LT((h.n - Vec3d(0, 1, 0)).norm(), 1e-6) << h.n.transpose();
+    // Exactly touching the top face and separated: no contact.
+    EXPECT_EQ(one(Query{pancake, Tri{{p + Vec3d(-1, -1, 0.125), p + Vec3d(1, -1, 0.125), p + Vec3d(0, 1, 0.125)}}}).count,
+              0u);
+    EXPECT_EQ(one(Query{pancake, Tri{{p + Vec3d(2.5, 0, 0), p + Vec3d(3, 1, 0), p + Vec3d(3, -1, 0)}}}).count, 0u);
+  }
+}
+
+TEST(EllipsoidTriangleCases, RoundEllipsoidIsSphereTriangle) {
+  std::mt19937 g(11);
+  std::uniform_real_distribution<double> u(-1, 1), u01(0, 1);
+  std::vector<Query> qs;
+  for (int k = 0; k < 200; ++k) {
+    Query q;
+    q.a = Ell{Vec3d(u(g), u(g), u(g)), test::random_rotation(g), Vec3d::Constant(0.2 + 0.6 * u01(g))};
+    q.b = random_triangle(g, q.a.p + Vec3d(u(g), u(g), u(g)) * 1.2, 0.3 + u01(g));
+    qs.push_back(rounded(q));
+  }
+  const std::vector<Hit> mine = run(qs, KernelPath::kSimd);
+  const size_t n = qs.size();
+  std::vector<float> sp[3], se[3], bp[3], bw[6];
+  for (const Query& q : qs) {
+    for (int i = 0; i < 3; ++i) {
+      sp[i].push_back(float(q.a.p[i]));
+      se[i].push_back(i == 0 ? float(q.a.e[0]) : 0.0f);
+      bp[i].push_back(float(q.b.v[0][i]));
+      bw[i].push_back(float(q.b.v[1][i]));
+      bw[3 + i].push_back(float(q.b.v[2][i]));
+    }
+  }
+  LeafSoA a{}, b{};
+  for (int i = 0; i < 3; ++i) a.p[i] = sp[i].data(), a.e[i] = se[i].data(), b.p[i] = bp[i].data();
+  for (int i = 0; i < 6; ++i) b.w[i] = bw[i].data();
+  test::ManifoldLanes o(static_cast<uint32_t>(n));
+  collide_sphere_triangle(a, b, o.view(), Range{0, static_cast<uint32_t>(n)}, NarrowConfig{});
+  int hits = 0;
+  for (uint32_t k = 0; k < n; ++k) {
+    const test::PairResult r = o.result(k);
+    if ((r.count == 0) != (mine[k].count == 0)) {
+      EXPECT_LT(std::max(r.count ? r.depth : 0.0, mine[k].count ? mine[k].depth : 0.0), 1e-5) << k;
+      continue;
+    }
+    if (!r.count) continue;
+    ++hits;
+    EXPECT_NEAR(mine[k].depth, r.depth, 2e-6) << k;
+    // sphere-triangle's normal is the centre-to-triangle direction (unique unless the
+    // centre is on the triangle)
+    if (r.depth < 0.95 * qs[k].a.e[0]) {
+      EXPECT_LT(angle(mine[k].n, r.n), 1e-5) << k;
+      EXPECT_LT((mine[k].pt - r.pt[0]).norm(), 1e-5) << k;
+    }
+  }
+  EXPECT_GT(hits, 30);
+}
+
+TEST(EllipsoidTriangleCases, VertexOrderAndOrientation) {
+  std::mt19937 g(19);
+  const std::vector<Query> qs = random_queries(g, 120, 1.0, 0.0);
+  const std::vector<Hit> h0 = run(qs, KernelPath::kSimd);
+  for (int variant = 0; variant < 2; ++variant) {
+    std::vector<Query> other = qs;
+    for (Query& q : other) q.b = variant == 0 ? Tri{{q.b.v[1], q.b.v[2], q.b.v[0]}} : Tri{{q.b.v[0], q.b.v[2], q.b.v[1]}};
+    const std::vector<Hit> h1 = run(other, KernelPath::kSimd);
+    for (size_t k = 0; k < qs.size(); ++k) {
+      const double L = size_of(qs[k]);
+      if (h0[k].count != h1[k].count) {
+        EXPECT_LT(std::max(h0[k].depth * h0[k].count, h1[k].depth * h1[k].count), 1e-5 * L) << k;
+        continue;
+      }
+      if (!h0[k].count) continue;
+      EXPECT_NEAR(h0[k].depth, h1[k].depth, 2e-6 * L) << k;
+      if (reference(qs[k]).conditioned) {
+        EXPECT_LT(angle(h0[k].n, h1[k].n), kAngleTol) << k;
+      }
+    }
+  }
+}
+
+TEST(EllipsoidTriangleCases, RangePartitionsAndBlockComposition) {
+  std::mt19937 g(41);
+  std::vector<Query> qs = random_queries(g, 37, 1.0, 0.0);
+  const std::vector<Query> thin = thin_queries(g, 40);
+  qs.insert(qs.end(), thin.begin(), thin.end());
+  const uint32_t n = static_cast<uint32_t>(qs.size());
+  const PairKernel kern = pair_kernel(kLeafEllipsoid, kLeafTriangle);
+  auto same = [](const Hit& x, const Hit& y) {
+    return x.count == y.count && (x.count == 0 || (x.depth == y.depth && x.n == y.n && x.pt == y.pt));
+  };
+  for (KernelPath path : {KernelPath::kSimd, KernelPath::kScalar}) {
+    const std::vector<Hit> all = run(qs, path, kern);
+    for (uint32_t cut : {1u, 5u, 8u, 13u, 36u, 61u}) {
+      const std::vector<Hit> lo = run(qs, path, kern, 0, cut), hi = run(qs, path, kern, cut, n);
+      for (uint32_t k = 0; k < n; ++k) EXPECT_TRUE(same(k < cut ? lo[k] : hi[k], all[k])) << cut << " " << k;
+    }
+    // Every lane among other neighbours: a shuffled bucket gives each lane's same bytes.
+    std::vector<uint32_t> perm(n);
+    std::iota(perm.begin(), perm.end(), 0u);
+    std::shuffle(perm.begin(), perm.end(), g);
+    std::vector<Query> shuffled(n);
+    for (uint32_t k = 0; k < n; ++k) shuffled[k] = qs[perm[k]];
+    const std::vector<Hit> sh = run(shuffled, path, kern);
+    for (uint32_t k = 0; k < n; ++k) EXPECT_TRUE(same(sh[k], all[perm[k]])) << k;
+  }
+}
+
+/// The general GJK / EPA path on the same lanes (overlaps of at least 1e-3 L): same
+/// hits, depth within 1e-3 L, normal within 0.02 rad where well conditioned.
+TEST(EllipsoidTriangleCases, AgreesWithGjkEpa) {
+  std::mt19937 g(23);
+  std::vector<Query> qs = random_queries(g, static_cast<int>(test::scaled(150)), 1.0, 0.0);
+  const std::vector<Hit> mine = run(qs, KernelPath::kSimd), gjk = run(qs, KernelPath::kSimd, &gjk_kernel);
+  int compared = 0;
+  for (size_t k = 0; k < qs.size(); ++k) {
+    const double L = size_of(qs[k]);
+    const Ref f = reference(qs[k]);
+    if (std::fabs(f.s) < 1e-3 * L) continue;
+    ASSERT_EQ(mine[k].count, gjk[k].count) << k << " depth " << f.s;
+    if (mine[k].count == 0) continue;
+    ++compared;
+    EXPECT_NEAR(mine[k].depth, gjk[k].depth, 1e-3 * L) << k;
+    if (f.conditioned) {
+      EXPECT_LT(angle(mine[k].n, gjk[k].n), 0.02) << k;
+    }
+  }
+  EXPECT_GT(compared, static_cast<int>(qs.size()) / 5);
+}
+
+}  // namespace
+}  // namespace impact::kernels
