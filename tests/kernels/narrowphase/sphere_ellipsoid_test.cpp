@@ -283,7 +283,6 @@ void check_all(const std::vector<Query>& qs, const char* what, Stats* st_out = n
         for (const Hit* hp : {&simd[k], &scal[k]}) {
           const double ang = angle(hp->n, f.n);
           st.worst_angle = std::max(st.worst_angle, ang);
-          if (ang > 3e-4) { const Vec3d y = q.b.R.transpose() * (q.c - q.b.p); std::printf("DBG ang %.3g sens %.3g e %.9g %.9g %.9g y %.9g %.9g %.9g r %.9g depth %.9g ref %.9g in %d\n", ang, sens, q.b.e[0], q.b.e[1], q.b.e[2], y[0], y[1], y[2], q.r, hp->depth, f.depth, f.inside); }
           EXPECT_LE(ang, kAngleTol) << what << " lane " << k << " n " << hp->n.transpose() << " ref "
                                     << f.n.transpose() << " e " << q.b.e.transpose();
         }
