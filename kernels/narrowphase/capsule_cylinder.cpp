@@ -21,7 +21,8 @@
 //  - n* horizontal (an end or the core against the side): then n* also minimises o over
 //    the horizontal circle, where o = h_{S_xy}(n) + rc: the direction from the core's
 //    point nearest the axis in the xy plane (2D segment vs point) towards the axis,
-//    and +-w, w = z x u / |z x u| (the core crossing the axis in projection);
+//    and, where that point is the foot of the perpendicular, +-w, w = z x u / |z x u|
+//    (the core crossing the axis in projection, where the first is undefined);
 //  - n* perpendicular to u (the core's interior against a rim): then n* minimises o over
 //    the great circle n.u = 0, where o is the support function of C's shadow along u
 //    (an ellipse of semi-axes rc along w and rc|u_z| along v = u x w, swept by 2 h |u_xy|
@@ -50,11 +51,12 @@
 // Ties keep the first candidate in the order caps, sides, rims, ends.
 // Contact points: the core point t of the winning candidate, moved along n by (r - o)/2
 // (midway between the capsule's surface and the cylinder's, which lies at -o along n
-// from the core point). Two points: a cap normal with the core clipped to the cap disk
-// (core within kParallelSin of the cap's plane, or a core inside the cylinder), and a
-// side normal with the core within kParallelSin of the axis clipped to the side's
-// height; each end with its own depth (the capsule's surface along n against the cap
-// plane / where the line enters the side), kept when both are positive.
+// from the core point). Two points where n is within kParallelSin of a cap normal and
+// the core within kParallelSin of the cap's plane (or the core meets the cylinder): the
+// core clipped to the cap disk; or where n is within kParallelSin of the horizontal
+// plane and the core of the axis: the core clipped to the side's height. Each end has
+// its own depth along n (the capsule's surface, capsule_exit, against where the line
+// enters the cylinder), and both are kept when both are positive.
 // Preconditions: finite inputs, positive radii and half lengths (hs >= 0), unit axes,
 // orthonormal R. Degenerate input: a zero-length core is a sphere (its candidates
 // reduce to point-cylinder); a core along the axis takes w = R's x axis; an end on the
@@ -74,6 +76,20 @@
 
 #include "kernels/narrowphase/pair_kernels.h"
 #include "kernels/narrowphase/primitives.h"
+
+// No FMA contraction in this file. Several quantities here are rounding noise by nature
+// (u's horizontal part for a core along the axis, the offset of a core end on the axis,
+// the 2D closest point of a core crossing the axis in projection); any unit direction
+// built from them is as good as another, but it must be unit, or o(n) is no upper bound.
+// GCC 12 at -O3 (SLP vectorisation of the one-lane path) was seen to evaluate such a
+// quantity twice, contracted differently, and normalise one copy by the other's length
+// (|n| = 0.93, a depth 6% short). Without contraction every copy rounds alike; the cost
+// was not measurable (the kernel is bound by its divisions and square roots).
+#if defined(__clang__)
+#pragma STDC FP_CONTRACT OFF
+#elif defined(__GNUC__)
+#pragma GCC optimize("fp-contract=off")
+#endif
 
 namespace impact::kernels {
 namespace {
@@ -199,6 +215,8 @@ IMPACT_INLINE void capsule_cylinder_block(const LeafSoA& a, const LeafSoA& b, co
   const F inv_uxy = one / sqrt(select(tilted, uxy2, one));
   const F wx = select(tilted, -u.y * inv_uxy, one), wy = select(tilted, u.x * inv_uxy, zero);
   const F mx = wy, my = -wx;
+  const F never(3.0e38f);                    // o of a dropped candidate
+  const F slack = F(1e-6f) * (hs + rc + h);  // rounding allowance of a witness test
 
   Best<F> best;
   // --- caps: n = +-z; the witness is the core end that reaches furthest along n ---
@@ -211,19 +229,24 @@ IMPACT_INLINE void capsule_cylinder_block(const LeafSoA& a, const LeafSoA& b, co
     best.cls = F(kClassCap);
     best.take(ext - c.z, V3<F>{zero, zero, F(-1.0f)}, -t_up, kClassCap);
   }
-  // --- side: +-w and the direction from the core's point nearest the axis (xy) ---
+  // --- side: the direction from the core's point nearest the axis (xy) towards it, and
+  // +-w where that point is the foot of the perpendicular (only there can +-w be the
+  // minimiser: elsewhere the 2D closest point is an end, not along w; and w, from u's
+  // horizontal part, loses its precision for a core nearly along the axis) ---
   const F cu = c.x * u.x + c.y * u.y;
-  const F t_axis = clamp(select(tilted, -cu / select(tilted, uxy2, one), zero), -hs, hs);
+  const F t_free = select(tilted, -cu / select(tilted, uxy2, one), zero);
+  const F t_axis = clamp(t_free, -hs, hs);
   {
     auto side_o = [&](F nx, F ny) { return mul_add(hs, abs(nx * u.x + ny * u.y), nx * c.x + ny * c.y) + rc; };
-    best.take(side_o(wx, wy), V3<F>{wx, wy, zero}, t_axis, kClassSide);
-    best.take(side_o(-wx, -wy), V3<F>{-wx, -wy, zero}, t_axis, kClassSide);
     const F qx = mul_add(t_axis, u.x, c.x), qy = mul_add(t_axis, u.y, c.y);
     const F q2 = qx * qx + qy * qy;
     const Mask off = q2 > tiny;
     const F qi = one / sqrt(select(off, q2, one));
     const F nx = select(off, -qx * qi, wx), ny = select(off, -qy * qi, wy);
     best.take(side_o(nx, ny), V3<F>{nx, ny, zero}, t_axis, kClassSide);
+    const Mask foot = abs(t_free) <= hs;
+    best.take(select(foot, side_o(wx, wy), never), V3<F>{wx, wy, zero}, t_axis, kClassSide);
+    best.take(select(foot, side_o(-wx, -wy), never), V3<F>{-wx, -wy, zero}, t_axis, kClassSide);
   }
   // --- rims against the core's interior: n perpendicular to u (half ellipses) ---
   {
@@ -236,20 +259,27 @@ IMPACT_INLINE void capsule_cylinder_block(const LeafSoA& a, const LeafSoA& b, co
     const F by = -dot(c, v) * inv_rc;
     const F lr = half_len * inv_rc;
     const F ratio = abs(u.z);  // minor / major semi-axis of a rim's shadow
-    F ex, ey;
+    // (w and v are orthonormal only up to rounding, which for a core along the axis is all
+    // of u's horizontal part: normalised, so that o(n) stays an upper bound)
+    F ex, ey, len;
     half_ellipse_normal(ratio, bx, by - lr, ex, ey);
-    const V3<F> n_top = madd(w3 * ex, ey, v);
+    const V3<F> n_top = normalize_or(madd(w3 * ex, ey, v), w3, len);
     half_ellipse_normal(ratio, bx, -(by + lr), ex, ey);
-    const V3<F> n_bot = madd(w3 * ex, -ey, v);
-    // witness: the core point level (along u) with the rim point C offers along -n
-    auto rim_t = [&](const V3<F>& n) {
+    const V3<F> n_bot = normalize_or(madd(w3 * ex, -ey, v), w3, len);
+    // witness: the core point level (along u) with the rim point C offers along -n; a
+    // witness beyond the core's ends (by more than rounding) is no point of this piece,
+    // and such a candidate is dropped: near the minimum o is flat, and an invalid
+    // direction whose o ties the minimum within rounding would win half the time
+    auto rim_take = [&](const V3<F>& n) {
       const F nxy2 = n.x * n.x + n.y * n.y;
       const F s = rc / sqrt(select(nxy2 > tiny, nxy2, one));
       const V3<F> pc{-s * n.x, -s * n.y, -h * simd::sign_nonneg(n.z)};
-      return clamp(dot(pc - c, u), -hs, hs);
+      const F tw = dot(pc - c, u);
+      const Mask on_core = abs(tw) <= hs + slack;
+      best.take(select(on_core, overlap(n, c, u, hs, rc, h), never), n, clamp(tw, -hs, hs), kClassOther);
     };
-    best.take(overlap(n_top, c, u, hs, rc, h), n_top, rim_t(n_top), kClassOther);
-    best.take(overlap(n_bot, c, u, hs, rc, h), n_bot, rim_t(n_bot), kClassOther);
+    rim_take(n_top);
+    rim_take(n_bot);
   }
   // --- a core end against a rim circle: its nearest point, n with the allowed sign ---
   for (int e = 0; e < 2; ++e) {
@@ -268,7 +298,10 @@ IMPACT_INLINE void capsule_cylinder_block(const LeafSoA& a, const LeafSoA& b, co
       F len;
       const V3<F> n = normalize_or(V3<F>{radial * dx, radial * dy, vert},
                                    V3<F>{dx * F(0.70710678f), dy * F(0.70710678f), sg * F(0.70710678f)}, len);
-      best.take(overlap(n, c, u, hs, rc, h), n, se * hs, kClassOther);
+      // a critical point only where n is in the end's normal cone and along +-(end - rim
+      // point): rc - rho and h + sg x_z of one sign (else dropped, as above)
+      const Mask valid = (se * dot(n, u) >= F(-1e-6f)) & ((rc - rho) * mul_add(sg, x.z, h) >= -slack * slack);
+      best.take(select(valid, overlap(n, c, u, hs, rc, h), never), n, se * hs, kClassOther);
     }
   }
 
@@ -276,23 +309,40 @@ IMPACT_INLINE void capsule_cylinder_block(const LeafSoA& a, const LeafSoA& b, co
   const V3<F> n = best.n;
   const F depth = r + o;
   const Mask is_cap = best.cls == F(kClassCap), is_side = best.cls == F(kClassSide);
-  // The core clipped to the cap disk (|c_xy + t u_xy| <= rc) and to the side's height.
+  // Two points where n is within kParallelSin of a cap normal with the core level or
+  // inside, or of the horizontal with the core along the axis: the core clipped where
+  // its points, moved along n, meet the face (capsule-box's rule): the cap plane z = -s h
+  // (s = sign n_z) inside the disk, a line in t; or the side within |z| <= h, the line's
+  // height there taken as the witness's (x_z - o n_z). For n = +-z (horizontal n), the
+  // cap (side) witnesses', that is the core clipped to the disk (the side's height).
+  const F nxy2 = n.x * n.x + n.y * n.y;
+  const F par2 = F(kParallelSin * kParallelSin);
+  const Mask cap_like = (nxy2 < par2) & ((abs(u.z) < F(kParallelSin)) | (o > zero));
+  const Mask side_like = andnot((n.z * n.z < par2) & (uxy2 < par2), cap_like);
+  const F s_cap = simd::sign_nonneg(n.z);
+  const F nz = select(abs(n.z) > half, n.z, one);
   F cl_lo, cl_hi, sd_lo, sd_hi;
   Mask cl_ok, sd_ok;
   {
-    const F qc = c.x * c.x + c.y * c.y - rc * rc;
-    const F disc = cu * cu - uxy2 * qc;
+    const F l0 = (-s_cap * h - c.z) / nz, l1 = -u.z / nz;  // x(t) + (l0 + l1 t) n on the plane
+    const F csx = mul_add(l0, n.x, c.x), csy = mul_add(l0, n.y, c.y);
+    const F usx = mul_add(l1, n.x, u.x), usy = mul_add(l1, n.y, u.y);
+    const F qa = usx * usx + usy * usy, qb = csx * usx + csy * usy;
+    const F qc = csx * csx + csy * csy - rc * rc;
+    const F disc = qb * qb - qa * qc;
     const F root = sqrt(max(disc, zero));
-    const F ia = one / select(tilted, uxy2, one);
-    cl_lo = max(select(tilted, (-cu - root) * ia, -hs), -hs);
-    cl_hi = min(select(tilted, (root - cu) * ia, hs), hs);
-    cl_ok = select(tilted, disc >= zero, qc <= zero) & (cl_lo <= cl_hi);
+    const Mask moving = qa > tiny;
+    const F ia = one / select(moving, qa, one);
+    cl_lo = max(select(moving, (-qb - root) * ia, -hs), -hs);
+    cl_hi = min(select(moving, (root - qb) * ia, hs), hs);
+    cl_ok = select(moving, disc >= zero, qc <= zero) & (cl_lo <= cl_hi);
+    const F cz = c.z - o * n.z;
     const Mask level = abs(u.z) < tiny;
     const F iz = one / select(level, one, u.z);
-    const F ta = (-h - c.z) * iz, tb = (h - c.z) * iz;
+    const F ta = (-h - cz) * iz, tb = (h - cz) * iz;
     sd_lo = select(level, -hs, max(min(ta, tb), -hs));
     sd_hi = select(level, hs, min(max(ta, tb), hs));
-    sd_ok = select(level, abs(c.z) <= h, Mask(true)) & (sd_lo <= sd_hi);
+    sd_ok = select(level, abs(cz) <= h, Mask(true)) & (sd_lo <= sd_hi);
   }
   // One point: the witness (a cap / side witness moved into the clipped core, for a
   // core level with the cap or along the axis whose ends tie).
@@ -300,17 +350,43 @@ IMPACT_INLINE void capsule_cylinder_block(const LeafSoA& a, const LeafSoA& b, co
   t = select(is_cap & cl_ok, clamp(t, cl_lo, cl_hi), t);
   t = select(is_side & sd_ok, clamp(t, sd_lo, sd_hi), t);
   const V3<F> pf = madd(madd(c, t, u), half * (r - o), n);
-  // Two points: the clipped core's ends, each with its own depth along n.
+  // The clipped ends, each with its own depth along n: the capsule's surface
+  // (capsule_exit) against the cap plane / where the line enters the side (a line that
+  // misses the side beyond rounding: no second point).
   const F snu = dot(n, u);
-  const F t0 = select(is_cap, cl_lo, sd_lo), t1 = select(is_cap, cl_hi, sd_hi);
+  const F ia = one / select(side_like, nxy2, one);
+  // A side end whose line enters the infinite cylinder beyond the cap's height (a tilted
+  // n: the entry is not where the witness's is) moves along the core until it does not
+  // (the height changes by u_z per unit t, to first order).
+  auto side_end = [&](F te) {
+    const V3<F> x = madd(c, te, u);
+    const F bh = x.x * n.x + x.y * n.y, ch = x.x * x.x + x.y * x.y - rc * rc;
+    const F lam = (-bh - sqrt(max(bh * bh - nxy2 * ch, zero))) * ia;
+    const F ze = mul_add(lam, n.z, x.z);
+    const F excess = select(ze > h, ze - h, select(ze < -h, ze + h, zero));
+    return clamp(te - excess / select(abs(u.z) > half, u.z, one), sd_lo, sd_hi);
+  };
+  const F t0 = select(cap_like, cl_lo, side_end(sd_lo)), t1 = select(cap_like, cl_hi, side_end(sd_hi));
   auto end_point = [&](F te, V3<F>& p, F& d) {
     const V3<F> x = madd(c, te, u);
-    const F l = capsule_exit(te, snu, r, hs);  // the capsule's surface along n
-    // the cylinder's along the same line: the cap plane n.y = -h, or the side's entry
-    const F lam_cap = -h - n.z * x.z;
-    const F xn = x.x * n.x + x.y * n.y;
-    const F lam_side = -xn - sqrt(max(xn * xn - (x.x * x.x + x.y * x.y) + rc * rc, zero));
-    const F lam = select(is_cap, lam_cap, lam_side);
+    const F l = capsule_exit(te, snu, r, hs);
+    const F lam_cap = (-s_cap * h - x.z) / nz;
+    const F bh = x.x * n.x + x.y * n.y, ch = x.x * x.x + x.y * x.y - rc * rc;
+    const F disc = bh * bh - nxy2 * ch;
+    // side: where the line enters the infinite cylinder, if that is within the side's
+    // height (up to rounding); else where it then enters the slab through the cap it is
+    // heading for; a line that misses (beyond rounding): no point
+    const F root = sqrt(max(disc, zero));
+    const F side_in = (-bh - root) * ia, side_out = (root - bh) * ia;
+    const F ze = mul_add(side_in, n.z, x.z);
+    const F zlim = h + F(1e-6f) * (h + abs(x.z));
+    const Mask above = ze > zlim, below = ze < -zlim;
+    const F lz = (select(above, h, -h) - x.z) / select(abs(n.z) > tiny, n.z, one);
+    const Mask via_cap = ((above & (n.z < zero)) | (below & (n.z > zero))) & (lz <= side_out);
+    const Mask met = disc >= F(-1e-5f) * nxy2 * rc * rc;
+    const F big(3.0e38f);
+    const F lam_side = select(met, select(above | below, select(via_cap, lz, big), side_in), big);
+    const F lam = select(cap_like, lam_cap, lam_side);
     d = l - lam;
     p = madd(x, half * (l + lam), n);
   };
@@ -318,10 +394,8 @@ IMPACT_INLINE void capsule_cylinder_block(const LeafSoA& a, const LeafSoA& b, co
   F d0, d1;
   end_point(t0, p0, d0);
   end_point(t1, p1, d1);
-  const Mask cap_two = is_cap & cl_ok & (cl_hi - cl_lo > F(1e-4f) * (hs + rc)) &
-                       ((abs(u.z) < F(kParallelSin)) | (o > zero));
-  const Mask side_two = is_side & sd_ok & (sd_hi - sd_lo > F(1e-4f) * (hs + h)) &
-                        (uxy2 < F(kParallelSin * kParallelSin));
+  const Mask cap_two = cap_like & cl_ok & (cl_hi - cl_lo > F(1e-4f) * (hs + rc));
+  const Mask side_two = side_like & sd_ok & (sd_hi - sd_lo > F(1e-4f) * (hs + h));
   const Mask hit = depth > zero;
   const Mask two = (cap_two | side_two) & (d0 > zero) & (d1 > zero) & hit;
 
@@ -331,8 +405,8 @@ IMPACT_INLINE void capsule_cylinder_block(const LeafSoA& a, const LeafSoA& b, co
   m.depth = depth;
   m.point[0] = cb + rot.apply(select(two, p0, pf));
   m.pdepth[0] = select(two, min(d0, depth), depth);
-  m.point[1] = cb + rot.apply(p1);
-  m.pdepth[1] = min(d1, depth);
+  m.point[1] = cb + rot.apply(select(two, p1, pf));  // (slot 1 of a 1-point lane: finite filler)
+  m.pdepth[1] = select(two, min(d1, depth), depth);
   store(out, k, m, pa);
 }
 
