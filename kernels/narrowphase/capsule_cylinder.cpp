@@ -46,8 +46,10 @@
 // interior's the great circle n.u = 0; the cylinder's are the cap normals, the
 // horizontal circle and the quarter arcs between them at the rims), so the least o is
 // exact up to float rounding whatever the configuration, apart or meeting: no case split
-// on overlap. The local minimum of a half ellipse seen from the far side is kept even
-// when it is not on M's boundary (its o is then merely an upper bound).
+// on overlap. A rim or end candidate whose witness lies off its piece (the core point
+// beyond the core's ends; the end's normal cone, or the end - rim point offset, not
+// along n) is dropped: it is no minimiser, and near the minimum, where o is flat, it
+// could tie the true one within rounding with a direction 1e-4 rad off.
 // Ties keep the first candidate in the order caps, sides, rims, ends.
 // Contact points: the core point t of the winning candidate, moved along n by (r - o)/2
 // (midway between the capsule's surface and the cylinder's, which lies at -o along n
@@ -63,7 +65,7 @@
 // axis takes its rim direction along the core's own horizontal direction. Coincident
 // centres give a finite unit normal (the ties above decide it).
 // Cost: 11 candidate directions, each o(n) in closed form, and two 2D root solves of
-// kArcIterations steps (4 divisions, 2 square roots each); no branch on lane data
+// kArcIterations steps (3 divisions, 2 square roots each); no branch on lane data
 // (selects) except a block whose lanes are all farther apart than their bounding
 // spheres. impact_narrowbench BM_Kernel/capsule-cylinder/simd/4096: see
 // docs/narrowphase.md (measured ns per pair there, against GJK/EPA and FCL).
@@ -161,7 +163,7 @@ IMPACT_INLINE void half_ellipse_normal(F b, F X, F Y, F& nx, F& ny) {
     const F q1 = A * r1, q2 = B * r2;
     const F q1s = q1 * q1, q2s = q2 * q2;
     const F f = q1s + q2s;  // |q|^2
-    // psi = 1/|q| - 1: psi' = D / |q|^3, Newton step (|q| - 1) |q|^2 / D.
+    // psi = 1/|q| - 1: psi' = dd / |q|^3, Newton step (|q| - 1) |q|^2 / dd.
     const F dd = sg * q1s * r1 + q2s * r2;
     const Mask rising = dd > zero;
     const F tn = c + (sqrt(f) - one) * f / select(rising, dd, one);

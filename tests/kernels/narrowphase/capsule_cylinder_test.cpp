@@ -30,8 +30,8 @@
 //  (e) the scalar and SIMD paths give the same bytes.
 // Scenarios: random poses at sizes 1, 1e-4, 1e4 and 1e5 from the origin (about half
 // overlapping); deep: cores through the cylinder's middle, along its axis, crossing a rim,
-// wholly inside, coincident centres; cores lying across the cap inside the cylinder
-// (the rims' far-side minima); near-parallel cores (0..1e-2 rad) beside the side and on
+// wholly inside, coincident centres (the tie rule of a core along the axis); cores lying
+// across the cap inside the cylinder (the rims' far-side minima); short cores off a rim; near-parallel cores (0..1e-2 rad) beside the side and on
 // the cap: two points at the analytic ends; exactly touching (count 0); zero-length cores
 // (sphere-cylinder's answers); needle and pancake proportions (1e-4); symmetries (the
 // flip that maps the cylinder onto itself, the core's axis reversed, a rotation of the
@@ -512,10 +512,21 @@ TEST(CapsuleCylinder, DeepCores) {
 }
 
 /// Coincident centres with the axes aligned or perpendicular: finite unit normals, the
-/// closed-form depths.
+/// closed-form depths; a core exactly along the axis ties every horizontal direction:
+/// the first candidate, R's x axis (as sphere-cylinder's centre on the axis).
 TEST(CapsuleCylinder, CoincidentCentresClosedForms) {
   std::mt19937 g(3);
   for (KernelPath path : {KernelPath::kSimd, KernelPath::kScalar}) {
+    {
+      Query q;
+      q.p = Vec3d(2, -1, 0.5);
+      q.R = Mat3d::Identity();
+      q.c = q.p, q.u = Vec3d(0, 0, 1), q.r = 0.25, q.hs = 0.5, q.rc = 0.5, q.h = 2.0;
+      const auto h = run({q}, path)[0];
+      ASSERT_GE(h.count, 1u);
+      EXPECT_NEAR(h.depth, 0.75, 1e-6);
+      EXPECT_EQ(h.n, Vec3d(1, 0, 0));
+    }
     // along the axis, rc < h: out by the side, depth r + rc
     Query q = posed(g, Vec3d::Zero(), Vec3d(0, 0, 1), 0.25, 0.5, 0.5, 2.0);
     q.c = q.p;
@@ -546,6 +557,35 @@ TEST(CapsuleCylinder, CoincidentCentresClosedForms) {
     EXPECT_NEAR(h.n.dot(q.u), 0.0, 1e-6);
     EXPECT_NEAR(h.n.dot(q.R.col(2)), 0.0, 1e-6);
   }
+}
+
+/// Short cores (1e-6 .. 1e-3 of the size) off a rim: the end and interior candidates'
+/// directions differ by up to hs / distance while their o tie within rounding (only
+/// candidates whose witness lies on their piece may win).
+TEST(CapsuleCylinder, ShortCoresAtARim) {
+  std::mt19937 g(71);
+  std::uniform_real_distribution<double> uni(-1, 1);
+  std::vector<Query> qs;
+  const double lengths[] = {1e-6, 1e-5, 1e-4, 1e-3};
+  for (int i = 0; i < static_cast<int>(test::scaled(60)); ++i)
+    for (double hs : lengths) {
+      const double rc = 0.3 + 0.7 * std::fabs(uni(g)), h = 0.3 + 0.7 * std::fabs(uni(g));
+      const double a = M_PI * uni(g), side = uni(g) > 0 ? 1.0 : -1.0;
+      const Vec3d rim(rc * std::cos(a), rc * std::sin(a), side * h);
+      // off the rim diagonally (outside), 0.02 .. 0.3 away
+      const Vec3d out = (Vec3d(std::cos(a), std::sin(a), 0) * (0.2 + std::fabs(uni(g))) + Vec3d(0, 0, side)).normalized();
+      const double dist = 0.02 + 0.28 * std::fabs(uni(g));
+      qs.push_back(posed(g, rim + dist * out, random_unit(g), dist * (0.5 + std::fabs(uni(g))), hs, rc, h));
+      // the core perpendicular to the offset, its nearest point to the rim just beyond an
+      // end: the interior (rim) candidate's direction ties the end's within rounding
+      const Vec3d u = out.cross(random_unit(g)).normalized();
+      const double beyond = hs + dist * std::pow(10.0, -5 + 2 * std::fabs(uni(g)));
+      qs.push_back(posed(g, rim + dist * out + (uni(g) > 0 ? beyond : -beyond) * u, u,
+                         dist * (0.5 + std::fabs(uni(g))), hs, rc, h));
+    }
+  Stats st;
+  check_all(qs, "short cores at a rim", &st);
+  EXPECT_GT(st.hits, static_cast<int>(qs.size()) / 4);
 }
 
 /// Long, nearly level cores crossing the cylinder just below a cap: the minimum lies on
