@@ -31,12 +31,11 @@
 // Scenarios: random poses at sizes 1, 1e-4, 1e4 and 1e5 from the origin (about half
 // overlapping); deep: cores through the cylinder's middle, along its axis, crossing a rim,
 // wholly inside, coincident centres (the tie rule of a core along the axis); cores lying
-// across the cap inside the cylinder (the rims' far-side minima); short cores off a rim; near-parallel cores (0..1e-2 rad) beside the side and on
-// the cap: two points at the analytic ends; exactly touching (count 0); zero-length cores
-// (sphere-cylinder's answers); needle and pancake proportions (1e-4); symmetries (the
-// flip that maps the cylinder onto itself, the core's axis reversed, a rotation of the
-// whole pair); range partitions (same bytes, nothing written outside the range);
-// agreement with GJK / EPA.
+// across the cap inside the cylinder (the rims' far-side minima); short cores off a rim; near-parallel cores
+// (0..1e-2 rad) beside the side and on the cap: two points at the analytic ends; exactly touching (count 0);
+// zero-length cores (sphere-cylinder's answers); needle and pancake proportions (1e-4); symmetries (the flip
+// that maps the cylinder onto itself, the core's axis reversed, a rotation of the whole pair); range
+// partitions (same bytes, nothing written outside the range); agreement with GJK / EPA.
 #include <gtest/gtest.h>
 
 #include <Eigen/Core>
@@ -64,13 +63,15 @@ using Mat3d = Eigen::Matrix3d;
 constexpr double kRel = 1e-5;       // depth tolerance, of L
 constexpr double kAngleTol = 1e-4;  // rad, where the normal is unique
 
-double angle(const Vec3d& a, const Vec3d& b) { return std::atan2(a.cross(b).norm(), a.dot(b)); }
+double angle(const Vec3d& a, const Vec3d& b) {
+  return std::atan2(a.cross(b).norm(), a.dot(b));
+}
 
 struct Query {
-  Vec3d c, u;   // capsule centre and axis
+  Vec3d c, u;    // capsule centre and axis
   double r, hs;  // radius, half length of the core
-  Vec3d p;      // cylinder centre
-  Mat3d R;      // cylinder rotation (column 2 = axis)
+  Vec3d p;       // cylinder centre
+  Mat3d R;       // cylinder rotation (column 2 = axis)
   double rc, h;  // radius, half length
 };
 
@@ -87,7 +88,9 @@ Query rounded(Query q) {
   return q;
 }
 
-double size_of(const Query& q) { return std::max(q.r + q.hs, std::hypot(q.rc, q.h)); }
+double size_of(const Query& q) {
+  return std::max(q.r + q.hs, std::hypot(q.rc, q.h));
+}
 
 double coord_ulp(const Query& q) {
   const double m = std::max(q.c.cwiseAbs().maxCoeff(), q.p.cwiseAbs().maxCoeff()) + size_of(q);
@@ -113,13 +116,15 @@ struct Lanes {
       ae[0].push_back(float(q.r)), ae[1].push_back(float(q.hs)), ae[2].push_back(0.0f);
       be[0].push_back(float(q.rc)), be[1].push_back(float(q.h)), be[2].push_back(0.0f);
     }
-    for (int i = 0; i < 3; ++i) a.p[i] = ap[i].data(), a.e[i] = ae[i].data(), b.p[i] = bp[i].data(), b.e[i] = be[i].data();
+    for (int i = 0; i < 3; ++i)
+      a.p[i] = ap[i].data(), a.e[i] = ae[i].data(), b.p[i] = bp[i].data(), b.e[i] = be[i].data();
     for (int i = 0; i < 9; ++i) a.r[i] = ar[i].data(), b.r[i] = br[i].data();
   }
 };
 
 std::vector<test::PairResult> run(const std::vector<Query>& qs, KernelPath path, PairKernel kern = nullptr,
-                                  uint32_t begin = 0, uint32_t end = ~0u, test::ManifoldLanes* keep = nullptr) {
+                                  uint32_t begin = 0, uint32_t end = ~0u,
+                                  test::ManifoldLanes* keep = nullptr) {
   if (kern == nullptr) kern = pair_kernel(kLeafCapsule, kLeafCylinder);
   const uint32_t n = static_cast<uint32_t>(qs.size());
   end = std::min(end, n);
@@ -134,7 +139,8 @@ std::vector<test::PairResult> run(const std::vector<Query>& qs, KernelPath path,
   return out;
 }
 
-void gjk_kernel(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out, Range r, const NarrowConfig& cfg) {
+void gjk_kernel(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out, Range r,
+                const NarrowConfig& cfg) {
   collide_gjk_epa(a, b, out, r, cfg, kLeafCapsule, kLeafCylinder);
 }
 
@@ -200,8 +206,12 @@ test::nref::Shape cylinder_shape(const Query& q) {
   s.e[1] = q.h;
   return s;
 }
-test::nref::V3 v3(const Vec3d& v) { return {v.x(), v.y(), v.z()}; }
-Vec3d ev(const test::nref::V3& v) { return {v.x, v.y, v.z}; }
+test::nref::V3 v3(const Vec3d& v) {
+  return {v.x(), v.y(), v.z()};
+}
+Vec3d ev(const test::nref::V3& v) {
+  return {v.x, v.y, v.z};
+}
 
 /// The support overlap of A and B along n (the reference's o(n), plus the capsule radius).
 double overlap_along(const Query& q, const Vec3d& n) {
@@ -209,7 +219,7 @@ double overlap_along(const Query& q, const Vec3d& n) {
 }
 
 struct Ref {
-  double depth = 0;     // > 0: penetration depth; else minus the gap
+  double depth = 0;  // > 0: penetration depth; else minus the gap
   Vec3d n = Vec3d::UnitZ();
   bool core_outside = false;
   bool unique = false;  // the normal is unique at this tolerance
@@ -226,7 +236,9 @@ bool unique_minimum(const Query& q, const Vec3d& n_ref, double depth, double sec
   const double cone = 0.02;
   for (int i = 0; i < 720; ++i) {
     const double a = 2 * M_PI * i / 720;
-    best = std::min(best, overlap_along(q, (n_ref + std::tan(cone) * (std::cos(a) * t1 + std::sin(a) * t2)).normalized()));
+    best = std::min(
+        best,
+        overlap_along(q, (n_ref + std::tan(cone) * (std::cos(a) * t1 + std::sin(a) * t2)).normalized()));
   }
   const Vec3d axes[2] = {q.R.col(2), q.u.normalized()};
   for (const Vec3d& ax : axes) {
@@ -339,10 +351,11 @@ void check_all(const std::vector<Query>& qs, const char* what, Stats* out_stats 
     }
   }
   if (out_stats != nullptr) *out_stats = st;
-  std::printf("  %-28s lanes %4d hits %4d core-inside %4d two-point %3d normals %4d | worst |depth-ref| %.2g L, "
-              "angle %.2g rad\n",
-              what, st.lanes, st.hits, st.core_inside, st.two_points, st.normals_checked, st.worst_depth,
-              st.worst_angle);
+  std::printf(
+      "  %-28s lanes %4d hits %4d core-inside %4d two-point %3d normals %4d | worst |depth-ref| %.2g L, "
+      "angle %.2g rad\n",
+      what, st.lanes, st.hits, st.core_inside, st.two_points, st.normals_checked, st.worst_depth,
+      st.worst_angle);
 }
 
 // --- inputs -----------------------------------------------------------------------------------
@@ -418,12 +431,12 @@ TEST(CapsuleCylinder, ReferenceMatchesClosedForms) {
     Vec3d n;
   };
   const Case cases[] = {
-      {Vec3d(1.4, 0, 0.3), Vec3d(0, 0, 1), 0.1, Vec3d(-1, 0, 0)},          // beside the side, parallel
-      {Vec3d(0.2, 0, 2.45), Vec3d(1, 0, 0), 0.05, Vec3d(0, 0, -1)},        // lying on the cap
+      {Vec3d(1.4, 0, 0.3), Vec3d(0, 0, 1), 0.1, Vec3d(-1, 0, 0)},    // beside the side, parallel
+      {Vec3d(0.2, 0, 2.45), Vec3d(1, 0, 0), 0.05, Vec3d(0, 0, -1)},  // lying on the cap
       {Vec3d(2, 0, 2.4), Vec3d(1, 0, 0), 0.5 - std::hypot(0.4, 0.0), Vec3d(0, 0, -1)},  // end over the rim
-      {Vec3d(0, 0, 0), Vec3d(1, 0, 0), 0.5 + 1.0, Vec3d(0, 1, 0)},         // through the middle, level
-      {Vec3d(0, 0, 0.25), Vec3d(0, 0, 1), 0.5 + 1.0, Vec3d(1, 0, 0)},      // along the axis: out by the side
-      {Vec3d(0.7, 0, 0), Vec3d(0, 0, 1), 0.5 + 0.3, Vec3d(-1, 0, 0)},      // parallel, inside, near the side
+      {Vec3d(0, 0, 0), Vec3d(1, 0, 0), 0.5 + 1.0, Vec3d(0, 1, 0)},     // through the middle, level
+      {Vec3d(0, 0, 0.25), Vec3d(0, 0, 1), 0.5 + 1.0, Vec3d(1, 0, 0)},  // along the axis: out by the side
+      {Vec3d(0.7, 0, 0), Vec3d(0, 0, 1), 0.5 + 0.3, Vec3d(-1, 0, 0)},  // parallel, inside, near the side
   };
   for (const Case& cs : cases) {
     Query w = q;
@@ -488,11 +501,12 @@ TEST(CapsuleCylinder, DeepCores) {
     // through the middle, any direction
     qs.push_back(posed(g, 0.05 * Vec3d(uni(g), uni(g), uni(g)), random_unit(g), r, hs, rc, h));
     // level through the middle (the side or a cap, by rc vs h)
-    qs.push_back(posed(g, Vec3d(0.1 * uni(g), 0.1 * uni(g), 0.5 * h * uni(g)), Vec3d(uni(g), uni(g), 0).normalized(),
-                       r, hs, rc, h));
+    qs.push_back(posed(g, Vec3d(0.1 * uni(g), 0.1 * uni(g), 0.5 * h * uni(g)),
+                       Vec3d(uni(g), uni(g), 0).normalized(), r, hs, rc, h));
     // along the axis
     qs.push_back(posed(g, Vec3d(0, 0, h * uni(g)), Vec3d(0, 0, 1), r, hs, rc, h));
-    qs.push_back(posed(g, Vec3d(0.3 * rc * uni(g), 0.3 * rc * uni(g), h * uni(g)), Vec3d(0, 0, -1), r, hs, rc, h));
+    qs.push_back(
+        posed(g, Vec3d(0.3 * rc * uni(g), 0.3 * rc * uni(g), h * uni(g)), Vec3d(0, 0, -1), r, hs, rc, h));
     // crossing a rim
     const double a = M_PI * uni(g);
     const Vec3d rim(rc * std::cos(a), rc * std::sin(a), h * (uni(g) > 0 ? 1 : -1));
@@ -573,7 +587,8 @@ TEST(CapsuleCylinder, ShortCoresAtARim) {
       const double a = M_PI * uni(g), side = uni(g) > 0 ? 1.0 : -1.0;
       const Vec3d rim(rc * std::cos(a), rc * std::sin(a), side * h);
       // off the rim diagonally (outside), 0.02 .. 0.3 away
-      const Vec3d out = (Vec3d(std::cos(a), std::sin(a), 0) * (0.2 + std::fabs(uni(g))) + Vec3d(0, 0, side)).normalized();
+      const Vec3d out =
+          (Vec3d(std::cos(a), std::sin(a), 0) * (0.2 + std::fabs(uni(g))) + Vec3d(0, 0, side)).normalized();
       const double dist = 0.02 + 0.28 * std::fabs(uni(g));
       qs.push_back(posed(g, rim + dist * out, random_unit(g), dist * (0.5 + std::fabs(uni(g))), hs, rc, h));
       // the core perpendicular to the offset, its nearest point to the rim just beyond an
@@ -646,7 +661,8 @@ TEST(CapsuleCylinder, NearParallelTwoPoints) {
     ASSERT_EQ(h.count, 2u);
     EXPECT_NEAR(h.depth, 0.125, 1e-6);
     EXPECT_LT(angle(h.n, Vec3d(-1, 0, 0)), 1e-6);
-    const double z0 = std::min(h.pt[0].z(), h.pt[1].z()) - q.p.z(), z1 = std::max(h.pt[0].z(), h.pt[1].z()) - q.p.z();
+    const double z0 = std::min(h.pt[0].z(), h.pt[1].z()) - q.p.z(),
+                 z1 = std::max(h.pt[0].z(), h.pt[1].z()) - q.p.z();
     EXPECT_NEAR(z0, 0.25, 1e-6);
     EXPECT_NEAR(z1, 1.0, 1e-6);
     for (int i = 0; i < 2; ++i) {
@@ -660,7 +676,8 @@ TEST(CapsuleCylinder, NearParallelTwoPoints) {
     ASSERT_EQ(h.count, 2u);
     EXPECT_NEAR(h.depth, 0.0625, 1e-6);
     EXPECT_LT(angle(h.n, Vec3d(0, 0, -1)), 1e-6);
-    const double x0 = std::min(h.pt[0].x(), h.pt[1].x()) - q.p.x(), x1 = std::max(h.pt[0].x(), h.pt[1].x()) - q.p.x();
+    const double x0 = std::min(h.pt[0].x(), h.pt[1].x()) - q.p.x(),
+                 x1 = std::max(h.pt[0].x(), h.pt[1].x()) - q.p.x();
     EXPECT_NEAR(x0, 0.0, 1e-6);
     EXPECT_NEAR(x1, 0.5, 1e-6);
     for (int i = 0; i < 2; ++i) EXPECT_NEAR(h.pt[i].z() - q.p.z(), 1.0 - 0.03125, 1e-6);
@@ -733,10 +750,18 @@ TEST(CapsuleCylinder, NeedlesAndPancakes) {
   for (int i = 0; i < n; ++i) {
     Query q = random_query(g, 1.0, 0.0, 0.6);
     switch (i % 4) {
-      case 0: q.rc = 1e-4 * q.h; break;             // needle cylinder
-      case 1: q.h = 1e-4 * q.rc; break;             // pancake (a disk)
-      case 2: q.r = 1e-4 * std::max(q.hs, 0.1); break;  // needle capsule
-      default: q.rc = 1e-4 * q.h, q.r = 1e-4 * std::max(q.hs, 0.1); break;
+      case 0:
+        q.rc = 1e-4 * q.h;
+        break;  // needle cylinder
+      case 1:
+        q.h = 1e-4 * q.rc;
+        break;  // pancake (a disk)
+      case 2:
+        q.r = 1e-4 * std::max(q.hs, 0.1);
+        break;  // needle capsule
+      default:
+        q.rc = 1e-4 * q.h, q.r = 1e-4 * std::max(q.hs, 0.1);
+        break;
     }
     const double reach = q.r + q.hs + std::hypot(q.rc, q.h);
     q.c = q.p + 0.3 * reach * random_unit(g);
@@ -784,7 +809,8 @@ TEST(CapsuleCylinder, Symmetries) {
     ASSERT_EQ(a[k].count > 0, d[k].count > 0) << k;
     if (a[k].count == 0) continue;
     ++compared;
-    const Mat3d flip = base[k].R * Eigen::AngleAxisd(M_PI, Vec3d::UnitX()).toRotationMatrix() * base[k].R.transpose();
+    const Mat3d flip =
+        base[k].R * Eigen::AngleAxisd(M_PI, Vec3d::UnitX()).toRotationMatrix() * base[k].R.transpose();
     const Mat3d turn = turned[k].R * base[k].R.transpose();
     EXPECT_NEAR(a[k].depth, b[k].depth, 2 * tol) << k;
     EXPECT_NEAR(a[k].depth, c[k].depth, tol) << k;
