@@ -11,7 +11,9 @@
 // separating axis test with Gauss-map pruned edge axes); sphere-ellipsoid,
 // capsule-ellipsoid and ellipsoid-triangle exact lane kernels (sphere_ellipsoid.cpp,
 // capsule_ellipsoid.cpp, ellipsoid_triangle.cpp: candidate normals from the point
-// solvers of ellipsoid_solve.h, SIMD across pairs). Everything else goes through the
+// solvers of ellipsoid_solve.h, SIMD across pairs); capsule-cylinder a lane kernel
+// (capsule_cylinder.cpp: candidate normals of the core-cylinder Minkowski difference's
+// pieces). Everything else goes through the
 // general convex path (kernels/narrowphase/gjk_epa.cpp): GJK + EPA on the leaves'
 // support functions, with face clipping for polytope manifolds, and a support-function
 // kernel against half-spaces.
@@ -63,6 +65,10 @@ void collide_capsule_ellipsoid(const LeafSoA&, const LeafSoA&, const ManifoldSoA
 /// normals, each vertex's nearest and far local minimum on the ellipsoid, each edge's on
 /// the ellipsoid's shadow across it; ellipsoid_triangle.cpp), SIMD across pairs.
 void collide_ellipsoid_triangle(const LeafSoA&, const LeafSoA&, const ManifoldSoA&, Range, const NarrowConfig&);
+/// Capsule against cylinder: the least support overlap of the core and the cylinder over
+/// the candidate normals of their Minkowski difference's boundary pieces (caps, side,
+/// rims by a fixed-count 2D root solve, end-rim edges), 1-2 points, SIMD across pairs.
+void collide_capsule_cylinder(const LeafSoA&, const LeafSoA&, const ManifoldSoA&, Range, const NarrowConfig&);
 
 // --- general convex -----------------------------------------------------------------------
 /// GJK + EPA for any two convex leaf types ta <= tb (neither a half-space), one pair

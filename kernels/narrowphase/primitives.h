@@ -3,7 +3,8 @@
 // walks a Range kSimdWidth pairs at a time, LeafSoA loads, the manifold store, and the
 // geometric queries the kernels share (closest point on a segment, closest points of
 // two segments robust for parallel ones, closest point on a triangle, a deterministic
-// perpendicular for degenerate normals), and the reduction of a candidate set of contact
+// perpendicular for degenerate normals, a capsule's surface along a direction from a
+// core point), and the reduction of a candidate set of contact
 // points to at most 4 (reduce4).
 //
 // Every helper is a template over the lane type F (simd::FloatW or simd::Float1), so
@@ -230,6 +231,22 @@ IMPACT_INLINE V3<F> normalize_or(const V3<F>& v, const V3<F>& fallback, F& len) 
 template <class F>
 IMPACT_INLINE F closest_on_segment(const V3<F>& c, const V3<F>& u, F h, const V3<F>& q) {
   return clamp(dot(q - c, u), -h, h);
+}
+
+/// Distance lambda from the core point at axial parameter t (|t| <= h) along unit
+/// direction n (s = n.axis) to the capsule's surface: through the cylinder, or through
+/// an end cap where the cylinder exit would lie beyond the segment (capsule-capsule, -box,
+/// -triangle, -half-space, -cylinder manifolds).
+template <class F>
+IMPACT_INLINE F capsule_exit(F t, F s, F r, F h) {
+  const F c2 = max(F(1.0f) - s * s, F(1e-12f));  // sin^2 of the angle to the axis
+  const F lc = r / sqrt(c2);
+  const F ax = mul_add(lc, s, t);
+  const auto over = ax > h, under = ax < -h;
+  const F delta = select(over, t - h, t + h);  // from the cap's centre
+  const F disc = max(r * r - delta * delta * c2, F(0.0f));
+  const F lcap = sqrt(disc) - delta * s;
+  return select(over | under, lcap, lc);
 }
 
 /// Closest points of segments A: pa + s*ua, s in [-ha, ha] and B: pb + t*ub, t in

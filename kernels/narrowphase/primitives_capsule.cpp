@@ -65,21 +65,6 @@ inline constexpr float kParallelSin = 0.05f;
 template <class F>
 using L2 = Lanes<F, 2>;
 
-/// Distance lambda from the core point at axial parameter t (|t| <= h) along unit
-/// direction n (s = n.axis) to the capsule's surface: through the cylinder, or through
-/// an end cap where the cylinder exit would lie beyond the segment.
-template <class F>
-IMPACT_INLINE F capsule_exit(F t, F s, F r, F h) {
-  const F c2 = max(F(1.0f) - s * s, F(1e-12f));  // sin^2 of the angle to the axis
-  const F lc = r / sqrt(c2);
-  const F ax = mul_add(lc, s, t);
-  const auto over = ax > h, under = ax < -h;
-  const F delta = select(over, t - h, t + h);  // from the cap's centre
-  const F disc = max(r * r - delta * delta * c2, F(0.0f));
-  const F lcap = sqrt(disc) - delta * s;
-  return select(over | under, lcap, lc);
-}
-
 /// Where the line o + n * lambda (unit n, travelling along +n) enters the capsule with
 /// core cb + ub * t (|t| <= hb, unit ub) and radius rb: the smallest lambda on its
 /// surface (cylinder or cap); `met` is false in lanes where the line misses it.

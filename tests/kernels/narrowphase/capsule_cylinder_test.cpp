@@ -1,0 +1,879 @@
+// collide_capsule_cylinder (kernels/narrowphase/capsule_cylinder.cpp) on both paths
+// against independent double-precision references, and against the general GJK / EPA
+// path (collide_gjk_epa) on the same lanes.
+//
+// References (double, the inputs rounded to float as the kernel sees them):
+//  - the signed distance of a point to the solid cylinder in closed form (its frame:
+//    radial and axial excess; inside, minus the nearer of side and caps);
+//  - the core's least signed distance m = min_t sd(c + t u), by golden-section search
+//    (the signed distance to a convex set is convex along a line); no feature logic;
+//  - m > 0 (core outside): depth_ref = r - m, normal from the core point at the minimum
+//    to its closest cylinder point (unique: the offset of two disjoint convex sets'
+//    closest points is);
+//  - m <= 0 (core meets the cylinder): depth_ref = the least support overlap
+//    h_A(n) + h_B(-n) over unit n by dense sampling and Nelder-Mead
+//    (tests/support/narrow_reference.h, no candidate enumeration);
+//  - the translation check, with the golden-section distance alone: B moved by
+//    n (depth + d) is apart by at least d - tol, and moved by n (depth - d) still meets A.
+// The references are checked against closed forms first (ReferenceMatchesClosedForms).
+// Per lane, L = the larger bounding radius (r + hs, sqrt(rc^2 + h^2)), tol = kRel L:
+//  (a) count > 0 iff depth_ref > 0 (either answer where |depth_ref| <= tol), count <= 2;
+//  (b) |depth - depth_ref| <= tol;
+//  (c) n finite and unit; as good a direction as the reference's (the support overlap
+//      along n within tol of depth_ref); angle(n, n_ref) <= kAngleTol where the minimum
+//      is unique (core outside by more than 1e-3 L; core inside: no direction outside a
+//      0.02 rad cone around n_ref within 2 tol of depth_ref, by nref's own probes and by
+//      a dense ring on the cone and the two circles where whole circles of minima occur:
+//      the cylinder's horizontal one and the one perpendicular to the core);
+//  (d) each point p with depth d: p + n d/2 on the capsule's surface, p - n d/2 on the
+//      cylinder's (within tol plus an ulp of the largest coordinate), 0 < d <= depth;
+//  (e) the scalar and SIMD paths give the same bytes.
+// Scenarios: random poses at sizes 1, 1e-4, 1e4 and 1e5 from the origin (about half
+// overlapping); deep: cores through the cylinder's middle, along its axis, crossing a rim,
+// wholly inside, coincident centres (the tie rule of a core along the axis); cores lying
+// across the cap inside the cylinder (the rims' far-side minima); short cores off a rim; near-parallel cores
+// (0..1e-2 rad) beside the side and on the cap: two points at the analytic ends; exactly touching (count 0);
+// zero-length cores (sphere-cylinder's answers); needle and pancake proportions (1e-4); symmetries (the flip
+// that maps the cylinder onto itself, the core's axis reversed, a rotation of the whole pair); range
+// partitions (same bytes, nothing written outside the range); agreement with GJK / EPA.
+#include <gtest/gtest.h>
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <cstring>
+#include <random>
+#include <vector>
+
+#include "kernels/narrowphase/pair_kernels.h"
+#include "support/leaf_lanes.h"
+#include "support/narrow_reference.h"
+#include "support/random_input.h"
+#include "support/test_support.h"
+
+namespace impact::kernels {
+namespace {
+
+using Vec3d = Eigen::Vector3d;
+using Mat3d = Eigen::Matrix3d;
+
+constexpr double kRel = 1e-5;       // depth tolerance, of L
+constexpr double kAngleTol = 1e-4;  // rad, where the normal is unique
+
+double angle(const Vec3d& a, const Vec3d& b) {
+  return std::atan2(a.cross(b).norm(), a.dot(b));
+}
+
+struct Query {
+  Vec3d c, u;    // capsule centre and axis
+  double r, hs;  // radius, half length of the core
+  Vec3d p;       // cylinder centre
+  Mat3d R;       // cylinder rotation (column 2 = axis)
+  double rc, h;  // radius, half length
+};
+
+/// The query as the kernel sees it: every input rounded to float.
+Query rounded(Query q) {
+  q.c = test::round_to_float(q.c);
+  q.u = test::round_to_float(q.u);
+  q.r = test::round_to_float(q.r);
+  q.hs = test::round_to_float(q.hs);
+  q.p = test::round_to_float(q.p);
+  q.R = test::round_to_float(q.R);
+  q.rc = test::round_to_float(q.rc);
+  q.h = test::round_to_float(q.h);
+  return q;
+}
+
+double size_of(const Query& q) {
+  return std::max(q.r + q.hs, std::hypot(q.rc, q.h));
+}
+
+double coord_ulp(const Query& q) {
+  const double m = std::max(q.c.cwiseAbs().maxCoeff(), q.p.cwiseAbs().maxCoeff()) + size_of(q);
+  return m * std::ldexp(1.0, -23);
+}
+
+// --- running the kernel -----------------------------------------------------------------------
+
+struct Lanes {
+  std::vector<float> ap[3], ar[9], ae[3], bp[3], br[9], be[3];
+  LeafSoA a{}, b{};
+  explicit Lanes(const std::vector<Query>& qs) {
+    for (const Query& q : qs) {
+      for (int i = 0; i < 3; ++i) {
+        ap[i].push_back(float(q.c[i]));
+        bp[i].push_back(float(q.p[i]));
+      }
+      for (int i = 0; i < 9; ++i) {
+        // the capsule's R: only column 2 (the axis) is read
+        ar[i].push_back(i % 3 == 2 ? float(q.u[i / 3]) : 0.0f);
+        br[i].push_back(float(q.R(i / 3, i % 3)));
+      }
+      ae[0].push_back(float(q.r)), ae[1].push_back(float(q.hs)), ae[2].push_back(0.0f);
+      be[0].push_back(float(q.rc)), be[1].push_back(float(q.h)), be[2].push_back(0.0f);
+    }
+    for (int i = 0; i < 3; ++i)
+      a.p[i] = ap[i].data(), a.e[i] = ae[i].data(), b.p[i] = bp[i].data(), b.e[i] = be[i].data();
+    for (int i = 0; i < 9; ++i) a.r[i] = ar[i].data(), b.r[i] = br[i].data();
+  }
+};
+
+std::vector<test::PairResult> run(const std::vector<Query>& qs, KernelPath path, PairKernel kern = nullptr,
+                                  uint32_t begin = 0, uint32_t end = ~0u,
+                                  test::ManifoldLanes* keep = nullptr) {
+  if (kern == nullptr) kern = pair_kernel(kLeafCapsule, kLeafCylinder);
+  const uint32_t n = static_cast<uint32_t>(qs.size());
+  end = std::min(end, n);
+  Lanes l(qs);
+  test::ManifoldLanes o(n);
+  NarrowConfig cfg;
+  cfg.path = path;
+  kern(l.a, l.b, o.view(), Range{begin, end}, cfg);
+  std::vector<test::PairResult> out(n);
+  for (uint32_t k = begin; k < end; ++k) out[k] = o.result(k);
+  if (keep != nullptr) *keep = o;
+  return out;
+}
+
+void gjk_kernel(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out, Range r,
+                const NarrowConfig& cfg) {
+  collide_gjk_epa(a, b, out, r, cfg, kLeafCapsule, kLeafCylinder);
+}
+
+// --- references -------------------------------------------------------------------------------
+
+/// Signed distance of x to the solid cylinder of q (< 0 inside), shifted by `shift`.
+double cyl_sd(const Query& q, const Vec3d& x, const Vec3d& shift = Vec3d::Zero()) {
+  const Vec3d l = q.R.transpose() * (x - q.p - shift);
+  const double dr = std::hypot(l.x(), l.y()) - q.rc, dz = std::fabs(l.z()) - q.h;
+  if (dr <= 0 && dz <= 0) return std::max(dr, dz);
+  return std::hypot(std::max(dr, 0.0), std::max(dz, 0.0));
+}
+
+/// The closest point of the solid cylinder to an outside point x.
+Vec3d cyl_closest(const Query& q, const Vec3d& x) {
+  const Vec3d l = q.R.transpose() * (x - q.p);
+  const double rho = std::hypot(l.x(), l.y());
+  const double s = rho > q.rc ? q.rc / rho : 1.0;
+  return q.p + q.R * Vec3d(l.x() * s, l.y() * s, std::clamp(l.z(), -q.h, q.h));
+}
+
+/// Signed distance of x to the capsule (< 0 inside).
+double cap_sd(const Query& q, const Vec3d& x) {
+  const double t = std::clamp((x - q.c).dot(q.u) / q.u.squaredNorm(), -q.hs, q.hs);
+  return (x - q.c - t * q.u).norm() - q.r;
+}
+
+/// min over the core of cyl_sd (convex along the core): golden-section search.
+double core_min(const Query& q, const Vec3d& shift = Vec3d::Zero(), double* t_out = nullptr) {
+  auto f = [&](double t) { return cyl_sd(q, q.c + t * q.u, shift); };
+  double lo = -q.hs, hi = q.hs;
+  const double g = 0.5 * (3.0 - std::sqrt(5.0));
+  double x1 = lo + g * (hi - lo), x2 = hi - g * (hi - lo), f1 = f(x1), f2 = f(x2);
+  for (int it = 0; it < 200 && hi - lo > 1e-17 * (q.hs + 1e-300); ++it) {
+    if (f1 <= f2) {
+      hi = x2, x2 = x1, f2 = f1, x1 = lo + g * (hi - lo), f1 = f(x1);
+    } else {
+      lo = x1, x1 = x2, f1 = f2, x2 = hi - g * (hi - lo), f2 = f(x2);
+    }
+  }
+  double t = 0.5 * (lo + hi), best = f(t);
+  for (double e : {-q.hs, q.hs})
+    if (f(e) < best) best = f(e), t = e;
+  if (t_out != nullptr) *t_out = t;
+  return best;
+}
+
+test::nref::Shape capsule_shape(const Query& q) {
+  test::nref::Shape s;
+  s.type = kLeafCapsule;
+  s.p = {q.c.x(), q.c.y(), q.c.z()};
+  for (int i = 0; i < 9; ++i) s.r[i] = i % 3 == 2 ? q.u[i / 3] : 0.0;
+  s.e[0] = q.r;
+  s.e[1] = q.hs;
+  return s;
+}
+test::nref::Shape cylinder_shape(const Query& q) {
+  test::nref::Shape s;
+  s.type = kLeafCylinder;
+  s.p = {q.p.x(), q.p.y(), q.p.z()};
+  for (int i = 0; i < 9; ++i) s.r[i] = q.R(i / 3, i % 3);
+  s.e[0] = q.rc;
+  s.e[1] = q.h;
+  return s;
+}
+test::nref::V3 v3(const Vec3d& v) {
+  return {v.x(), v.y(), v.z()};
+}
+Vec3d ev(const test::nref::V3& v) {
+  return {v.x, v.y, v.z};
+}
+
+/// The support overlap of A and B along n (the reference's o(n), plus the capsule radius).
+double overlap_along(const Query& q, const Vec3d& n) {
+  return test::nref::overlap(capsule_shape(q), cylinder_shape(q), v3(n));
+}
+
+struct Ref {
+  double depth = 0;  // > 0: penetration depth; else minus the gap
+  Vec3d n = Vec3d::UnitZ();
+  bool core_outside = false;
+  bool unique = false;  // the normal is unique at this tolerance
+};
+
+/// Whether n_ref is the only minimiser of the support overlap within 0.02 rad: every
+/// direction outside that cone overlaps by more than depth + 2 tol. Beyond nref's own
+/// second best (samples, other basins, a ring), a dense ring at 0.02 rad and the two
+/// circles where o has kinks and where whole circles of minima occur (the cylinder's
+/// horizontal circle, the great circle perpendicular to the core), finely sampled.
+bool unique_minimum(const Query& q, const Vec3d& n_ref, double depth, double second, double tol) {
+  double best = second;
+  Vec3d t1 = n_ref.unitOrthogonal(), t2 = n_ref.cross(t1);
+  const double cone = 0.02;
+  for (int i = 0; i < 720; ++i) {
+    const double a = 2 * M_PI * i / 720;
+    best = std::min(
+        best,
+        overlap_along(q, (n_ref + std::tan(cone) * (std::cos(a) * t1 + std::sin(a) * t2)).normalized()));
+  }
+  const Vec3d axes[2] = {q.R.col(2), q.u.normalized()};
+  for (const Vec3d& ax : axes) {
+    const Vec3d e1 = ax.unitOrthogonal(), e2 = ax.cross(e1);
+    for (int i = 0; i < 6284; ++i) {
+      const double a = 1e-3 * i;
+      const Vec3d n = std::cos(a) * e1 + std::sin(a) * e2;
+      if (angle(n, n_ref) > cone) best = std::min(best, overlap_along(q, n));
+    }
+  }
+  return best > depth + 2 * tol;
+}
+
+Ref reference(const Query& q) {
+  Ref f;
+  double t;
+  const double m = core_min(q, Vec3d::Zero(), &t);
+  const double tol = kRel * size_of(q);
+  if (m > 0) {
+    f.core_outside = true;
+    f.depth = q.r - m;
+    const Vec3d x = q.c + t * q.u;
+    f.n = (cyl_closest(q, x) - x).normalized();
+    f.unique = m > 1e-3 * size_of(q);
+    return f;
+  }
+  const test::nref::PairResult s = test::nref::solve_pair(capsule_shape(q), cylinder_shape(q));
+  f.depth = s.s;
+  f.n = ev(s.n);
+  f.unique = s.unique(2 * tol) && unique_minimum(q, f.n, s.s, s.second, tol);
+  return f;
+}
+
+// --- the per-lane check -----------------------------------------------------------------------
+
+struct Stats {
+  int lanes = 0, hits = 0, core_inside = 0, two_points = 0, normals_checked = 0;
+  double worst_depth = 0, worst_angle = 0;
+};
+
+/// Checks (a)-(e) for every lane of qs (already rounded).
+void check_all(const std::vector<Query>& qs, const char* what, Stats* out_stats = nullptr) {
+  SCOPED_TRACE(what);
+  const auto simd = run(qs, KernelPath::kSimd), scal = run(qs, KernelPath::kScalar);
+  Stats st;
+  for (size_t k = 0; k < qs.size(); ++k) {
+    const Query& q = qs[k];
+    const Ref f = reference(q);
+    const double L = size_of(q), tol = kRel * L, ptol = tol + 4 * coord_ulp(q);
+    ++st.lanes;
+    for (const test::PairResult* hp : {&simd[k], &scal[k]}) {
+      const test::PairResult& h = *hp;
+      const bool is_simd = hp == &simd[k];
+      const char* path = is_simd ? " simd" : " scalar";
+      ASSERT_LE(h.count, 2u) << what << " lane " << k;
+      if (std::fabs(f.depth) <= tol) continue;
+      ASSERT_EQ(h.count > 0, f.depth > 0) << what << " lane " << k << " depth_ref " << f.depth << " got "
+                                          << (h.count > 0 ? h.depth : 0.0) << path;
+      if (f.depth <= 0) continue;
+      if (is_simd) {
+        ++st.hits;
+        st.core_inside += !f.core_outside;
+        st.two_points += h.count == 2;
+      }
+      const double dd = std::fabs(h.depth - f.depth);
+      st.worst_depth = std::max(st.worst_depth, dd / L);
+      EXPECT_LE(dd, tol) << what << " lane " << k << " depth " << h.depth << " ref " << f.depth
+                         << (f.core_outside ? " (core outside)" : " (core inside)") << path;
+      ASSERT_TRUE(h.n.allFinite()) << what << " lane " << k;
+      EXPECT_NEAR(h.n.norm(), 1.0, 1e-6) << what << " lane " << k;
+      // (c) as good a separating direction as the reference's, and the same where unique
+      EXPECT_LE(overlap_along(q, h.n), f.depth + tol) << what << " lane " << k << path;
+      if (f.unique) {
+        const double ang = angle(h.n, f.n);
+        if (is_simd) ++st.normals_checked, st.worst_angle = std::max(st.worst_angle, ang);
+        EXPECT_LE(ang, kAngleTol) << what << " lane " << k << " n " << h.n.transpose() << " ref "
+                                  << f.n.transpose() << path;
+      }
+      // (d) the points
+      for (uint32_t i = 0; i < h.count; ++i) {
+        ASSERT_TRUE(h.pt[i].allFinite()) << what << " lane " << k;
+        EXPECT_GT(h.pd[i], 0.0) << what << " lane " << k << " point " << i;
+        EXPECT_LE(h.pd[i], h.depth) << what << " lane " << k << " point " << i;
+        const Vec3d on_a = h.pt[i] + 0.5 * h.pd[i] * h.n, on_b = h.pt[i] - 0.5 * h.pd[i] * h.n;
+        EXPECT_LE(std::fabs(cap_sd(q, on_a)), ptol) << what << " lane " << k << " point " << i << path;
+        EXPECT_LE(std::fabs(cyl_sd(q, on_b)), ptol) << what << " lane " << k << " point " << i << path;
+      }
+      if (h.count == 1) {
+        EXPECT_EQ(h.pd[0], h.depth) << what << " lane " << k;
+      }
+    }
+    // (e) the paths give the same bytes (the same IEEE operations, no contraction)
+    {
+      const test::PairResult &x = simd[k], &y = scal[k];
+      bool same = x.count == y.count;
+      if (same && x.count > 0) {
+        same = x.depth == y.depth && x.n == y.n;
+        for (uint32_t i = 0; i < x.count; ++i) same = same && x.pt[i] == y.pt[i] && x.pd[i] == y.pd[i];
+      }
+      EXPECT_TRUE(same) << what << " lane " << k << ": the SIMD and scalar paths differ";
+    }
+    // the translation check, by the golden-section distance alone
+    const test::PairResult& h = simd[k];
+    if (h.count > 0 && h.depth > 20 * tol) {
+      const double d = 0.05 * h.depth;
+      const double apart = core_min(q, (h.depth + d) * h.n) - q.r;
+      EXPECT_GE(apart, d - 2 * tol) << what << " lane " << k << ": moved by n (depth + d) not apart by d";
+      const double meets = core_min(q, (h.depth - d) * h.n) - q.r;
+      EXPECT_LT(meets, 0.0) << what << " lane " << k << ": moved by n (depth - d) already apart";
+    }
+  }
+  if (out_stats != nullptr) *out_stats = st;
+  std::printf(
+      "  %-28s lanes %4d hits %4d core-inside %4d two-point %3d normals %4d | worst |depth-ref| %.2g L, "
+      "angle %.2g rad\n",
+      what, st.lanes, st.hits, st.core_inside, st.two_points, st.normals_checked, st.worst_depth,
+      st.worst_angle);
+}
+
+// --- inputs -----------------------------------------------------------------------------------
+
+Vec3d random_unit(std::mt19937& g) {
+  std::normal_distribution<double> d;
+  for (;;) {
+    const Vec3d v(d(g), d(g), d(g));
+    if (v.norm() > 1e-3) return v.normalized();
+  }
+}
+
+/// A random pair at size `size`, `offset` from the origin, the capsule centre within
+/// `spread` (of the pair's reach) of the cylinder's.
+Query random_query(std::mt19937& g, double size, double offset, double spread) {
+  std::uniform_real_distribution<double> uni(0, 1);
+  Query q;
+  q.p = Vec3d(offset, -offset, 0.5 * offset) + size * Vec3d(uni(g) - 0.5, uni(g) - 0.5, uni(g) - 0.5);
+  q.R = test::random_rotation(g);
+  q.rc = size * (0.1 + 0.9 * uni(g));
+  q.h = size * (0.1 + 0.9 * uni(g));
+  q.r = size * (0.05 + 0.55 * uni(g));
+  q.hs = size * uni(g);
+  q.u = random_unit(g);
+  const double reach = q.r + q.hs + std::hypot(q.rc, q.h);
+  q.c = q.p + spread * reach * uni(g) * random_unit(g);
+  return rounded(q);
+}
+
+std::vector<Query> random_queries(std::mt19937& g, int n, double size, double offset) {
+  std::vector<Query> qs;
+  for (int i = 0; i < n; ++i) qs.push_back(random_query(g, size, offset, 0.9));
+  return qs;
+}
+
+/// A query in the cylinder's frame (centre 0, axis z, size 1 parts) posed by a random
+/// rotation and offset; c and u are local.
+Query posed(std::mt19937& g, const Vec3d& c, const Vec3d& u, double r, double hs, double rc, double h,
+            double offset = 0.0) {
+  Query q;
+  q.R = test::random_rotation(g);
+  q.p = Vec3d(offset, 0.3 * offset, -0.7 * offset) + Vec3d(0.25, -0.5, 0.75);
+  q.c = q.p + q.R * c;
+  q.u = (q.R * u).normalized();
+  q.r = r, q.hs = hs, q.rc = rc, q.h = h;
+  return rounded(q);
+}
+
+// ---------------------------------------------------------------------------------------------
+
+TEST(CapsuleCylinder, RegisteredForTheBucket) {
+  EXPECT_EQ(pair_kernel(kLeafCapsule, kLeafCylinder), &collide_capsule_cylinder);
+}
+
+/// The references against closed forms: point distances, a core beside the side / above
+/// the cap / at a rim (apart: r - distance), a core through the middle, along the axis
+/// and a parallel core inside near the side (penetration), and nref against the
+/// golden-section distance on random separated lanes.
+TEST(CapsuleCylinder, ReferenceMatchesClosedForms) {
+  Query q;
+  q.p = Vec3d(1, 2, 3);
+  q.R = Mat3d::Identity();
+  q.rc = 1.0, q.h = 2.0;
+  EXPECT_NEAR(cyl_sd(q, q.p + Vec3d(3, 0, 0)), 2.0, 1e-15);
+  EXPECT_NEAR(cyl_sd(q, q.p + Vec3d(0, 0, 2.5)), 0.5, 1e-15);
+  EXPECT_NEAR(cyl_sd(q, q.p + Vec3d(0, 4, 6)), 5.0, 1e-15);  // rim (0, 1, 2): (3, 4)
+  EXPECT_NEAR(cyl_sd(q, q.p + Vec3d(0.5, 0, 0)), -0.5, 1e-15);
+  EXPECT_NEAR(cyl_sd(q, q.p + Vec3d(0, 0, 1.9)), -0.1, 1e-15);
+  q.r = 0.5, q.hs = 1.0;
+  struct Case {
+    Vec3d c, u;
+    double depth;
+    Vec3d n;
+  };
+  const Case cases[] = {
+      {Vec3d(1.4, 0, 0.3), Vec3d(0, 0, 1), 0.1, Vec3d(-1, 0, 0)},    // beside the side, parallel
+      {Vec3d(0.2, 0, 2.45), Vec3d(1, 0, 0), 0.05, Vec3d(0, 0, -1)},  // lying on the cap
+      {Vec3d(2, 0, 2.4), Vec3d(1, 0, 0), 0.5 - std::hypot(0.4, 0.0), Vec3d(0, 0, -1)},  // end over the rim
+      {Vec3d(0, 0, 0), Vec3d(1, 0, 0), 0.5 + 1.0, Vec3d(0, 1, 0)},     // through the middle, level
+      {Vec3d(0, 0, 0.25), Vec3d(0, 0, 1), 0.5 + 1.0, Vec3d(1, 0, 0)},  // along the axis: out by the side
+      {Vec3d(0.7, 0, 0), Vec3d(0, 0, 1), 0.5 + 0.3, Vec3d(-1, 0, 0)},  // parallel, inside, near the side
+  };
+  for (const Case& cs : cases) {
+    Query w = q;
+    w.c = q.p + cs.c;
+    w.u = cs.u;
+    const Ref f = reference(w);
+    EXPECT_NEAR(f.depth, cs.depth, 1e-9) << cs.c.transpose();
+    if (f.unique) {
+      EXPECT_LT(angle(f.n, cs.n), 1e-6) << cs.c.transpose();
+    }
+  }
+  // a rim from outside, diagonally: the end 0.3 / 0.4 off the rim point (1, 0, 2)
+  {
+    Query w = q;
+    w.c = q.p + Vec3d(1.3 + 1.0, 0, 2.4);
+    w.u = Vec3d(1, 0, 0);
+    const Ref f = reference(w);
+    EXPECT_NEAR(f.depth, 0.5 - 0.5, 1e-12);
+    EXPECT_LT(angle(f.n, Vec3d(-0.6, 0, -0.8)), 1e-6);
+  }
+  // nref against the golden-section distance where the core is outside
+  std::mt19937 g(5);
+  int compared = 0;
+  for (int i = 0; i < 60; ++i) {
+    const Query w = random_query(g, 1.0, 0.0, 1.2);
+    double t;
+    const double m = core_min(w, Vec3d::Zero(), &t);
+    if (m <= 1e-3) continue;
+    const test::nref::PairResult s = test::nref::solve_pair(capsule_shape(w), cylinder_shape(w));
+    // (the float-rounded rotation is orthonormal to ~1e-8: cyl_sd reads all of R, nref
+    // only the axis)
+    EXPECT_NEAR(s.s, w.r - m, 1e-7) << i;
+    ++compared;
+  }
+  EXPECT_GT(compared, 10);
+}
+
+class CapsuleCylinderScales : public ::testing::TestWithParam<std::tuple<double, double>> {};
+
+TEST_P(CapsuleCylinderScales, RandomPosesAgainstReference) {
+  const auto [size, offset] = GetParam();
+  std::mt19937 g(17 + static_cast<uint32_t>(std::log10(size) + 10 * (offset > 0)));
+  const int n = static_cast<int>(test::scaled(offset == 0 && size == 1.0 ? 300 : 80));
+  Stats st;
+  check_all(random_queries(g, n, size, offset), "random", &st);
+  EXPECT_GT(st.hits, n / 4);
+  EXPECT_GT(st.core_inside, n / 20);
+}
+
+INSTANTIATE_TEST_SUITE_P(Scales, CapsuleCylinderScales,
+                         ::testing::Values(std::make_tuple(1.0, 0.0), std::make_tuple(1e-4, 0.0),
+                                           std::make_tuple(1e4, 0.0), std::make_tuple(1.0, 1e5)));
+
+TEST(CapsuleCylinder, DeepCores) {
+  std::mt19937 g(29);
+  std::uniform_real_distribution<double> uni(-1, 1);
+  std::vector<Query> qs;
+  const int n = static_cast<int>(test::scaled(24));
+  for (int i = 0; i < n; ++i) {
+    const double rc = 0.3 + 0.7 * std::fabs(uni(g)), h = 0.3 + 0.7 * std::fabs(uni(g));
+    const double r = 0.05 + 0.3 * std::fabs(uni(g)), hs = 0.2 + 1.5 * std::fabs(uni(g));
+    // through the middle, any direction
+    qs.push_back(posed(g, 0.05 * Vec3d(uni(g), uni(g), uni(g)), random_unit(g), r, hs, rc, h));
+    // level through the middle (the side or a cap, by rc vs h)
+    qs.push_back(posed(g, Vec3d(0.1 * uni(g), 0.1 * uni(g), 0.5 * h * uni(g)),
+                       Vec3d(uni(g), uni(g), 0).normalized(), r, hs, rc, h));
+    // along the axis
+    qs.push_back(posed(g, Vec3d(0, 0, h * uni(g)), Vec3d(0, 0, 1), r, hs, rc, h));
+    qs.push_back(
+        posed(g, Vec3d(0.3 * rc * uni(g), 0.3 * rc * uni(g), h * uni(g)), Vec3d(0, 0, -1), r, hs, rc, h));
+    // crossing a rim
+    const double a = M_PI * uni(g);
+    const Vec3d rim(rc * std::cos(a), rc * std::sin(a), h * (uni(g) > 0 ? 1 : -1));
+    qs.push_back(posed(g, rim + 0.1 * Vec3d(uni(g), uni(g), uni(g)), random_unit(g), r, hs, rc, h));
+    // wholly inside, short core
+    qs.push_back(posed(g, Vec3d(0.3 * rc * uni(g), 0.3 * rc * uni(g), 0.3 * h * uni(g)), random_unit(g), 0.05,
+                       0.2 * std::min(rc, h), rc, h));
+    // coincident centres
+    Query c = posed(g, Vec3d::Zero(), random_unit(g), r, hs, rc, h);
+    c.c = c.p;
+    qs.push_back(c);
+  }
+  Stats st;
+  check_all(qs, "deep", &st);
+  EXPECT_GT(st.core_inside, st.hits * 9 / 10);
+  EXPECT_GT(st.hits, static_cast<int>(qs.size()) * 9 / 10);
+}
+
+/// Coincident centres with the axes aligned or perpendicular: finite unit normals, the
+/// closed-form depths; a core exactly along the axis ties every horizontal direction:
+/// the first candidate, R's x axis (as sphere-cylinder's centre on the axis).
+TEST(CapsuleCylinder, CoincidentCentresClosedForms) {
+  std::mt19937 g(3);
+  for (KernelPath path : {KernelPath::kSimd, KernelPath::kScalar}) {
+    {
+      Query q;
+      q.p = Vec3d(2, -1, 0.5);
+      q.R = Mat3d::Identity();
+      q.c = q.p, q.u = Vec3d(0, 0, 1), q.r = 0.25, q.hs = 0.5, q.rc = 0.5, q.h = 2.0;
+      const auto h = run({q}, path)[0];
+      ASSERT_GE(h.count, 1u);
+      EXPECT_NEAR(h.depth, 0.75, 1e-6);
+      EXPECT_EQ(h.n, Vec3d(1, 0, 0));
+    }
+    // along the axis, rc < h: out by the side, depth r + rc
+    Query q = posed(g, Vec3d::Zero(), Vec3d(0, 0, 1), 0.25, 0.5, 0.5, 2.0);
+    q.c = q.p;
+    auto h = run({q}, path)[0];
+    ASSERT_EQ(h.count, 2u);
+    EXPECT_NEAR(h.depth, 0.75, 1e-6);
+    EXPECT_NEAR(std::fabs(h.n.dot(q.R.col(2))), 0.0, 1e-6);
+    EXPECT_NEAR(h.n.norm(), 1.0, 1e-6);
+    // along the axis, long core through a short cylinder: still the side
+    q = posed(g, Vec3d::Zero(), Vec3d(0, 0, 1), 0.25, 3.0, 1.0, 0.5);
+    q.c = q.p;
+    h = run({q}, path)[0];
+    ASSERT_GE(h.count, 1u);
+    EXPECT_NEAR(h.depth, 1.25, 1e-6);
+    // level core in a pancake: out through a cap, depth r + h
+    q = posed(g, Vec3d::Zero(), Vec3d(1, 0, 0), 0.25, 0.5, 2.0, 0.3);
+    q.c = q.p;
+    h = run({q}, path)[0];
+    ASSERT_GE(h.count, 1u);
+    EXPECT_NEAR(h.depth, 0.55, 1e-6);
+    EXPECT_NEAR(std::fabs(h.n.dot(q.R.col(2))), 1.0, 1e-6);
+    // level core longer than the cylinder is wide: sideways (perpendicular to the core)
+    q = posed(g, Vec3d::Zero(), Vec3d(1, 0, 0), 0.25, 3.0, 0.5, 2.0);
+    q.c = q.p;
+    h = run({q}, path)[0];
+    ASSERT_GE(h.count, 1u);
+    EXPECT_NEAR(h.depth, 0.75, 1e-6);
+    EXPECT_NEAR(h.n.dot(q.u), 0.0, 1e-6);
+    EXPECT_NEAR(h.n.dot(q.R.col(2)), 0.0, 1e-6);
+  }
+}
+
+/// Short cores (1e-6 .. 1e-3 of the size) off a rim: the end and interior candidates'
+/// directions differ by up to hs / distance while their o tie within rounding (only
+/// candidates whose witness lies on their piece may win).
+TEST(CapsuleCylinder, ShortCoresAtARim) {
+  std::mt19937 g(71);
+  std::uniform_real_distribution<double> uni(-1, 1);
+  std::vector<Query> qs;
+  const double lengths[] = {1e-6, 1e-5, 1e-4, 1e-3};
+  for (int i = 0; i < static_cast<int>(test::scaled(60)); ++i)
+    for (double hs : lengths) {
+      const double rc = 0.3 + 0.7 * std::fabs(uni(g)), h = 0.3 + 0.7 * std::fabs(uni(g));
+      const double a = M_PI * uni(g), side = uni(g) > 0 ? 1.0 : -1.0;
+      const Vec3d rim(rc * std::cos(a), rc * std::sin(a), side * h);
+      // off the rim diagonally (outside), 0.02 .. 0.3 away
+      const Vec3d out =
+          (Vec3d(std::cos(a), std::sin(a), 0) * (0.2 + std::fabs(uni(g))) + Vec3d(0, 0, side)).normalized();
+      const double dist = 0.02 + 0.28 * std::fabs(uni(g));
+      qs.push_back(posed(g, rim + dist * out, random_unit(g), dist * (0.5 + std::fabs(uni(g))), hs, rc, h));
+      // the core perpendicular to the offset, its nearest point to the rim just beyond an
+      // end: the interior (rim) candidate's direction ties the end's within rounding
+      const Vec3d u = out.cross(random_unit(g)).normalized();
+      const double beyond = hs + dist * std::pow(10.0, -5 + 2 * std::fabs(uni(g)));
+      qs.push_back(posed(g, rim + dist * out + (uni(g) > 0 ? beyond : -beyond) * u, u,
+                         dist * (0.5 + std::fabs(uni(g))), hs, rc, h));
+    }
+  Stats st;
+  check_all(qs, "short cores at a rim", &st);
+  EXPECT_GT(st.hits, static_cast<int>(qs.size()) / 4);
+}
+
+/// Long, nearly level cores crossing the cylinder just below a cap: the minimum lies on
+/// a rim's shadow seen from its far side (the second local minimum of the half ellipse).
+TEST(CapsuleCylinder, CoresAcrossTheCapInside) {
+  std::mt19937 g(31);
+  std::uniform_real_distribution<double> uni(-1, 1);
+  std::vector<Query> qs;
+  const double tilts[] = {0.0, 1e-6, 1e-4, 1e-3, 1e-2, 0.05, 0.2};
+  const int n = static_cast<int>(test::scaled(16));
+  for (int i = 0; i < n; ++i)
+    for (double tilt : tilts) {
+      const double rc = 0.5 + 0.5 * std::fabs(uni(g)), h = 0.3 + 0.7 * std::fabs(uni(g));
+      const double a = M_PI * uni(g);
+      const Vec3d u = Vec3d(std::cos(a) * std::cos(tilt), std::sin(a) * std::cos(tilt), std::sin(tilt));
+      const double below = 0.02 + 0.2 * std::fabs(uni(g));  // the core below the top cap
+      const Vec3d c(0.5 * rc * uni(g), 0.5 * rc * uni(g), (h - below) * (uni(g) > 0 ? 1 : -1));
+      qs.push_back(posed(g, c, u, 0.02 + 0.1 * std::fabs(uni(g)), 2.0 + std::fabs(uni(g)), rc, h));
+    }
+  Stats st;
+  check_all(qs, "across the cap", &st);
+  EXPECT_GT(st.hits, static_cast<int>(qs.size()) * 9 / 10);
+}
+
+/// Near-parallel cores beside the side and on the cap: two points at the clipped ends
+/// (analytic for the exactly parallel ones), depth and normal against the reference.
+TEST(CapsuleCylinder, NearParallelTwoPoints) {
+  std::mt19937 g(37);
+  std::uniform_real_distribution<double> uni(-1, 1);
+  const double tilts[] = {0.0, 1e-7, 1e-5, 1e-3, 1e-2};
+  std::vector<Query> qs;
+  for (int i = 0; i < static_cast<int>(test::scaled(6)); ++i)
+    for (double tilt : tilts) {
+      const double rc = 0.5, h = 1.0, r = 0.2, hs = 0.6, d = 0.05;
+      const double a = M_PI * uni(g);
+      const Vec3d radial(std::cos(a), std::sin(a), 0), side_dir(-std::sin(a), std::cos(a), 0);
+      // beside the side, axis tilted by `tilt`, overlapping the side's height in part
+      const Vec3d us = (Vec3d(0, 0, 1) + tilt * (uni(g) > 0 ? radial : side_dir)).normalized();
+      qs.push_back(posed(g, radial * (rc + r - d) + Vec3d(0, 0, 0.7 * uni(g)), us, r, hs, rc, h));
+      // on the top cap, level up to `tilt`, its middle over the disk, an end over the rim
+      const Vec3d uc = (radial + tilt * Vec3d(0, 0, uni(g) > 0 ? 1 : -1)).normalized();
+      qs.push_back(posed(g, Vec3d(0.2 * uni(g), 0.2 * uni(g), h + r - d), uc, r, hs, rc, h));
+    }
+  Stats st;
+  check_all(qs, "near-parallel", &st);
+  EXPECT_EQ(st.two_points, st.hits);
+  EXPECT_GT(st.hits, static_cast<int>(qs.size()) * 3 / 4);
+  // Exactly parallel, axis-aligned: the points' positions in closed form.
+  for (KernelPath path : {KernelPath::kSimd, KernelPath::kScalar}) {
+    Query q;
+    q.p = Vec3d(1, -2, 0.5);
+    q.R = Mat3d::Identity();
+    q.rc = 0.5, q.h = 1.0, q.r = 0.25, q.hs = 1.0;
+    // beside the side, 0.125 deep, the core z in [0.25, 2.25] -> clipped to [0.25, 1]
+    q.c = q.p + Vec3d(0.625, 0, 1.25);
+    q.u = Vec3d(0, 0, 1);
+    auto h = run({q}, path)[0];
+    ASSERT_EQ(h.count, 2u);
+    EXPECT_NEAR(h.depth, 0.125, 1e-6);
+    EXPECT_LT(angle(h.n, Vec3d(-1, 0, 0)), 1e-6);
+    const double z0 = std::min(h.pt[0].z(), h.pt[1].z()) - q.p.z(),
+                 z1 = std::max(h.pt[0].z(), h.pt[1].z()) - q.p.z();
+    EXPECT_NEAR(z0, 0.25, 1e-6);
+    EXPECT_NEAR(z1, 1.0, 1e-6);
+    for (int i = 0; i < 2; ++i) {
+      EXPECT_NEAR(h.pt[i].x() - q.p.x(), 0.5 - 0.0625, 1e-6);
+      EXPECT_NEAR(h.pd[i], 0.125, 1e-6);
+    }
+    // lying on the cap, 0.0625 deep, the core x in [0, 2] -> clipped to [0, 0.5]
+    q.c = q.p + Vec3d(1.0, 0, 1.1875);
+    q.u = Vec3d(1, 0, 0);
+    h = run({q}, path)[0];
+    ASSERT_EQ(h.count, 2u);
+    EXPECT_NEAR(h.depth, 0.0625, 1e-6);
+    EXPECT_LT(angle(h.n, Vec3d(0, 0, -1)), 1e-6);
+    const double x0 = std::min(h.pt[0].x(), h.pt[1].x()) - q.p.x(),
+                 x1 = std::max(h.pt[0].x(), h.pt[1].x()) - q.p.x();
+    EXPECT_NEAR(x0, 0.0, 1e-6);
+    EXPECT_NEAR(x1, 0.5, 1e-6);
+    for (int i = 0; i < 2; ++i) EXPECT_NEAR(h.pt[i].z() - q.p.z(), 1.0 - 0.03125, 1e-6);
+  }
+}
+
+/// Exactly touching (representable) configurations: count 0; B moved onto touching by
+/// the reference's depth along its normal: depth within tol.
+TEST(CapsuleCylinder, Touching) {
+  for (KernelPath path : {KernelPath::kSimd, KernelPath::kScalar}) {
+    Query q;
+    q.p = Vec3d(4, 5, -6);
+    q.R = Mat3d::Identity();
+    q.rc = 0.5, q.h = 1.0, q.r = 0.25, q.hs = 0.75;
+    q.c = q.p + Vec3d(0.75, 0, 0.5), q.u = Vec3d(0, 0, 1);  // beside the side
+    EXPECT_EQ(run({q}, path)[0].count, 0u);
+    q.c = q.p + Vec3d(0.25, 0, 1.25), q.u = Vec3d(1, 0, 0);  // on the cap
+    EXPECT_EQ(run({q}, path)[0].count, 0u);
+    q.c = q.p + Vec3d(0, 0, -2.0), q.u = Vec3d(0, 0, 1);  // end on the lower cap
+    EXPECT_EQ(run({q}, path)[0].count, 0u);
+    q.c = q.p + Vec3d(0.5, 0, 2.0), q.u = Vec3d(0, 0, 1);  // end on the rim, axis through it
+    EXPECT_EQ(run({q}, path)[0].count, 0u);
+  }
+  std::mt19937 g(43);
+  std::vector<Query> qs;
+  for (int i = 0; i < 400 && static_cast<int>(qs.size()) < static_cast<int>(test::scaled(40)); ++i) {
+    Query q = random_query(g, 1.0, 0.0, 0.6);
+    const Ref f = reference(q);
+    if (f.depth <= 1e-3) continue;
+    q.p = test::round_to_float(Vec3d(q.p + f.depth * f.n));
+    qs.push_back(q);
+  }
+  const auto res = run(qs, KernelPath::kSimd);
+  for (size_t k = 0; k < qs.size(); ++k) {
+    const double tol = 4 * kRel * size_of(qs[k]);
+    if (res[k].count > 0) {
+      EXPECT_LE(res[k].depth, tol) << k;
+    }
+  }
+}
+
+/// A zero-length core is a sphere: sphere-cylinder's answers.
+TEST(CapsuleCylinder, ZeroLengthCoreIsSphereCylinder) {
+  std::mt19937 g(47);
+  std::vector<Query> qs = random_queries(g, static_cast<int>(test::scaled(200)), 1.0, 0.0);
+  for (Query& q : qs) q.hs = 0.0;
+  check_all(qs, "zero-length core");
+  // sphere lanes: A's p and e0 as the capsule's
+  const auto mine = run(qs, KernelPath::kSimd);
+  Lanes l(qs);
+  test::ManifoldLanes o(static_cast<uint32_t>(qs.size()));
+  collide_sphere_cylinder(l.a, l.b, o.view(), Range{0, static_cast<uint32_t>(qs.size())}, NarrowConfig{});
+  for (uint32_t k = 0; k < qs.size(); ++k) {
+    const test::PairResult s = o.result(k);
+    const double tol = kRel * size_of(qs[k]);
+    if (s.count == 0 || s.depth < tol) continue;
+    ASSERT_EQ(mine[k].count, 1u) << k;
+    EXPECT_NEAR(mine[k].depth, s.depth, tol) << k;
+    if (s.depth < qs[k].r - 1e-3) {  // centre outside
+      EXPECT_LT(angle(mine[k].n, s.n), kAngleTol) << k;
+    }
+  }
+}
+
+/// Needles and pancakes (1e-4 proportions) of both shapes.
+TEST(CapsuleCylinder, NeedlesAndPancakes) {
+  std::mt19937 g(53);
+  std::vector<Query> qs;
+  const int n = static_cast<int>(test::scaled(40));
+  for (int i = 0; i < n; ++i) {
+    Query q = random_query(g, 1.0, 0.0, 0.6);
+    switch (i % 4) {
+      case 0:
+        q.rc = 1e-4 * q.h;
+        break;  // needle cylinder
+      case 1:
+        q.h = 1e-4 * q.rc;
+        break;  // pancake (a disk)
+      case 2:
+        q.r = 1e-4 * std::max(q.hs, 0.1);
+        break;  // needle capsule
+      default:
+        q.rc = 1e-4 * q.h, q.r = 1e-4 * std::max(q.hs, 0.1);
+        break;
+    }
+    const double reach = q.r + q.hs + std::hypot(q.rc, q.h);
+    q.c = q.p + 0.3 * reach * random_unit(g);
+    qs.push_back(rounded(q));
+  }
+  Stats st;
+  check_all(qs, "needle / pancake", &st);
+  EXPECT_GT(st.hits, n / 5);
+}
+
+/// Symmetries: the half-turn about the cylinder's x axis maps it onto itself (same
+/// depth, the normal turned); reversing the core's axis changes nothing; turning the
+/// whole pair turns the normal.
+TEST(CapsuleCylinder, Symmetries) {
+  std::mt19937 g(59);
+  std::vector<Query> base, flipped, reversed, turned;
+  for (int i = 0; i < static_cast<int>(test::scaled(120)); ++i) {
+    Query q = random_query(g, 1.0, 0.0, 0.7);
+    base.push_back(q);
+    const Mat3d flip = q.R * Eigen::AngleAxisd(M_PI, Vec3d::UnitX()).toRotationMatrix() * q.R.transpose();
+    Query f = q;
+    f.c = test::round_to_float(Vec3d(q.p + flip * (q.c - q.p)));
+    f.u = test::round_to_float(Vec3d(flip * q.u));
+    flipped.push_back(f);
+    Query r = q;
+    r.u = -q.u;
+    reversed.push_back(r);
+    const Mat3d turn = test::random_rotation(g);
+    Query t = q;
+    t.c = test::round_to_float(Vec3d(turn * q.c));
+    t.p = test::round_to_float(Vec3d(turn * q.p));
+    t.u = test::round_to_float(Vec3d(turn * q.u));
+    t.R = test::round_to_float(Mat3d(turn * q.R));
+    turned.push_back(t);
+  }
+  const auto a = run(base, KernelPath::kSimd), b = run(flipped, KernelPath::kSimd),
+             c = run(reversed, KernelPath::kSimd), d = run(turned, KernelPath::kSimd);
+  int compared = 0;
+  for (size_t k = 0; k < base.size(); ++k) {
+    const Ref f = reference(base[k]);
+    const double tol = kRel * size_of(base[k]);
+    if (std::fabs(f.depth) <= 4 * tol) continue;
+    ASSERT_EQ(a[k].count > 0, b[k].count > 0) << k;
+    ASSERT_EQ(a[k].count > 0, c[k].count > 0) << k;
+    ASSERT_EQ(a[k].count > 0, d[k].count > 0) << k;
+    if (a[k].count == 0) continue;
+    ++compared;
+    const Mat3d flip =
+        base[k].R * Eigen::AngleAxisd(M_PI, Vec3d::UnitX()).toRotationMatrix() * base[k].R.transpose();
+    const Mat3d turn = turned[k].R * base[k].R.transpose();
+    EXPECT_NEAR(a[k].depth, b[k].depth, 2 * tol) << k;
+    EXPECT_NEAR(a[k].depth, c[k].depth, tol) << k;
+    EXPECT_NEAR(a[k].depth, d[k].depth, 2 * tol) << k;
+    if (f.unique) {
+      EXPECT_LT(angle(flip * a[k].n, b[k].n), kAngleTol) << k;
+      EXPECT_LT(angle(a[k].n, c[k].n), kAngleTol) << k;
+      EXPECT_LT(angle(turn * a[k].n, d[k].n), kAngleTol) << k;
+    }
+  }
+  EXPECT_GT(compared, static_cast<int>(base.size()) / 4);
+}
+
+/// Any partition of a bucket's range gives the same bytes, and nothing outside the range
+/// is written (the output lanes start poisoned).
+TEST(CapsuleCylinder, RangePartitionsAndTail) {
+  std::mt19937 g(61);
+  const std::vector<Query> qs = random_queries(g, 37, 1.0, 0.0);
+  for (KernelPath path : {KernelPath::kSimd, KernelPath::kScalar}) {
+    test::ManifoldLanes all(37);
+    run(qs, path, nullptr, 0, 37, &all);
+    for (uint32_t cut : {1u, 3u, 8u, 11u, 36u}) {
+      test::ManifoldLanes lo(37), hi(37);
+      run(qs, path, nullptr, 0, cut, &lo);
+      run(qs, path, nullptr, cut, 37, &hi);
+      for (uint32_t k = 0; k < 37; ++k) {
+        const test::ManifoldLanes& m = k < cut ? lo : hi;
+        const test::ManifoldLanes& other = k < cut ? hi : lo;
+        EXPECT_EQ(other.count[k], 0xff) << "lane " << k << " written outside its range";
+        ASSERT_EQ(m.count[k], all.count[k]) << cut << " " << k;
+        if (m.count[k] == 0) continue;
+        EXPECT_EQ(std::memcmp(&m.depth[k], &all.depth[k], 4), 0) << k;
+        for (int i = 0; i < 3; ++i) EXPECT_EQ(std::memcmp(&m.n[i][k], &all.n[i][k], 4), 0) << k;
+        for (uint32_t j = 0; j < m.count[k]; ++j) {
+          EXPECT_EQ(std::memcmp(&m.pd[j][k], &all.pd[j][k], 4), 0) << k;
+          for (int i = 0; i < 3; ++i) EXPECT_EQ(std::memcmp(&m.pt[j][i][k], &all.pt[j][i][k], 4), 0) << k;
+        }
+      }
+    }
+  }
+}
+
+/// The general GJK / EPA path on the same lanes: same hits away from touching (1e-3 L),
+/// depth within 1e-3 L, normal within 0.02 rad where unique.
+TEST(CapsuleCylinder, AgreesWithGjkEpa) {
+  std::mt19937 g(67);
+  const std::vector<Query> qs = random_queries(g, static_cast<int>(test::scaled(300)), 1.0, 0.0);
+  const auto mine = run(qs, KernelPath::kSimd), gjk = run(qs, KernelPath::kSimd, &gjk_kernel);
+  int compared = 0;
+  for (size_t k = 0; k < qs.size(); ++k) {
+    const Ref f = reference(qs[k]);
+    const double L = size_of(qs[k]);
+    if (std::fabs(f.depth) < 1e-3 * L) continue;
+    ASSERT_EQ(mine[k].count > 0, gjk[k].count > 0) << k << " depth_ref " << f.depth;
+    if (mine[k].count == 0) continue;
+    ++compared;
+    EXPECT_NEAR(mine[k].depth, gjk[k].depth, 1e-3 * L) << k;
+    if (f.unique) {
+      EXPECT_LT(angle(mine[k].n, gjk[k].n), 0.02) << k;
+    }
+  }
+  EXPECT_GT(compared, static_cast<int>(qs.size()) / 5);
+}
+
+}  // namespace
+}  // namespace impact::kernels
