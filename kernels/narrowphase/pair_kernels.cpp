@@ -60,6 +60,7 @@ struct Table {
     k[kLeafSphere][kLeafEllipsoid] = &collide_sphere_ellipsoid;
     k[kLeafCapsule][kLeafEllipsoid] = &collide_capsule_ellipsoid;
     k[kLeafEllipsoid][kLeafTriangle] = &collide_ellipsoid_triangle;
+    k[kLeafBox][kLeafEllipsoid] = &collide_box_ellipsoid;
   }
 };
 

@@ -63,6 +63,11 @@ void collide_capsule_ellipsoid(const LeafSoA&, const LeafSoA&, const ManifoldSoA
 /// normals, each vertex's nearest and far local minimum on the ellipsoid, each edge's on
 /// the ellipsoid's shadow across it; ellipsoid_triangle.cpp), SIMD across pairs.
 void collide_ellipsoid_triangle(const LeafSoA&, const LeafSoA&, const ManifoldSoA&, Range, const NarrowConfig&);
+/// Box against ellipsoid: exact, the least support overlap over the box's face normals and
+/// the candidate normals of the vertex and edge pieces that can hold one (pruned along
+/// each candidate's solution curve, the rest solved packed; box_ellipsoid.cpp), SIMD
+/// across pairs.
+void collide_box_ellipsoid(const LeafSoA&, const LeafSoA&, const ManifoldSoA&, Range, const NarrowConfig&);
 
 // --- general convex -----------------------------------------------------------------------
 /// GJK + EPA for any two convex leaf types ta <= tb (neither a half-space), one pair
