@@ -61,6 +61,7 @@ struct Table {
     k[kLeafCapsule][kLeafEllipsoid] = &collide_capsule_ellipsoid;
     k[kLeafEllipsoid][kLeafTriangle] = &collide_ellipsoid_triangle;
     k[kLeafCapsule][kLeafCylinder] = &collide_capsule_cylinder;
+    k[kLeafBox][kLeafEllipsoid] = &collide_box_ellipsoid;
   }
 };
 

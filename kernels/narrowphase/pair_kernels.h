@@ -9,9 +9,10 @@
 // Sphere-hull, capsule-hull and hull-triangle have their own exact per-lane kernels
 // (kernels/narrowphase/sphere_convex.cpp, capsule_convex.cpp, convex_triangle.cpp: a
 // separating axis test with Gauss-map pruned edge axes); sphere-ellipsoid,
-// capsule-ellipsoid and ellipsoid-triangle exact lane kernels (sphere_ellipsoid.cpp,
-// capsule_ellipsoid.cpp, ellipsoid_triangle.cpp: candidate normals from the point
-// solvers of ellipsoid_solve.h, SIMD across pairs); capsule-cylinder a lane kernel
+// capsule-ellipsoid, box-ellipsoid and ellipsoid-triangle exact lane kernels
+// (sphere_ellipsoid.cpp, capsule_ellipsoid.cpp, box_ellipsoid.cpp, ellipsoid_triangle.cpp:
+// candidate normals from the point solvers of ellipsoid_solve.h, SIMD across pairs);
+// capsule-cylinder a lane kernel
 // (capsule_cylinder.cpp: candidate normals of the core-cylinder Minkowski difference's
 // pieces). Everything else goes through the
 // general convex path (kernels/narrowphase/gjk_epa.cpp): GJK + EPA on the leaves'
@@ -69,6 +70,11 @@ void collide_ellipsoid_triangle(const LeafSoA&, const LeafSoA&, const ManifoldSo
 /// the candidate normals of their Minkowski difference's boundary pieces (caps, side,
 /// rims by a fixed-count 2D root solve, end-rim edges), 1-2 points, SIMD across pairs.
 void collide_capsule_cylinder(const LeafSoA&, const LeafSoA&, const ManifoldSoA&, Range, const NarrowConfig&);
+/// Box against ellipsoid: exact, the least support overlap over the box's face normals and
+/// the candidate normals of the vertex and edge pieces that can hold one (pruned along
+/// each candidate's solution curve, the rest solved packed; box_ellipsoid.cpp), SIMD
+/// across pairs.
+void collide_box_ellipsoid(const LeafSoA&, const LeafSoA&, const ManifoldSoA&, Range, const NarrowConfig&);
 
 // --- general convex -----------------------------------------------------------------------
 /// GJK + EPA for any two convex leaf types ta <= tb (neither a half-space), one pair
