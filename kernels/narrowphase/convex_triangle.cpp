@@ -87,6 +87,7 @@
 #include <cstdint>
 
 #include "kernels/narrowphase/gjk_epa.h"
+#include "kernels/narrowphase/hull_scan.h"
 #include "kernels/narrowphase/pair_kernels.h"
 #include "kernels/simd/lanes.h"
 
@@ -724,19 +725,7 @@ void convex_triangle_lane(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA&
   if (mf.count > kMaxManifoldPoints) mf.count = cvx::reduce_manifold(mf.p, mf.d, mf.count, nl);
 
   // --- world frame ---
-  const V3 n = ax[0] * nl.x + ax[1] * nl.y + ax[2] * nl.z;
-  out.count[k] = static_cast<uint8_t>(mf.count);
-  out.n[0][k] = n.x;
-  out.n[1][k] = n.y;
-  out.n[2][k] = n.z;
-  out.depth[k] = depth;
-  for (uint32_t i = 0; i < mf.count; ++i) {
-    const V3 q = mf.p[i];
-    out.point[i][0][k] = pw.x + (ax[0].x * q.x + ax[1].x * q.y + ax[2].x * q.z);
-    out.point[i][1][k] = pw.y + (ax[0].y * q.x + ax[1].y * q.y + ax[2].y * q.z);
-    out.point[i][2][k] = pw.z + (ax[0].z * q.x + ax[1].z * q.y + ax[2].z * q.z);
-    out.pdepth[i][k] = mf.d[i];
-  }
+  hull_scan::store_from_frame(out, k, ax, pw, nl, depth, mf.count, mf.p, mf.d);
 }
 
 }  // namespace

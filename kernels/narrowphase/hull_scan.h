@@ -1,11 +1,12 @@
 // Per-lane passes over one convex hull's faces and vertices (HullView), shared by the
-// exact hull kernels (sphere_convex.cpp, capsule_convex.cpp); internal to
-// kernels/narrowphase.
+// exact hull kernels (sphere_convex.cpp, capsule_convex.cpp, convex_triangle.cpp);
+// internal to kernels/narrowphase.
 //   next_block          block starts of a kSimdWidth-wide pass (last block overlaps)
 //   kKeep               hulls up to this many faces / edges keep pass values on the stack
 //   lanes_min/max       horizontal min / max of the lanes
 //   vertex, face_normal one hull vertex / face normal as a V3
 //   projects_into_face  whether a point projects into a face's polygon
+//   store_from_frame    one lane's collision data, from a hull's frame to the world
 #pragma once
 
 #include <cstdint>
@@ -59,6 +60,25 @@ IMPACT_INLINE bool projects_into_face(const HullView& h, uint32_t f, V3 p) {
     a = q;
   }
   return true;
+}
+
+/// Writes lane k of out: the normal nl, depth, and count points p[i] with depths d[i],
+/// given in a frame with axes ax (R's columns) and origin o, turned into the world frame.
+IMPACT_INLINE void store_from_frame(const ManifoldSoA& out, uint32_t k, const V3 ax[3], V3 o, V3 nl,
+                                    float depth, uint32_t count, const V3* p, const float* d) {
+  const V3 n = ax[0] * nl.x + ax[1] * nl.y + ax[2] * nl.z;
+  out.count[k] = static_cast<uint8_t>(count);
+  out.n[0][k] = n.x;
+  out.n[1][k] = n.y;
+  out.n[2][k] = n.z;
+  out.depth[k] = depth;
+  for (uint32_t i = 0; i < count; ++i) {
+    const V3 q = p[i];
+    out.point[i][0][k] = o.x + (ax[0].x * q.x + ax[1].x * q.y + ax[2].x * q.z);
+    out.point[i][1][k] = o.y + (ax[0].y * q.x + ax[1].y * q.y + ax[2].y * q.z);
+    out.point[i][2][k] = o.z + (ax[0].z * q.x + ax[1].z * q.y + ax[2].z * q.z);
+    out.pdepth[i][k] = d[i];
+  }
 }
 
 }  // namespace impact::kernels::hull_scan
