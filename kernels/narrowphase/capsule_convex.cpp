@@ -112,9 +112,15 @@ constexpr float kEdgeRound = 2e-7f;
 constexpr float kFaceCos = 0.99999f;
 constexpr float kParallelSin = 0.05f;
 
-IMPACT_INLINE float clampf(float x, float lo, float hi) { return simd::fmin_nn(simd::fmax_nn(x, lo), hi); }
-IMPACT_INLINE double clampd(double x, double lo, double hi) { return x < lo ? lo : (x > hi ? hi : x); }
-IMPACT_INLINE float l1(V3 a) { return std::fabs(a.x) + std::fabs(a.y) + std::fabs(a.z); }
+IMPACT_INLINE float clampf(float x, float lo, float hi) {
+  return simd::fmin_nn(simd::fmax_nn(x, lo), hi);
+}
+IMPACT_INLINE double clampd(double x, double lo, double hi) {
+  return x < lo ? lo : (x > hi ? hi : x);
+}
+IMPACT_INLINE float l1(V3 a) {
+  return std::fabs(a.x) + std::fabs(a.y) + std::fabs(a.z);
+}
 
 // ---------------------------------------------------------------------------------------
 // Step 1: the face pass
@@ -142,8 +148,8 @@ IMPACT_INLINE void plane_ab(const HullView& h, uint32_t i, V3 c, V3 u, float* a,
 
 /// Step 1 over faces [fb, fe) but the clip (core_meets_hull). keep_a / keep_b: null, or
 /// room for fe - fb values each (wide path only): a_f, b_f at f - fb.
-IMPACT_INLINE FacePass face_pass(const HullView& h, uint32_t fb, uint32_t fe, V3 c, V3 u, float hl, float* keep_a,
-                                 float* keep_b) {
+IMPACT_INLINE FacePass face_pass(const HullView& h, uint32_t fb, uint32_t fe, V3 c, V3 u, float hl,
+                                 float* keep_a, float* keep_b) {
   FacePass fp;
   if (fe - fb >= kSimdWidth) {
     using F = FloatW;
@@ -287,7 +293,8 @@ IMPACT_INLINE uint32_t near_tie_face(const HullView& h, uint32_t fb, uint32_t fe
 /// parameter of the core, clamped; the edge's for it, clamped; the core's again for
 /// that, clamped).
 IMPACT_INLINE FloatW edge_seg_dist2(const HullView& h, uint32_t i, const float* bx, const float* by,
-                                    const float* bz, const FloatW* c, const FloatW* u, FloatW hl, FloatW* out_tau) {
+                                    const float* bz, const FloatW* c, const FloatW* u, FloatW hl,
+                                    FloatW* out_tau) {
   using F = FloatW;
   const F zero(0.0f), one(1.0f);
   const F ax = F::load(h.epx + i), ay = F::load(h.epy + i), az = F::load(h.epz + i);
@@ -359,7 +366,8 @@ IMPACT_INLINE float hull_extent(const HullView& h, uint32_t vb, uint32_t ve) {
   if (ve - vb >= kSimdWidth) {
     F mw(0.0f);
     for (;; i = next_block(i, ve)) {
-      mw = simd::max(mw, simd::abs(F::load(h.vx + i)) + simd::abs(F::load(h.vy + i)) + simd::abs(F::load(h.vz + i)));
+      mw = simd::max(
+          mw, simd::abs(F::load(h.vx + i)) + simd::abs(F::load(h.vy + i)) + simd::abs(F::load(h.vz + i)));
       if (i + kSimdWidth == ve) break;
     }
     return lanes_max(mw);
@@ -394,8 +402,9 @@ IMPACT_INLINE SegEdge seg_vertex(const double c[3], const double u[3], double hl
 /// evaluated instead of the edge (each vertex once: the edges that meet there tie; the
 /// edge's own closest point lies within the float rounding of the vertex, and the
 /// distance differs by its square). *out_e: the winner's index.
-IMPACT_INLINE SegEdge nearest_edge(const HullView& h, uint32_t ab, uint32_t ae, uint32_t vb, uint32_t ve, V3 c,
-                                   V3 u, float hl, const double cd[3], const double ud[3], uint32_t* out_e) {
+IMPACT_INLINE SegEdge nearest_edge(const HullView& h, uint32_t ab, uint32_t ae, uint32_t vb, uint32_t ve,
+                                   V3 c, V3 u, float hl, const double cd[3], const double ud[3],
+                                   uint32_t* out_e) {
   using F = FloatW;
   SegEdge best;
   *out_e = ab;
@@ -613,15 +622,15 @@ void capsule_convex_lane(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& 
   }
   const float scale = l1(c) + hl + std::fabs(h.fd[fp.f_core]);
 
-  V3 nl;          // local normal, capsule to hull
-  float depth;    // > 0
+  V3 nl;        // local normal, capsule to hull
+  float depth;  // > 0
   // The core meets the hull: not where a face plane separates it, surely where an end
   // point is inside, else by the clip.
   bool deep = !(fp.s_core > 0.0f) &&
               (!(fp.s_end[0] > 0.0f) || !(fp.s_end[1] > 0.0f) ||
                core_meets_hull(h, fb, fe, c, u, hl, keep ? kept_a : nullptr, keep ? kept_b : nullptr));
-  bool edge_axis = false;   // deep: an edge axis won
-  uint32_t face = fe;       // a face whose normal nl may be (fe: none known)
+  bool edge_axis = false;       // deep: an edge axis won
+  uint32_t face = fe;           // a face whose normal nl may be (fe: none known)
   V3 xs{0, 0, 0}, yh{0, 0, 0};  // shallow: closest points (core, hull)
   uint32_t edge = ab;
 
@@ -648,8 +657,8 @@ void capsule_convex_lane(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& 
       if (!projects_into_face(h, f, p)) {
         // Faces tied with f up to their planes' rounding may hold the closest point.
         const float slack = 1e-5f * (l1(p) + std::fabs(h.fd[f]));
-        f = near_tie_face(h, fb, fe, f, c, u, sh, p, s - slack, keep ? kept_a : nullptr, keep ? kept_b : nullptr,
-                          &sf);
+        f = near_tie_face(h, fb, fe, f, c, u, sh, p, s - slack, keep ? kept_a : nullptr,
+                          keep ? kept_b : nullptr, &sf);
       }
       if (f != fe && sf < face_d) {
         face_d = sf;
@@ -752,9 +761,8 @@ void capsule_convex_lane(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& 
       // moved along nl by r - depth/2 (midway between the surfaces along nl).
       float t;
       if (edge_axis) {
-        t = static_cast<float>(seg_edge(cd, ud, hl, V3{h.epx[edge], h.epy[edge], h.epz[edge]},
-                                        vertex(h, vb + h.ev1[edge]))
-                                   .t);
+        t = static_cast<float>(
+            seg_edge(cd, ud, hl, V3{h.epx[edge], h.epy[edge], h.epz[edge]}, vertex(h, vb + h.ev1[edge])).t);
       } else {
         t = cvx::dot(nl, u) >= 0.0f ? hl : -hl;
       }

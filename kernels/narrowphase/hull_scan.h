@@ -43,8 +43,12 @@ IMPACT_INLINE float lanes_max(FloatW v) {
   return m;
 }
 
-IMPACT_INLINE V3 vertex(const HullView& h, uint32_t i) { return V3{h.vx[i], h.vy[i], h.vz[i]}; }
-IMPACT_INLINE V3 face_normal(const HullView& h, uint32_t f) { return V3{h.fnx[f], h.fny[f], h.fnz[f]}; }
+IMPACT_INLINE V3 vertex(const HullView& h, uint32_t i) {
+  return V3{h.vx[i], h.vy[i], h.vz[i]};
+}
+IMPACT_INLINE V3 face_normal(const HullView& h, uint32_t f) {
+  return V3{h.fnx[f], h.fny[f], h.fnz[f]};
+}
 
 /// Whether p projects into face f's polygon (on its boundary counts as inside): p is
 /// behind every side plane through a polygon edge, perpendicular to the face.

@@ -46,6 +46,7 @@
 
 #include "kernels/narrowphase/pair_kernels.h"
 #include "support/ellipsoid_reference.h"
+#include "support/lane_checks.h"
 #include "support/leaf_lanes.h"
 #include "support/narrow_reference.h"
 #include "support/random_input.h"
@@ -144,7 +145,8 @@ std::vector<Hit> run(const std::vector<Query>& qs, KernelPath path) {
   return run(qs, path, k);
 }
 
-void gjk_kernel(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out, Range r, const NarrowConfig& cfg) {
+void gjk_kernel(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out, Range r,
+                const NarrowConfig& cfg) {
   collide_gjk_epa(a, b, out, r, cfg, kLeafBox, kLeafEllipsoid);
 }
 
@@ -295,8 +297,8 @@ void check_all(const std::vector<Query>& qs, const char* what, Stats* st_out = n
     for (const Hit* hp : {&simd[k], &scal[k]}) {
       const Hit& h = *hp;
       const char* path = hp == &simd[k] ? " simd" : " scalar";
-      ASSERT_EQ(h.count > 0, f.s > 0) << what << " lane " << k << " depth_ref " << f.s << " got " << h.depth
-                                      << path;
+      ASSERT_EQ(h.count > 0, f.s > 0)
+          << what << " lane " << k << " depth_ref " << f.s << " got " << h.depth << path;
       if (f.s <= 0) continue;
       ASSERT_EQ(h.count, 1u);
       if (hp == &simd[k]) ++st.hits;
@@ -335,8 +337,8 @@ void check_all(const std::vector<Query>& qs, const char* what, Stats* st_out = n
     }
   }
   std::printf(
-      "  %-30s lanes %5d hits %5d normals %5d | worst depth %.2g L, angle %.2g; simd-scalar %.2g L, %.2g\n", what,
-      st.lanes, st.hits, st.normal_checked, st.worst_depth, st.worst_angle, st.worst_path_depth,
+      "  %-30s lanes %5d hits %5d normals %5d | worst depth %.2g L, angle %.2g; simd-scalar %.2g L, %.2g\n",
+      what, st.lanes, st.hits, st.normal_checked, st.worst_depth, st.worst_angle, st.worst_path_depth,
       st.worst_path_angle);
   if (st_out != nullptr) *st_out = st;
 }
@@ -412,9 +414,15 @@ std::vector<Touch> touching_queries(std::mt19937& g, int n) {
     // [0, 2 h_i] (vertex), the edge along d_0 through c, or the face's centre at c.
     Vec3d ml;  // m in D's coordinates: all components >= 0 on the box's side
     switch (k % 3) {
-      case 0: ml = Vec3d(0, 0, 1); break;
-      case 1: ml = Vec3d(0, w(g), w(g)).normalized(); break;
-      default: ml = Vec3d(w(g), w(g), w(g)).normalized(); break;
+      case 0:
+        ml = Vec3d(0, 0, 1);
+        break;
+      case 1:
+        ml = Vec3d(0, w(g), w(g)).normalized();
+        break;
+      default:
+        ml = Vec3d(w(g), w(g), w(g)).normalized();
+        break;
     }
     // D with D ml = m: a rotation taking ml to m, turned about m at random.
     const Mat3d A = frame_with_z(g, m), B = frame_with_z(g, ml);
@@ -495,9 +503,15 @@ std::vector<Query> odd_box_queries(std::mt19937& g, int n) {
     const double tiny = (k / 5) % 2 ? 0.0 : 1e-4 * u01(g);
     Vec3d c = q.b.p + Vec3d(u(g), u(g), u(g)) * 0.9;
     switch (k % 5) {
-      case 0: h[k % 3] = tiny; break;
-      case 1: h[k % 3] = tiny, h[(k + 1) % 3] = tiny; break;
-      case 2: h = Vec3d::Constant(tiny); break;
+      case 0:
+        h[k % 3] = tiny;
+        break;
+      case 1:
+        h[k % 3] = tiny, h[(k + 1) % 3] = tiny;
+        break;
+      case 2:
+        h = Vec3d::Constant(tiny);
+        break;
       default: {  // large
         const double big = std::pow(10.0, ex(g));
         h = Vec3d(big, big * s(g), s(g));
@@ -523,8 +537,8 @@ TEST(BoxEllipsoidReference, ReferencesAgree) {
   std::mt19937 g(3);
   int compared = 0;
   for (const Query& q : random_queries(g, static_cast<int>(test::scaled(40)), 1.0, 0.0)) {
-    const nref::PairResult r = nref::solve_pair(posed_shape(q.a, kLeafBox), posed_shape(q.b, kLeafEllipsoid), {},
-                                                dense_options());
+    const nref::PairResult r =
+        nref::solve_pair(posed_shape(q.a, kLeafBox), posed_shape(q.b, kLeafEllipsoid), {}, dense_options());
     if (!(r.s < -1e-3)) continue;
     const double sd = box_minimum(q, 28);
     EXPECT_NEAR(r.s, -sd, 1e-6) << compared;
@@ -573,8 +587,8 @@ TEST(BoxEllipsoidCases, ConstructedTouching) {
       worst = std::max(worst, std::fabs(h.depth - ts[k].depth) / L);
       worst_angle = std::max(worst_angle, angle(h.n, ts[k].n));
       EXPECT_NEAR(h.depth, ts[k].depth, tol) << k << " kind " << k % 3;
-      EXPECT_LE(angle(h.n, ts[k].n), kAngleTol) << k << " kind " << k % 3 << " n " << h.n.transpose() << " want "
-                                                << ts[k].n.transpose();
+      EXPECT_LE(angle(h.n, ts[k].n), kAngleTol)
+          << k << " kind " << k % 3 << " n " << h.n.transpose() << " want " << ts[k].n.transpose();
     }
     std::printf("  touching: hits %d, worst depth %.2g L, angle %.2g\n", hits, worst, worst_angle);
     EXPECT_GT(hits, static_cast<int>(ts.size()) / 4);
@@ -622,7 +636,8 @@ TEST(BoxEllipsoidCases, Analytic) {
     const Vec3d p = box.p;
     // A pancake resting 1/16 deep on the top face (z = 0.5): n = +z, depth 1/16; the
     // point midway: 1/32 below the face, above the pancake's lower pole.
-    Hit h = one(Query{box, Posed{p + Vec3d(0.25, 0.5, 0.5 + 0.125 - 0.0625), Mat3d::Identity(), Vec3d(1, 0.75, 0.125)}});
+    Hit h = one(Query{
+        box, Posed{p + Vec3d(0.25, 0.5, 0.5 + 0.125 - 0.0625), Mat3d::Identity(), Vec3d(1, 0.75, 0.125)}});
     ASSERT_EQ(h.count, 1u);
     EXPECT_NEAR(h.depth, 0.0625, 1e-6);
     EXPECT_LT((h.n - Vec3d(0, 0, 1)).norm(), 1e-6) << h.n.transpose();
@@ -650,9 +665,11 @@ TEST(BoxEllipsoidCases, Analytic) {
       EXPECT_LT(angle(h.n, d), 1e-5) << h.n.transpose();
     }
     // Exactly touching the top face, and separated: no contact.
-    EXPECT_EQ(one(Query{box, Posed{p + Vec3d(0, 0, 0.5 + 0.125), Mat3d::Identity(), Vec3d(1, 0.75, 0.125)}}).count,
+    EXPECT_EQ(
+        one(Query{box, Posed{p + Vec3d(0, 0, 0.5 + 0.125), Mat3d::Identity(), Vec3d(1, 0.75, 0.125)}}).count,
+        0u);
+    EXPECT_EQ(one(Query{box, Posed{p + Vec3d(3.5, 0, 0), Mat3d::Identity(), Vec3d(1, 0.75, 0.125)}}).count,
               0u);
-    EXPECT_EQ(one(Query{box, Posed{p + Vec3d(3.5, 0, 0), Mat3d::Identity(), Vec3d(1, 0.75, 0.125)}}).count, 0u);
     // Coincident centres, axis aligned: the least overlap is along z (h 0.5 + e 0.125).
     h = one(Query{box, Posed{p, Mat3d::Identity(), Vec3d(1, 0.75, 0.125)}});
     ASSERT_EQ(h.count, 1u);
@@ -667,7 +684,8 @@ TEST(BoxEllipsoidCases, RoundEllipsoidIsSphereBox) {
   std::vector<Query> qs;
   for (int k = 0; k < 200; ++k) {
     Query q;
-    q.a = Posed{Vec3d(u(g), u(g), u(g)), test::random_rotation(g), Vec3d(0.2 + 0.8 * u01(g), 0.2 + 0.8 * u01(g), 0.2 + 0.8 * u01(g))};
+    q.a = Posed{Vec3d(u(g), u(g), u(g)), test::random_rotation(g),
+                Vec3d(0.2 + 0.8 * u01(g), 0.2 + 0.8 * u01(g), 0.2 + 0.8 * u01(g))};
     const double r = 0.2 + 0.6 * u01(g);
     q.b = Posed{q.a.p + Vec3d(u(g), u(g), u(g)) * 1.5, test::random_rotation(g), Vec3d::Constant(r)};
     qs.push_back(rounded(q));
@@ -745,25 +763,15 @@ TEST(BoxEllipsoidCases, RangePartitionsAndBlockComposition) {
   std::vector<Query> qs = random_queries(g, 57, 1.0, 0.0);
   const std::vector<Query> thin = thin_queries(g, 40);
   qs.insert(qs.end(), thin.begin(), thin.end());
-  const uint32_t n = static_cast<uint32_t>(qs.size());
   const PairKernel kern = pair_kernel(kLeafBox, kLeafEllipsoid);
   auto same = [](const Hit& x, const Hit& y) {
     return x.count == y.count && (x.count == 0 || (x.depth == y.depth && x.n == y.n && x.pt == y.pt));
   };
   for (KernelPath path : {KernelPath::kSimd, KernelPath::kScalar}) {
-    const std::vector<Hit> all = run(qs, path, kern);
-    for (uint32_t cut : {1u, 5u, 8u, 13u, 36u, 61u, 90u}) {
-      const std::vector<Hit> lo = run(qs, path, kern, 0, cut), hi = run(qs, path, kern, cut, n);
-      for (uint32_t k = 0; k < n; ++k) EXPECT_TRUE(same(k < cut ? lo[k] : hi[k], all[k])) << cut << " " << k;
-    }
-    // Every lane among other neighbours: a shuffled bucket gives each lane's same bytes.
-    std::vector<uint32_t> perm(n);
-    std::iota(perm.begin(), perm.end(), 0u);
-    std::shuffle(perm.begin(), perm.end(), g);
-    std::vector<Query> shuffled(n);
-    for (uint32_t k = 0; k < n; ++k) shuffled[k] = qs[perm[k]];
-    const std::vector<Hit> sh = run(shuffled, path, kern);
-    for (uint32_t k = 0; k < n; ++k) EXPECT_TRUE(same(sh[k], all[perm[k]])) << k;
+    const auto run_path = [&](const std::vector<Query>& q, uint32_t begin, uint32_t end) {
+      return run(q, path, kern, begin, end);
+    };
+    test::expect_partition_invariant(qs, {1u, 5u, 8u, 13u, 36u, 61u, 90u}, run_path, same, g);
   }
 }
 

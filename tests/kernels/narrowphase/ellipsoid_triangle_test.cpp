@@ -53,6 +53,7 @@
 
 #include "kernels/narrowphase/pair_kernels.h"
 #include "support/ellipsoid_reference.h"
+#include "support/lane_checks.h"
 #include "support/leaf_lanes.h"
 #include "support/narrow_reference.h"
 #include "support/random_input.h"
@@ -154,7 +155,8 @@ std::vector<Hit> run(const std::vector<Query>& qs, KernelPath path) {
   return run(qs, path, k);
 }
 
-void gjk_kernel(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out, Range r, const NarrowConfig& cfg) {
+void gjk_kernel(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out, Range r,
+                const NarrowConfig& cfg) {
   collide_gjk_epa(a, b, out, r, cfg, kLeafEllipsoid, kLeafTriangle);
 }
 
@@ -190,7 +192,9 @@ double golden(Fn f, double lo, double hi, int iters, double* arg) {
 /// golden-section search over the barycentric coordinates); y = where.
 double triangle_minimum(const Query& q, Vec3d* where) {
   const Tri& t = q.b;
-  auto point = [&](double u, double v) { return Vec3d(t.v[0] + u * (t.v[1] - t.v[0]) + v * (t.v[2] - t.v[0])); };
+  auto point = [&](double u, double v) {
+    return Vec3d(t.v[0] + u * (t.v[1] - t.v[0]) + v * (t.v[2] - t.v[0]));
+  };
   auto inner = [&](double u, double* v_at) {
     return golden([&](double v) { return sd_ellipsoid(q.a, point(u, v)); }, 0.0, 1.0 - u, 44, v_at);
   };
@@ -333,8 +337,8 @@ void check_all(const std::vector<Query>& qs, const char* what, Stats* st_out = n
     for (const Hit* hp : {&simd[k], &scal[k]}) {
       const Hit& h = *hp;
       const char* path = hp == &simd[k] ? " simd" : " scalar";
-      ASSERT_EQ(h.count > 0, f.s > 0) << what << " lane " << k << " depth_ref " << f.s << " got " << h.depth
-                                      << path;
+      ASSERT_EQ(h.count > 0, f.s > 0)
+          << what << " lane " << k << " depth_ref " << f.s << " got " << h.depth << path;
       if (f.s <= 0) continue;
       ASSERT_EQ(h.count, 1u);
       if (hp == &simd[k]) {
@@ -380,8 +384,8 @@ void check_all(const std::vector<Query>& qs, const char* what, Stats* st_out = n
   std::printf(
       "  %-30s lanes %5d hits %5d through %5d normals %5d | worst depth %.2g L, angle %.2g; simd-scalar "
       "%.2g L, %.2g\n",
-      what, st.lanes, st.hits, st.through, st.normal_checked, st.worst_depth, st.worst_angle, st.worst_path_depth,
-      st.worst_path_angle);
+      what, st.lanes, st.hits, st.through, st.normal_checked, st.worst_depth, st.worst_angle,
+      st.worst_path_depth, st.worst_path_angle);
   if (st_out != nullptr) *st_out = st;
 }
 
@@ -471,10 +475,12 @@ std::vector<Touch> touching_queries(std::mt19937& g, int n) {
         q.b = Tri{{c + r * tan_dir(a0), c + r * tan_dir(a0 + 2.1), c + r * tan_dir(a0 + 4.2)}};
         break;
       case 1:  // edge through c across m, third vertex above
-        q.b = Tri{{c + r * tan_dir(a0), c - 0.7 * r * tan_dir(a0), c + r * (0.5 * u01(g) + 0.2) * m + r * tan_dir(a0 + 1.5)}};
+        q.b = Tri{{c + r * tan_dir(a0), c - 0.7 * r * tan_dir(a0),
+                   c + r * (0.5 * u01(g) + 0.2) * m + r * tan_dir(a0 + 1.5)}};
         break;
       default:  // vertex at c, the others above
-        q.b = Tri{{c, c + r * (tan_dir(a0) + (0.2 + u01(g)) * m), c + r * (tan_dir(a0 + 2.0) + (0.2 + u01(g)) * m)}};
+        q.b = Tri{{c, c + r * (tan_dir(a0) + (0.2 + u01(g)) * m),
+                   c + r * (tan_dir(a0 + 2.0) + (0.2 + u01(g)) * m)}};
         break;
     }
     out.push_back(Touch{rounded(q), -ff, m});
@@ -591,7 +597,8 @@ TEST(EllipsoidTriangleReference, ReferencesAgree) {
     Vec3d y;
     const double sd = triangle_minimum(q, &y);
     if (!(sd > 1e-3)) continue;
-    const nref::PairResult r = nref::solve_pair(ellipsoid_shape(q.a), triangle_shape(q.b), {}, dense_options());
+    const nref::PairResult r =
+        nref::solve_pair(ellipsoid_shape(q.a), triangle_shape(q.b), {}, dense_options());
     // (The float-rounded R is orthonormal to ~6e-8: see capsule_ellipsoid_test.)
     EXPECT_NEAR(r.s, -sd, 2e-7) << compared;
     EXPECT_LT(angle(to_eigen(r.n), outward_normal_nearest(q.a, y)), 1e-5) << compared;
@@ -641,8 +648,8 @@ TEST(EllipsoidTriangleCases, ConstructedTouching) {
       worst = std::max(worst, std::fabs(h.depth - ts[k].depth) / L);
       worst_angle = std::max(worst_angle, angle(h.n, ts[k].n));
       EXPECT_NEAR(h.depth, ts[k].depth, tol) << k;
-      EXPECT_LE(angle(h.n, ts[k].n), kAngleTol) << k << " kind " << k % 3 << " n " << h.n.transpose() << " want "
-                                                << ts[k].n.transpose();
+      EXPECT_LE(angle(h.n, ts[k].n), kAngleTol)
+          << k << " kind " << k % 3 << " n " << h.n.transpose() << " want " << ts[k].n.transpose();
     }
     std::printf("  touching: hits %d, worst depth %.2g L, angle %.2g\n", hits, worst, worst_angle);
     EXPECT_GT(hits, static_cast<int>(ts.size()) / 4);
@@ -695,7 +702,8 @@ TEST(EllipsoidTriangleCases, Analytic) {
     const Vec3d p = pancake.p;
     // A flat triangle 1/16 below the top face (z = 0.125): n = +z, depth 1/16; the
     // point midway: 1/32 below the face, above the pancake's pole.
-    Hit h = one(Query{pancake, Tri{{p + Vec3d(-1, -1, 0.0625), p + Vec3d(1, -1, 0.0625), p + Vec3d(0, 1, 0.0625)}}});
+    Hit h = one(
+        Query{pancake, Tri{{p + Vec3d(-1, -1, 0.0625), p + Vec3d(1, -1, 0.0625), p + Vec3d(0, 1, 0.0625)}}});
     ASSERT_EQ(h.count, 1u);
     EXPECT_NEAR(h.depth, 0.0625, 1e-6);
     EXPECT_LT((h.n - Vec3d(0, 0, 1)).norm(), 1e-6) << h.n.transpose();
@@ -717,9 +725,12 @@ TEST(EllipsoidTriangleCases, Analytic) {
     EXPECT_NEAR(h.depth, 0.125, 1e-6);
     EXPECT_LT((h.n - Vec3d(0, 1, 0)).norm(), 1e-6) << h.n.transpose();
     // Exactly touching the top face and separated: no contact.
-    EXPECT_EQ(one(Query{pancake, Tri{{p + Vec3d(-1, -1, 0.125), p + Vec3d(1, -1, 0.125), p + Vec3d(0, 1, 0.125)}}}).count,
+    EXPECT_EQ(
+        one(Query{pancake, Tri{{p + Vec3d(-1, -1, 0.125), p + Vec3d(1, -1, 0.125), p + Vec3d(0, 1, 0.125)}}})
+            .count,
+        0u);
+    EXPECT_EQ(one(Query{pancake, Tri{{p + Vec3d(2.5, 0, 0), p + Vec3d(3, 1, 0), p + Vec3d(3, -1, 0)}}}).count,
               0u);
-    EXPECT_EQ(one(Query{pancake, Tri{{p + Vec3d(2.5, 0, 0), p + Vec3d(3, 1, 0), p + Vec3d(3, -1, 0)}}}).count, 0u);
   }
 }
 
@@ -776,7 +787,8 @@ TEST(EllipsoidTriangleCases, VertexOrderAndOrientation) {
   const std::vector<Hit> h0 = run(qs, KernelPath::kSimd);
   for (int variant = 0; variant < 2; ++variant) {
     std::vector<Query> other = qs;
-    for (Query& q : other) q.b = variant == 0 ? Tri{{q.b.v[1], q.b.v[2], q.b.v[0]}} : Tri{{q.b.v[0], q.b.v[2], q.b.v[1]}};
+    for (Query& q : other)
+      q.b = variant == 0 ? Tri{{q.b.v[1], q.b.v[2], q.b.v[0]}} : Tri{{q.b.v[0], q.b.v[2], q.b.v[1]}};
     const std::vector<Hit> h1 = run(other, KernelPath::kSimd);
     for (size_t k = 0; k < qs.size(); ++k) {
       const double L = size_of(qs[k]);
@@ -798,25 +810,15 @@ TEST(EllipsoidTriangleCases, RangePartitionsAndBlockComposition) {
   std::vector<Query> qs = random_queries(g, 37, 1.0, 0.0);
   const std::vector<Query> thin = thin_queries(g, 40);
   qs.insert(qs.end(), thin.begin(), thin.end());
-  const uint32_t n = static_cast<uint32_t>(qs.size());
   const PairKernel kern = pair_kernel(kLeafEllipsoid, kLeafTriangle);
   auto same = [](const Hit& x, const Hit& y) {
     return x.count == y.count && (x.count == 0 || (x.depth == y.depth && x.n == y.n && x.pt == y.pt));
   };
   for (KernelPath path : {KernelPath::kSimd, KernelPath::kScalar}) {
-    const std::vector<Hit> all = run(qs, path, kern);
-    for (uint32_t cut : {1u, 5u, 8u, 13u, 36u, 61u}) {
-      const std::vector<Hit> lo = run(qs, path, kern, 0, cut), hi = run(qs, path, kern, cut, n);
-      for (uint32_t k = 0; k < n; ++k) EXPECT_TRUE(same(k < cut ? lo[k] : hi[k], all[k])) << cut << " " << k;
-    }
-    // Every lane among other neighbours: a shuffled bucket gives each lane's same bytes.
-    std::vector<uint32_t> perm(n);
-    std::iota(perm.begin(), perm.end(), 0u);
-    std::shuffle(perm.begin(), perm.end(), g);
-    std::vector<Query> shuffled(n);
-    for (uint32_t k = 0; k < n; ++k) shuffled[k] = qs[perm[k]];
-    const std::vector<Hit> sh = run(shuffled, path, kern);
-    for (uint32_t k = 0; k < n; ++k) EXPECT_TRUE(same(sh[k], all[perm[k]])) << k;
+    const auto run_path = [&](const std::vector<Query>& q, uint32_t begin, uint32_t end) {
+      return run(q, path, kern, begin, end);
+    };
+    test::expect_partition_invariant(qs, {1u, 5u, 8u, 13u, 36u, 61u}, run_path, same, g);
   }
 }
 
