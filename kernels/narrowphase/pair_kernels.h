@@ -12,6 +12,8 @@
 // capsule-ellipsoid, box-ellipsoid and ellipsoid-triangle exact lane kernels
 // (sphere_ellipsoid.cpp, capsule_ellipsoid.cpp, box_ellipsoid.cpp, ellipsoid_triangle.cpp:
 // candidate normals from the point solvers of ellipsoid_solve.h, SIMD across pairs);
+// hull-ellipsoid the same candidates per pair, 8 hull features per step
+// (convex_ellipsoid.cpp);
 // capsule-cylinder a lane kernel
 // (capsule_cylinder.cpp: candidate normals of the core-cylinder Minkowski difference's
 // pieces). Everything else goes through the
