@@ -62,6 +62,7 @@ struct Table {
     k[kLeafEllipsoid][kLeafTriangle] = &collide_ellipsoid_triangle;
     k[kLeafCapsule][kLeafCylinder] = &collide_capsule_cylinder;
     k[kLeafBox][kLeafEllipsoid] = &collide_box_ellipsoid;
+    k[kLeafConvex][kLeafEllipsoid] = &collide_convex_ellipsoid;
   }
 };
 

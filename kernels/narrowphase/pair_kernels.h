@@ -12,6 +12,8 @@
 // capsule-ellipsoid, box-ellipsoid and ellipsoid-triangle exact lane kernels
 // (sphere_ellipsoid.cpp, capsule_ellipsoid.cpp, box_ellipsoid.cpp, ellipsoid_triangle.cpp:
 // candidate normals from the point solvers of ellipsoid_solve.h, SIMD across pairs);
+// hull-ellipsoid the same candidates per pair, 8 hull features per step
+// (convex_ellipsoid.cpp);
 // capsule-cylinder a lane kernel
 // (capsule_cylinder.cpp: candidate normals of the core-cylinder Minkowski difference's
 // pieces). Everything else goes through the
@@ -75,6 +77,12 @@ void collide_capsule_cylinder(const LeafSoA&, const LeafSoA&, const ManifoldSoA&
 /// each candidate's solution curve, the rest solved packed; box_ellipsoid.cpp), SIMD
 /// across pairs.
 void collide_box_ellipsoid(const LeafSoA&, const LeafSoA&, const ManifoldSoA&, Range, const NarrowConfig&);
+/// Convex hull (A) against ellipsoid (B): exact, the least support overlap over the hull's
+/// face normals and the candidate normals of the vertex and edge pieces that can still
+/// win (distance and level bounds, the curve test along each edge candidate's solution;
+/// survivors solved packed; convex_ellipsoid.cpp); one pair at a time, kSimdWidth
+/// features per step, not GJK / EPA.
+void collide_convex_ellipsoid(const LeafSoA&, const LeafSoA&, const ManifoldSoA&, Range, const NarrowConfig&);
 
 // --- general convex -----------------------------------------------------------------------
 /// GJK + EPA for any two convex leaf types ta <= tb (neither a half-space), one pair

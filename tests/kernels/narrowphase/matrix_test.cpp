@@ -418,7 +418,7 @@ bool specialised(LeafType a, LeafType b) {
           kp == &k::collide_capsule_convex || kp == &k::collide_convex_triangle ||
           kp == &k::collide_sphere_ellipsoid || kp == &k::collide_capsule_ellipsoid ||
           kp == &k::collide_ellipsoid_triangle || kp == &k::collide_capsule_cylinder ||
-          kp == &k::collide_box_ellipsoid);
+          kp == &k::collide_box_ellipsoid || kp == &k::collide_convex_ellipsoid);
 }
 
 struct Lane {
