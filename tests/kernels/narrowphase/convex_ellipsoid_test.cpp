@@ -151,7 +151,8 @@ struct Checker {
     for (int i = 0; i < 9; ++i) R(i / 3, i % 3) = b.r[i][k];
     const Vec3d pb(b.p[0][k], b.p[1][k], b.p[2][k]), eb(b.e[0][k], b.e[1][k], b.e[2][k]);
     const Vec3d xe = R.transpose() * (got.pt[0] - 0.5 * got.depth * n - pb);
-    EXPECT_NEAR(test::eref::signed_distance_local(eb, xe), 0.0, tol + 1e-6 * L + 2.4e-7 * got.pt[0].cwiseAbs().maxCoeff());
+    EXPECT_NEAR(test::eref::signed_distance_local(eb, xe), 0.0,
+                tol + 1e-6 * L + 2.4e-7 * got.pt[0].cwiseAbs().maxCoeff());
     if (scalar != nullptr) {
       const test::PairResult s = scalar->out.result(k);
       ASSERT_EQ(s.count, got.count);
@@ -174,8 +175,8 @@ Vec3d radii(hi::Rng& g, double scale, int kind) {
 
 /// Random pairs at `scale` and `offset`: the ellipsoid's centre within 1.2 times the sum
 /// of the bounding radii of the hull's origin (about half overlap).
-void random_pairs(hi::Rng& g, const hi::Hulls& hulls, uint32_t first, uint32_t nh, double scale, double offset,
-                  uint32_t count, int kind, Case& c) {
+void random_pairs(hi::Rng& g, const hi::Hulls& hulls, uint32_t first, uint32_t nh, double scale,
+                  double offset, uint32_t count, int kind, Case& c) {
   for (uint32_t i = 0; i < count; ++i) {
     Side a, b;
     a.hull = first + static_cast<uint32_t>(g() % nh);
@@ -197,11 +198,12 @@ class ConvexEllipsoid : public ::testing::Test {
  protected:
   void SetUp() override {
     hi::Rng g(7);
-    hi::add_random_hulls(g, &hulls, 12, 1.0);   // 0..11: size 1
-    hi::add_random_hulls(g, &hulls, 4, 1e-4);   // 12..15
-    hi::add_random_hulls(g, &hulls, 4, 1e4);    // 16..19
+    hi::add_random_hulls(g, &hulls, 12, 1.0);       // 0..11: size 1
+    hi::add_random_hulls(g, &hulls, 4, 1e-4);       // 12..15
+    hi::add_random_hulls(g, &hulls, 4, 1e4);        // 16..19
     hulls.add(hi::box_corners(1.0f, 0.5f, 1e-4f));  // 20: flat
     hulls.add(hi::box_corners(0.7f, 0.4f, 0.3f));   // 21: box
+    hulls.add(hi::ellipsoid_points(g, 400, 1.0));   // 22: beyond the kernel's limits
   }
 
   /// Runs SIMD and scalar, checks every lane; returns the checker's counts.
@@ -221,7 +223,9 @@ class ConvexEllipsoid : public ::testing::Test {
   hi::Hulls hulls;
 };
 
-uint32_t count_of(uint32_t n) { return static_cast<uint32_t>(n * test::intensity()); }
+uint32_t count_of(uint32_t n) {
+  return static_cast<uint32_t>(n * test::intensity());
+}
 
 TEST_F(ConvexEllipsoid, Registered) {
   EXPECT_EQ(pair_kernel(kLeafConvex, kLeafEllipsoid), &collide_convex_ellipsoid);
@@ -271,10 +275,12 @@ TEST_F(ConvexEllipsoid, TouchingAndPushedIn) {
     const int kind = static_cast<int>(i % 3);
     Vec3d ul;
     if (kind == 0) {
-      const uint32_t f = hv.face_begin[a.hull] + static_cast<uint32_t>(g() % (hv.face_begin[a.hull + 1] - hv.face_begin[a.hull]));
+      const uint32_t f = hv.face_begin[a.hull] +
+                         static_cast<uint32_t>(g() % (hv.face_begin[a.hull + 1] - hv.face_begin[a.hull]));
       ul = Vec3d(hv.fnx[f], hv.fny[f], hv.fnz[f]);
     } else if (kind == 1) {
-      const uint32_t e = hv.adj_begin[a.hull] + static_cast<uint32_t>(g() % (hv.adj_begin[a.hull + 1] - hv.adj_begin[a.hull]));
+      const uint32_t e = hv.adj_begin[a.hull] +
+                         static_cast<uint32_t>(g() % (hv.adj_begin[a.hull + 1] - hv.adj_begin[a.hull]));
       ul = Vec3d(hv.emx[e], hv.emy[e], hv.emz[e]);
     } else {
       const auto& vs = hulls.data[a.hull].vertices;
@@ -394,7 +400,8 @@ TEST_F(ConvexEllipsoid, AgreesWithGjkEpa) {
   run.go(&collide_convex_ellipsoid, hv, KernelPath::kSimd, Range{0, run.n()});
   NarrowConfig cfg;
   cfg.hulls = hv;
-  collide_gjk_epa(gj.la.soa(), gj.lb.soa(), gj.out.view(), Range{0, gj.n()}, cfg, kLeafConvex, kLeafEllipsoid);
+  collide_gjk_epa(gj.la.soa(), gj.lb.soa(), gj.out.view(), Range{0, gj.n()}, cfg, kLeafConvex,
+                  kLeafEllipsoid);
   int hits = 0;
   for (uint32_t k = 0; k < run.n(); ++k) {
     const test::PairResult x = run.out.result(k), y = gj.out.result(k);
@@ -411,6 +418,35 @@ TEST_F(ConvexEllipsoid, AgreesWithGjkEpa) {
   EXPECT_GT(hits, 60);
 }
 
+/// A hull beyond the kernel's stack limits (more than 256 vertices) goes through
+/// GJK / EPA for its lanes: the same bytes as collide_gjk_epa, and still right.
+TEST_F(ConvexEllipsoid, LargeHullsFallBackToGjkEpa) {
+  ASSERT_GT(hulls.data[22].vertices.size(), 256u);
+  hi::Rng g(23);
+  Case c;
+  random_pairs(g, hulls, 21, 2, 1.0, 0.0, count_of(40), 0, c);  // hulls 21 (kernel) and 22
+  Lanes run(c), gj(c);
+  const HullView hv = hulls.store.view();
+  run.go(&collide_convex_ellipsoid, hv, KernelPath::kSimd, Range{0, run.n()});
+  NarrowConfig cfg;
+  cfg.hulls = hv;
+  collide_gjk_epa(gj.la.soa(), gj.lb.soa(), gj.out.view(), Range{0, gj.n()}, cfg, kLeafConvex,
+                  kLeafEllipsoid);
+  int large = 0, hits = 0;
+  for (uint32_t k = 0; k < run.n(); ++k) {
+    if (c.a[k].hull != 22) continue;
+    ++large;
+    const test::PairResult x = run.out.result(k), y = gj.out.result(k);
+    ASSERT_EQ(x.count, y.count) << k;
+    if (x.count == 0) continue;
+    ++hits;
+    EXPECT_EQ(x.depth, y.depth) << k;
+    EXPECT_EQ(x.n, y.n) << k;
+  }
+  EXPECT_GT(large, static_cast<int>(run.n()) / 4);
+  EXPECT_GT(hits, 0);
+}
+
 TEST_F(ConvexEllipsoid, PartitionsAndShuffledLanesGiveTheSameBytes) {
   hi::Rng g(19);
   Case c;
@@ -420,7 +456,8 @@ TEST_F(ConvexEllipsoid, PartitionsAndShuffledLanesGiveTheSameBytes) {
   whole.go(&collide_convex_ellipsoid, hv, KernelPath::kSimd, Range{0, whole.n()});
   Lanes parts(c);
   const uint32_t cuts[] = {0, 1, 7, 100, 101, whole.n()};
-  for (int i = 0; i + 1 < 6; ++i) parts.go(&collide_convex_ellipsoid, hv, KernelPath::kSimd, Range{cuts[i], cuts[i + 1]});
+  for (int i = 0; i + 1 < 6; ++i)
+    parts.go(&collide_convex_ellipsoid, hv, KernelPath::kSimd, Range{cuts[i], cuts[i + 1]});
   std::vector<uint32_t> perm(whole.n());
   std::iota(perm.begin(), perm.end(), 0u);
   std::shuffle(perm.begin(), perm.end(), g);
