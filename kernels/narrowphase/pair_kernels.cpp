@@ -61,6 +61,7 @@ struct Table {
     k[kLeafCapsule][kLeafEllipsoid] = &collide_capsule_ellipsoid;
     k[kLeafEllipsoid][kLeafTriangle] = &collide_ellipsoid_triangle;
     k[kLeafCapsule][kLeafCylinder] = &collide_capsule_cylinder;
+    k[kLeafCylinder][kLeafTriangle] = &collide_cylinder_triangle;
   }
 };
 
