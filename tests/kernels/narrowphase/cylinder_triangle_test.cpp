@@ -710,8 +710,8 @@ TEST(CylinderTriangle, AnalyticCases) {
 }
 
 /// Near-parallel contacts: a large triangle tilted 0..1e-2 rad from level on a cap
-/// (several points), an edge tilted from the axis beside the side and the cylinder lying
-/// tilted on a triangle (2 points).
+/// (several points), an edge tilted from the axis beside the side (also one past both
+/// caps) and the cylinder lying tilted on a triangle (2 points).
 TEST(CylinderTriangle, NearParallelManifolds) {
   std::mt19937 g(37);
   std::uniform_real_distribution<double> uni(-1, 1);
@@ -731,6 +731,9 @@ TEST(CylinderTriangle, NearParallelManifolds) {
       const Vec3d ax = (Vec3d::UnitZ() + tilt * (uni(g) > 0 ? radial : tang)).normalized();
       const Vec3d m0 = radial * (rc - d) + Vec3d(0, 0, 0.5 * uni(g));
       sides.push_back(posed(g, m0 - 0.8 * ax, m0 + 0.8 * ax, m0 + 2 * radial + 0.3 * tang, rc, h));
+      // an edge along the side past both caps (its ends clipped to the cap planes)
+      const Vec3d m1 = radial * (rc - d);
+      sides.push_back(posed(g, m1 - 1.5 * h * ax, m1 + 1.5 * h * ax, m1 + 2 * radial + 0.3 * tang, rc, h));
       // lying on a large triangle (the axis tilted from its plane)
       const Vec3d up = (radial + tilt * Vec3d::UnitZ()).normalized(), s1 = up.cross(tang).normalized(),
                   s2 = up.cross(s1);
