@@ -38,7 +38,8 @@
 //    in sphere_ellipsoid.cpp): kArcIterations Newton steps from a certified lower bound
 //    (Newton on a concave function lands at or below the root), a certified upper
 //    bound from any evaluated point, and a pole step on the b|Y|/tau term where it
-//    dominates (Newton crawls there: points near the evolute's cusps);
+//    dominates (Newton crawls there: points near the evolute's cusps): the shared
+//    solve of rim_solve.h, both rims in one loop;
 //  - otherwise n* meets a rim at a core end (M's edge: an end point plus a rim circle):
 //    the nearest point of that circle, n along it with the sign its normal cone allows
 //    (4 candidates: 2 ends x 2 rims).
@@ -79,6 +80,7 @@
 
 #include "kernels/narrowphase/pair_kernels.h"
 #include "kernels/narrowphase/primitives.h"
+#include "kernels/narrowphase/rim_solve.h"
 
 // No FMA contraction in this file. Several quantities here are rounding noise by nature
 // (u's horizontal part for a core along the axis, the offset of a core end on the axis,
@@ -102,12 +104,6 @@ using simd::cross;
 using simd::dot;
 using simd::length_sq;
 
-/// Fixed step count of the half-ellipse root solve: float precision is reached by 9
-/// everywhere tried (points at the evolute's cusps of ellipses with axis ratio 1e-6..1,
-/// 1e-8..1e3 of the radius from them); 10 for margin.
-constexpr int kArcIterations = 10;
-/// Smallest tau of the root solve (scaled units: the rim's radius is 1).
-constexpr float kFloor = 1e-18f;
 /// |sin| between the core and the cap plane / the axis below which a cap / side
 /// contact is a 2-point manifold (as for capsule-capsule, -box and -triangle).
 constexpr float kParallelSin = 0.05f;
@@ -135,61 +131,6 @@ struct Best {
     cls = select(m, F(cls2), cls);
   }
 };
-
-/// The unit normal (nx, ny), ny >= 0, at the local minimum of the distance from the
-/// point (X, Y) to the upper half { (cos s, b sin s) : s in [0, pi] } of the ellipse
-/// with semi-axes 1 and b in [0, 1] (Y >= 0: the nearest point of the ellipse; Y < 0:
-/// the minimum on the far half, where one exists; where none does the result is some
-/// unit normal of that half). See the file header for the solve.
-template <class F>
-IMPACT_INLINE void half_ellipse_normal(F b, F X, F Y, F& nx, F& ny) {
-  using Mask = typename F::Mask;
-  const F zero(0.0f), one(1.0f), fl(kFloor);
-  const F sx = simd::sign_nonneg(X);
-  const F ax = abs(X), ay = abs(Y);
-  const Mask same = Y >= zero;
-  const F sg = select(same, one, F(-1.0f));
-  const F k = (one - b) * (one + b);  // a^2 - b^2, exact for b in [0.5, 1]
-  const F A = ax, B = b * ay;
-  // Each term of |q| alone >= 1 below these: certified lower bounds of the root. The far
-  // side's root has q_1 <= 1, i.e. tau <= k - A.
-  F lo = max(select(same, max(B, A - k), B), fl);
-  F hi = max(select(same, sqrt(A * A + B * B), k - A), lo);
-  const F dmin = max(A, fl);  // k +- tau >= A at and below the root (q_1 <= 1)
-  F c = lo;
-  for (int i = 0; i < kArcIterations; ++i) {
-    const F d1 = max(mul_add(sg, c, k), dmin);
-    const F rr = one / (d1 * c);
-    const F r1 = c * rr, r2 = d1 * rr;  // 1 / d1, 1 / tau
-    const F q1 = A * r1, q2 = B * r2;
-    const F q1s = q1 * q1, q2s = q2 * q2;
-    const F f = q1s + q2s;  // |q|^2
-    // psi = 1/|q| - 1: psi' = dd / |q|^3, Newton step (|q| - 1) |q|^2 / dd.
-    const F dd = sg * q1s * r1 + q2s * r2;
-    const Mask rising = dd > zero;
-    const F tn = c + (sqrt(f) - one) * f / select(rising, dd, one);
-    hi = select(f <= one, min(hi, c), hi);
-    lo = min(max(lo, select(rising, tn, lo)), hi);
-    // Pole step: the root if q_1 stayed as it is (exact where the b|Y|/tau term rules).
-    const F tp = B / sqrt(max(one - q1s, fl));
-    const Mask pole = (q2s * r2 > q1s * r1) & (q1 < one) & (tp > lo) & (tp < hi);
-    c = select(pole, tp, lo);
-  }
-  // Normal at the foot (x / a^2, y / b^2) = (X / (k +- tau), |Y| / tau), scaled by tau
-  // (k +- tau); on the axis inside the evolute (tau at its floor, Eberly's special case)
-  // from the ellipse's equation instead, times b: (b q_1, sqrt(1 - q_1^2)).
-  const F d1 = max(mul_add(sg, lo, k), dmin);
-  F px = ax * lo, py = ay * d1;
-  const Mask degenerate = px * px + py * py < F(kTinySq);
-  const F q1 = min(A / d1, one);
-  px = select(degenerate, b * q1, px);
-  py = select(degenerate, sqrt(max(one - q1 * q1, zero)), py);
-  const F l2 = px * px + py * py;
-  const Mask ok = l2 >= F(kTinySq);
-  const F inv = one / sqrt(select(ok, l2, one));
-  nx = select(ok, sx * px * inv, zero);
-  ny = select(ok, py * inv, one);
-}
 
 template <class F>
 IMPACT_INLINE void capsule_cylinder_block(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out,
@@ -264,11 +205,11 @@ IMPACT_INLINE void capsule_cylinder_block(const LeafSoA& a, const LeafSoA& b, co
     const F ratio = abs(u.z);  // minor / major semi-axis of a rim's shadow
     // (w and v are orthonormal only up to rounding, which for a core along the axis is all
     // of u's horizontal part: normalised, so that o(n) stays an upper bound)
-    F ex, ey, len;
-    half_ellipse_normal(ratio, bx, by - lr, ex, ey);
-    const V3<F> n_top = normalize_or(madd(w3 * ex, ey, v), w3, len);
-    half_ellipse_normal(ratio, bx, -(by + lr), ex, ey);
-    const V3<F> n_bot = normalize_or(madd(w3 * ex, -ey, v), w3, len);
+    const F rb[2] = {ratio, ratio}, rx[2] = {bx, bx}, ry[2] = {by - lr, -(by + lr)};
+    F ex[2], ey[2], len;
+    rim::half_ellipse_normals(rb, rx, ry, ex, ey);
+    const V3<F> n_top = normalize_or(madd(w3 * ex[0], ey[0], v), w3, len);
+    const V3<F> n_bot = normalize_or(madd(w3 * ex[1], -ey[1], v), w3, len);
     // witness: the core point level (along u) with the rim point C offers along -n; a
     // witness beyond the core's ends (by more than rounding) is no point of this piece,
     // and such a candidate is dropped: near the minimum o is flat, and an invalid

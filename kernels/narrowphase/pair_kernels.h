@@ -13,13 +13,12 @@
 // (sphere_ellipsoid.cpp, capsule_ellipsoid.cpp, box_ellipsoid.cpp, ellipsoid_triangle.cpp:
 // candidate normals from the point solvers of ellipsoid_solve.h, SIMD across pairs);
 // hull-ellipsoid the same candidates per pair, 8 hull features per step
-// (convex_ellipsoid.cpp);
-// capsule-cylinder a lane kernel
-// (capsule_cylinder.cpp: candidate normals of the core-cylinder Minkowski difference's
-// pieces). Everything else goes through the
-// general convex path (kernels/narrowphase/gjk_epa.cpp): GJK + EPA on the leaves'
-// support functions, with face clipping for polytope manifolds, and a support-function
-// kernel against half-spaces.
+// (convex_ellipsoid.cpp); capsule-cylinder and cylinder-triangle lane kernels
+// (capsule_cylinder.cpp, cylinder_triangle.cpp: candidate normals of the Minkowski
+// difference's pieces, rims by rim_solve.h). Everything else goes through the general
+// convex path (kernels/narrowphase/gjk_epa.cpp): GJK + EPA on the leaves' support
+// functions, with face clipping for polytope manifolds, and a support-function kernel
+// against half-spaces.
 #pragma once
 
 #include "kernels/narrowphase/leaf.h"
@@ -83,6 +82,11 @@ void collide_box_ellipsoid(const LeafSoA&, const LeafSoA&, const ManifoldSoA&, R
 /// survivors solved packed; convex_ellipsoid.cpp); one pair at a time, kSimdWidth
 /// features per step, not GJK / EPA.
 void collide_convex_ellipsoid(const LeafSoA&, const LeafSoA&, const ManifoldSoA&, Range, const NarrowConfig&);
+/// Cylinder against triangle: the least support overlap over the candidate normals of
+/// their Minkowski difference's pieces (caps, faces, side against edges and vertices,
+/// vertices against rims, edges against rims by the 2D root solve of rim_solve.h), the
+/// cap or side clipped to the triangle (1-4 points), SIMD across pairs.
+void collide_cylinder_triangle(const LeafSoA&, const LeafSoA&, const ManifoldSoA&, Range, const NarrowConfig&);
 
 // --- general convex -----------------------------------------------------------------------
 /// GJK + EPA for any two convex leaf types ta <= tb (neither a half-space), one pair

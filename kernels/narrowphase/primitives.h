@@ -5,7 +5,7 @@
 // two segments robust for parallel ones, closest point on a triangle, a deterministic
 // perpendicular for degenerate normals, a capsule's surface along a direction from a
 // core point), and the reduction of a candidate set of contact
-// points to at most 4 (reduce4).
+// points to at most 4 (reduce4, reduce4_indices).
 //
 // Every helper is a template over the lane type F (simd::FloatW or simd::Float1), so
 // the SIMD path and the scalar reference path run the same code. Positions are taken
@@ -358,10 +358,13 @@ IMPACT_INLINE F tree_extreme(const F (&v)[M]) {
 /// Each choice is one max/min tree over keys that carry their candidate's index in
 /// their low bits (simd::tag), then a per-lane pick of the winner (gather_lanes): no
 /// select chain through the candidates. Keys equal to ~4e-6 relative may resolve
-/// either way (deterministically); the outputs are the candidates' exact values.
+/// either way (deterministically). idx receives the chosen candidates' indices (slots
+/// count .. 3 repeat chosen ones), for kernels that carry more than (x, y, d) per point,
+/// and ox, oy their coordinates.
 template <class F, int M>
-IMPACT_INLINE void reduce4(const F (&x)[M], const F (&y)[M], const F (&d)[M], const typename F::Mask (&valid)[M],
-                           F tol, F (&ox)[4], F (&oy)[4], F (&od)[4], typename F::Int& count) {
+IMPACT_INLINE void reduce4_indices(const F (&x)[M], const F (&y)[M], const F (&d)[M],
+                                   const typename F::Mask (&valid)[M], F tol, typename F::Int (&idx)[4],
+                                   typename F::Int& count, F (&ox)[4], F (&oy)[4]) {
   static_assert(M <= 32, "tag() holds indices below 32");
   using Mask = typename F::Mask;
   using Int = typename F::Int;
@@ -373,14 +376,14 @@ IMPACT_INLINE void reduce4(const F (&x)[M], const F (&y)[M], const F (&d)[M], co
   for (int i = 1; i < M; ++i) any = any | valid[i];
   for (int i = 0; i < M; ++i) key[i] = simd::tag(select(valid[i], d[i], neg), i);
   const Int ib = simd::tag_index(tree_extreme<true>(key));
-  const F bx = simd::gather_lanes(x, ib), by = simd::gather_lanes(y, ib), bd = simd::gather_lanes(d, ib);
+  const F bx = simd::gather_lanes(x, ib), by = simd::gather_lanes(y, ib);
   // farthest from it
   for (int i = 0; i < M; ++i) {
     const F dx = x[i] - bx, dy = y[i] - by;
     key[i] = simd::tag(select(valid[i], dx * dx + dy * dy, neg), i);
   }
   const Int jf = simd::tag_index(tree_extreme<true>(key));
-  const F fx = simd::gather_lanes(x, jf), fy = simd::gather_lanes(y, jf), fdp = simd::gather_lanes(d, jf);
+  const F fx = simd::gather_lanes(x, jf), fy = simd::gather_lanes(y, jf);
   const F fd2 = (fx - bx) * (fx - bx) + (fy - by) * (fy - by);
   const Mask v1 = fd2 > tol * tol;
   // largest signed area on either side of the diagonal
@@ -391,18 +394,32 @@ IMPACT_INLINE void reduce4(const F (&x)[M], const F (&y)[M], const F (&d)[M], co
     key2[i] = simd::tag(select(valid[i], ar, pos), i);
   }
   const Int jp = simd::tag_index(tree_extreme<true>(key)), jq = simd::tag_index(tree_extreme<false>(key2));
-  const F px = simd::gather_lanes(x, jp), py = simd::gather_lanes(y, jp), pd = simd::gather_lanes(d, jp);
-  const F qx = simd::gather_lanes(x, jq), qy = simd::gather_lanes(y, jq), qd = simd::gather_lanes(d, jq);
+  const F px = simd::gather_lanes(x, jp), py = simd::gather_lanes(y, jp);
+  const F qx = simd::gather_lanes(x, jq), qy = simd::gather_lanes(y, jq);
   const F amax = ex * (py - by) - ey * (px - bx), amin = ex * (qy - by) - ey * (qx - bx);
   const F area_tol = tol * sqrt(max(fd2, zero));
   const Mask v2 = v1 & (amax > area_tol);
   const Mask v3 = v1 & (-amin > area_tol);
-  ox[0] = bx, oy[0] = by, od[0] = bd;
-  ox[1] = fx, oy[1] = fy, od[1] = fdp;
-  ox[2] = select(v2, px, qx), oy[2] = select(v2, py, qy), od[2] = select(v2, pd, qd);
-  ox[3] = qx, oy[3] = qy, od[3] = qd;
+  idx[0] = ib;
+  idx[1] = jf;
+  idx[2] = select(v2, jp, jq);
+  idx[3] = jq;
+  ox[0] = bx, oy[0] = by;
+  ox[1] = fx, oy[1] = fy;
+  ox[2] = select(v2, px, qx), oy[2] = select(v2, py, qy);
+  ox[3] = qx, oy[3] = qy;
   const Int c = Int(1) + simd::to_int(v1) + simd::to_int(v2 | v3) + simd::to_int(v2 & v3);
   count = select(any, c, Int(0));
+}
+
+/// reduce4_indices, returning the chosen candidates' values: the outputs are the
+/// candidates' exact values.
+template <class F, int M>
+IMPACT_INLINE void reduce4(const F (&x)[M], const F (&y)[M], const F (&d)[M], const typename F::Mask (&valid)[M],
+                           F tol, F (&ox)[4], F (&oy)[4], F (&od)[4], typename F::Int& count) {
+  typename F::Int idx[4];
+  reduce4_indices<F, M>(x, y, d, valid, tol, idx, count, ox, oy);
+  for (int i = 0; i < 4; ++i) od[i] = simd::gather_lanes(d, idx[i]);
 }
 
 }  // namespace impact::kernels::prim

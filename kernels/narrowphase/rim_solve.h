@@ -1,0 +1,109 @@
+// A cylinder's rim seen along a direction: the 2-D half-ellipse root solve shared by
+// the lane kernels whose support overlap has a piece where a rim circle meets a
+// segment's interior (capsule_cylinder.cpp: the core; cylinder_triangle.cpp: a
+// triangle's edges).
+//
+// Seen along a unit direction d (not along the axis z), a rim circle of radius rc is
+// an ellipse in the plane perpendicular to d: semi-axis rc along w = z x d / |z x d|,
+// rc |d_z| along v = d x w, and the two rims' ellipses lie 2 h v_z apart along v
+// (v_z >= 0). On the great circle of directions perpendicular to d, the cylinder's
+// support function is that shadow's (a stadium: the ellipse swept along v), and a
+// direction with n_z > 0 (< 0) meets the top (bottom) rim: the upper (lower) half of
+// its ellipse. The support overlap of the cylinder and a point p of the plane there is
+// the 2-D signed distance of p to the half ellipse along its normal, whose local
+// minimum is the solve below.
+//
+// Method: Eberly's secular equation for the point (t > -b^2: the nearest point; t in
+// (-a^2, -b^2), the root next to -b^2: the second local minimum seen from the far side,
+// which exists inside the ellipse's evolute), written with tau = |t + b^2| as
+// 1/|q(tau)| = 1, q = (a X / (a^2 - b^2 +- tau), b |Y| / tau), whose left side is concave
+// in tau on either range (Cauchy-Schwarz, as in sphere_ellipsoid.cpp): kArcIterations
+// Newton steps from a certified lower bound (Newton on a concave function lands at or
+// below the root), a certified upper bound from any evaluated point, and a pole step on
+// the b|Y|/tau term where it dominates (Newton crawls there: points near the evolute's
+// cusps). Fixed step count, lane-wise: a lane's bytes do not depend on its block.
+// Several solves of one block run as one loop over their slots (independent chains,
+// so their divisions and square roots overlap).
+// Cost per slot: kArcIterations steps of 3 divisions and 2 square roots.
+// Reference: Eberly, "Distance from a Point to an Ellipse, an Ellipsoid, or a
+// Hyperellipsoid", Geometric Tools, 2013.
+#pragma once
+
+#include "kernels/narrowphase/primitives.h"
+
+namespace impact::kernels::rim {
+
+using prim::kTinySq;
+
+/// Fixed step count of the half-ellipse root solve: float precision is reached by 9
+/// everywhere tried (points at the evolute's cusps of ellipses with axis ratio 1e-6..1,
+/// 1e-8..1e3 of the radius from them); 10 for margin.
+inline constexpr int kArcIterations = 10;
+/// Smallest tau of the root solve (scaled units: the rim's radius is 1).
+inline constexpr float kFloor = 1e-18f;
+
+/// For each slot s < M: the unit normal (nx, ny), ny >= 0, at the local minimum of the
+/// distance from the point (X, Y) to the upper half { (cos t, b sin t) : t in [0, pi] }
+/// of the ellipse with semi-axes 1 and b in [0, 1] (Y >= 0: the nearest point of the
+/// ellipse; Y < 0: the minimum on the far half, where one exists; where none does the
+/// result is some unit normal of that half). See the file header for the solve.
+template <class F, int M>
+IMPACT_INLINE void half_ellipse_normals(const F (&b)[M], const F (&X)[M], const F (&Y)[M], F (&nx)[M],
+                                        F (&ny)[M]) {
+  using Mask = typename F::Mask;
+  const F zero(0.0f), one(1.0f), fl(kFloor);
+  F sx[M], ax[M], ay[M], sg[M], k[M], A[M], B[M], lo[M], hi[M], dmin[M], c[M];
+  Mask same[M];
+  for (int s = 0; s < M; ++s) {
+    sx[s] = simd::sign_nonneg(X[s]);
+    ax[s] = abs(X[s]), ay[s] = abs(Y[s]);
+    same[s] = Y[s] >= zero;
+    sg[s] = select(same[s], one, F(-1.0f));
+    k[s] = (one - b[s]) * (one + b[s]);  // a^2 - b^2, exact for b in [0.5, 1]
+    A[s] = ax[s], B[s] = b[s] * ay[s];
+    // Each term of |q| alone >= 1 below these: certified lower bounds of the root. The
+    // far side's root has q_1 <= 1, i.e. tau <= k - A.
+    lo[s] = max(select(same[s], max(B[s], A[s] - k[s]), B[s]), fl);
+    hi[s] = max(select(same[s], sqrt(A[s] * A[s] + B[s] * B[s]), k[s] - A[s]), lo[s]);
+    dmin[s] = max(A[s], fl);  // k +- tau >= A at and below the root (q_1 <= 1)
+    c[s] = lo[s];
+  }
+  for (int i = 0; i < kArcIterations; ++i) {
+    for (int s = 0; s < M; ++s) {
+      const F d1 = max(mul_add(sg[s], c[s], k[s]), dmin[s]);
+      const F rr = one / (d1 * c[s]);
+      const F r1 = c[s] * rr, r2 = d1 * rr;  // 1 / d1, 1 / tau
+      const F q1 = A[s] * r1, q2 = B[s] * r2;
+      const F q1s = q1 * q1, q2s = q2 * q2;
+      const F f = q1s + q2s;  // |q|^2
+      // psi = 1/|q| - 1: psi' = dd / |q|^3, Newton step (|q| - 1) |q|^2 / dd.
+      const F dd = sg[s] * q1s * r1 + q2s * r2;
+      const Mask rising = dd > zero;
+      const F tn = c[s] + (sqrt(f) - one) * f / select(rising, dd, one);
+      hi[s] = select(f <= one, min(hi[s], c[s]), hi[s]);
+      lo[s] = min(max(lo[s], select(rising, tn, lo[s])), hi[s]);
+      // Pole step: the root if q_1 stayed as it is (exact where the b|Y|/tau term rules).
+      const F tp = B[s] / sqrt(max(one - q1s, fl));
+      const Mask pole = (q2s * r2 > q1s * r1) & (q1 < one) & (tp > lo[s]) & (tp < hi[s]);
+      c[s] = select(pole, tp, lo[s]);
+    }
+  }
+  for (int s = 0; s < M; ++s) {
+    // Normal at the foot (x / a^2, y / b^2) = (X / (k +- tau), |Y| / tau), scaled by tau
+    // (k +- tau); on the axis inside the evolute (tau at its floor, Eberly's special case)
+    // from the ellipse's equation instead, times b: (b q_1, sqrt(1 - q_1^2)).
+    const F d1 = max(mul_add(sg[s], lo[s], k[s]), dmin[s]);
+    F px = ax[s] * lo[s], py = ay[s] * d1;
+    const Mask degenerate = px * px + py * py < F(kTinySq);
+    const F q1 = min(A[s] / d1, one);
+    px = select(degenerate, b[s] * q1, px);
+    py = select(degenerate, sqrt(max(one - q1 * q1, zero)), py);
+    const F l2 = px * px + py * py;
+    const Mask ok = l2 >= F(kTinySq);
+    const F inv = one / sqrt(select(ok, l2, one));
+    nx[s] = select(ok, sx[s] * px * inv, zero);
+    ny[s] = select(ok, py * inv, one);
+  }
+}
+
+}  // namespace impact::kernels::rim

@@ -1,0 +1,995 @@
+// collide_cylinder_triangle (kernels/narrowphase/cylinder_triangle.cpp) on both paths
+// against independent double-precision references, and against the general GJK / EPA
+// path (collide_gjk_epa) and the capsule-cylinder kernel on the same lanes.
+//
+// References (double, the inputs rounded to float as the kernel sees them; no candidate
+// enumeration, no root solve by steps):
+//  - the signed distance of a point to the solid cylinder in closed form (its frame:
+//    radial and axial excess; inside, minus the nearer of side and caps);
+//  - the triangle's least signed distance m = min over the triangle of sd(x), by nested
+//    golden-section search over the barycentric coordinates (the signed distance to a
+//    convex set is convex, and so is its minimum over one coordinate);
+//  - m > 0 (the triangle outside): depth_ref = -m, normal from the cylinder's point
+//    nearest the minimiser to it (unique: the offset of two disjoint convex sets'
+//    closest points is);
+//  - m <= 0 (they meet): depth_ref = the least support overlap h_A(n) + h_B(-n) over unit
+//    n by dense sampling and Nelder-Mead (tests/support/narrow_reference.h);
+//  - the translation check, with the golden-section minimum alone: B moved by
+//    n (depth + d) is apart by at least d - tol, and moved by n (depth - d) still meets A.
+// The references are checked against closed forms and each other first
+// (ReferenceMatchesClosedForms).
+// Per lane, L = the larger bounding radius (sqrt(rc^2 + h^2), the triangle's about its
+// centroid), tol = kRel L:
+//  (a) count > 0 iff depth_ref > 0 (either answer where |depth_ref| <= tol), count <= 4;
+//  (b) |depth - depth_ref| <= tol;
+//  (c) n finite and unit; as good a direction as the reference's (the support overlap
+//      along n within tol of depth_ref); angle(n, n_ref) <= kAngleTol where the minimum
+//      is unique and well conditioned (triangle outside by more than 1e-3 L; meeting:
+//      no direction outside a 0.02 rad cone around n_ref within 2 tol of depth_ref, by
+//      nref's own probes and dense probes of the circles where whole circles of minima
+//      occur: the cylinder's horizontal one and those perpendicular to the edges; and
+//      the overlap rising by >= 1e-6 L 3e-3 rad from n_ref);
+//  (d) each point p with depth d: p + n d/2 on the cylinder's surface, p - n d/2 on the
+//      triangle (within tol plus ulps of the largest coordinate), 0 < d <= depth;
+//  (e) the scalar and SIMD paths give the same bytes.
+// Scenarios: random poses at sizes 1, 1e-4, 1e4 and 1e5 from the origin (about half
+// meeting); large triangles (terrain); deep (through the middle, coincident centres, a
+// vertex deep in a cap, an edge through the side, triangles inside); analytic cases
+// (standing on a large triangle: 4 rim points; lying on it: the side's 2 ends; an edge
+// along the side: its 2 clipped ends; a vertex into a cap; an edge across the side; a
+// vertex off a rim); near-parallel caps and edges (tilts 0..1e-2); exactly touching
+// (count 0); degenerate triangles (collinear, a point, two equal vertices, slivers
+// 1e-3..1e-7) and the capsule-cylinder kernel on segment-like slivers; needles and
+// pancakes (1e-4); symmetries (vertex order, the flip that maps the cylinder onto itself,
+// a rotation of the whole pair); range partitions and shuffled buckets (same bytes,
+// nothing written outside the range); agreement with GJK / EPA.
+#include <gtest/gtest.h>
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <cstring>
+#include <numeric>
+#include <random>
+#include <vector>
+
+#include "kernels/narrowphase/pair_kernels.h"
+#include "support/leaf_lanes.h"
+#include "support/narrow_reference.h"
+#include "support/random_input.h"
+#include "support/test_support.h"
+
+namespace impact::kernels {
+namespace {
+
+using Vec3d = Eigen::Vector3d;
+using Mat3d = Eigen::Matrix3d;
+namespace nref = test::nref;
+
+constexpr double kRel = 1e-5;       // depth tolerance, of L
+constexpr double kAngleTol = 1e-4;  // rad, where the minimum is unique and conditioned
+
+double angle(const Vec3d& a, const Vec3d& b) {
+  return std::atan2(a.cross(b).norm(), a.dot(b));
+}
+
+struct Query {
+  Vec3d p;       // cylinder centre
+  Mat3d R;       // cylinder rotation (column 2 = axis)
+  double rc, h;  // radius, half length
+  Vec3d v[3];    // triangle
+};
+
+/// The query as the kernel sees it: every input rounded to float.
+Query rounded(Query q) {
+  q.p = test::round_to_float(q.p);
+  q.R = test::round_to_float(q.R);
+  q.rc = test::round_to_float(q.rc);
+  q.h = test::round_to_float(q.h);
+  for (Vec3d& v : q.v) v = test::round_to_float(v);
+  return q;
+}
+
+double triangle_radius(const Query& q) {
+  const Vec3d c = (q.v[0] + q.v[1] + q.v[2]) / 3.0;
+  return std::max({(q.v[0] - c).norm(), (q.v[1] - c).norm(), (q.v[2] - c).norm()});
+}
+
+double size_of(const Query& q) {
+  return std::max(std::hypot(q.rc, q.h), triangle_radius(q));
+}
+
+double coord_ulp(const Query& q) {
+  double m = q.p.cwiseAbs().maxCoeff();
+  for (const Vec3d& v : q.v) m = std::max(m, v.cwiseAbs().maxCoeff());
+  return (m + size_of(q)) * std::ldexp(1.0, -23);
+}
+
+// --- running the kernel -----------------------------------------------------------------------
+
+struct Lanes {
+  std::vector<float> ap[3], ar[9], ae[3], bp[3], bw[6], zero;
+  LeafSoA a{}, b{};
+  explicit Lanes(const std::vector<Query>& qs) {
+    for (const Query& q : qs) {
+      for (int i = 0; i < 3; ++i) {
+        ap[i].push_back(float(q.p[i]));
+        bp[i].push_back(float(q.v[0][i]));
+        bw[i].push_back(float(q.v[1][i]));
+        bw[3 + i].push_back(float(q.v[2][i]));
+      }
+      for (int i = 0; i < 9; ++i) ar[i].push_back(float(q.R(i / 3, i % 3)));
+      ae[0].push_back(float(q.rc)), ae[1].push_back(float(q.h)), ae[2].push_back(0.0f);
+      zero.push_back(0.0f);
+    }
+    for (int i = 0; i < 3; ++i) a.p[i] = ap[i].data(), a.e[i] = ae[i].data(), b.p[i] = bp[i].data();
+    for (int i = 0; i < 9; ++i) a.r[i] = ar[i].data();
+    for (int i = 0; i < 6; ++i) b.w[i] = bw[i].data();
+    // (a triangle has no R or e: left null, as the host gathers it)
+  }
+};
+
+std::vector<test::PairResult> run(const std::vector<Query>& qs, KernelPath path, PairKernel kern = nullptr,
+                                  uint32_t begin = 0, uint32_t end = ~0u,
+                                  test::ManifoldLanes* keep = nullptr) {
+  if (kern == nullptr) kern = pair_kernel(kLeafCylinder, kLeafTriangle);
+  const uint32_t n = static_cast<uint32_t>(qs.size());
+  end = std::min(end, n);
+  Lanes l(qs);
+  test::ManifoldLanes o(n);
+  NarrowConfig cfg;
+  cfg.path = path;
+  kern(l.a, l.b, o.view(), Range{begin, end}, cfg);
+  std::vector<test::PairResult> out(n);
+  for (uint32_t k = begin; k < end; ++k) out[k] = o.result(k);
+  if (keep != nullptr) *keep = o;
+  return out;
+}
+
+void gjk_kernel(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out, Range r,
+                const NarrowConfig& cfg) {
+  collide_gjk_epa(a, b, out, r, cfg, kLeafCylinder, kLeafTriangle);
+}
+
+// --- references -------------------------------------------------------------------------------
+
+/// Signed distance of x to the solid cylinder of q (< 0 inside).
+double cyl_sd(const Query& q, const Vec3d& x) {
+  const Vec3d l = q.R.transpose() * (x - q.p);
+  const double dr = std::hypot(l.x(), l.y()) - q.rc, dz = std::fabs(l.z()) - q.h;
+  if (dr <= 0 && dz <= 0) return std::max(dr, dz);
+  return std::hypot(std::max(dr, 0.0), std::max(dz, 0.0));
+}
+
+/// The closest point of the solid cylinder to an outside point x.
+Vec3d cyl_closest(const Query& q, const Vec3d& x) {
+  const Vec3d l = q.R.transpose() * (x - q.p);
+  const double rho = std::hypot(l.x(), l.y());
+  const double s = rho > q.rc ? q.rc / rho : 1.0;
+  return q.p + q.R * Vec3d(l.x() * s, l.y() * s, std::clamp(l.z(), -q.h, q.h));
+}
+
+template <class Fn>
+double golden(Fn f, double lo, double hi, int iters, double* arg) {
+  const double g = 0.5 * (std::sqrt(5.0) - 1.0);
+  double x1 = hi - g * (hi - lo), x2 = lo + g * (hi - lo), f1 = f(x1), f2 = f(x2);
+  for (int it = 0; it < iters; ++it) {
+    if (f1 < f2) {
+      hi = x2, x2 = x1, f2 = f1, x1 = hi - g * (hi - lo), f1 = f(x1);
+    } else {
+      lo = x1, x1 = x2, f1 = f2, x2 = lo + g * (hi - lo), f2 = f(x2);
+    }
+  }
+  double best = std::min(f1, f2), at = f1 < f2 ? x1 : x2;
+  for (double c : {lo, hi}) {
+    const double fc = f(c);
+    if (fc < best) best = fc, at = c;
+  }
+  *arg = at;
+  return best;
+}
+
+/// The least signed distance to the cylinder over the triangle moved by `shift` (convex:
+/// nested golden-section search over the barycentric coordinates); where = the point.
+double triangle_minimum(const Query& q, const Vec3d& shift = Vec3d::Zero(), Vec3d* where = nullptr) {
+  auto point = [&](double u, double v) {
+    return Vec3d(q.v[0] + u * (q.v[1] - q.v[0]) + v * (q.v[2] - q.v[0]) + shift);
+  };
+  auto inner = [&](double u, double* v_at) {
+    return golden([&](double v) { return cyl_sd(q, point(u, v)); }, 0.0, 1.0 - u, 60, v_at);
+  };
+  double u = 0, v = 0;
+  const double best = golden(
+      [&](double uu) {
+        double vv;
+        return inner(uu, &vv);
+      },
+      0.0, 1.0, 60, &u);
+  inner(u, &v);
+  if (where != nullptr) *where = point(u, v);
+  return best;
+}
+
+nref::V3 v3(const Vec3d& v) {
+  return {v.x(), v.y(), v.z()};
+}
+Vec3d ev(const nref::V3& v) {
+  return {v.x, v.y, v.z};
+}
+nref::Shape cylinder_shape(const Query& q) {
+  nref::Shape s;
+  s.type = kLeafCylinder;
+  s.p = v3(q.p);
+  for (int i = 0; i < 9; ++i) s.r[i] = q.R(i / 3, i % 3);
+  s.e[0] = q.rc;
+  s.e[1] = q.h;
+  return s;
+}
+nref::Shape triangle_shape(const Query& q) {
+  return nref::make_triangle(v3(q.v[0]), v3(q.v[1]), v3(q.v[2]));
+}
+double tri_distance(const Query& q, const Vec3d& x) {
+  return nref::triangle_distance(v3(x), v3(q.v[0]), v3(q.v[1]), v3(q.v[2]));
+}
+
+/// The support overlap of A and B along n.
+double overlap_along(const Query& q, const Vec3d& n) {
+  return nref::overlap(cylinder_shape(q), triangle_shape(q), v3(n.normalized()));
+}
+
+nref::Options dense_options() {
+  nref::Options o;
+  o.samples = 6000;
+  o.starts = 8;
+  return o;
+}
+
+/// Whether n_ref is the only minimiser within 0.02 rad: every direction outside that
+/// cone overlaps by more than depth + 2 tol (nref's second best, a dense ring at 0.02 rad,
+/// and the circles where whole circles of minima occur: the cylinder's horizontal
+/// circle, the great circles perpendicular to the triangle's edges), and the overlap
+/// rises by >= 1e-6 L at 3e-3 rad from n_ref in every direction (its flat valleys).
+bool unique_minimum(const Query& q, const Vec3d& n_ref, double depth, double second, double tol) {
+  double best = second;
+  const Vec3d t1 = n_ref.unitOrthogonal(), t2 = n_ref.cross(t1);
+  auto ring = [&](double cone, int count) {
+    double r = 1e300;
+    for (int i = 0; i < count; ++i) {
+      const double a = 2 * M_PI * i / count;
+      r = std::min(r, overlap_along(q, (n_ref + std::tan(cone) * (std::cos(a) * t1 + std::sin(a) * t2))));
+    }
+    return r;
+  };
+  best = std::min(best, ring(0.02, 720));
+  std::vector<Vec3d> axes = {q.R.col(2)};
+  for (int j = 0; j < 3; ++j) {
+    const Vec3d e = q.v[(j + 1) % 3] - q.v[j];
+    if (e.norm() > 0) axes.push_back(e.normalized());
+  }
+  for (const Vec3d& ax : axes) {
+    const Vec3d e1 = ax.unitOrthogonal(), e2 = ax.cross(e1);
+    for (int i = 0; i < 3142; ++i) {
+      const double a = 2e-3 * i;
+      const Vec3d n = std::cos(a) * e1 + std::sin(a) * e2;
+      if (angle(n, n_ref) > 0.02) best = std::min(best, overlap_along(q, n));
+    }
+  }
+  if (!(best > depth + 2 * tol)) return false;
+  return ring(3e-3, 96) - depth >= 1e-6 * size_of(q);
+}
+
+struct Ref {
+  double depth = 0;  // > 0: penetration depth; else minus the gap
+  Vec3d n = Vec3d::UnitZ();
+  bool outside = false;
+  bool unique = false;  // the normal is unique at this tolerance
+};
+
+Ref reference(const Query& q) {
+  Ref f;
+  Vec3d x;
+  const double m = triangle_minimum(q, Vec3d::Zero(), &x);
+  const double tol = kRel * size_of(q);
+  if (m > 0) {
+    f.outside = true;
+    f.depth = -m;
+    f.n = (x - cyl_closest(q, x)).normalized();
+    f.unique = m > 1e-3 * size_of(q);
+    return f;
+  }
+  const nref::PairResult s = nref::solve_pair(cylinder_shape(q), triangle_shape(q), {}, dense_options());
+  f.depth = s.s;
+  f.n = ev(s.n);
+  f.unique = s.unique(2 * tol) && unique_minimum(q, f.n, s.s, s.second, tol);
+  return f;
+}
+
+// --- the per-lane check -----------------------------------------------------------------------
+
+struct Stats {
+  int lanes = 0, hits = 0, meeting = 0, multi = 0, normals_checked = 0;
+  int counts[5] = {0, 0, 0, 0, 0};
+  double worst_depth = 0, worst_angle = 0;
+};
+
+bool same_bytes(const test::PairResult& x, const test::PairResult& y) {
+  bool same = x.count == y.count;
+  if (same && x.count > 0) {
+    same = x.depth == y.depth && x.n == y.n;
+    for (uint32_t i = 0; i < x.count; ++i) same = same && x.pt[i] == y.pt[i] && x.pd[i] == y.pd[i];
+  }
+  return same;
+}
+
+/// Checks a lane's points: on both surfaces, 0 < pdepth <= depth.
+void check_points(const Query& q, const test::PairResult& h, double ptol, const char* what, size_t k,
+                  const char* path) {
+  for (uint32_t i = 0; i < h.count; ++i) {
+    ASSERT_TRUE(h.pt[i].allFinite()) << what << " lane " << k;
+    EXPECT_GT(h.pd[i], 0.0) << what << " lane " << k << " point " << i << path;
+    EXPECT_LE(h.pd[i], h.depth) << what << " lane " << k << " point " << i << path;
+    const Vec3d on_a = h.pt[i] + 0.5 * h.pd[i] * h.n, on_b = h.pt[i] - 0.5 * h.pd[i] * h.n;
+    EXPECT_LE(std::fabs(cyl_sd(q, on_a)), ptol) << what << " lane " << k << " point " << i << path;
+    if (std::getenv("CYLTRI_DUMP") && (std::fabs(cyl_sd(q, on_a)) > ptol || tri_distance(q, on_b) > ptol)) {
+      std::printf("DUMP %.9g %.9g", q.rc, q.h);
+      for (const Vec3d& v : q.v) {
+        const Vec3d l = q.R.transpose() * (v - q.p);
+        std::printf(" %.9g %.9g %.9g", l.x(), l.y(), l.z());
+      }
+      std::printf("\n");
+    }
+    EXPECT_LE(tri_distance(q, on_b), ptol) << what << " lane " << k << " point " << i << path;
+  }
+}
+
+/// Checks (a)-(e) for every lane of qs (already rounded).
+void check_all(const std::vector<Query>& qs, const char* what, Stats* out_stats = nullptr) {
+  SCOPED_TRACE(what);
+  const auto simd = run(qs, KernelPath::kSimd), scal = run(qs, KernelPath::kScalar);
+  Stats st;
+  for (size_t k = 0; k < qs.size(); ++k) {
+    const Query& q = qs[k];
+    const Ref f = reference(q);
+    const double L = size_of(q), tol = kRel * L, ptol = tol + 4 * coord_ulp(q);
+    ++st.lanes;
+    for (const test::PairResult* hp : {&simd[k], &scal[k]}) {
+      const test::PairResult& h = *hp;
+      const bool is_simd = hp == &simd[k];
+      const char* path = is_simd ? " simd" : " scalar";
+      ASSERT_LE(h.count, 4u) << what << " lane " << k;
+      if (std::fabs(f.depth) <= tol) continue;
+      ASSERT_EQ(h.count > 0, f.depth > 0) << what << " lane " << k << " depth_ref " << f.depth << " got "
+                                          << (h.count > 0 ? h.depth : 0.0) << path;
+      if (f.depth <= 0) continue;
+      if (is_simd) {
+        ++st.hits;
+        st.meeting += !f.outside;
+        st.multi += h.count > 1;
+        ++st.counts[h.count];
+      }
+      const double dd = std::fabs(h.depth - f.depth);
+      st.worst_depth = std::max(st.worst_depth, dd / L);
+      EXPECT_LE(dd, tol) << what << " lane " << k << " depth " << h.depth << " ref " << f.depth
+                         << (f.outside ? " (outside)" : " (meeting)") << path;
+      ASSERT_TRUE(h.n.allFinite()) << what << " lane " << k;
+      EXPECT_NEAR(h.n.norm(), 1.0, 1e-6) << what << " lane " << k;
+      // (c) as good a separating direction as the reference's, and the same where unique
+      EXPECT_LE(overlap_along(q, h.n), f.depth + tol) << what << " lane " << k << path;
+      if (f.unique) {
+        const double ang = angle(h.n, f.n);
+        if (is_simd) ++st.normals_checked, st.worst_angle = std::max(st.worst_angle, ang);
+        EXPECT_LE(ang, kAngleTol) << what << " lane " << k << " n " << h.n.transpose() << " ref "
+                                  << f.n.transpose() << path;
+      }
+      check_points(q, h, ptol, what, k, path);
+    }
+    // (e) the paths give the same bytes (the same IEEE operations, no contraction)
+    EXPECT_TRUE(same_bytes(simd[k], scal[k]))
+        << what << " lane " << k << ": the SIMD and scalar paths differ";
+    // the translation check, by the golden-section minimum alone
+    const test::PairResult& h = simd[k];
+    if (h.count > 0 && h.depth > 20 * tol) {
+      const double d = 0.05 * h.depth;
+      const double apart = triangle_minimum(q, (h.depth + d) * h.n);
+      EXPECT_GE(apart, d - 2 * tol) << what << " lane " << k << ": moved by n (depth + d) not apart by d";
+      const double meets = triangle_minimum(q, (h.depth - d) * h.n);
+      EXPECT_LT(meets, 0.0) << what << " lane " << k << ": moved by n (depth - d) already apart";
+    }
+  }
+  if (out_stats != nullptr) *out_stats = st;
+  std::printf(
+      "  %-28s lanes %4d hits %4d meeting %4d points 1/2/3/4 %d/%d/%d/%d normals %4d | worst |depth-ref| "
+      "%.2g L, angle %.2g rad\n",
+      what, st.lanes, st.hits, st.meeting, st.counts[1], st.counts[2], st.counts[3], st.counts[4],
+      st.normals_checked, st.worst_depth, st.worst_angle);
+}
+
+// --- inputs -----------------------------------------------------------------------------------
+
+Vec3d random_unit(std::mt19937& g) {
+  std::normal_distribution<double> d;
+  for (;;) {
+    const Vec3d v(d(g), d(g), d(g));
+    if (v.norm() > 1e-3) return v.normalized();
+  }
+}
+
+/// A triangle of circumradius ~r around c in a random plane, its angles spread.
+void random_triangle(std::mt19937& g, const Vec3d& c, double r, Vec3d (&v)[3]) {
+  std::uniform_real_distribution<double> uni(0, 1);
+  const Vec3d n = random_unit(g), t = n.unitOrthogonal(), b = n.cross(t);
+  const double a0 = 2 * M_PI * uni(g);
+  for (int i = 0; i < 3; ++i) {
+    const double ang = a0 + i * 2 * M_PI / 3 + (uni(g) - 0.5);
+    const double rad = r * (0.5 + uni(g));
+    v[i] = c + rad * (std::cos(ang) * t + std::sin(ang) * b);
+  }
+}
+
+/// A random pair at size `size`, `offset` from the origin, the triangle's centroid within
+/// `spread` (of the pair's reach) of the cylinder's centre.
+Query random_query(std::mt19937& g, double size, double offset, double spread) {
+  std::uniform_real_distribution<double> uni(0, 1);
+  Query q;
+  q.p = Vec3d(offset, -offset, 0.5 * offset) + size * Vec3d(uni(g) - 0.5, uni(g) - 0.5, uni(g) - 0.5);
+  q.R = test::random_rotation(g);
+  q.rc = size * (0.1 + 0.9 * uni(g));
+  q.h = size * (0.1 + 0.9 * uni(g));
+  const double tr = size * (0.1 + 1.2 * uni(g));
+  const double reach = std::hypot(q.rc, q.h) + tr;
+  random_triangle(g, q.p + spread * reach * uni(g) * random_unit(g), tr, q.v);
+  return rounded(q);
+}
+
+std::vector<Query> random_queries(std::mt19937& g, int n, double size, double offset) {
+  std::vector<Query> qs;
+  for (int i = 0; i < n; ++i) qs.push_back(random_query(g, size, offset, 0.8));
+  return qs;
+}
+
+/// A query in the cylinder's frame (centre 0, axis z) posed by a random rotation and
+/// offset; the vertices are local.
+Query posed(std::mt19937& g, const Vec3d& v0, const Vec3d& v1, const Vec3d& v2, double rc, double h,
+            double offset = 0.0) {
+  Query q;
+  q.R = test::random_rotation(g);
+  q.p = Vec3d(offset, 0.3 * offset, -0.7 * offset) + Vec3d(0.25, -0.5, 0.75);
+  q.v[0] = q.p + q.R * v0, q.v[1] = q.p + q.R * v1, q.v[2] = q.p + q.R * v2;
+  q.rc = rc, q.h = h;
+  return rounded(q);
+}
+
+/// An axis-aligned query (R = I): exact in float for the analytic cases.
+Query aligned(const Vec3d& p, const Vec3d& v0, const Vec3d& v1, const Vec3d& v2, double rc, double h) {
+  Query q;
+  q.R = Mat3d::Identity();
+  q.p = p;
+  q.v[0] = p + v0, q.v[1] = p + v1, q.v[2] = p + v2;
+  q.rc = rc, q.h = h;
+  return rounded(q);
+}
+
+// ---------------------------------------------------------------------------------------------
+
+TEST(CylinderTriangle, RegisteredForTheBucket) {
+  EXPECT_EQ(pair_kernel(kLeafCylinder, kLeafTriangle), &collide_cylinder_triangle);
+}
+
+/// The references against closed forms (the point distance; a triangle on a cap, beside
+/// the side, off a rim, through the middle) and against each other (nref's sampled
+/// minimum against the golden-section distance on separated lanes).
+TEST(CylinderTriangle, ReferenceMatchesClosedForms) {
+  Query q;
+  q.p = Vec3d(1, 2, 3);
+  q.R = Mat3d::Identity();
+  q.rc = 1.0, q.h = 2.0;
+  EXPECT_NEAR(cyl_sd(q, q.p + Vec3d(3, 0, 0)), 2.0, 1e-15);
+  EXPECT_NEAR(cyl_sd(q, q.p + Vec3d(0, 4, 6)), 5.0, 1e-15);  // rim (0, 1, 2): (3, 4)
+  EXPECT_NEAR(cyl_sd(q, q.p + Vec3d(0, 0, 1.9)), -0.1, 1e-15);
+  struct Case {
+    Vec3d v0, v1, v2;
+    double depth;
+    Vec3d n;
+  };
+  const Case cases[] = {
+      // a large level triangle 0.25 into the top cap
+      {Vec3d(-10, -10, 1.75), Vec3d(10, -10, 1.75), Vec3d(0, 10, 1.75), 0.25, Vec3d(0, 0, 1)},
+      // a vertical triangle 0.1 into the side
+      {Vec3d(0.9, -5, -5), Vec3d(0.9, 5, -5), Vec3d(0.9, 0, 5), 0.1, Vec3d(1, 0, 0)},
+      // a vertex 0.3 / 0.4 off the rim point (1, 0, 2), the triangle leaning away
+      {Vec3d(1.3, 0, 2.4), Vec3d(3, 1, 3), Vec3d(3, -1, 3), -0.5, Vec3d(0.6, 0, 0.8)},
+      // a vertex 0.2 into the bottom cap
+      {Vec3d(0.3, 0.2, -1.8), Vec3d(1, 2, -4), Vec3d(-1, 2, -4), 0.2, Vec3d(0, 0, -1)},
+  };
+  for (const Case& cs : cases) {
+    Query w = q;
+    w.v[0] = q.p + cs.v0, w.v[1] = q.p + cs.v1, w.v[2] = q.p + cs.v2;
+    const Ref f = reference(w);
+    EXPECT_NEAR(f.depth, cs.depth, 1e-9) << cs.v0.transpose();
+    EXPECT_TRUE(f.unique) << cs.v0.transpose();
+    EXPECT_LT(angle(f.n, cs.n), 1e-6) << cs.v0.transpose();
+  }
+  // nref against the golden-section distance where the triangle is outside
+  std::mt19937 g(5);
+  int compared = 0;
+  for (int i = 0; i < 60; ++i) {
+    const Query w = random_query(g, 1.0, 0.0, 1.2);
+    const double m = triangle_minimum(w);
+    if (m <= 1e-3) continue;
+    const nref::PairResult s = nref::solve_pair(cylinder_shape(w), triangle_shape(w), {}, dense_options());
+    // (the float-rounded rotation is orthonormal to ~1e-8: cyl_sd reads all of R, nref
+    // only the axis)
+    EXPECT_NEAR(s.s, -m, 1e-7) << i;
+    ++compared;
+  }
+  EXPECT_GT(compared, 10);
+}
+
+class CylinderTriangleScales : public ::testing::TestWithParam<std::tuple<double, double>> {};
+
+TEST_P(CylinderTriangleScales, RandomPosesAgainstReference) {
+  const auto [size, offset] = GetParam();
+  std::mt19937 g(17 + static_cast<uint32_t>(std::log10(size) + 10 * (offset > 0)));
+  const int n = static_cast<int>(test::scaled(offset == 0 && size == 1.0 ? 300 : 80));
+  Stats st;
+  check_all(random_queries(g, n, size, offset), "random", &st);
+  EXPECT_GT(st.hits, n / 4);
+  EXPECT_GT(st.meeting, n / 8);
+}
+
+INSTANTIATE_TEST_SUITE_P(Scales, CylinderTriangleScales,
+                         ::testing::Values(std::make_tuple(1.0, 0.0), std::make_tuple(1e-4, 0.0),
+                                           std::make_tuple(1e4, 0.0), std::make_tuple(1.0, 1e5)));
+
+/// Large triangles (10 .. 1e4 times the cylinder: terrain) through, under and beside it.
+TEST(CylinderTriangle, LargeTriangles) {
+  std::mt19937 g(19);
+  std::uniform_real_distribution<double> uni(-1, 1);
+  std::vector<Query> qs;
+  const double scales[] = {10.0, 100.0, 1e4};
+  for (int i = 0; i < static_cast<int>(test::scaled(30)); ++i)
+    for (double sc : scales) {
+      Query q = random_query(g, 1.0, 0.0, 0.0);
+      // the triangle's plane through a point within the cylinder's reach, its centroid
+      // up to half its size away along the plane
+      const double reach = std::hypot(q.rc, q.h);
+      const Vec3d n = random_unit(g), t = n.unitOrthogonal(), b = n.cross(t);
+      const Vec3d c = q.p + 1.2 * reach * uni(g) * n + 0.5 * sc * (uni(g) * t + uni(g) * b) * reach;
+      random_triangle(g, c, sc * reach, q.v);
+      // project the vertices onto the plane through c (random_triangle's plane is random)
+      for (Vec3d& v : q.v) v = c + (v - c) - (v - c).dot(n) * n + 0.0 * n;
+      qs.push_back(rounded(q));
+    }
+  Stats st;
+  check_all(qs, "large triangles", &st);
+  EXPECT_GT(st.hits, static_cast<int>(qs.size()) / 5);
+}
+
+TEST(CylinderTriangle, DeepTriangles) {
+  std::mt19937 g(29);
+  std::uniform_real_distribution<double> uni(-1, 1);
+  std::vector<Query> qs;
+  const int n = static_cast<int>(test::scaled(24));
+  for (int i = 0; i < n; ++i) {
+    const double rc = 0.3 + 0.7 * std::fabs(uni(g)), h = 0.3 + 0.7 * std::fabs(uni(g));
+    Vec3d v[3];
+    // through the middle, any plane
+    random_triangle(g, 0.05 * Vec3d(uni(g), uni(g), uni(g)), 1.0 + std::fabs(uni(g)), v);
+    qs.push_back(posed(g, v[0], v[1], v[2], rc, h));
+    // coincident centres: the centroid at the cylinder's centre
+    random_triangle(g, Vec3d::Zero(), 0.3 + std::fabs(uni(g)), v);
+    const Vec3d c = (v[0] + v[1] + v[2]) / 3.0;
+    qs.push_back(posed(g, v[0] - c, v[1] - c, v[2] - c, rc, h));
+    // a vertex deep in a cap, the triangle leaning out
+    const double sz = uni(g) > 0 ? 1.0 : -1.0;
+    const Vec3d tip(0.5 * rc * uni(g), 0.5 * rc * uni(g), sz * h * (1 - 0.3 * std::fabs(uni(g))));
+    const Vec3d out = (Vec3d(0.5 * uni(g), 0.5 * uni(g), sz)).normalized(), side = out.unitOrthogonal();
+    qs.push_back(posed(g, tip, tip + 2 * h * out + side, tip + 2 * h * out - side, rc, h));
+    // an edge through the side, the triangle outside
+    const double a = M_PI * uni(g);
+    const Vec3d radial(std::cos(a), std::sin(a), 0), along = Vec3d(-std::sin(a), std::cos(a), 0);
+    const Vec3d dir = (along + 0.5 * uni(g) * Vec3d::UnitZ()).normalized();
+    const Vec3d m0 = radial * rc * (1 - 0.4 * std::fabs(uni(g))) + Vec3d(0, 0, 0.8 * h * uni(g));
+    qs.push_back(posed(g, m0 - 2 * rc * dir, m0 + 2 * rc * dir, m0 + 2 * rc * radial, rc, h));
+    // a small triangle inside
+    random_triangle(g, Vec3d(0.3 * rc * uni(g), 0.3 * rc * uni(g), 0.3 * h * uni(g)), 0.2 * std::min(rc, h),
+                    v);
+    qs.push_back(posed(g, v[0], v[1], v[2], rc, h));
+  }
+  Stats st;
+  check_all(qs, "deep", &st);
+  EXPECT_GT(st.meeting, st.hits * 9 / 10);
+  EXPECT_GT(st.hits, static_cast<int>(qs.size()) * 9 / 10);
+}
+
+/// Closed-form answers (axis-aligned, exact in float), both paths: standing on a large
+/// triangle (4 rim points), lying on it (the side line's 2 ends), an edge along the side
+/// (its 2 ends clipped to the side's height), a vertex into a cap (1 point), an edge
+/// lying across a cap (its 2 crossings of the rim), an edge across the side (1 point).
+TEST(CylinderTriangle, AnalyticCases) {
+  const Vec3d p(1, -2, 0.5);
+  const double rc = 0.5, h = 1.0, d = 0.125;
+  for (KernelPath path : {KernelPath::kSimd, KernelPath::kScalar}) {
+    SCOPED_TRACE(path == KernelPath::kSimd ? "simd" : "scalar");
+    // standing on a large level triangle, d into the bottom cap
+    {
+      const Query q =
+          aligned(p, Vec3d(-10, -10, -h + d), Vec3d(10, -10, -h + d), Vec3d(0, 10, -h + d), rc, h);
+      const auto r = run({q}, path)[0];
+      ASSERT_EQ(r.count, 4u);
+      EXPECT_EQ(r.n, Vec3d(0, 0, -1));
+      EXPECT_NEAR(r.depth, d, 1e-6);
+      for (uint32_t i = 0; i < r.count; ++i) {
+        const Vec3d l = r.pt[i] - p;
+        EXPECT_NEAR(l.z(), -h + d / 2, 1e-6);
+        EXPECT_NEAR(std::hypot(l.x(), l.y()), rc, 1e-6);
+        EXPECT_NEAR(r.pd[i], d, 1e-6);
+      }
+      // (the 4 points span the disk: the farthest pair a diameter)
+      double far = 0;
+      for (uint32_t i = 0; i < 4; ++i)
+        for (uint32_t j = 0; j < 4; ++j) far = std::max(far, (r.pt[i] - r.pt[j]).norm());
+      EXPECT_NEAR(far, 2 * rc, 1e-6);
+    }
+    // lying on a large level triangle (axis along x), d into the side
+    {
+      Query q = aligned(p, Vec3d(-10, -10, -rc + d), Vec3d(10, -10, -rc + d), Vec3d(0, 10, -rc + d), rc, h);
+      q.R << 0, 0, 1, 0, 1, 0, -1, 0, 0;  // column 2 = +x
+      const auto r = run({q}, path)[0];
+      ASSERT_EQ(r.count, 2u);
+      EXPECT_LT(angle(r.n, Vec3d(0, 0, -1)), 1e-6);
+      EXPECT_NEAR(r.depth, d, 1e-6);
+      const double x0 = std::min(r.pt[0].x(), r.pt[1].x()) - p.x(),
+                   x1 = std::max(r.pt[0].x(), r.pt[1].x()) - p.x();
+      EXPECT_NEAR(x0, -h, 1e-6);
+      EXPECT_NEAR(x1, h, 1e-6);
+      for (int i = 0; i < 2; ++i) {
+        EXPECT_NEAR(r.pt[i].z() - p.z(), -rc + d / 2, 1e-6);
+        EXPECT_NEAR(r.pt[i].y() - p.y(), 0.0, 1e-6);
+        EXPECT_NEAR(r.pd[i], d, 1e-6);
+      }
+    }
+    // an edge along the side, d inside, z in [-0.5, 2.5] -> clipped to [-0.5, h]
+    {
+      const Query q = aligned(p, Vec3d(rc - d, 0, -0.5), Vec3d(rc - d, 0, 2.5), Vec3d(rc + 3, 0, 1.0), rc, h);
+      const auto r = run({q}, path)[0];
+      ASSERT_EQ(r.count, 2u);
+      EXPECT_LT(angle(r.n, Vec3d(1, 0, 0)), 1e-6);
+      EXPECT_NEAR(r.depth, d, 1e-6);
+      const double z0 = std::min(r.pt[0].z(), r.pt[1].z()) - p.z(),
+                   z1 = std::max(r.pt[0].z(), r.pt[1].z()) - p.z();
+      EXPECT_NEAR(z0, -0.5, 1e-6);
+      EXPECT_NEAR(z1, h, 1e-6);
+      for (int i = 0; i < 2; ++i) {
+        EXPECT_NEAR(r.pt[i].x() - p.x(), rc - d / 2, 1e-6);
+        EXPECT_NEAR(r.pd[i], d, 1e-6);
+      }
+    }
+    // a vertex into the top cap, the triangle leaning out: 1 point
+    {
+      const Query q = aligned(p, Vec3d(0.125, 0.25, h - d), Vec3d(1, 1, 3), Vec3d(-1, 1, 3), rc, h);
+      const auto r = run({q}, path)[0];
+      ASSERT_EQ(r.count, 1u);
+      EXPECT_EQ(r.n, Vec3d(0, 0, 1));
+      EXPECT_NEAR(r.depth, d, 1e-6);
+      EXPECT_LT((r.pt[0] - (p + Vec3d(0.125, 0.25, h - d / 2))).norm(), 1e-6);
+    }
+    // an edge lying across the top cap (y = 0.25), the triangle rising away: the 2 rim
+    // crossings x = +-sqrt(rc^2 - 0.25^2)
+    {
+      const Query q = aligned(p, Vec3d(-2, 0.25, h - d), Vec3d(2, 0.25, h - d), Vec3d(0, 3, h + 5), rc, h);
+      const auto r = run({q}, path)[0];
+      ASSERT_EQ(r.count, 2u);
+      EXPECT_LT(angle(r.n, Vec3d(0, 0, 1)), 1e-6);
+      EXPECT_NEAR(r.depth, d, 1e-6);
+      const double xc = std::sqrt(rc * rc - 0.25 * 0.25);
+      const double x0 = std::min(r.pt[0].x(), r.pt[1].x()) - p.x(),
+                   x1 = std::max(r.pt[0].x(), r.pt[1].x()) - p.x();
+      EXPECT_NEAR(x0, -xc, 1e-6);
+      EXPECT_NEAR(x1, xc, 1e-6);
+    }
+    // an edge across the side (horizontal, along y, d inside), the triangle in the plane
+    // z = 0 reaching out: n = +x, one point
+    {
+      const Query q = aligned(p, Vec3d(rc - d, -2, 0), Vec3d(rc - d, 2, 0), Vec3d(rc + 2, 0, 0), rc, h);
+      const auto r = run({q}, path)[0];
+      ASSERT_GE(r.count, 1u);
+      EXPECT_LT(angle(r.n, Vec3d(1, 0, 0)), 1e-6);
+      EXPECT_NEAR(r.depth, d, 1e-6);
+    }
+    // a vertex 0.3 / 0.4 off the rim, apart
+    {
+      const Query q =
+          aligned(p, Vec3d(rc + 0.3, 0, h + 0.4), Vec3d(rc + 2, 1, h + 1), Vec3d(rc + 2, -1, h + 1), rc, h);
+      EXPECT_EQ(run({q}, path)[0].count, 0u);
+    }
+  }
+}
+
+/// Near-parallel contacts: a large triangle tilted 0..1e-2 rad from level on a cap
+/// (several points), an edge tilted from the axis beside the side (also one past both
+/// caps) and the cylinder lying tilted on a triangle (2 points).
+TEST(CylinderTriangle, NearParallelManifolds) {
+  std::mt19937 g(37);
+  std::uniform_real_distribution<double> uni(-1, 1);
+  const double tilts[] = {0.0, 1e-7, 1e-5, 1e-3, 1e-2};
+  std::vector<Query> caps, sides;
+  for (int i = 0; i < static_cast<int>(test::scaled(6)); ++i)
+    for (double tilt : tilts) {
+      const double rc = 0.5, h = 1.0, d = 0.05;
+      const double a = M_PI * uni(g);
+      const Vec3d radial(std::cos(a), std::sin(a), 0), tang(-std::sin(a), std::cos(a), 0);
+      // a large triangle on the top cap, d deep, tilted about a random horizontal axis
+      const Vec3d nrm = (Vec3d::UnitZ() + tilt * radial).normalized(), t1 = nrm.cross(tang).normalized(),
+                  t2 = nrm.cross(t1);
+      const Vec3d c(0.3 * uni(g), 0.3 * uni(g), h - d);
+      caps.push_back(posed(g, c + 4 * t1, c - 2 * t1 + 3.5 * t2, c - 2 * t1 - 3.5 * t2, rc, h));
+      // an edge beside the side, d deep, tilted from the axis, the triangle outside
+      const Vec3d ax = (Vec3d::UnitZ() + tilt * (uni(g) > 0 ? radial : tang)).normalized();
+      const Vec3d m0 = radial * (rc - d) + Vec3d(0, 0, 0.5 * uni(g));
+      sides.push_back(posed(g, m0 - 0.8 * ax, m0 + 0.8 * ax, m0 + 2 * radial + 0.3 * tang, rc, h));
+      // an edge along the side past both caps (its ends clipped to the cap planes)
+      const Vec3d m1 = radial * (rc - d);
+      sides.push_back(posed(g, m1 - 1.5 * h * ax, m1 + 1.5 * h * ax, m1 + 2 * radial + 0.3 * tang, rc, h));
+      // lying on a large triangle (the axis tilted from its plane)
+      const Vec3d up = (radial + tilt * Vec3d::UnitZ()).normalized(), s1 = up.cross(tang).normalized(),
+                  s2 = up.cross(s1);
+      const Vec3d cs = radial * (rc - d) + 0.2 * uni(g) * tang;
+      sides.push_back(posed(g, cs + 5 * s1, cs - 2.5 * s1 + 4 * s2, cs - 2.5 * s1 - 4 * s2, rc, h));
+    }
+  Stats st;
+  check_all(caps, "near-level on a cap", &st);
+  EXPECT_EQ(st.hits, static_cast<int>(caps.size()));
+  EXPECT_GE(st.counts[3] + st.counts[4], st.hits * 9 / 10);
+  check_all(sides, "near-parallel to the side", &st);
+  EXPECT_EQ(st.hits, static_cast<int>(sides.size()));
+  EXPECT_EQ(st.multi, st.hits);
+}
+
+/// Exactly touching (representable) configurations: count 0; B moved onto touching by
+/// the reference's depth along its normal: depth within tol.
+TEST(CylinderTriangle, Touching) {
+  const Vec3d p(4, 5, -6);
+  const double rc = 0.5, h = 1.0;
+  for (KernelPath path : {KernelPath::kSimd, KernelPath::kScalar}) {
+    // a large triangle on the cap plane
+    EXPECT_EQ(run({aligned(p, Vec3d(-5, -5, h), Vec3d(5, -5, h), Vec3d(0, 5, h), rc, h)}, path)[0].count, 0u);
+    // a vertical triangle tangent to the side
+    EXPECT_EQ(run({aligned(p, Vec3d(rc, -5, -5), Vec3d(rc, 5, -5), Vec3d(rc, 0, 5), rc, h)}, path)[0].count,
+              0u);
+    // a vertex on the rim, the triangle leaning out
+    EXPECT_EQ(run({aligned(p, Vec3d(rc, 0, h), Vec3d(2, 1, 2), Vec3d(2, -1, 2), rc, h)}, path)[0].count, 0u);
+    // an edge on the rim's tangent line in the cap plane
+    EXPECT_EQ(run({aligned(p, Vec3d(rc, -2, h), Vec3d(rc, 2, h), Vec3d(2, 0, 2), rc, h)}, path)[0].count, 0u);
+  }
+  std::mt19937 g(43);
+  std::vector<Query> qs;
+  for (int i = 0; i < 400 && static_cast<int>(qs.size()) < static_cast<int>(test::scaled(40)); ++i) {
+    Query q = random_query(g, 1.0, 0.0, 0.5);
+    const Ref f = reference(q);
+    if (f.depth <= 1e-3) continue;
+    for (Vec3d& v : q.v) v = test::round_to_float(Vec3d(v + f.depth * f.n));
+    qs.push_back(q);
+  }
+  const auto res = run(qs, KernelPath::kSimd);
+  for (size_t k = 0; k < qs.size(); ++k) {
+    const double tol = 4 * kRel * size_of(qs[k]);
+    if (res[k].count > 0) {
+      EXPECT_LE(res[k].depth, tol) << k;
+    }
+  }
+}
+
+/// Degenerate triangles: collinear (exactly), a point, two equal vertices, slivers of
+/// height 1e-3 .. 1e-7 of their base: the references handle them as the sets they are.
+TEST(CylinderTriangle, DegenerateTriangles) {
+  std::mt19937 g(41);
+  std::uniform_real_distribution<double> uni(-1, 1);
+  std::vector<Query> qs;
+  for (int i = 0; i < static_cast<int>(test::scaled(30)); ++i) {
+    Query q = random_query(g, 1.0, 0.0, 0.6);
+    const Vec3d a = q.v[0], b = q.v[1];
+    Query c = q;  // collinear: the midpoint (exact in float up to one rounding)
+    c.v[2] = test::round_to_float(Vec3d(0.5 * (a + b)));
+    qs.push_back(c);
+    Query pt = q;  // a point
+    pt.v[1] = pt.v[2] = a;
+    qs.push_back(pt);
+    Query two = q;  // two equal vertices
+    two.v[2] = b;
+    qs.push_back(two);
+    for (double hgt : {1e-3, 1e-5, 1e-7}) {  // slivers
+      Query s = q;
+      const Vec3d ab = b - a, perp = ab.cross(random_unit(g)).normalized();
+      s.v[2] = test::round_to_float(Vec3d(a + (0.3 + 0.4 * std::fabs(uni(g))) * ab + hgt * ab.norm() * perp));
+      qs.push_back(s);
+    }
+  }
+  Stats st;
+  check_all(qs, "degenerate triangles", &st);
+  EXPECT_GT(st.hits, static_cast<int>(qs.size()) / 5);
+}
+
+/// A segment-like sliver is a capsule of radius ~0: capsule-cylinder's answers (depth
+/// minus the capsule's radius, the normal reversed: A and B swap).
+TEST(CylinderTriangle, SliverIsCapsuleCylinder) {
+  std::mt19937 g(47);
+  std::vector<Query> qs;
+  for (int i = 0; i < static_cast<int>(test::scaled(200)); ++i) {
+    Query q = random_query(g, 1.0, 0.0, 0.6);
+    const Vec3d a = q.v[0], b = q.v[1], perp = (b - a).cross(random_unit(g)).normalized();
+    q.v[2] = test::round_to_float(Vec3d(0.5 * (a + b) + 1e-7 * (b - a).norm() * perp));
+    qs.push_back(q);
+  }
+  const auto mine = run(qs, KernelPath::kSimd);
+  // capsule lanes: core v0 .. v1, radius r
+  const double r = 1e-6;
+  std::vector<float> cp[3], cr[9], ce[3];
+  for (const Query& q : qs) {
+    const Vec3d c = 0.5 * (q.v[0] + q.v[1]), u = (q.v[1] - q.v[0]).normalized();
+    for (int i = 0; i < 3; ++i) cp[i].push_back(float(c[i]));
+    for (int i = 0; i < 9; ++i) cr[i].push_back(i % 3 == 2 ? float(u[i / 3]) : 0.0f);
+    ce[0].push_back(float(r)), ce[1].push_back(float(0.5 * (q.v[1] - q.v[0]).norm())), ce[2].push_back(0.0f);
+  }
+  LeafSoA ca{};
+  for (int i = 0; i < 3; ++i) ca.p[i] = cp[i].data(), ca.e[i] = ce[i].data();
+  for (int i = 0; i < 9; ++i) ca.r[i] = cr[i].data();
+  const Lanes l(qs);
+  test::ManifoldLanes o(static_cast<uint32_t>(qs.size()));
+  collide_capsule_cylinder(ca, l.a, o.view(), Range{0, static_cast<uint32_t>(qs.size())}, NarrowConfig{});
+  int compared = 0;
+  for (uint32_t k = 0; k < qs.size(); ++k) {
+    const test::PairResult s = o.result(k);
+    const double tol = kRel * size_of(qs[k]);
+    if (s.count == 0 || s.depth - r < 2 * tol) continue;
+    ASSERT_GE(mine[k].count, 1u) << k;
+    ++compared;
+    EXPECT_NEAR(mine[k].depth, s.depth - r, tol) << k;
+    const Ref f = reference(qs[k]);
+    if (f.unique) {
+      EXPECT_LT(angle(mine[k].n, -s.n), kAngleTol) << k;
+    }
+  }
+  EXPECT_GT(compared, static_cast<int>(qs.size()) / 5);
+}
+
+/// Needles and pancakes (1e-4 proportions) of the cylinder, against triangles of the
+/// larger size.
+TEST(CylinderTriangle, NeedlesAndPancakes) {
+  std::mt19937 g(53);
+  std::vector<Query> qs;
+  const int n = static_cast<int>(test::scaled(40));
+  for (int i = 0; i < n; ++i) {
+    Query q = random_query(g, 1.0, 0.0, 0.5);
+    if (i % 2 == 0) {
+      q.rc = test::round_to_float(1e-4 * q.h);  // needle
+    } else {
+      q.h = test::round_to_float(1e-4 * q.rc);  // pancake (a disk)
+    }
+    qs.push_back(q);
+  }
+  Stats st;
+  check_all(qs, "needle / pancake", &st);
+  EXPECT_GT(st.hits, n / 5);
+}
+
+/// Symmetries: the vertex order (cyclic and reversed) changes nothing; the half-turn
+/// about the cylinder's x axis maps it onto itself (the normal turned); turning the whole
+/// pair turns the normal.
+TEST(CylinderTriangle, Symmetries) {
+  std::mt19937 g(59);
+  std::vector<Query> base, cyc, rev, flipped, turned;
+  for (int i = 0; i < static_cast<int>(test::scaled(120)); ++i) {
+    const Query q = random_query(g, 1.0, 0.0, 0.6);
+    base.push_back(q);
+    Query c = q;
+    c.v[0] = q.v[1], c.v[1] = q.v[2], c.v[2] = q.v[0];
+    cyc.push_back(c);
+    Query r = q;
+    std::swap(r.v[1], r.v[2]);
+    rev.push_back(r);
+    const Mat3d flip = q.R * Eigen::AngleAxisd(M_PI, Vec3d::UnitX()).toRotationMatrix() * q.R.transpose();
+    Query f = q;
+    for (int j = 0; j < 3; ++j) f.v[j] = test::round_to_float(Vec3d(q.p + flip * (q.v[j] - q.p)));
+    flipped.push_back(f);
+    const Mat3d turn = test::random_rotation(g);
+    Query t = q;
+    t.p = test::round_to_float(Vec3d(turn * q.p));
+    t.R = test::round_to_float(Mat3d(turn * q.R));
+    for (int j = 0; j < 3; ++j) t.v[j] = test::round_to_float(Vec3d(turn * q.v[j]));
+    turned.push_back(t);
+  }
+  const auto a = run(base, KernelPath::kSimd), b = run(cyc, KernelPath::kSimd),
+             c = run(rev, KernelPath::kSimd), d = run(flipped, KernelPath::kSimd),
+             e = run(turned, KernelPath::kSimd);
+  int compared = 0;
+  for (size_t k = 0; k < base.size(); ++k) {
+    const Ref f = reference(base[k]);
+    const double tol = kRel * size_of(base[k]);
+    if (std::fabs(f.depth) <= 4 * tol) continue;
+    for (const auto* other : {&b, &c, &d, &e}) ASSERT_EQ(a[k].count > 0, (*other)[k].count > 0) << k;
+    if (a[k].count == 0) continue;
+    ++compared;
+    const Mat3d flip =
+        base[k].R * Eigen::AngleAxisd(M_PI, Vec3d::UnitX()).toRotationMatrix() * base[k].R.transpose();
+    const Mat3d turn = turned[k].R * base[k].R.transpose();
+    EXPECT_NEAR(a[k].depth, b[k].depth, tol) << k;
+    EXPECT_NEAR(a[k].depth, c[k].depth, tol) << k;
+    EXPECT_NEAR(a[k].depth, d[k].depth, 2 * tol) << k;
+    EXPECT_NEAR(a[k].depth, e[k].depth, 2 * tol) << k;
+    if (f.unique) {
+      EXPECT_LT(angle(a[k].n, b[k].n), kAngleTol) << k;
+      EXPECT_LT(angle(a[k].n, c[k].n), kAngleTol) << k;
+      EXPECT_LT(angle(flip * a[k].n, d[k].n), kAngleTol) << k;
+      EXPECT_LT(angle(turn * a[k].n, e[k].n), kAngleTol) << k;
+    }
+  }
+  EXPECT_GT(compared, static_cast<int>(base.size()) / 4);
+}
+
+/// Any partition of a bucket's range gives the same bytes, nothing outside the range is
+/// written (the output lanes start poisoned), and a lane's bytes do not depend on which
+/// lanes share its block (a shuffled bucket).
+TEST(CylinderTriangle, RangePartitionsAndBlocks) {
+  std::mt19937 g(61);
+  const std::vector<Query> qs = random_queries(g, 37, 1.0, 0.0);
+  for (KernelPath path : {KernelPath::kSimd, KernelPath::kScalar}) {
+    test::ManifoldLanes all(37);
+    const auto whole = run(qs, path, nullptr, 0, 37, &all);
+    for (uint32_t cut : {1u, 3u, 8u, 11u, 36u}) {
+      test::ManifoldLanes lo(37), hi(37);
+      run(qs, path, nullptr, 0, cut, &lo);
+      run(qs, path, nullptr, cut, 37, &hi);
+      for (uint32_t k = 0; k < 37; ++k) {
+        const test::ManifoldLanes& m = k < cut ? lo : hi;
+        const test::ManifoldLanes& other = k < cut ? hi : lo;
+        EXPECT_EQ(other.count[k], 0xff) << "lane " << k << " written outside its range";
+        ASSERT_EQ(m.count[k], all.count[k]) << cut << " " << k;
+        if (m.count[k] == 0) continue;
+        EXPECT_EQ(std::memcmp(&m.depth[k], &all.depth[k], 4), 0) << k;
+        for (int i = 0; i < 3; ++i) EXPECT_EQ(std::memcmp(&m.n[i][k], &all.n[i][k], 4), 0) << k;
+        for (uint32_t j = 0; j < m.count[k]; ++j) {
+          EXPECT_EQ(std::memcmp(&m.pd[j][k], &all.pd[j][k], 4), 0) << k;
+          for (int i = 0; i < 3; ++i) EXPECT_EQ(std::memcmp(&m.pt[j][i][k], &all.pt[j][i][k], 4), 0) << k;
+        }
+      }
+    }
+    // shuffled: every lane in other company
+    std::vector<uint32_t> perm(qs.size());
+    std::iota(perm.begin(), perm.end(), 0u);
+    std::shuffle(perm.begin(), perm.end(), g);
+    std::vector<Query> sh;
+    for (uint32_t i : perm) sh.push_back(qs[i]);
+    const auto shuffled = run(sh, path);
+    for (size_t i = 0; i < perm.size(); ++i)
+      EXPECT_TRUE(same_bytes(shuffled[i], whole[perm[i]])) << "lane " << perm[i] << " moved to " << i;
+  }
+}
+
+/// The general GJK / EPA path on the same lanes: same hits away from touching (1e-3 L),
+/// depth within 1e-3 L, normal within 0.02 rad where unique.
+TEST(CylinderTriangle, AgreesWithGjkEpa) {
+  std::mt19937 g(67);
+  const std::vector<Query> qs = random_queries(g, static_cast<int>(test::scaled(300)), 1.0, 0.0);
+  const auto mine = run(qs, KernelPath::kSimd), gjk = run(qs, KernelPath::kSimd, &gjk_kernel);
+  int compared = 0;
+  for (size_t k = 0; k < qs.size(); ++k) {
+    const Ref f = reference(qs[k]);
+    const double L = size_of(qs[k]);
+    if (std::fabs(f.depth) < 1e-3 * L) continue;
+    ASSERT_EQ(mine[k].count > 0, gjk[k].count > 0) << k << " depth_ref " << f.depth;
+    if (mine[k].count == 0) continue;
+    ++compared;
+    EXPECT_NEAR(mine[k].depth, gjk[k].depth, 1e-3 * L) << k;
+    if (f.unique) {
+      EXPECT_LT(angle(mine[k].n, gjk[k].n), 0.02) << k;
+    }
+  }
+  EXPECT_GT(compared, static_cast<int>(qs.size()) / 5);
+}
+
+}  // namespace
+}  // namespace impact::kernels
