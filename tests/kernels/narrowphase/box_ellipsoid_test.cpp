@@ -61,6 +61,8 @@ namespace nref = test::nref;
 
 constexpr double kRel = 1e-5;       // depth tolerance, of L
 constexpr double kAngleTol = 1e-4;  // rad, where the minimum is well conditioned
+/// A few float ulps of the overlap at size L (4 x 2^-24): its evaluation's rounding.
+constexpr double kRoundingSlack = 2.4e-7;
 
 double angle(const Vec3d& a, const Vec3d& b) {
   return std::atan2(a.cross(b).norm(), a.dot(b));
@@ -321,8 +323,14 @@ void check_all(const std::vector<Query>& qs, const char* what, Stats* st_out = n
         const double ang = angle(h.n, f.n);
         EXPECT_NEAR(sd_box(q.a, on_a), 0.0, slack + (ang + 1e-6) * rho) << what << " lane " << k << path;
         st.worst_angle = std::max(st.worst_angle, ang);
-        EXPECT_LE(ang, kAngleTol) << what << " lane " << k << path << " n " << h.n.transpose() << " ref "
-                                  << f.n.transpose();
+        // A normal farther than kAngleTol is accepted only when it is as good a separating
+        // direction as the reference's up to the overlap's float rounding (kRoundingSlack
+        // L), and within 10 kAngleTol: the overlap then rises by less than its rounding over
+        // that angle (seen: 3.1e-4 rad, 6.9e-8 L worse, 1 lane in ~1600 at intensity 10).
+        const bool as_good = overlap(q, h.n) <= f.s + kRoundingSlack * L;
+        EXPECT_TRUE(ang <= kAngleTol || (as_good && ang <= 10 * kAngleTol))
+            << what << " lane " << k << path << " angle " << ang << " n " << h.n.transpose() << " ref "
+            << f.n.transpose() << " overlap - ref " << overlap(q, h.n) - f.s;
       }
     }
     if (f.s > tol && f.conditioned) ++st.normal_checked;

@@ -49,6 +49,8 @@ namespace hi = test::hull_input;
 
 constexpr double kRel = 1e-5;
 constexpr double kAngleTol = 1e-4;
+/// A few float ulps of the overlap at size L (4 x 2^-24): its evaluation's rounding.
+constexpr double kRoundingSlack = 2.4e-7;
 
 struct Side {
   Vec3d p = Vec3d::Zero();
@@ -143,7 +145,12 @@ struct Checker {
     EXPECT_LE(nref::overlap(sa, sb, nref::normalized(nv)), ref.s + tol);
     if (ref.unique(10 * tol) && ref.s > tol) {
       ++unique;
-      EXPECT_LE(nref::angle(nv, ref.n), kAngleTol);
+      // Farther than kAngleTol only as good a direction as the reference's up to the
+      // overlap's float rounding (kRoundingSlack L), within 10 kAngleTol (seen at
+      // intensity 10: up to 2.3e-4 rad, 3 lanes in ~6000).
+      const double ang = nref::angle(nv, ref.n);
+      const bool as_good = nref::overlap(sa, sb, nref::normalized(nv)) <= ref.s + kRoundingSlack * L;
+      EXPECT_TRUE(ang <= kAngleTol || (as_good && ang <= 10 * kAngleTol)) << "angle " << ang;
     }
     EXPECT_EQ(got.pd[0], got.depth);
     // point - n depth/2 lies on the ellipsoid.
@@ -155,7 +162,11 @@ struct Checker {
                 tol + 1e-6 * L + 2.4e-7 * got.pt[0].cwiseAbs().maxCoeff());
     if (scalar != nullptr) {
       const test::PairResult s = scalar->out.result(k);
-      ASSERT_EQ(s.count, got.count);
+      if (s.count != got.count) {  // only at touching, within the tolerance
+        EXPECT_LE(std::fabs(ref.s), tol);
+        EXPECT_LE(got.depth, tol);
+        return;
+      }
       EXPECT_NEAR(s.depth, got.depth, tol);
       if (ref.unique(10 * tol)) {
         EXPECT_LE(nref::angle(nv, nref::V3{s.n.x(), s.n.y(), s.n.z()}), kAngleTol);
