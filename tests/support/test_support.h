@@ -1,6 +1,6 @@
 // Shared helpers of the test suite: problem-size scaling, the list of thread
 // configurations every determinism check runs over, Status matchers, float ulp
-// distance, and a snapshot of a world's observable state.
+// distance, a snapshot of a world's observable state, and a golden-section minimiser.
 #pragma once
 
 #include <gtest/gtest.h>
@@ -10,6 +10,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdlib>
+#include <initializer_list>
 #include <memory>
 #include <string>
 #include <vector>
@@ -152,6 +153,29 @@ inline WorldSnapshot snapshot(const World& w) {
     s.words.push_back(h.generation);
   }
   return s;
+}
+
+/// The minimum of f over [lo, hi] for a unimodal (e.g. convex) f: iters golden-section
+/// steps, then the bracket's ends; *arg gets its argument. The tests' 1-D reference
+/// minimiser (nested for 2-D and 3-D minima of convex distances).
+template <class Fn>
+double golden_section_min(Fn f, double lo, double hi, int iters, double* arg) {
+  const double g = 0.5 * (std::sqrt(5.0) - 1.0);
+  double x1 = hi - g * (hi - lo), x2 = lo + g * (hi - lo), f1 = f(x1), f2 = f(x2);
+  for (int it = 0; it < iters; ++it) {
+    if (f1 < f2) {
+      hi = x2, x2 = x1, f2 = f1, x1 = hi - g * (hi - lo), f1 = f(x1);
+    } else {
+      lo = x1, x1 = x2, f1 = f2, x2 = lo + g * (hi - lo), f2 = f(x2);
+    }
+  }
+  double best = std::min(f1, f2), at = f1 < f2 ? x1 : x2;
+  for (double c : {lo, hi}) {
+    const double fc = f(c);
+    if (fc < best) best = fc, at = c;
+  }
+  *arg = at;
+  return best;
 }
 
 }  // namespace impact::test

@@ -166,26 +166,6 @@ double sd_box(const Posed& a, const Vec3d& x) {
   return inside > 0 ? q.cwiseMax(0.0).norm() : inside;
 }
 
-template <class Fn>
-double golden(Fn f, double lo, double hi, int iters, double* arg) {
-  const double g = 0.5 * (std::sqrt(5.0) - 1.0);
-  double x1 = hi - g * (hi - lo), x2 = lo + g * (hi - lo), f1 = f(x1), f2 = f(x2);
-  for (int it = 0; it < iters; ++it) {
-    if (f1 < f2) {
-      hi = x2, x2 = x1, f2 = f1, x1 = hi - g * (hi - lo), f1 = f(x1);
-    } else {
-      lo = x1, x1 = x2, f1 = f2, x2 = lo + g * (hi - lo), f2 = f(x2);
-    }
-  }
-  double best = std::min(f1, f2), at = f1 < f2 ? x1 : x2;
-  for (double c : {lo, hi}) {
-    const double fc = f(c);
-    if (fc < best) best = fc, at = c;
-  }
-  *arg = at;
-  return best;
-}
-
 /// The least signed distance to the ellipsoid over the solid box (convex: nested
 /// golden-section search over the box's three coordinates).
 double box_minimum(const Query& q, int iters) {
@@ -193,14 +173,15 @@ double box_minimum(const Query& q, int iters) {
   auto point = [&](double u, double v, double w) { return Vec3d(a.p + a.R * Vec3d(u, v, w)); };
   auto over_w = [&](double u, double v) {
     double w;
-    return golden([&](double ww) { return sd_ellipsoid(q.b, point(u, v, ww)); }, -a.e[2], a.e[2], iters, &w);
+    return test::golden_section_min([&](double ww) { return sd_ellipsoid(q.b, point(u, v, ww)); }, -a.e[2],
+                                    a.e[2], iters, &w);
   };
   auto over_vw = [&](double u) {
     double v;
-    return golden([&](double vv) { return over_w(u, vv); }, -a.e[1], a.e[1], iters, &v);
+    return test::golden_section_min([&](double vv) { return over_w(u, vv); }, -a.e[1], a.e[1], iters, &v);
   };
   double u;
-  return golden(over_vw, -a.e[0], a.e[0], iters, &u);
+  return test::golden_section_min(over_vw, -a.e[0], a.e[0], iters, &u);
 }
 
 nref::Shape posed_shape(const Posed& s, LeafType t) {

@@ -172,26 +172,6 @@ Vec3d cyl_closest(const Query& q, const Vec3d& x) {
   return q.p + q.R * Vec3d(l.x() * s, l.y() * s, std::clamp(l.z(), -q.h, q.h));
 }
 
-template <class Fn>
-double golden(Fn f, double lo, double hi, int iters, double* arg) {
-  const double g = 0.5 * (std::sqrt(5.0) - 1.0);
-  double x1 = hi - g * (hi - lo), x2 = lo + g * (hi - lo), f1 = f(x1), f2 = f(x2);
-  for (int it = 0; it < iters; ++it) {
-    if (f1 < f2) {
-      hi = x2, x2 = x1, f2 = f1, x1 = hi - g * (hi - lo), f1 = f(x1);
-    } else {
-      lo = x1, x1 = x2, f1 = f2, x2 = lo + g * (hi - lo), f2 = f(x2);
-    }
-  }
-  double best = std::min(f1, f2), at = f1 < f2 ? x1 : x2;
-  for (double c : {lo, hi}) {
-    const double fc = f(c);
-    if (fc < best) best = fc, at = c;
-  }
-  *arg = at;
-  return best;
-}
-
 /// The least signed distance to the cylinder over the triangle moved by `shift` (convex:
 /// nested golden-section search over the barycentric coordinates); where = the point.
 double triangle_minimum(const Query& q, const Vec3d& shift = Vec3d::Zero(), Vec3d* where = nullptr) {
@@ -199,10 +179,10 @@ double triangle_minimum(const Query& q, const Vec3d& shift = Vec3d::Zero(), Vec3
     return Vec3d(q.v[0] + u * (q.v[1] - q.v[0]) + v * (q.v[2] - q.v[0]) + shift);
   };
   auto inner = [&](double u, double* v_at) {
-    return golden([&](double v) { return cyl_sd(q, point(u, v)); }, 0.0, 1.0 - u, 60, v_at);
+    return test::golden_section_min([&](double v) { return cyl_sd(q, point(u, v)); }, 0.0, 1.0 - u, 60, v_at);
   };
   double u = 0, v = 0;
-  const double best = golden(
+  const double best = test::golden_section_min(
       [&](double uu) {
         double vv;
         return inner(uu, &vv);

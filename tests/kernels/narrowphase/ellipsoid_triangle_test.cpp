@@ -168,26 +168,6 @@ double sd_ellipsoid(const Ell& b, const Vec3d& x) {
   return test::eref::signed_distance_local(b.e, b.R.transpose() * (x - b.p));
 }
 
-template <class Fn>
-double golden(Fn f, double lo, double hi, int iters, double* arg) {
-  const double g = 0.5 * (std::sqrt(5.0) - 1.0);
-  double x1 = hi - g * (hi - lo), x2 = lo + g * (hi - lo), f1 = f(x1), f2 = f(x2);
-  for (int it = 0; it < iters; ++it) {
-    if (f1 < f2) {
-      hi = x2, x2 = x1, f2 = f1, x1 = hi - g * (hi - lo), f1 = f(x1);
-    } else {
-      lo = x1, x1 = x2, f1 = f2, x2 = lo + g * (hi - lo), f2 = f(x2);
-    }
-  }
-  double best = std::min(f1, f2), at = f1 < f2 ? x1 : x2;
-  for (double c : {lo, hi}) {
-    const double fc = f(c);
-    if (fc < best) best = fc, at = c;
-  }
-  *arg = at;
-  return best;
-}
-
 /// The least signed distance to the ellipsoid over the triangle (convex: nested
 /// golden-section search over the barycentric coordinates); y = where.
 double triangle_minimum(const Query& q, Vec3d* where) {
@@ -196,10 +176,11 @@ double triangle_minimum(const Query& q, Vec3d* where) {
     return Vec3d(t.v[0] + u * (t.v[1] - t.v[0]) + v * (t.v[2] - t.v[0]));
   };
   auto inner = [&](double u, double* v_at) {
-    return golden([&](double v) { return sd_ellipsoid(q.a, point(u, v)); }, 0.0, 1.0 - u, 44, v_at);
+    return test::golden_section_min([&](double v) { return sd_ellipsoid(q.a, point(u, v)); }, 0.0, 1.0 - u,
+                                    44, v_at);
   };
   double u = 0, v = 0;
-  const double best = golden(
+  const double best = test::golden_section_min(
       [&](double uu) {
         double vv;
         return inner(uu, &vv);
