@@ -119,8 +119,8 @@ IMPACT_INLINE void consider(const Frame<F>& f, Best<F>& best, const V3<F>& m, ty
   const F len = sqrt(select(ok, l2, one));
   const F ax = f.av[0] * m.x, ay = f.av[1] * m.y, az = f.av[2] * m.z;
   const F he = sqrt(ax * ax + ay * ay + az * az);
-  const F lowest =
-      dot(m, f.c) - f.h[0] * abs(dot(m, f.bx[0])) - f.h[1] * abs(dot(m, f.bx[1])) - f.h[2] * abs(dot(m, f.bx[2]));
+  const F lowest = dot(m, f.c) - f.h[0] * abs(dot(m, f.bx[0])) - f.h[1] * abs(dot(m, f.bx[1])) -
+                   f.h[2] * abs(dot(m, f.bx[2]));
   const F value = (he - lowest) / len;
   const auto take = ok & (value < best.value);
   best.value = select(take, value, best.value);
@@ -152,8 +152,8 @@ IMPACT_INLINE void pieces(const Frame<F>& fr, Best<F>& best) {
   using Mask = typename F::Mask;
   constexpr uint32_t W = F::kWidth;
   const F zero(0.0f), one(1.0f), big(3.0e38f);
-  const F (&av)[3] = fr.av;
-  const F (&h)[3] = fr.h;
+  const F(&av)[3] = fr.av;
+  const F(&h)[3] = fr.h;
   const V3<F>& c = fr.c;
   const V3<F>(&bx)[3] = fr.bx;
   V3<F> hb[3];
@@ -188,7 +188,6 @@ IMPACT_INLINE void pieces(const Frame<F>& fr, Best<F>& best) {
   uint32_t want_far[kPieces];
   F far_level[kPieces];  // level of inside points (2 outside), for the far minima's bound
 
-
   // Cheap filters first. An outside point's nearest-point candidate on its piece has
   // the ellipsoid's nearest point in the feature's Voronoi region (beyond each of its
   // face planes): the ellipsoid must reach past those planes, reach_i = |A b_i| -
@@ -208,16 +207,11 @@ IMPACT_INLINE void pieces(const Frame<F>& fr, Best<F>& best) {
   }
   const F reach_tol = -F(ellip::kPruneMargin) * (sqrt(length_sq(c)) + h[0] + h[1] + h[2] + F(2.0f));
   const F band(1.0f + ellip::kPruneMargin);
-  // level above which an inside point's candidates can beat `value` (radius am).
-  auto level_floor = [&](F value, F am) {
-    const F t = one - value / am;
-    return select(t > zero, t * t, F(-1.0f));
-  };
 
   // Vertices: the nearest point and the far minimum of the distance from the vertex.
   const ellip::Radii3<F> r3 = ellip::radii3(av);
   const ellip::FarAxes3<F> fx = ellip::far_axes3(av);
-  const F vfloor = level_floor(best.value, r3.am);
+  const F vfloor = ellip::level_floor(best.value, r3.am);
   for (int p = 0; p < kVertexPieces; ++p) {
     V3<F> w = c;
     Mask reach_ok(true);
@@ -263,7 +257,7 @@ IMPACT_INLINE void pieces(const Frame<F>& fr, Best<F>& best) {
     const F sa[3] = {sh[kk].ax[0], sh[kk].ax[1], sh[kk].ax[0]};
     for (int i = 0; i < 3; ++i) sa[i].store(batch.rad[1 + kk][i]);
     const ellip::Radii2<F> r2 = ellip::radii2(sh[kk]);
-    const F efloor = level_floor(best.value, sh[kk].ax[1]);
+    const F efloor = ellip::level_floor(best.value, sh[kk].ax[1]);
     int a0, a1;
     edge_axes(kk, a0, a1);
     const F u0[2] = {dot(bx[a0], sh[kk].e1), dot(bx[a0], sh[kk].e2)};
@@ -308,7 +302,6 @@ IMPACT_INLINE void pieces(const Frame<F>& fr, Best<F>& best) {
     }
   }
 
-
   auto lift = [&](int p) {
     const V3<F> r{F::load(batch.res[p][0]), F::load(batch.res[p][1]), F::load(batch.res[p][2])};
     if (p < kVertexPieces) return r;
@@ -322,7 +315,6 @@ IMPACT_INLINE void pieces(const Frame<F>& fr, Best<F>& best) {
   };
 
   ellip::solve_near_packed<F>(batch);
-
 
   for (int p = 0; p < kPieces; ++p) {
     if (batch.want[p] == 0) continue;
@@ -338,11 +330,11 @@ IMPACT_INLINE void pieces(const Frame<F>& fr, Best<F>& best) {
     bool any = false;
     for (int p = 0; p < kPieces; ++p) {
       const F am = p < kVertexPieces ? r3.am : sh[(p - kVertexPieces) / 4].ax[1];
-      batch.want[p] = want_far[p] & meets_bits & simd::bits(far_level[p] > level_floor(best.value, am));
+      batch.want[p] =
+          want_far[p] & meets_bits & simd::bits(far_level[p] > ellip::level_floor(best.value, am));
       any = any || batch.want[p] != 0;
     }
     if (any) {
-
       ellip::solve_far_packed<F>(batch);
 
       for (int p = 0; p < kPieces; ++p) {
@@ -353,7 +345,6 @@ IMPACT_INLINE void pieces(const Frame<F>& fr, Best<F>& best) {
       }
     }
   }
-
 }
 
 /// Gathers lanes idx of the LeafSoA fields.
@@ -364,7 +355,8 @@ IMPACT_INLINE V3<F> gather3(const float* const* p, typename F::Int idx) {
 template <class F>
 IMPACT_INLINE M3<F> gather_r(const LeafSoA& s, typename F::Int idx) {
   M3<F> m;
-  for (int c = 0; c < 3; ++c) m.c[c] = {simd::gather(s.r[c], idx), simd::gather(s.r[3 + c], idx), simd::gather(s.r[6 + c], idx)};
+  for (int c = 0; c < 3; ++c)
+    m.c[c] = {simd::gather(s.r[c], idx), simd::gather(s.r[3 + c], idx), simd::gather(s.r[6 + c], idx)};
   return m;
 }
 

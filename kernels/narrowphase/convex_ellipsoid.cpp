@@ -120,23 +120,17 @@ IMPACT_INLINE uint32_t valid_bits(uint32_t i, uint32_t n) {
   return c >= 32 ? 0xffffffffu : (1u << c) - 1u;
 }
 
-template <class F>
-IMPACT_INLINE F level_floor(F value, F am) {
-  const F t = F(1.0f) - value / am;
-  return select(t > F(0.0f), t * t, F(-1.0f));
-}
-
 /// The pair's frame and running state.
 template <class F>
 struct Pair {
   static constexpr uint32_t W = F::kWidth;
   const HullView* h;
   uint32_t v0, nv, f0, nf, a0, na;
-  float av[3];   // scaled radii
+  float av[3];  // scaled radii
   float inv_a[3];
-  float rs[9];   // hull local -> scaled ellipsoid frame, row-major
-  float rr[9];   // the rotation alone
-  float c[3];    // hull origin, scaled ellipsoid frame
+  float rs[9];  // hull local -> scaled ellipsoid frame, row-major
+  float rr[9];  // the rotation alone
+  float c[3];   // hull origin, scaled ellipsoid frame
   float am;
   Scratch<W>* s;
   Best best;
@@ -198,7 +192,8 @@ IMPACT_INLINE void flush(Pair<F>& p, Slots<F::kWidth>& q, bool near) {
     for (int j = 0; j < 3; ++j) ml[j] = sign[j] * g[j];
     V3<F> m{F(0.0f), F(0.0f), F(0.0f)};
     for (int j = 0; j < 3; ++j) {
-      const V3<F> bj{block<F>(q.b[3 * j], i, q.n), block<F>(q.b[3 * j + 1], i, q.n), block<F>(q.b[3 * j + 2], i, q.n)};
+      const V3<F> bj{block<F>(q.b[3 * j], i, q.n), block<F>(q.b[3 * j + 1], i, q.n),
+                     block<F>(q.b[3 * j + 2], i, q.n)};
       m = madd(m, ml[j], bj);
     }
     score(p, m, simd::bits(ok) & valid_bits<F>(i, q.n));
@@ -208,8 +203,8 @@ IMPACT_INLINE void flush(Pair<F>& p, Slots<F::kWidth>& q, bool near) {
 
 /// Appends the lanes of `bits` as slots (flushing first when full).
 template <class F>
-IMPACT_INLINE void push(Pair<F>& p, Slots<F::kWidth>& q, bool near, uint32_t bits, const F (&a)[3], const F (&y)[3],
-                        const V3<F> (&basis)[3]) {
+IMPACT_INLINE void push(Pair<F>& p, Slots<F::kWidth>& q, bool near, uint32_t bits, const F (&a)[3],
+                        const F (&y)[3], const V3<F> (&basis)[3]) {
   constexpr uint32_t W = F::kWidth;
   if (bits == 0) return;
   float ta[3][W], ty[3][W], tb[9][W];
@@ -241,7 +236,8 @@ bool convex_ellipsoid_pair(const LeafSoA& A, const LeafSoA& B, const ManifoldSoA
   p.v0 = h.vert_begin[hid], p.nv = h.vert_begin[hid + 1] - p.v0;
   p.f0 = h.face_begin[hid], p.nf = h.face_begin[hid + 1] - p.f0;
   p.a0 = h.adj_begin[hid], p.na = h.adj_begin[hid + 1] - p.a0;
-  if (p.nv == 0 || p.nf == 0 || p.na == 0 || p.nv > kMaxVerts || p.nf > kMaxFaces || p.na > kMaxEdges) return false;
+  if (p.nv == 0 || p.nf == 0 || p.na == 0 || p.nv > kMaxVerts || p.nf > kMaxFaces || p.na > kMaxEdges)
+    return false;
 
   // Frames: world = R local + p (row-major r[3 row + col]).
   float ra[9], re[9];
@@ -250,7 +246,8 @@ bool convex_ellipsoid_pair(const LeafSoA& A, const LeafSoA& B, const ManifoldSoA
   const float emax = e[0] > e[1] ? (e[0] > e[2] ? e[0] : e[2]) : (e[1] > e[2] ? e[1] : e[2]);
   const float inv = 1.0f / emax;
   for (int i = 0; i < 3; ++i) p.av[i] = e[i] * inv, p.inv_a[i] = 1.0f / p.av[i];
-  p.am = p.av[0] < p.av[1] ? (p.av[0] < p.av[2] ? p.av[0] : p.av[2]) : (p.av[1] < p.av[2] ? p.av[1] : p.av[2]);
+  p.am =
+      p.av[0] < p.av[1] ? (p.av[0] < p.av[2] ? p.av[0] : p.av[2]) : (p.av[1] < p.av[2] ? p.av[1] : p.av[2]);
   const float d[3] = {A.p[0][k] - B.p[0][k], A.p[1][k] - B.p[1][k], A.p[2][k] - B.p[2][k]};
   for (int i = 0; i < 3; ++i) {
     p.c[i] = (re[i] * d[0] + re[3 + i] * d[1] + re[6 + i] * d[2]) * inv;
@@ -269,14 +266,16 @@ bool convex_ellipsoid_pair(const LeafSoA& A, const LeafSoA& B, const ManifoldSoA
   // 1. Faces.
   F fbest(kBig), fidx(0.0f), cmin(kBig);
   for (uint32_t i = 0; i < p.nf; i += W) {
-    const V3<F> nl{block<F>(h.fnx + p.f0, i, p.nf), block<F>(h.fny + p.f0, i, p.nf), block<F>(h.fnz + p.f0, i, p.nf)};
+    const V3<F> nl{block<F>(h.fnx + p.f0, i, p.nf), block<F>(h.fny + p.f0, i, p.nf),
+                   block<F>(h.fnz + p.f0, i, p.nf)};
     const V3<F> ne{F(p.rr[0]) * nl.x + F(p.rr[1]) * nl.y + F(p.rr[2]) * nl.z,
                    F(p.rr[3]) * nl.x + F(p.rr[4]) * nl.y + F(p.rr[5]) * nl.z,
                    F(p.rr[6]) * nl.x + F(p.rr[7]) * nl.y + F(p.rr[8]) * nl.z};
     const F pc = dot(ne, c) + block<F>(h.fd + p.f0, i, p.nf) * F(inv);
     const F ax = av[0] * ne.x, ay = av[1] * ne.y, az = av[2] * ne.z;
     const F g = sqrt(ax * ax + ay * ay + az * az) + pc;
-    ne.x.store(scratch.nx + i), ne.y.store(scratch.ny + i), ne.z.store(scratch.nz + i), pc.store(scratch.pc + i);
+    ne.x.store(scratch.nx + i), ne.y.store(scratch.ny + i), ne.z.store(scratch.nz + i),
+        pc.store(scratch.pc + i);
     const Mask take = g < fbest;
     fbest = select(take, g, fbest);
     fidx = select(take, lane + F(static_cast<float>(i)), fidx);
@@ -298,7 +297,8 @@ bool convex_ellipsoid_pair(const LeafSoA& A, const LeafSoA& B, const ManifoldSoA
   // 2. Vertices: positions, levels, the distance bound U.
   F umin(kBig), ymax(0.0f);
   for (uint32_t i = 0; i < p.nv; i += W) {
-    const V3<F> vl{block<F>(h.vx + p.v0, i, p.nv), block<F>(h.vy + p.v0, i, p.nv), block<F>(h.vz + p.v0, i, p.nv)};
+    const V3<F> vl{block<F>(h.vx + p.v0, i, p.nv), block<F>(h.vy + p.v0, i, p.nv),
+                   block<F>(h.vz + p.v0, i, p.nv)};
     const V3<F> y{F(p.rs[0]) * vl.x + F(p.rs[1]) * vl.y + F(p.rs[2]) * vl.z + c.x,
                   F(p.rs[3]) * vl.x + F(p.rs[4]) * vl.y + F(p.rs[5]) * vl.z + c.y,
                   F(p.rs[6]) * vl.x + F(p.rs[7]) * vl.y + F(p.rs[8]) * vl.z + c.z};
@@ -308,7 +308,8 @@ bool convex_ellipsoid_pair(const LeafSoA& A, const LeafSoA& B, const ManifoldSoA
     ymax = max(ymax, length_sq(y));
   }
   float lmin = umin.lane(0), ym2 = ymax.lane(0);
-  for (uint32_t l = 1; l < W; ++l) lmin = simd::fmin_nn(lmin, umin.lane(l)), ym2 = simd::fmax_nn(ym2, ymax.lane(l));
+  for (uint32_t l = 1; l < W; ++l)
+    lmin = simd::fmin_nn(lmin, umin.lane(l)), ym2 = simd::fmax_nn(ym2, ymax.lane(l));
   float U = std::sqrt(lmin) - 1.0f;
   if (cmin_s >= 0.0f) U = U < 0.0f ? U : 0.0f;  // the ellipsoid's centre is in the hull
   if (U > 0.0f) {
@@ -338,9 +339,10 @@ bool convex_ellipsoid_pair(const LeafSoA& A, const LeafSoA& B, const ManifoldSoA
   const ellip::FarAxes3<F> fx = ellip::far_axes3(av);
   {
     const F bestv(p.best.value);
-    const F vfloor = level_floor(bestv, am);
+    const F vfloor = ellip::level_floor(bestv, am);
     for (uint32_t i = 0; i < p.nv; i += W) {
-      const F y[3] = {block<F>(scratch.yx, i, p.nv), block<F>(scratch.yy, i, p.nv), block<F>(scratch.yz, i, p.nv)};
+      const F y[3] = {block<F>(scratch.yx, i, p.nv), block<F>(scratch.yy, i, p.nv),
+                      block<F>(scratch.yz, i, p.nv)};
       const F tx = y[0] * ia[0], ty = y[1] * ia[1], tz = y[2] * ia[2];
       const F level = tx * tx + ty * ty + tz * tz;
       const Mask inside = level < band;
@@ -358,7 +360,7 @@ bool convex_ellipsoid_pair(const LeafSoA& A, const LeafSoA& B, const ManifoldSoA
   // 3b. Edges: the line level first, the shadow and the curve tests for those that pass.
   {
     const F bestv(p.best.value);
-    const F vfloor = level_floor(bestv, am);
+    const F vfloor = ellip::level_floor(bestv, am);
     uint32_t ne = 0;
     for (uint32_t i = 0; i < p.na; i += W) {
       // The adjacency list is padded to a multiple of 8 (W divides 8).
@@ -385,15 +387,18 @@ bool convex_ellipsoid_pair(const LeafSoA& A, const LeafSoA& B, const ManifoldSoA
     }
     for (uint32_t i = ne; i < ne + W; ++i) {  // padding repeats the last
       const uint32_t l = ne == 0 ? 0 : ne - 1;
-      scratch.e0[i] = scratch.e0[l], scratch.e1[i] = scratch.e1[l], scratch.f0[i] = scratch.f0[l], scratch.f1[i] = scratch.f1[l];
+      scratch.e0[i] = scratch.e0[l], scratch.e1[i] = scratch.e1[l], scratch.f0[i] = scratch.f0[l],
+      scratch.f1[i] = scratch.f1[l];
     }
     for (uint32_t i = 0; i < ne; i += W) {
       const Int i0 = Int::load(scratch.e0 + i), i1 = Int::load(scratch.e1 + i);
       const Int j0 = Int::load(scratch.f0 + i), j1 = Int::load(scratch.f1 + i);
       const V3<F> P{simd::gather(scratch.yx, i0), simd::gather(scratch.yy, i0), simd::gather(scratch.yz, i0)};
       const V3<F> Q{simd::gather(scratch.yx, i1), simd::gather(scratch.yy, i1), simd::gather(scratch.yz, i1)};
-      const V3<F> n0{simd::gather(scratch.nx, j0), simd::gather(scratch.ny, j0), simd::gather(scratch.nz, j0)};
-      const V3<F> n1{simd::gather(scratch.nx, j1), simd::gather(scratch.ny, j1), simd::gather(scratch.nz, j1)};
+      const V3<F> n0{simd::gather(scratch.nx, j0), simd::gather(scratch.ny, j0),
+                     simd::gather(scratch.nz, j0)};
+      const V3<F> n1{simd::gather(scratch.nx, j1), simd::gather(scratch.ny, j1),
+                     simd::gather(scratch.nz, j1)};
       const V3<F> t = Q - P;
       const V3<F> tu = t * (one / sqrt(length_sq(t)));
       const ellip::Shadow<F> sh = ellip::shadow(av, tu);
@@ -402,7 +407,7 @@ bool convex_ellipsoid_pair(const LeafSoA& A, const LeafSoA& B, const ManifoldSoA
       Mask keep;
       const F level = ellip::level_of(r2.inv, y, keep);
       const Mask inside = level < band;
-      const Mask can = ~inside | (level > level_floor(bestv, sh.ax[1]));
+      const Mask can = ~inside | (level > ellip::level_floor(bestv, sh.ax[1]));
       Mask near_want = select(inside, can, (sqrt(level) - one) * sh.ax[1] <= Uk);
       Mask far_want = can & (abs(y[1]) < bestv);
       const F c01 = dot(n0, n1);

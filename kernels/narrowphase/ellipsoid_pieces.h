@@ -50,11 +50,21 @@ inline constexpr float kPolyRound = 1e-5f;
 /// Relative widening of the brackets (the solver's root may sit on its bound's rounding).
 inline constexpr float kWiden = 1e-4f;
 
+/// The level above which an inside point's candidates can still beat `value` on an
+/// ellipsoid of smallest radius am (scaled frame): such a candidate scores at least the
+/// point's distance to the surface, >= (1 - sqrt(level)) am; -1 (every level) when
+/// value >= am.
+template <class F>
+IMPACT_INLINE F level_floor(F value, F am) {
+  const F t = F(1.0f) - value / am;
+  return select(t > F(0.0f), t * t, F(-1.0f));
+}
+
 /// The smallest-axis data of radii a (N = 3) used by every curve test of one ellipsoid.
 template <class F>
 struct Radii3 {
   F a[3], inv[3];
-  F d[3];     // a_i^2 - a_m^2
+  F d[3];        // a_i^2 - a_m^2
   F S[3], P[3];  // d_j + d_l, d_j d_l over the two other axes
   F am, am2, dmax;
 };
@@ -98,8 +108,8 @@ IMPACT_INLINE F level_of(const F (&inv)[N], const F (&y)[N], typename F::Mask& k
 /// level from level_of): the solver's lower bounds (each term alone, all terms with the
 /// largest d), |a y| above, then a_m^2 splits inside from outside; widened by kWiden.
 template <int N, class F>
-IMPACT_INLINE void near_bracket(const F (&a)[N], const F (&d)[N], F am2, F dmax, const F (&y)[N], F level, F& lo,
-                                F& hi) {
+IMPACT_INLINE void near_bracket(const F (&a)[N], const F (&d)[N], F am2, F dmax, const F (&y)[N], F level,
+                                F& lo, F& hi) {
   const F zero(0.0f);
   F wn2 = zero;
   lo = zero;
