@@ -64,6 +64,7 @@ struct Table {
     k[kLeafBox][kLeafEllipsoid] = &collide_box_ellipsoid;
     k[kLeafConvex][kLeafEllipsoid] = &collide_convex_ellipsoid;
     k[kLeafCylinder][kLeafTriangle] = &collide_cylinder_triangle;
+    k[kLeafConvex][kLeafHalfSpace] = &collide_convex_halfspace;
   }
 };
 

@@ -15,10 +15,12 @@
 // hull-ellipsoid the same candidates per pair, 8 hull features per step
 // (convex_ellipsoid.cpp); capsule-cylinder and cylinder-triangle lane kernels
 // (capsule_cylinder.cpp, cylinder_triangle.cpp: candidate normals of the Minkowski
-// difference's pieces, rims by rim_solve.h). Everything else goes through the general
-// convex path (kernels/narrowphase/gjk_epa.cpp): GJK + EPA on the leaves' support
-// functions, with face clipping for polytope manifolds, and a support-function kernel
-// against half-spaces.
+// difference's pieces, rims by rim_solve.h); hull-half-space a lane kernel over the
+// hull's vertices (convex_halfspace.cpp; hulls over 64 vertices per pair by the
+// support-function routine). Everything else goes through the general convex path
+// (kernels/narrowphase/gjk_epa.cpp): GJK + EPA on the leaves' support functions, with
+// face clipping for polytope manifolds, and a support-function kernel against
+// half-spaces.
 #pragma once
 
 #include "kernels/narrowphase/leaf.h"
@@ -87,6 +89,10 @@ void collide_convex_ellipsoid(const LeafSoA&, const LeafSoA&, const ManifoldSoA&
 /// vertices against rims, edges against rims by the 2D root solve of rim_solve.h), the
 /// cap or side clipped to the triangle (1-4 points), SIMD across pairs.
 void collide_cylinder_triangle(const LeafSoA&, const LeafSoA&, const ManifoldSoA&, Range, const NarrowConfig&);
+/// Convex hull (A) against half-space (B): the deepest vertex and up to 3 more vertices
+/// below the plane, one pair per SIMD lane, each lane walking its own hull's vertices
+/// (convex_halfspace.cpp); hulls of more than 64 vertices take collide_support_halfspace.
+void collide_convex_halfspace(const LeafSoA&, const LeafSoA&, const ManifoldSoA&, Range, const NarrowConfig&);
 
 // --- general convex -----------------------------------------------------------------------
 /// GJK + EPA for any two convex leaf types ta <= tb (neither a half-space), one pair
@@ -96,8 +102,9 @@ void collide_cylinder_triangle(const LeafSoA&, const LeafSoA&, const ManifoldSoA
 void collide_gjk_epa(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out, Range r,
                      const NarrowConfig& cfg, LeafType ta, LeafType tb);
 /// Any convex leaf type ta against a half-space (B): the deepest point by the support
-/// function, and for polytopes up to 4 manifold points below the plane (pair_kernel()
-/// sends convex hulls here; the other types have lane kernels).
+/// function, and for polytopes up to 4 manifold points below the plane, one pair at a
+/// time (every type has a lane kernel in pair_kernel(); collide_convex_halfspace sends
+/// its hulls of more than 64 vertices here).
 void collide_support_halfspace(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out, Range r,
                                const NarrowConfig& cfg, LeafType ta);
 

@@ -9,7 +9,8 @@
 //   capsule: the lowest points of the two end spheres (up to 2);
 //   sphere, ellipsoid, cylinder, triangle: the deepest point (pair_kernel() gives
 //     these closed-form lane kernels, primitives_*.cpp, with the cylinder's cap / side
-//     manifold and the triangle's vertices below; this routine serves hulls).
+//     manifold and the triangle's vertices below; hulls have collide_convex_halfspace,
+//     convex_halfspace.cpp, which sends hulls of more than 64 vertices here).
 // Each point lies midway between A's point x and its projection onto the plane; its
 // pdepth is x's depth. Points are computed relative to A's position (precision far from
 // the origin) and shifted back on output.

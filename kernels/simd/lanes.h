@@ -11,6 +11,7 @@
 //              copysign-free sign helpers are built from select;
 //              gather(float array, index lanes): lane i of array[index_i];
 //              gather_lanes(array of lanes, index lanes): lane i of array[index_i];
+//              load_transposed(N row pointers): N rows of N floats, one per lane;
 //              tag / tag_index: a small index kept in a float's 5 low mantissa bits,
 //              so one max/min tree gives both the extreme and where it came from.
 //
@@ -304,6 +305,36 @@ IMPACT_INLINE FloatN<N> gather(const float* base, IntN<N> idx) {
   return r;
 }
 
+/// out[j] lane i = rows[i][j] for i, j < N: N rows of N contiguous floats (one row per
+/// lane, no alignment needed), transposed; the per-lane walk over a short array without
+/// gathers (N loads and a shuffle network: 24 shuffles for N = 8, where 8 gathers cost
+/// several times that).
+template <uint32_t N>
+IMPACT_INLINE void load_transposed(const float* const* rows, FloatN<N>* out) {
+#if defined(__AVX__)
+  if constexpr (N == 8) {
+    __m256 r[8];
+    for (int i = 0; i < 8; ++i) r[i] = _mm256_loadu_ps(rows[i]);
+    const __m256 t0 = _mm256_unpacklo_ps(r[0], r[1]), t1 = _mm256_unpackhi_ps(r[0], r[1]);
+    const __m256 t2 = _mm256_unpacklo_ps(r[2], r[3]), t3 = _mm256_unpackhi_ps(r[2], r[3]);
+    const __m256 t4 = _mm256_unpacklo_ps(r[4], r[5]), t5 = _mm256_unpackhi_ps(r[4], r[5]);
+    const __m256 t6 = _mm256_unpacklo_ps(r[6], r[7]), t7 = _mm256_unpackhi_ps(r[6], r[7]);
+    const __m256 s0 = _mm256_shuffle_ps(t0, t2, 0x44), s1 = _mm256_shuffle_ps(t0, t2, 0xee);
+    const __m256 s2 = _mm256_shuffle_ps(t1, t3, 0x44), s3 = _mm256_shuffle_ps(t1, t3, 0xee);
+    const __m256 s4 = _mm256_shuffle_ps(t4, t6, 0x44), s5 = _mm256_shuffle_ps(t4, t6, 0xee);
+    const __m256 s6 = _mm256_shuffle_ps(t5, t7, 0x44), s7 = _mm256_shuffle_ps(t5, t7, 0xee);
+    const __m256 o[8] = {_mm256_permute2f128_ps(s0, s4, 0x20), _mm256_permute2f128_ps(s1, s5, 0x20),
+                         _mm256_permute2f128_ps(s2, s6, 0x20), _mm256_permute2f128_ps(s3, s7, 0x20),
+                         _mm256_permute2f128_ps(s0, s4, 0x31), _mm256_permute2f128_ps(s1, s5, 0x31),
+                         _mm256_permute2f128_ps(s2, s6, 0x31), _mm256_permute2f128_ps(s3, s7, 0x31)};
+    for (int j = 0; j < 8; ++j) out[j] = FloatN<N>(reinterpret_cast<typename FloatN<N>::Raw>(o[j]));
+    return;
+  }
+#endif
+  for (uint32_t j = 0; j < N; ++j)
+    for (uint32_t i = 0; i < N; ++i) out[j].v[i] = rows[i][j];
+}
+
 /// key with its 5 low mantissa bits replaced by index i in [0, 32) (a relative change
 /// below 4e-6; among exactly equal positive keys the lower index compares larger).
 template <uint32_t N>
@@ -398,6 +429,7 @@ IMPACT_INLINE FloatN<1> abs(FloatN<1> a) { return FloatN<1>(std::fabs(a.v)); }
 
 IMPACT_INLINE FloatN<1> gather(const float* base, IntN<1> idx) { return FloatN<1>(base[idx.v]); }
 IMPACT_INLINE FloatN<1> gather_lanes(const FloatN<1>* arr, IntN<1> idx) { return arr[idx.v]; }
+IMPACT_INLINE void load_transposed(const float* const* rows, FloatN<1>* out) { out[0] = FloatN<1>(rows[0][0]); }
 IMPACT_INLINE FloatN<1> tag(FloatN<1> key, int32_t i) {
   uint32_t b;
   std::memcpy(&b, &key.v, 4);

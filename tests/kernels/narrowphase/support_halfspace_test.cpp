@@ -1,5 +1,6 @@
-// The convex-leaf / half-space kernels (collide_support_halfspace for hulls and
-// triangles, the lane kernels of primitives_*.cpp for the others; through pair_kernel,
+// The convex-leaf / half-space kernels (collide_convex_halfspace for hulls, which hands
+// hulls over 64 vertices to collide_support_halfspace; the lane kernels of
+// primitives_*.cpp for the others; through pair_kernel,
 // on both paths) against closed forms in double: the deepest point of every convex
 // leaf type below a plane, the normal, the manifold points (each one a point of A below
 // the plane, midway to the plane), and the manifold sizes of resting boxes, cylinders
@@ -401,8 +402,9 @@ TEST(SupportHalfspaceManifold, SunkHullKeepsDeepestAndSpreadPoints) {
 }
 
 /// A hull of ~400 vertices (points on an ellipsoid) sunk from barely to entirely below
-/// the plane, so that the vertices below range from one to all of them: both the
-/// candidate list of the kernel (up to 32 vertices below, kBelowList) and its fallback over all
+/// the plane, so that the vertices below range from one to all of them (through
+/// collide_convex_halfspace's big-hull fallback, collide_support_halfspace): both the
+/// candidate list of that routine (up to 32 vertices below, kBelowList) and its fallback over all
 /// vertices. Against a brute force over the vertices in double: depth = the deepest
 /// vertex's, pd[0] is it, count = min(4, vertices below) where they span an area,
 /// every point is a vertex below moved up by pd/2, and point 1 is the vertex below
