@@ -411,8 +411,11 @@ IMPACT_INLINE void box_box_block(const LeafSoA& a, const LeafSoA& b, const Manif
   V3<F> edge_l{zero, zero, zero};  // the winning edge axis in A's frame (normalised)
   F min_edge(3.0e38f);              // the smallest edge overlap, rounding band ignored
   F edge_len(1.0f);                 // |a_i x b_j| of the winning edge axis
+  // Unrolled: l's components and the axis constants then stay in registers.
+#pragma GCC unroll 3
   for (int i = 0; i < 3; ++i) {
     const int i1 = (i + 1) % 3, i2 = (i + 2) % 3;
+#pragma GCC unroll 3
     for (int j = 0; j < 3; ++j) {
       // L = e_i x R[:, j] in A's frame: L_i = 0, L_i1 = -R[i2][j], L_i2 = R[i1][j]
       F l[3];
@@ -429,10 +432,10 @@ IMPACT_INLINE void box_box_block(const LeafSoA& a, const LeafSoA& b, const Manif
       const F o = (ra_ + rb_ - abs(tl)) / len;
       min_all = select(ok, min(min_all, o), min_all);
       min_edge = select(ok, min(min_edge, o), min_edge);
-      const Mask take = ok & (o < lim_face - edge_round / len) & (o < best);
+      const F inv = one / len;
+      const Mask take = ok & (o < lim_face - edge_round * inv) & (o < best);
       best = select(take, o, best);
       axis = select(take, F(static_cast<float>(6 + 3 * i + j)), axis);
-      const F inv = one / len;
       edge_l = select(take, V3<F>{l[0] * inv, l[1] * inv, l[2] * inv}, edge_l);
       edge_len = select(take, len, edge_len);
     }
