@@ -417,12 +417,12 @@ IMPACT_INLINE void box_ellipsoid_range(const LeafSoA& a, const LeafSoA& b, const
       const Frame<F> fr = make_frame(load_p<F>(*va, at), load_r<F>(*va, at), load_e<F>(*va, at),
                                      load_p<F>(*vb, at), load_r<F>(*vb, at), load_e<F>(*vb, at));
       const uint32_t bits = simd::bits(may_touch(fr, face_best(fr)));
+      // branch-free (the lanes' bits are data): every lane gets count 0 here, the live
+      // ones their result from finish() below
       for (uint32_t l = 0; l < nb; ++l) {
-        if ((bits >> l) & 1u) {
-          live[nlive++] = static_cast<int32_t>(k + l);
-        } else {
-          out.count[k + l] = 0;
-        }
+        out.count[k + l] = 0;
+        live[nlive] = static_cast<int32_t>(k + l);
+        nlive += (bits >> l) & 1u;
       }
     }
     for (uint32_t g = 0; g < nlive; g += W) {
