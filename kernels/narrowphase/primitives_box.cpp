@@ -41,7 +41,8 @@
 //   corners of that face, the deepest first). No candidate reduction.
 // Preconditions: finite inputs, positive half extents, orthonormal R.
 // Cost: SAT ~250 flops; the face manifold ~700 flops. The SIMD path runs the SAT block
-// by block, queues the lanes whose face axis won (FaceQueue, chunks of 8 blocks) and
+// by block, queues the lanes whose face axis won (FaceQueue, chunks of 32 blocks: the
+// partly filled last face block of a chunk pads about W / 2 lanes, a few % of ~15 W) and
 // clips only those, W to a block (inputs gathered by pair index, points scattered
 // back), so separated and edge lanes cost no clipping; a lane's arithmetic is the
 // same wherever it lands, so the output bytes do not depend on its neighbours.
@@ -74,7 +75,7 @@ using L4 = Lanes<F, 4>;
 /// (the SIMD path computes the SAT for every lane, then the costly face clipping only
 /// for these, W at a time: separated and edge lanes no longer ride along).
 struct FaceQueue {
-  static constexpr uint32_t kChunk = 8 * simd::kSimdWidth;
+  static constexpr uint32_t kChunk = 32 * simd::kSimdWidth;
   static constexpr uint32_t kCap = kChunk + simd::kSimdWidth;  // room to pad the last block
   int32_t idx[kCap];
   float axis[kCap], best[kCap], nx[kCap], ny[kCap], nz[kCap];
