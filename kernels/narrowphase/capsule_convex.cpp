@@ -288,18 +288,15 @@ IMPACT_INLINE uint32_t near_tie_face(const HullView& h, uint32_t fb, uint32_t fe
 // ---------------------------------------------------------------------------------------
 
 /// Squared distance from the core (c + t u, |t| <= hl, unit u) to edges i .. i +
-/// kSimdWidth of the adjacency list (start ep, far end gathered through ev1 from
-/// (bx, by, bz) = the hull's vertices), in float (Ericson 5.1.9: the lines' closest
-/// parameter of the core, clamped; the edge's for it, clamped; the core's again for
-/// that, clamped).
-IMPACT_INLINE FloatW edge_seg_dist2(const HullView& h, uint32_t i, const float* bx, const float* by,
-                                    const float* bz, const FloatW* c, const FloatW* u, FloatW hl,
+/// kSimdWidth of the adjacency list (start ep, edge vector ed: contiguous loads), in
+/// float (Ericson 5.1.9: the lines' closest parameter of the core, clamped; the edge's
+/// for it, clamped; the core's again for that, clamped).
+IMPACT_INLINE FloatW edge_seg_dist2(const HullView& h, uint32_t i, const FloatW* c, const FloatW* u, FloatW hl,
                                     FloatW* out_tau) {
   using F = FloatW;
   const F zero(0.0f), one(1.0f);
   const F ax = F::load(h.epx + i), ay = F::load(h.epy + i), az = F::load(h.epz + i);
-  const simd::IntW j = simd::IntW::load(reinterpret_cast<const int32_t*>(h.ev1 + i));
-  const F ex = simd::gather(bx, j) - ax, ey = simd::gather(by, j) - ay, ez = simd::gather(bz, j) - az;
+  const F ex = F::load(h.edx + i), ey = F::load(h.edy + i), ez = F::load(h.edz + i);
   const F wx = c[0] - ax, wy = c[1] - ay, wz = c[2] - az;
   const F be = u[0] * ex + u[1] * ey + u[2] * ez;
   const F ee = ex * ex + ey * ey + ez * ez;
@@ -408,18 +405,18 @@ IMPACT_INLINE SegEdge nearest_edge(const HullView& h, uint32_t ab, uint32_t ae, 
   using F = FloatW;
   SegEdge best;
   *out_e = ab;
-  const float* bx = h.vx + vb;
-  const float* by = h.vy + vb;
-  const float* bz = h.vz + vb;
   const F cw[3] = {F(c.x), F(c.y), F(c.z)}, uw[3] = {F(u.x), F(u.y), F(u.z)}, H(hl);
-  float kept[kKeep];
+  float kept[kKeep], kept_tau[kKeep];
   const bool keep = ae - ab <= kKeep;
   F m(INFINITY);
   // The edge list is padded to a multiple of 8 (HullView): whole blocks.
   for (uint32_t i = ab; i < ae; i += kSimdWidth) {
-    F tau;  // (unused here)
-    const F d2 = edge_seg_dist2(h, i, bx, by, bz, cw, uw, H, &tau);
-    if (keep) d2.store(kept + (i - ab));
+    F tau;
+    const F d2 = edge_seg_dist2(h, i, cw, uw, H, &tau);
+    if (keep) {
+      d2.store(kept + (i - ab));
+      tau.store(kept_tau + (i - ab));
+    }
     m = simd::min(m, d2);
   }
   // A float distance here is off by a few ulps of |c - start|_1 + |e|_1 + h (the
@@ -432,10 +429,10 @@ IMPACT_INLINE SegEdge nearest_edge(const HullView& h, uint32_t ab, uint32_t ae, 
   uint32_t nseen = 0;
   for (uint32_t i = ab; i < ae; i += kSimdWidth) {
     F tau;
-    F d2 = keep ? F::load(kept + (i - ab)) : edge_seg_dist2(h, i, bx, by, bz, cw, uw, H, &tau);
+    const F d2 = keep ? F::load(kept + (i - ab)) : edge_seg_dist2(h, i, cw, uw, H, &tau);
     uint32_t bits = simd::bits(d2 <= lim2);
     if (bits == 0) continue;
-    if (keep) d2 = edge_seg_dist2(h, i, bx, by, bz, cw, uw, H, &tau);  // the block again, for tau
+    if (keep) tau = F::load(kept_tau + (i - ab));
     for (; bits != 0; bits &= bits - 1) {
       const uint32_t lane = static_cast<uint32_t>(std::countr_zero(bits)), l = i + lane;
       const float tl = tau.lane(lane);
@@ -471,19 +468,15 @@ struct EdgeAxis {
 
 /// The edge axis u x e of greatest key (separation less kEdgeRound * scale * |e| / |u x e|)
 /// over the edges [ab, ae) whose normal cone crosses the circle perpendicular to u.
-IMPACT_INLINE EdgeAxis sat_edges(const HullView& h, uint32_t ab, uint32_t ae, uint32_t vb, V3 c, V3 u,
+IMPACT_INLINE EdgeAxis sat_edges(const HullView& h, uint32_t ab, uint32_t ae, V3 c, V3 u,
                                  float round_scale) {
   using F = FloatW;
   const F zero(0.0f), lane = simd::lane_index<F>();
   const F cw[3] = {F(c.x), F(c.y), F(c.z)}, uw[3] = {F(u.x), F(u.y), F(u.z)}, rs(round_scale);
-  const float* bx = h.vx + vb;
-  const float* by = h.vy + vb;
-  const float* bz = h.vz + vb;
   F mk(-INFINITY), ms(-INFINITY), mi(0.0f);
   for (uint32_t i = ab; i < ae; i += kSimdWidth) {
     const F ax = F::load(h.epx + i), ay = F::load(h.epy + i), az = F::load(h.epz + i);
-    const simd::IntW j = simd::IntW::load(reinterpret_cast<const int32_t*>(h.ev1 + i));
-    const F ex = simd::gather(bx, j) - ax, ey = simd::gather(by, j) - ay, ez = simd::gather(bz, j) - az;
+    const F ex = F::load(h.edx + i), ey = F::load(h.edy + i), ez = F::load(h.edz + i);
     const F lx = uw[1] * ez - uw[2] * ey, ly = uw[2] * ex - uw[0] * ez, lz = uw[0] * ey - uw[1] * ex;
     const F mx = F::load(h.emx + i), my = F::load(h.emy + i), mz = F::load(h.emz + i);
     const F ll = lx * lx + ly * ly + lz * lz, ee = ex * ex + ey * ey + ez * ez;
@@ -586,7 +579,7 @@ void capsule_convex_lane(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& 
   const uint32_t fe = h.face_begin != nullptr ? h.face_begin[hull + 1] : 0u;
   const uint32_t ab = h.adj_begin != nullptr ? h.adj_begin[hull] : 0u;
   const uint32_t ae = h.adj_begin != nullptr ? h.adj_begin[hull + 1] : 0u;
-  if (fe == fb || ae == ab) {  // no faces or no edge adjacency: the general path, this lane
+  if (fe == fb || ae == ab || h.edx == nullptr) {  // no faces or no edge adjacency: the general path
     collide_gjk_epa(a, b, out, Range{k, k + 1}, cfg, kLeafCapsule, kLeafConvex);
     return;
   }
@@ -708,7 +701,7 @@ void capsule_convex_lane(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& 
     float s = fp.s_core;
     face = fp.f_core;
     nl = -face_normal(h, face);
-    const EdgeAxis ea = sat_edges(h, ab, ae, vb, c, u, kEdgeRound * (scale + r));
+    const EdgeAxis ea = sat_edges(h, ab, ae, c, u, kEdgeRound * (scale + r));
     const float lim = s + kTieRel * std::fabs(s) + kTieSize * (scale + r);
     if (ea.key > lim && ea.sep > s) {
       edge_axis = true;
