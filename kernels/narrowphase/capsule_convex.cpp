@@ -24,7 +24,8 @@
 //     distance to its deepest plane f_i when it projects into f_i's polygon (or into a
 //     face tied with f_i up to the planes' rounding, as in sphere_convex.cpp), (b) the
 //     segment-to-segment distance from S to every hull edge of the adjacency list
-//     (Ericson 5.1.9, kSimdWidth edges per step in float; the edges within twice its
+//     (Ericson 5.1.9, kSimdWidth edges per step in float, start ep and edge vector ed
+//     loaded contiguously from HullView, no gather; the edges within twice its
 //     rounding bound of the least are evaluated again in double and the nearest wins,
 //     lowest index among exact ties: a distance is flat about its minimum, so float
 //     alone could pick a neighbouring edge and tilt the normal). A face candidate wins
@@ -73,11 +74,14 @@
 // Cost: O(F) for lanes a face plane separates by r (43% of the bench's lanes), O(F + E)
 // for the others (a few near-minimum edges again in double). impact_narrowbench
 // BM_Kernel/capsule-convex/4096 (24-point hulls, ~44 faces and ~66 edges, half the pairs
-// overlapping, AVX2, 2-core machine with another job running): ~200 ns per pair, against
-// ~480 ns through GJK / EPA and ~1910 ns for FCL in the same run (9.6x). Measured split:
-// the face pass ~50 ns on every lane; the float edge pass ~90 ns and the double
-// re-evaluations ~50 ns on the half of the lanes with the core outside and within r of
-// every face plane; the end points' face tests ~60 ns there.
+// overlapping, AVX-512VL machine running 8-wide, 2 cores shared with two other builds):
+// ~190 ns per pair, against ~237 ns before the edge passes read ed contiguously (they
+// gathered the far end: 3 gathers per 8 edges) and ~1700 ns for FCL in the same run
+// (8.9x; ~1.25x the old kernel's ratio on the same loaded machine). Profile (perf,
+// cpu-clock): the float edge pass ~20%, its candidates in double ~6%, the face pass
+// ~14%, the end points' face tests ~10%, the edge axes ~4%, the lane's set-up and
+// stores ~20%. A block-level midpoint-ball bound on the edge pass was tried and made
+// it slower: the 8 edges of a block rarely all lie beyond r.
 // Method citations: Ericson, Real-Time Collision Detection (2005), 5.1.9 (closest points
 // of two segments) and 5.3.8 / Cyrus-Beck (segment against a convex polyhedron);
 // D. Gregorius, "The Separating Axis Test between Convex Polyhedra", GDC 2013 (Gauss-map
@@ -291,8 +295,8 @@ IMPACT_INLINE uint32_t near_tie_face(const HullView& h, uint32_t fb, uint32_t fe
 /// kSimdWidth of the adjacency list (start ep, edge vector ed: contiguous loads), in
 /// float (Ericson 5.1.9: the lines' closest parameter of the core, clamped; the edge's
 /// for it, clamped; the core's again for that, clamped).
-IMPACT_INLINE FloatW edge_seg_dist2(const HullView& h, uint32_t i, const FloatW* c, const FloatW* u, FloatW hl,
-                                    FloatW* out_tau) {
+IMPACT_INLINE FloatW edge_seg_dist2(const HullView& h, uint32_t i, const FloatW* c, const FloatW* u,
+                                    FloatW hl, FloatW* out_tau) {
   using F = FloatW;
   const F zero(0.0f), one(1.0f);
   const F ax = F::load(h.epx + i), ay = F::load(h.epy + i), az = F::load(h.epz + i);
@@ -468,8 +472,7 @@ struct EdgeAxis {
 
 /// The edge axis u x e of greatest key (separation less kEdgeRound * scale * |e| / |u x e|)
 /// over the edges [ab, ae) whose normal cone crosses the circle perpendicular to u.
-IMPACT_INLINE EdgeAxis sat_edges(const HullView& h, uint32_t ab, uint32_t ae, V3 c, V3 u,
-                                 float round_scale) {
+IMPACT_INLINE EdgeAxis sat_edges(const HullView& h, uint32_t ab, uint32_t ae, V3 c, V3 u, float round_scale) {
   using F = FloatW;
   const F zero(0.0f), lane = simd::lane_index<F>();
   const F cw[3] = {F(c.x), F(c.y), F(c.z)}, uw[3] = {F(u.x), F(u.y), F(u.z)}, rs(round_scale);
