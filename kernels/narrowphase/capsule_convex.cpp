@@ -74,10 +74,10 @@
 // Cost: O(F) for lanes a face plane separates by r (43% of the bench's lanes), O(F + E)
 // for the others (a few near-minimum edges again in double). impact_narrowbench
 // BM_Kernel/capsule-convex/4096 (24-point hulls, ~44 faces and ~66 edges, half the pairs
-// overlapping, AVX-512VL machine running 8-wide, 2 cores shared with two other builds):
-// ~190 ns per pair, against ~237 ns before the edge passes read ed contiguously (they
-// gathered the far end: 3 gathers per 8 edges) and ~1700 ns for FCL in the same run
-// (8.9x; ~1.25x the old kernel's ratio on the same loaded machine). Profile (perf,
+// overlapping, AVX-512VL machine running 8-wide, 2 shared cores): ~151-155 ns per pair,
+// against ~208-227 ns before the edge passes read ed contiguously (they gathered the
+// far end: 3 gathers per 8 edges) and ~1575-1610 ns for FCL in the same run (10.4x; the
+// old kernel 7.0-8.3x). Under two concurrent builds: ~190 vs ~237 ns. Profile (perf,
 // cpu-clock): the float edge pass ~20%, its candidates in double ~6%, the face pass
 // ~14%, the end points' face tests ~10%, the edge axes ~4%, the lane's set-up and
 // stores ~20%. A block-level midpoint-ball bound on the edge pass was tried and made
