@@ -55,6 +55,9 @@ void add_adjacency(const HullData& h, HullStore* st) {
     s.epx.push_back(h.vertices[a.v0[e]].x());
     s.epy.push_back(h.vertices[a.v0[e]].y());
     s.epz.push_back(h.vertices[a.v0[e]].z());
+    s.edx.push_back(h.vertices[a.v1[e]].x() - h.vertices[a.v0[e]].x());
+    s.edy.push_back(h.vertices[a.v1[e]].y() - h.vertices[a.v0[e]].y());
+    s.edz.push_back(h.vertices[a.v1[e]].z() - h.vertices[a.v0[e]].z());
     const Eigen::Vector3d n0 = h.face_normals[a.f0[e]].cast<double>().normalized();
     const Eigen::Vector3d n1 = h.face_normals[a.f1[e]].cast<double>().normalized();
     const Eigen::Vector3d sum = n0 + n1;
@@ -71,7 +74,8 @@ void add_adjacency(const HullData& h, HullStore* st) {
   // the edges need no tail; a repeated edge changes no maximum).
   while (!a.v0.empty() && (s.ev0.size() - s.adj_begin.back()) % kEdgePad != 0) {
     for (auto* v : {&s.ev0, &s.ev1, &s.ef0, &s.ef1}) v->push_back(v->back());
-    for (auto* v : {&s.emx, &s.emy, &s.emz, &s.ecos, &s.esin, &s.epx, &s.epy, &s.epz}) v->push_back(v->back());
+    for (auto* v : {&s.emx, &s.emy, &s.emz, &s.ecos, &s.esin, &s.epx, &s.epy, &s.epz, &s.edx, &s.edy, &s.edz})
+      v->push_back(v->back());
   }
   s.adj_begin.push_back(static_cast<uint32_t>(s.ev0.size()));
 }
@@ -137,6 +141,9 @@ kernels::HullView HullStore::view() const {
   v.epx = epx.data();
   v.epy = epy.data();
   v.epz = epz.data();
+  v.edx = edx.data();
+  v.edy = edy.data();
+  v.edz = edz.data();
   return v;
 }
 

@@ -29,7 +29,7 @@ struct HullStore {
   std::vector<uint32_t> face_verts;
   /// Edge adjacency (kernels::HullView, hull-local indices), from the faces in add().
   std::vector<uint32_t> adj_begin{0}, ev0, ev1, ef0, ef1;
-  std::vector<float> emx, emy, emz, ecos, esin, epx, epy, epz;
+  std::vector<float> emx, emy, emz, ecos, esin, epx, epy, epz, edx, edy, edz;
   uint32_t size() const { return static_cast<uint32_t>(vert_begin.size() - 1); }
   /// Appends a hull; returns its index.
   uint32_t add(const HullData& h);

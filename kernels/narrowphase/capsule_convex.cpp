@@ -24,7 +24,8 @@
 //     distance to its deepest plane f_i when it projects into f_i's polygon (or into a
 //     face tied with f_i up to the planes' rounding, as in sphere_convex.cpp), (b) the
 //     segment-to-segment distance from S to every hull edge of the adjacency list
-//     (Ericson 5.1.9, kSimdWidth edges per step in float; the edges within twice its
+//     (Ericson 5.1.9, kSimdWidth edges per step in float, start ep and edge vector ed
+//     loaded contiguously from HullView, no gather; the edges within twice its
 //     rounding bound of the least are evaluated again in double and the nearest wins,
 //     lowest index among exact ties: a distance is flat about its minimum, so float
 //     alone could pick a neighbouring edge and tilt the normal). A face candidate wins
@@ -73,11 +74,14 @@
 // Cost: O(F) for lanes a face plane separates by r (43% of the bench's lanes), O(F + E)
 // for the others (a few near-minimum edges again in double). impact_narrowbench
 // BM_Kernel/capsule-convex/4096 (24-point hulls, ~44 faces and ~66 edges, half the pairs
-// overlapping, AVX2, 2-core machine with another job running): ~200 ns per pair, against
-// ~480 ns through GJK / EPA and ~1910 ns for FCL in the same run (9.6x). Measured split:
-// the face pass ~50 ns on every lane; the float edge pass ~90 ns and the double
-// re-evaluations ~50 ns on the half of the lanes with the core outside and within r of
-// every face plane; the end points' face tests ~60 ns there.
+// overlapping, AVX-512VL machine running 8-wide, 2 shared cores): ~151-155 ns per pair,
+// against ~208-227 ns before the edge passes read ed contiguously (they gathered the
+// far end: 3 gathers per 8 edges) and ~1575-1610 ns for FCL in the same run (10.4x; the
+// old kernel 7.0-8.3x). Under two concurrent builds: ~190 vs ~237 ns. Profile (perf,
+// cpu-clock): the float edge pass ~20%, its candidates in double ~6%, the face pass
+// ~14%, the end points' face tests ~10%, the edge axes ~4%, the lane's set-up and
+// stores ~20%. A block-level midpoint-ball bound on the edge pass was tried and made
+// it slower: the 8 edges of a block rarely all lie beyond r.
 // Method citations: Ericson, Real-Time Collision Detection (2005), 5.1.9 (closest points
 // of two segments) and 5.3.8 / Cyrus-Beck (segment against a convex polyhedron);
 // D. Gregorius, "The Separating Axis Test between Convex Polyhedra", GDC 2013 (Gauss-map
@@ -288,18 +292,15 @@ IMPACT_INLINE uint32_t near_tie_face(const HullView& h, uint32_t fb, uint32_t fe
 // ---------------------------------------------------------------------------------------
 
 /// Squared distance from the core (c + t u, |t| <= hl, unit u) to edges i .. i +
-/// kSimdWidth of the adjacency list (start ep, far end gathered through ev1 from
-/// (bx, by, bz) = the hull's vertices), in float (Ericson 5.1.9: the lines' closest
-/// parameter of the core, clamped; the edge's for it, clamped; the core's again for
-/// that, clamped).
-IMPACT_INLINE FloatW edge_seg_dist2(const HullView& h, uint32_t i, const float* bx, const float* by,
-                                    const float* bz, const FloatW* c, const FloatW* u, FloatW hl,
-                                    FloatW* out_tau) {
+/// kSimdWidth of the adjacency list (start ep, edge vector ed: contiguous loads), in
+/// float (Ericson 5.1.9: the lines' closest parameter of the core, clamped; the edge's
+/// for it, clamped; the core's again for that, clamped).
+IMPACT_INLINE FloatW edge_seg_dist2(const HullView& h, uint32_t i, const FloatW* c, const FloatW* u,
+                                    FloatW hl, FloatW* out_tau) {
   using F = FloatW;
   const F zero(0.0f), one(1.0f);
   const F ax = F::load(h.epx + i), ay = F::load(h.epy + i), az = F::load(h.epz + i);
-  const simd::IntW j = simd::IntW::load(reinterpret_cast<const int32_t*>(h.ev1 + i));
-  const F ex = simd::gather(bx, j) - ax, ey = simd::gather(by, j) - ay, ez = simd::gather(bz, j) - az;
+  const F ex = F::load(h.edx + i), ey = F::load(h.edy + i), ez = F::load(h.edz + i);
   const F wx = c[0] - ax, wy = c[1] - ay, wz = c[2] - az;
   const F be = u[0] * ex + u[1] * ey + u[2] * ez;
   const F ee = ex * ex + ey * ey + ez * ez;
@@ -408,18 +409,18 @@ IMPACT_INLINE SegEdge nearest_edge(const HullView& h, uint32_t ab, uint32_t ae, 
   using F = FloatW;
   SegEdge best;
   *out_e = ab;
-  const float* bx = h.vx + vb;
-  const float* by = h.vy + vb;
-  const float* bz = h.vz + vb;
   const F cw[3] = {F(c.x), F(c.y), F(c.z)}, uw[3] = {F(u.x), F(u.y), F(u.z)}, H(hl);
-  float kept[kKeep];
+  float kept[kKeep], kept_tau[kKeep];
   const bool keep = ae - ab <= kKeep;
   F m(INFINITY);
   // The edge list is padded to a multiple of 8 (HullView): whole blocks.
   for (uint32_t i = ab; i < ae; i += kSimdWidth) {
-    F tau;  // (unused here)
-    const F d2 = edge_seg_dist2(h, i, bx, by, bz, cw, uw, H, &tau);
-    if (keep) d2.store(kept + (i - ab));
+    F tau;
+    const F d2 = edge_seg_dist2(h, i, cw, uw, H, &tau);
+    if (keep) {
+      d2.store(kept + (i - ab));
+      tau.store(kept_tau + (i - ab));
+    }
     m = simd::min(m, d2);
   }
   // A float distance here is off by a few ulps of |c - start|_1 + |e|_1 + h (the
@@ -432,10 +433,10 @@ IMPACT_INLINE SegEdge nearest_edge(const HullView& h, uint32_t ab, uint32_t ae, 
   uint32_t nseen = 0;
   for (uint32_t i = ab; i < ae; i += kSimdWidth) {
     F tau;
-    F d2 = keep ? F::load(kept + (i - ab)) : edge_seg_dist2(h, i, bx, by, bz, cw, uw, H, &tau);
+    const F d2 = keep ? F::load(kept + (i - ab)) : edge_seg_dist2(h, i, cw, uw, H, &tau);
     uint32_t bits = simd::bits(d2 <= lim2);
     if (bits == 0) continue;
-    if (keep) d2 = edge_seg_dist2(h, i, bx, by, bz, cw, uw, H, &tau);  // the block again, for tau
+    if (keep) tau = F::load(kept_tau + (i - ab));
     for (; bits != 0; bits &= bits - 1) {
       const uint32_t lane = static_cast<uint32_t>(std::countr_zero(bits)), l = i + lane;
       const float tl = tau.lane(lane);
@@ -471,19 +472,14 @@ struct EdgeAxis {
 
 /// The edge axis u x e of greatest key (separation less kEdgeRound * scale * |e| / |u x e|)
 /// over the edges [ab, ae) whose normal cone crosses the circle perpendicular to u.
-IMPACT_INLINE EdgeAxis sat_edges(const HullView& h, uint32_t ab, uint32_t ae, uint32_t vb, V3 c, V3 u,
-                                 float round_scale) {
+IMPACT_INLINE EdgeAxis sat_edges(const HullView& h, uint32_t ab, uint32_t ae, V3 c, V3 u, float round_scale) {
   using F = FloatW;
   const F zero(0.0f), lane = simd::lane_index<F>();
   const F cw[3] = {F(c.x), F(c.y), F(c.z)}, uw[3] = {F(u.x), F(u.y), F(u.z)}, rs(round_scale);
-  const float* bx = h.vx + vb;
-  const float* by = h.vy + vb;
-  const float* bz = h.vz + vb;
   F mk(-INFINITY), ms(-INFINITY), mi(0.0f);
   for (uint32_t i = ab; i < ae; i += kSimdWidth) {
     const F ax = F::load(h.epx + i), ay = F::load(h.epy + i), az = F::load(h.epz + i);
-    const simd::IntW j = simd::IntW::load(reinterpret_cast<const int32_t*>(h.ev1 + i));
-    const F ex = simd::gather(bx, j) - ax, ey = simd::gather(by, j) - ay, ez = simd::gather(bz, j) - az;
+    const F ex = F::load(h.edx + i), ey = F::load(h.edy + i), ez = F::load(h.edz + i);
     const F lx = uw[1] * ez - uw[2] * ey, ly = uw[2] * ex - uw[0] * ez, lz = uw[0] * ey - uw[1] * ex;
     const F mx = F::load(h.emx + i), my = F::load(h.emy + i), mz = F::load(h.emz + i);
     const F ll = lx * lx + ly * ly + lz * lz, ee = ex * ex + ey * ey + ez * ez;
@@ -586,7 +582,7 @@ void capsule_convex_lane(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& 
   const uint32_t fe = h.face_begin != nullptr ? h.face_begin[hull + 1] : 0u;
   const uint32_t ab = h.adj_begin != nullptr ? h.adj_begin[hull] : 0u;
   const uint32_t ae = h.adj_begin != nullptr ? h.adj_begin[hull + 1] : 0u;
-  if (fe == fb || ae == ab) {  // no faces or no edge adjacency: the general path, this lane
+  if (fe == fb || ae == ab || h.edx == nullptr) {  // no faces or no edge adjacency: the general path
     collide_gjk_epa(a, b, out, Range{k, k + 1}, cfg, kLeafCapsule, kLeafConvex);
     return;
   }
@@ -708,7 +704,7 @@ void capsule_convex_lane(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& 
     float s = fp.s_core;
     face = fp.f_core;
     nl = -face_normal(h, face);
-    const EdgeAxis ea = sat_edges(h, ab, ae, vb, c, u, kEdgeRound * (scale + r));
+    const EdgeAxis ea = sat_edges(h, ab, ae, c, u, kEdgeRound * (scale + r));
     const float lim = s + kTieRel * std::fabs(s) + kTieSize * (scale + r);
     if (ea.key > lim && ea.sep > s) {
       edge_axis = true;

@@ -99,8 +99,9 @@ struct HullView {
   // the end vertices minus vert_begin[h], ef0 / ef1 the two faces minus face_begin[h].
   // em = unit bisector of the two face normals (local), ecos / esin = cos / sin of half
   // the angle between them: the edge's normal cone lies within that angle of em.
-  // ep = vertex ev0 (local), next to the rest for contiguous SIMD loads. A hull's edge
-  // list is padded to a multiple of 8 with copies of its last edge.
+  // ep = vertex ev0 (local), ed = vertex ev1 - vertex ev0 (the float difference), next
+  // to the rest for contiguous SIMD loads (no gather of the far end). A hull's edge list
+  // is padded to a multiple of 8 with copies of its last edge.
   const uint32_t* adj_begin;        // [h], [h + 1]
   const uint32_t* ev0;
   const uint32_t* ev1;
@@ -114,6 +115,9 @@ struct HullView {
   const float* epx;
   const float* epy;
   const float* epz;
+  const float* edx;
+  const float* edy;
+  const float* edz;
 };
 
 /// Which implementation a kernel runs. Both give the same collision data up to

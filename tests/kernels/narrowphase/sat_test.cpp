@@ -281,6 +281,11 @@ TEST(Sat, HullEdgeAdjacency) {
       for (uint32_t f : {f0, f1}) EXPECT_GE(m.dot(Vec3d(v.fnx[f], v.fny[f], v.fnz[f])), v.ecos[k] - 1e-6);
       EXPECT_NEAR(v.ecos[k] * v.ecos[k] + v.esin[k] * v.esin[k], 1.0, 1e-5);
       EXPECT_EQ(v.epx[k], v.vx[v.vert_begin[h] + v.ev0[k]]);
+      // ed: the far end less the start, the float difference the kernels would compute.
+      const uint32_t i0 = v.vert_begin[h] + v.ev0[k], i1 = v.vert_begin[h] + v.ev1[k];
+      EXPECT_EQ(v.edx[k], v.vx[i1] - v.vx[i0]);
+      EXPECT_EQ(v.edy[k], v.vy[i1] - v.vy[i0]);
+      EXPECT_EQ(v.edz[k], v.vz[i1] - v.vz[i0]);
     }
     EXPECT_EQ(static_cast<int>(nv) - static_cast<int>(uniq.size()) + static_cast<int>(nf), 2) << "hull " << h;
   }
