@@ -41,7 +41,6 @@
 // Variants measured and dropped: AVX2 gathers per vertex (3 per vertex and block:
 // ~50-65 ns), picks tracked by slot index and fetched by gather_lanes (~37), one
 // chain per pick (~30-33), max-then-backward-scan picks (~36).
-#include <bit>
 #include <cmath>
 #include <cstdint>
 
@@ -97,24 +96,22 @@ struct FirstMax {
   }
 };
 
-/// Runs one block of F::kWidth lanes; ref = the lanes' hull ids. Returns a bit per lane
-/// whose hull is too big for the walk (its output is left to the caller).
+/// Runs one block of F::kWidth lanes. A lane whose hull is too big for the walk gets
+/// don't-care output (its caller runs it again through collide_support_halfspace).
 template <class F>
-IMPACT_INLINE uint32_t convex_halfspace_block(const LeafSoA& a, const LeafSoA& b, const uint32_t* ref,
-                                              const HullView& h, const ManifoldSoA& out, uint32_t k) {
+IMPACT_INLINE void convex_halfspace_block(const LeafSoA& a, const LeafSoA& b, const HullView& h,
+                                          const ManifoldSoA& out, uint32_t k) {
   using I = typename F::Int;
+  const uint32_t* ref = a.ref + k;
   constexpr uint32_t kW = F::kWidth;
   // Per lane: where its hull's vertices start and how many (0 for a big hull).
   int32_t cnt_l[kW];
   uint32_t vb_l[kW];
-  uint32_t big = 0, nmax = 0;
+  uint32_t nmax = 0;
   for (uint32_t l = 0; l < kW; ++l) {
     const uint32_t hb = h.vert_begin[ref[l]], he = h.vert_begin[ref[l] + 1];
     uint32_t c = he - hb;
-    if (c > kLaneVerts) {
-      big |= 1u << l;
-      c = 0;
-    }
+    if (c > kLaneVerts) c = 0;
     vb_l[l] = hb;
     cnt_l[l] = static_cast<int32_t>(c);
     nmax = c > nmax ? c : nmax;
@@ -191,7 +188,7 @@ IMPACT_INLINE uint32_t convex_halfspace_block(const LeafSoA& a, const LeafSoA& b
   const auto hit = d0 > zero;
   if (simd::none(hit)) {
     store_no_contact<F>(out, k);
-    return big;
+    return;
   }
   // Offers slot below[q] to m (alternating between its two chains).
   auto offer_below = [&](FirstMax<F>& m, uint32_t q, F s) {
@@ -241,7 +238,9 @@ IMPACT_INLINE uint32_t convex_halfspace_block(const LeafSoA& a, const LeafSoA& b
     for (uint32_t q = 0; q < nbelow; ++q) {
       const uint32_t i = below[q];
       const F x = buf.x[i], y = buf.y[i], z = buf.z[i];
-      auto edge = [&](const V3<F>& p, const V3<F>& g) { return (x - p.x) * g.x + (y - p.y) * g.y + (z - p.z) * g.z; };
+      auto edge = [&](const V3<F>& p, const V3<F>& g) {
+        return (x - p.x) * g.x + (y - p.y) * g.y + (z - p.z) * g.z;
+      };
       offer_below(outmost, q, max(edge(p0, g0), max(edge(p1, g1), edge(p2, g2))));
     }
     omax = outmost.result(&p3, &d3);
@@ -259,36 +258,21 @@ IMPACT_INLINE uint32_t convex_halfspace_block(const LeafSoA& a, const LeafSoA& b
     m.pdepth[j] = dep[j];
   }
   store(out, k, m, pa);
-  return big;
 }
 
-/// Full blocks in place; the tail through full-width local copies (the last valid lane
-/// repeated, as prim::for_each_block, plus the hull ids); big-hull lanes afterwards,
-/// one at a time, by collide_support_halfspace.
+/// The lane walk over every block of r (prim::for_each_block: the tail through padded
+/// local copies); then the big-hull lanes, one at a time, by collide_support_halfspace.
 template <class F>
 void convex_halfspace_range(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out, Range r,
                             const NarrowConfig& cfg) {
-  constexpr uint32_t kW = F::kWidth;
-  auto fallback = [&](uint32_t bits, uint32_t k) {
-    for (; bits != 0; bits &= bits - 1) {
-      const uint32_t l = k + static_cast<uint32_t>(std::countr_zero(bits));
+  const HullView& h = cfg.hulls;
+  for_each_block<F, 4>(a, b, out, r,
+                       [&](const LeafSoA& la, const LeafSoA& lb, const ManifoldSoA& lo, uint32_t k) {
+                         convex_halfspace_block<F>(la, lb, h, lo, k);
+                       });
+  for (uint32_t l = r.begin; l < r.end; ++l) {
+    if (h.vert_begin[a.ref[l] + 1] - h.vert_begin[a.ref[l]] > kLaneVerts) {
       collide_support_halfspace(a, b, out, Range{l, l + 1}, cfg, kLeafConvex);
-    }
-  };
-  uint32_t k = r.begin;
-  for (; k + kW <= r.end; k += kW) fallback(convex_halfspace_block<F>(a, b, a.ref + k, cfg.hulls, out, k), k);
-  if constexpr (kW > 1) {
-    if (k < r.end) {
-      const uint32_t n = r.end - k;
-      TailSide<kW> ta, tb;
-      ta.fill(a, k, n);
-      tb.fill(b, k, n);
-      uint32_t ref[kW];
-      for (uint32_t i = 0; i < kW; ++i) ref[i] = a.ref[k + (i < n ? i : n - 1)];
-      TailOut<kW, 4> to{};
-      const uint32_t big = convex_halfspace_block<F>(ta.view, tb.view, ref, cfg.hulls, to.view(), 0u);
-      to.copy_to(out, k, n);
-      fallback(big & ((1u << n) - 1u), k);
     }
   }
 }

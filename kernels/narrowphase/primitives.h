@@ -107,6 +107,7 @@ IMPACT_INLINE void store_no_contact(const ManifoldSoA& out, uint32_t k) {
 template <uint32_t W>
 struct TailSide {
   float p[3][W], r[9][W], e[3][W], w[6][W];
+  uint32_t ref[W];
   LeafSoA view{};
 
   void fill(const LeafSoA& s, uint32_t k, uint32_t n) {
@@ -120,6 +121,10 @@ struct TailSide {
     for (uint32_t j = 0; j < 3; ++j) view.e[j] = copy(s.e[j], e[j]);
     for (uint32_t j = 0; j < 6; ++j) view.w[j] = copy(s.w[j], w[j]);
     view.ref = nullptr;
+    if (s.ref != nullptr) {
+      for (uint32_t i = 0; i < W; ++i) ref[i] = s.ref[k + (i < n ? i : n - 1)];
+      view.ref = ref;
+    }
   }
 };
 
