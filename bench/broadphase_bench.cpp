@@ -40,7 +40,8 @@
 // (bodies per second); see bench/scenes/micro_common.h.
 //
 // 10M bodies: set IMPACT_BENCH_LARGE=1 to also register the grid and LBVH cases at
-// 10,000,000 bodies (scratch, phases, coherent; 1 and 2 threads). They need several
+// 10,000,000 bodies (scratch, phases, coherent; the thread counts of bench_threads.h:
+// 1 and 2 unless IMPACT_BENCH_THREADS lists others). They need several
 // GB of memory and seconds per iteration, so they are off by default and CI never
 // runs them.
 #include <benchmark/benchmark.h>
@@ -55,6 +56,7 @@
 #include <string>
 #include <vector>
 
+#include "bench/bench_threads.h"
 #include "bench/scenes/micro_common.h"
 #include "bench/scenes/scenes.h"
 #include "host/broadphase/lbvh.h"
@@ -424,43 +426,43 @@ void BM_WorldStepBox(benchmark::State& state) {
 
 constexpr int64_t k10k = 10000, k100k = 100000, k1M = 1000000, k10M = 10000000;
 
-BENCHMARK(BM_GridBroadPhase)->ArgsProduct({{k10k, k100k, k1M}, {1, 2}})->UseRealTime()->Unit(benchmark::kMillisecond);
-BENCHMARK(BM_LbvhBroadPhase)->ArgsProduct({{k10k, k100k, k1M}, {1, 2}})->UseRealTime()->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_GridBroadPhase)->ArgsProduct({{k10k, k100k, k1M}, impact::bench::bench_thread_counts()})->UseRealTime()->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_LbvhBroadPhase)->ArgsProduct({{k10k, k100k, k1M}, impact::bench::bench_thread_counts()})->UseRealTime()->Unit(benchmark::kMillisecond);
 // 1M would take ~10 s per call: a one-axis sweep meets ~n^(2/3) boxes per box in 3D.
 BENCHMARK(BM_SweepAndPruneBroadPhase)
-    ->ArgsProduct({{k10k, k100k}, {1, 2}})
+    ->ArgsProduct({{k10k, k100k}, impact::bench::bench_thread_counts()})
     ->UseRealTime()
     ->Unit(benchmark::kMillisecond);
-BENCHMARK(BM_GridClustered)->ArgsProduct({{k10k, k100k, k1M}, {1, 2}})->UseRealTime()->Unit(benchmark::kMillisecond);
-BENCHMARK(BM_LbvhClustered)->ArgsProduct({{k10k, k100k, k1M}, {1, 2}})->UseRealTime()->Unit(benchmark::kMillisecond);
-BENCHMARK(BM_GridMixedSizes)->ArgsProduct({{k100k, k1M}, {1, 2}})->UseRealTime()->Unit(benchmark::kMillisecond);
-BENCHMARK(BM_LbvhMixedSizes)->ArgsProduct({{k100k, k1M}, {1, 2}})->UseRealTime()->Unit(benchmark::kMillisecond);
-BENCHMARK(BM_BruteForceBroadPhase)->ArgsProduct({{k10k}, {1, 2}})->UseRealTime()->Unit(benchmark::kMillisecond);
-BENCHMARK(BM_GridColdStart)->ArgsProduct({{k10k, k100k, k1M}, {1, 2}})->UseManualTime()->Unit(benchmark::kMillisecond);
-BENCHMARK(BM_LbvhColdStart)->ArgsProduct({{k10k, k100k, k1M}, {1, 2}})->UseManualTime()->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_GridClustered)->ArgsProduct({{k10k, k100k, k1M}, impact::bench::bench_thread_counts()})->UseRealTime()->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_LbvhClustered)->ArgsProduct({{k10k, k100k, k1M}, impact::bench::bench_thread_counts()})->UseRealTime()->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_GridMixedSizes)->ArgsProduct({{k100k, k1M}, impact::bench::bench_thread_counts()})->UseRealTime()->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_LbvhMixedSizes)->ArgsProduct({{k100k, k1M}, impact::bench::bench_thread_counts()})->UseRealTime()->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_BruteForceBroadPhase)->ArgsProduct({{k10k}, impact::bench::bench_thread_counts()})->UseRealTime()->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_GridColdStart)->ArgsProduct({{k10k, k100k, k1M}, impact::bench::bench_thread_counts()})->UseManualTime()->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_LbvhColdStart)->ArgsProduct({{k10k, k100k, k1M}, impact::bench::bench_thread_counts()})->UseManualTime()->Unit(benchmark::kMillisecond);
 
-BENCHMARK(BM_LbvhBuild)->ArgsProduct({{k10k, k100k, k1M}, {1, 2}})->UseRealTime()->Unit(benchmark::kMillisecond);
-BENCHMARK(BM_LbvhRefit)->ArgsProduct({{k10k, k100k, k1M}, {1, 2}})->UseManualTime()->Unit(benchmark::kMillisecond);
-BENCHMARK(BM_LbvhTraverse)->ArgsProduct({{k10k, k100k, k1M}, {1, 2}})->UseRealTime()->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_LbvhBuild)->ArgsProduct({{k10k, k100k, k1M}, impact::bench::bench_thread_counts()})->UseRealTime()->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_LbvhRefit)->ArgsProduct({{k10k, k100k, k1M}, impact::bench::bench_thread_counts()})->UseManualTime()->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_LbvhTraverse)->ArgsProduct({{k10k, k100k, k1M}, impact::bench::bench_thread_counts()})->UseRealTime()->Unit(benchmark::kMillisecond);
 
-BENCHMARK(BM_GridCoherent)->ArgsProduct({{k10k, k100k, k1M}, {1, 2}})->UseManualTime()->Unit(benchmark::kMillisecond);
-BENCHMARK(BM_LbvhCoherent)->ArgsProduct({{k10k, k100k, k1M}, {1, 2}})->UseManualTime()->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_GridCoherent)->ArgsProduct({{k10k, k100k, k1M}, impact::bench::bench_thread_counts()})->UseManualTime()->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_LbvhCoherent)->ArgsProduct({{k10k, k100k, k1M}, impact::bench::bench_thread_counts()})->UseManualTime()->Unit(benchmark::kMillisecond);
 // The pair cache's cost grows over an episode (boxes drift out of their fat boxes, and
 // the movers add up to a rebuild), so these time whole episodes: every timed frame of
 // one episode, whatever --benchmark_min_time says.
 constexpr int64_t kEpisodeFrames = static_cast<int64_t>(impact::bench::kCoherentFrames - impact::bench::kCoherentWarmupFrames);
 BENCHMARK(BM_LbvhCacheCoherent)
-    ->ArgsProduct({{k10k, k100k, k1M}, {1, 2}})
+    ->ArgsProduct({{k10k, k100k, k1M}, impact::bench::bench_thread_counts()})
     ->Iterations(kEpisodeFrames)
     ->UseManualTime()
     ->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_LbvhCacheCoherentClustered)
-    ->ArgsProduct({{k10k, k100k, k1M}, {1, 2}})
+    ->ArgsProduct({{k10k, k100k, k1M}, impact::bench::bench_thread_counts()})
     ->Iterations(kEpisodeFrames)
     ->UseManualTime()
     ->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_LbvhCacheCoherentMixedSizes)
-    ->ArgsProduct({{k100k, k1M}, {1, 2}})
+    ->ArgsProduct({{k100k, k1M}, impact::bench::bench_thread_counts()})
     ->Iterations(kEpisodeFrames)
     ->UseManualTime()
     ->Unit(benchmark::kMillisecond);
@@ -477,19 +479,19 @@ const int kCacheMarginRegistered = [] {
   return 0;
 }();
 BENCHMARK(BM_GridCoherentClustered)
-    ->ArgsProduct({{k10k, k100k, k1M}, {1, 2}})
+    ->ArgsProduct({{k10k, k100k, k1M}, impact::bench::bench_thread_counts()})
     ->UseManualTime()
     ->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_LbvhCoherentClustered)
-    ->ArgsProduct({{k10k, k100k, k1M}, {1, 2}})
+    ->ArgsProduct({{k10k, k100k, k1M}, impact::bench::bench_thread_counts()})
     ->UseManualTime()
     ->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_GridCoherentMixedSizes)
-    ->ArgsProduct({{k100k, k1M}, {1, 2}})
+    ->ArgsProduct({{k100k, k1M}, impact::bench::bench_thread_counts()})
     ->UseManualTime()
     ->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_LbvhCoherentMixedSizes)
-    ->ArgsProduct({{k100k, k1M}, {1, 2}})
+    ->ArgsProduct({{k100k, k1M}, impact::bench::bench_thread_counts()})
     ->UseManualTime()
     ->Unit(benchmark::kMillisecond);
 
@@ -501,7 +503,7 @@ BENCHMARK(BM_LbvhSahVsBinnedMixedSizes)->ArgsProduct({{k100k, k1M}, {1}})->Itera
 
 // A fixed step count, so every thread count times the same stretch of the same simulation.
 BENCHMARK(BM_WorldStepBox)
-    ->ArgsProduct({{100000}, {1, 2}})
+    ->ArgsProduct({{100000}, impact::bench::bench_thread_counts()})
     ->Iterations(kWorldTimedSteps)
     ->UseRealTime()
     ->Unit(benchmark::kMillisecond);
@@ -526,7 +528,7 @@ void register_large() {
   };
   for (const Family& f : families) {
     benchmark::internal::Benchmark* b = benchmark::RegisterBenchmark(f.name, f.fn);
-    b->ArgsProduct({{k10M}, {1, 2}})->Iterations(3)->Unit(benchmark::kMillisecond);
+    b->ArgsProduct({{k10M}, impact::bench::bench_thread_counts()})->Iterations(3)->Unit(benchmark::kMillisecond);
     if (f.manual_time)
       b->UseManualTime();
     else

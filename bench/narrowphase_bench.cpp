@@ -52,6 +52,7 @@
 #include <utility>
 #include <vector>
 
+#include "bench/bench_threads.h"
 #include "bench/scenes/narrow_scenes.h"
 #include "host/narrowphase/convex_hull.h"
 #include "host/narrowphase/shape_store.h"
@@ -924,7 +925,7 @@ void register_all() {
           ->Unit(benchmark::kMicrosecond);
     }
     benchmark::RegisterBenchmark(("BM_Collide/" + name).c_str(), BM_Collide, pk.a, pk.b)
-        ->ArgsProduct({{k4k, k64k}, {1, 2}})
+        ->ArgsProduct({{k4k, k64k}, impact::bench::bench_thread_counts()})
         ->UseRealTime()
         ->Unit(benchmark::kMicrosecond);
     nb::register_peer_benchmarks(pk.a, pk.b);

@@ -20,6 +20,7 @@
 #include <utility>
 #include <vector>
 
+#include "bench/bench_threads.h"
 #include "bench/scenes/scenes.h"
 #include "impact/impact.h"
 
@@ -113,7 +114,7 @@ const bool kRegistered = [] {
     for (const auto& [shape, sname] : shapes) {
       const std::string name = std::string("BM_Query") + kname + sname;
       benchmark::RegisterBenchmark(name.c_str(), run_query, kind, shape)
-          ->ArgsProduct({{10000, 100000, 1000000}, {1, 2}})
+          ->ArgsProduct({{10000, 100000, 1000000}, impact::bench::bench_thread_counts()})
           ->UseRealTime()
           ->Unit(benchmark::kMillisecond);
     }

@@ -25,6 +25,7 @@
 #include <string>
 #include <vector>
 
+#include "bench/bench_threads.h"
 #include "bench/raycast_bench_bullet.h"
 #include "host/raycast/embree_plain.h"
 #include "impact/impact.h"
@@ -487,7 +488,8 @@ void register_all() {
     (void)camera_rays(terrain_camera(), screen_grid(grid_w(), grid_h()), ~0u, r);
     terrain_rays = r;
   }
-  const std::vector<uint32_t> thread_counts{1, 2};
+  std::vector<uint32_t> thread_counts;
+  for (int64_t t : impact::bench::bench_thread_counts()) thread_counts.push_back(static_cast<uint32_t>(t));
   auto name = [](const std::string& scene, const std::string& q, const std::string& v, uint32_t t) {
     return scene + "/" + q + "/" + v + "/threads:" + std::to_string(t);
   };

@@ -73,12 +73,36 @@ inline std::string to_string(const ExecCase& c) {
   return std::string(impact::to_string(c.backend)) + "/" + std::to_string(c.threads);
 }
 
-/// Serial, then every built-in parallel backend with 1, 2, 3 and 8 threads.
+/// The thread counts of exec_cases(): 1, 2, 3 and 8, or the comma-separated list in the
+/// environment variable IMPACT_TEST_THREADS (e.g. 1,2,3,8,16 on a 16-core machine, where
+/// the threads really run at once). A malformed list fails loudly, never silently
+/// tests fewer cases.
+inline std::vector<uint32_t> test_thread_counts() {
+  const char* env = std::getenv("IMPACT_TEST_THREADS");
+  if (env == nullptr || *env == '\0') return {1u, 2u, 3u, 8u};
+  std::vector<uint32_t> out;
+  const std::string s(env);
+  for (size_t pos = 0; pos <= s.size();) {
+    const size_t comma = std::min(s.find(',', pos), s.size());
+    const std::string item = s.substr(pos, comma - pos);
+    char* end = nullptr;
+    const long v = item.empty() ? 0 : std::strtol(item.c_str(), &end, 10);
+    if (item.empty() || *end != '\0' || v < 1 || v > 1024) {
+      ADD_FAILURE() << "IMPACT_TEST_THREADS='" << env << "': expected thread counts in 1..1024";
+      return {1u, 2u, 3u, 8u};
+    }
+    out.push_back(static_cast<uint32_t>(v));
+    pos = comma + 1;
+  }
+  return out;
+}
+
+/// Serial, then every built-in parallel backend with each of test_thread_counts().
 inline std::vector<ExecCase> exec_cases() {
   std::vector<ExecCase> out{{Backend::kSerial, 1}};
   for (Backend b : {Backend::kTbb, Backend::kOpenMP}) {
     if (!backend_available(b)) continue;
-    for (uint32_t t : {1u, 2u, 3u, 8u}) out.push_back({b, t});
+    for (uint32_t t : test_thread_counts()) out.push_back({b, t});
   }
   return out;
 }
