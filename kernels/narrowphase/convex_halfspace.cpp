@@ -11,36 +11,49 @@
 // midway between the vertex x and its projection onto the plane; pdepth = x's depth.
 // Inputs: LeafSoA lanes per leaf.h (A a hull: p, R, ref into NarrowConfig::hulls; B a
 // half-space, unit nh), Range r of the bucket. Outputs: ManifoldSoA lanes r.begin ..
-// r.end (all 4 point slots written; those past count hold finite don't-care values).
-// Method: the plane moves into each lane's hull frame (nl = R^T nh, offl = nh.(pB - pA)).
-// Walk: kSimdWidth vertices of every lane per step: lane l reads that many consecutive
-// vertices of its own hull (simd::load_transposed: one row per lane, no gathers; the
-// row start clamped to the hull's last full row, a vertex seen again changing no first
-// strict maximum; hulls of fewer vertices than lanes from a padded copy, the padding
-// masked out). Each vertex's local coordinates and depth go to a stack buffer of lanes,
-// and the slots below the plane in some lane are listed. The deepest vertex, then the
-// three other picks over the listed slots, are running strict maxima that carry their
-// vertex along (two interleaved chains per pick, merged by (score, lowest slot): the
-// first vertex wins ties, as in collide_support_halfspace); no horizontal reductions,
-// no gathers. Only the chosen vertices go back to the world frame, relative to A's
-// position (precision far from the origin).
-// Big hulls: a lane whose hull has more than kLaneVerts vertices takes no part in the
-// walk and gets collide_support_halfspace (one pair at a time, SIMD across its
-// vertices) instead, decided by its own hull, so a lane's bytes never depend on the
-// other lanes of its block.
+// r.end (count-0 lanes: count only; touching lanes: all 4 point slots, those past
+// count finite don't-care values).
+// Method: the range goes kChunk lanes at a time, in two passes.
+// 1. Listing, W = kSimdWidth lanes per block: the plane moves into each lane's hull frame
+//    (nl = R^T nh, offl = nh.(pB - pA), SIMD across the block); then each lane in turn
+//    tests its own hull's vertices W consecutive ones per step (contiguous loads, the
+//    last step's start clamped to the hull's last W vertices; a hull of fewer than W
+//    from a zero-padded copy, masked) and keeps a bit mask of those strictly below
+//    (nl.x < offl, i.e. depth offl - nl.x > 0). A lane with none gets count 0 and is done
+//    (about half the lanes on the bench); the others are listed (compacted).
+// 2. Picks, W listed lanes per group (the last group padded with repeats): the lanes'
+//    plane and pose by simd::gather; slot j of lane l is lane l's j-th vertex below, in
+//    vertex order (past its count, its first again: a vertex seen again changes no
+//    first strict maximum), the slots' vertices by simd::gather. So every slot of every
+//    lane lies below and the passes run over full vectors of touching lanes only: the
+//    deepest, then the farthest, the widest and the outmost, each a running strict
+//    maximum carrying its vertex (two interleaved chains per pick, merged by (score,
+//    lowest slot): the first vertex wins ties, as in collide_support_halfspace); depths
+//    recomputed from the chosen vertices (the same expression, the same bits). Only
+//    the chosen vertices go back to the world frame, relative to A's position
+//    (precision far from the origin), and are scattered to their lanes.
+// Big hulls: a lane whose hull has more than kLaneVerts vertices is not listed and gets
+// collide_support_halfspace (one pair at a time, SIMD across its vertices) instead,
+// decided by its own hull.
 // Preconditions: finite inputs, orthonormal R, unit nh (host-validated); a hull has at
 // least one vertex. Degenerate input: a hull lying in the plane (all depths 0) counts
 // 0, like exact touching; flat and needle hulls just give fewer points.
-// Deterministic: fixed loop order; every verb lane-wise. Both paths (kScalar: one lane,
-// kSimd: kSimdWidth lanes) run the same template.
-// Cost: per vertex and lane ~4 shuffles (the transposes), 3 FMAs and the running
-// maximum; per pick and listed slot ~15 operations. impact_narrowbench (24-point hulls,
-// half the pairs touching; loaded 2-core machine, alternated runs, best of 6): SIMD
-// ~27-29 ns per pair against ~44-47 for collide_support_halfspace (one pair at a time,
-// SIMD across its vertices); see docs/narrowphase.md for the same-run FCL figures.
-// Variants measured and dropped: AVX2 gathers per vertex (3 per vertex and block:
-// ~50-65 ns), picks tracked by slot index and fetched by gather_lanes (~37), one
-// chain per pick (~30-33), max-then-backward-scan picks (~36).
+// Deterministic: fixed loop order; every verb lane-wise, and a lane's result depends only
+// on its own hull and pose (never on which lanes share its block or group), so range
+// partitions and shuffled buckets give the same bytes; the one-lane path (kScalar)
+// runs the same template and gives the SIMD path's bytes.
+// Cost: impact_narrowbench (24-point hulls, half the pairs touching, 4096 lanes; loaded
+// 2-core machine, alternated runs): SIMD ~22-23 ns per pair against ~28-29 for the
+// previous lane kernel (a block walked every lane's whole hull through
+// simd::load_transposed and ran the picks over every slot below in any lane of the
+// block); see docs/narrowphase.md for the same-run FCL figures. Per touching group:
+// 21 gathers (pose, plane) and 3 per slot (~6 slots per group on the bench, ~3.3 used per
+// lane). Variants measured and dropped: blocks without compaction (picks over the
+// block's lanes, contiguous loads and stores: ~48 vs ~44 on one loaded run), the
+// vertices below copied into the group's slots by the listing pass instead of gathered
+// (no gain), a third pass moving the picks to the world frame per block with
+// contiguous loads (no gain), groups sorted by number of vertices below (no gain).
+#include <bit>
 #include <cmath>
 #include <cstdint>
 
@@ -59,156 +72,161 @@ using simd::dot;
 inline constexpr uint32_t kLaneVerts = 64;
 
 /// Per lane, the first strict maximum of scores offered in slot order and the vertex
-/// (local coordinates and depth) it came with; offers alternate between two running
-/// maxima (two short dependency chains instead of one long one), merged by (score,
-/// lowest slot).
+/// (local coordinates) it came with; offers alternate between two running maxima (two
+/// short dependency chains instead of one long one), merged by (score, lowest slot).
+/// (The vertex's depth is not carried: vertex_depth gives it again, the same bits.)
 template <class F>
 struct FirstMax {
   using I = typename F::Int;
-  F v[2], x[2], y[2], z[2], d[2];
+  F v[2], x[2], y[2], z[2];
   I at[2];
-  IMPACT_INLINE FirstMax(F init, const V3<F>& p, F dp) {
+  IMPACT_INLINE FirstMax(F init, const V3<F>& p) {
     for (int r = 0; r < 2; ++r) {
       v[r] = init;
       x[r] = p.x;
       y[r] = p.y;
       z[r] = p.z;
-      d[r] = dp;
       at[r] = I(0);
     }
   }
   template <int r>
-  IMPACT_INLINE void offer(F s, typename F::Mask ok, uint32_t slot, F px, F py, F pz, F pd) {
+  IMPACT_INLINE void offer(F s, typename F::Mask ok, uint32_t slot, F px, F py, F pz) {
     const auto gt = (s > v[r]) & ok;
     v[r] = select(gt, s, v[r]);
     x[r] = select(gt, px, x[r]);
     y[r] = select(gt, py, y[r]);
     z[r] = select(gt, pz, z[r]);
-    d[r] = select(gt, pd, d[r]);
     at[r] = select(gt, I(static_cast<int32_t>(slot)), at[r]);
   }
-  /// The maximum; *p, *dp: its vertex (the initial one if never above init).
-  IMPACT_INLINE F result(V3<F>* p, F* dp) const {
+  /// The maximum; *p: its vertex (the initial one if never above init).
+  IMPACT_INLINE F result(V3<F>* p) const {
     const auto take = (v[1] > v[0]) | ((v[1] == v[0]) & (at[0] > at[1]));
     *p = V3<F>{select(take, x[1], x[0]), select(take, y[1], y[0]), select(take, z[1], z[0])};
-    *dp = select(take, d[1], d[0]);
     return select(take, v[1], v[0]);
   }
 };
 
-/// Runs one block of F::kWidth lanes. A lane whose hull is too big for the walk gets
-/// don't-care output (its caller runs it again through collide_support_halfspace).
+/// nl.x for local vertex x: a vertex lies below the plane where nl.x < offl, and
+/// its depth is offl - nl.x; one expression for every use (the listing pass and the
+/// picks must agree bit for bit). offl - t > 0 exactly where t < offl (an IEEE
+/// subtraction keeps the sign of the exact difference), so the listing pass compares.
 template <class F>
-IMPACT_INLINE void convex_halfspace_block(const LeafSoA& a, const LeafSoA& b, const HullView& h,
-                                          const ManifoldSoA& out, uint32_t k) {
-  using I = typename F::Int;
-  const uint32_t* ref = a.ref + k;
+IMPACT_INLINE F plane_dot(const V3<F>& nl, F x, F y, F z) {
+  return nl.x * x + nl.y * y + nl.z * z;
+}
+template <class F>
+IMPACT_INLINE F vertex_depth(const V3<F>& nl, F offl, F x, F y, F z) {
+  return offl - plane_dot(nl, x, y, z);
+}
+
+/// The plane in the hull frames of lanes k .. k + width: nl = R^T nh, offl = nh.(pB - pA).
+template <class F>
+IMPACT_INLINE void local_plane(const V3<F>& pa, const M3<F>& ra, const V3<F>& nh, const V3<F>& pb, V3<F>* nl,
+                               F* offl) {
+  *offl = dot(nh, pb - pa);
+  *nl = V3<F>{dot(nh, ra.c[0]), dot(nh, ra.c[1]), dot(nh, ra.c[2])};
+}
+
+/// Bit v set where vertex v of the c (1 <= c <= kLaneVerts) vertices at h.vx[vb].. lies
+/// strictly below the plane (depth > 0): F::kWidth consecutive vertices per step, the
+/// last step's start clamped to c - width (a vertex seen twice sets the same bit);
+/// fewer vertices than lanes through a zero-padded copy, the padding masked off.
+template <class F>
+IMPACT_INLINE uint64_t below_bits(const HullView& h, uint32_t vb, uint32_t c, const V3<F>& nl, F offl) {
   constexpr uint32_t kW = F::kWidth;
-  // Per lane: where its hull's vertices start and how many (0 for a big hull).
-  int32_t cnt_l[kW];
-  uint32_t vb_l[kW];
-  uint32_t nmax = 0;
-  for (uint32_t l = 0; l < kW; ++l) {
-    const uint32_t hb = h.vert_begin[ref[l]], he = h.vert_begin[ref[l] + 1];
-    uint32_t c = he - hb;
-    if (c > kLaneVerts) c = 0;
-    vb_l[l] = hb;
-    cnt_l[l] = static_cast<int32_t>(c);
-    nmax = c > nmax ? c : nmax;
-  }
-  const I cnt = I::load(cnt_l);
-
-  const F zero(0.0f), half(0.5f);
-  const V3<F> pa = load_p<F>(a, k);
-  const V3<F> nh = load_e<F>(b, k);
-  const F offl = dot(nh, load_p<F>(b, k) - pa);  // x (local) is below when nl.x < offl
-  const M3<F> ra = load_r<F>(a, k);
-  const V3<F> nl{dot(nh, ra.c[0]), dot(nh, ra.c[1]), dot(nh, ra.c[2])};
-
-  // Walk: kW vertices of every lane per step (lane l reads kW consecutive vertices of its
-  // own hull from its start, clamped to its last kW: a vertex seen again changes no
-  // first strict maximum; hulls of fewer than kW vertices from a padded copy, the
-  // padding masked out). Each vertex's local coordinates and depth go to the buffer
-  // (-inf where masked), the deepest so far is kept, and `below` lists the buffer
-  // slots below the plane in some lane (the only ones the other picks visit).
-  struct Buf {
-    F x[kLaneVerts], y[kLaneVerts], z[kLaneVerts], d[kLaneVerts];
-  } buf;
-  float pad[3][kW][kW];
-  const float* rows[3][kW];
-  for (uint32_t l = 0; l < kW; ++l) {
-    if (static_cast<uint32_t>(cnt_l[l]) < kW) {
-      for (uint32_t j = 0; j < kW; ++j) {
-        const bool in = j < static_cast<uint32_t>(cnt_l[l]);
-        pad[0][l][j] = in ? h.vx[vb_l[l] + j] : 0.0f;
-        pad[1][l][j] = in ? h.vy[vb_l[l] + j] : 0.0f;
-        pad[2][l][j] = in ? h.vz[vb_l[l] + j] : 0.0f;
-      }
-    }
-  }
-  uint32_t below[kLaneVerts];
-  uint32_t nbelow = 0;
-  FirstMax<F> deepest(zero, V3<F>{zero, zero, zero}, zero);
-  const uint32_t nblk = (nmax + kW - 1) / kW;
-  for (uint32_t blk = 0; blk < nblk; ++blk) {
-    for (uint32_t l = 0; l < kW; ++l) {
-      const auto c = static_cast<uint32_t>(cnt_l[l]);
-      if (c < kW) {
-        for (uint32_t q = 0; q < 3; ++q) rows[q][l] = pad[q][l];
-      } else {
-        const uint32_t at = vb_l[l] + (blk * kW + kW <= c ? blk * kW : c - kW);
-        rows[0][l] = h.vx + at;
-        rows[1][l] = h.vy + at;
-        rows[2][l] = h.vz + at;
-      }
-    }
-    F* const x = buf.x + blk * kW;
-    F* const y = buf.y + blk * kW;
-    F* const z = buf.z + blk * kW;
-    simd::load_transposed(rows[0], x);
-    simd::load_transposed(rows[1], y);
-    simd::load_transposed(rows[2], z);
+  if (c < kW) {
+    float px[kW], py[kW], pz[kW];
     for (uint32_t j = 0; j < kW; ++j) {
-      const uint32_t i = blk * kW + j;
-      const F d = select(cnt > I(static_cast<int32_t>(j)), offl - (nl.x * x[j] + nl.y * y[j] + nl.z * z[j]),
-                         F(-INFINITY));
-      buf.d[i] = d;
-      if (j % 2 == 0) {
-        deepest.template offer<0>(d, typename F::Mask(true), i, x[j], y[j], z[j], d);
-      } else {
-        deepest.template offer<1>(d, typename F::Mask(true), i, x[j], y[j], z[j], d);
-      }
-      below[nbelow] = i;
-      nbelow += simd::any(d > zero) ? 1u : 0u;
+      const bool in = j < c;
+      px[j] = in ? h.vx[vb + j] : 0.0f;
+      py[j] = in ? h.vy[vb + j] : 0.0f;
+      pz[j] = in ? h.vz[vb + j] : 0.0f;
+    }
+    const F t = plane_dot(nl, F::load(px), F::load(py), F::load(pz));
+    return simd::bits(t < offl) & ((uint64_t{1} << c) - 1u);
+  }
+  uint64_t bits = 0;
+  for (uint32_t s = 0; s < c; s += kW) {
+    const uint32_t at = s + kW <= c ? s : c - kW;
+    const F t = plane_dot(nl, F::load(h.vx + vb + at), F::load(h.vy + vb + at), F::load(h.vz + vb + at));
+    bits |= static_cast<uint64_t>(simd::bits(t < offl)) << at;
+  }
+  return bits;
+}
+
+/// The picks for F::kWidth touching lanes: lane l is pair live[l] (global index; the
+/// group padded with repeats), bits[l] its hull's vertices below (non-zero), vb[l] their
+/// start. Slot j of lane l holds its j-th vertex below (in vertex order; past its count,
+/// its first again: a vertex seen again changes no first strict maximum), so every
+/// slot of every lane is below and the picks run over full vectors. Writes lanes
+/// live[0 .. cnt) of out.
+template <class F>
+IMPACT_INLINE void touching_group(const LeafSoA& a, const LeafSoA& b, const HullView& h, const ManifoldSoA& out,
+                                  const int32_t* live, const uint64_t* bits_l, const uint32_t* vb_l, uint32_t cnt) {
+  using I = typename F::Int;
+  constexpr uint32_t kW = F::kWidth;
+  const I idx = I::load(live);
+  const V3<F> pa{simd::gather(a.p[0], idx), simd::gather(a.p[1], idx), simd::gather(a.p[2], idx)};
+  const V3<F> nh{simd::gather(b.e[0], idx), simd::gather(b.e[1], idx), simd::gather(b.e[2], idx)};
+  const V3<F> pb{simd::gather(b.p[0], idx), simd::gather(b.p[1], idx), simd::gather(b.p[2], idx)};
+  M3<F> ra;
+  for (int c = 0; c < 3; ++c) {
+    ra.c[c] = {simd::gather(a.r[c], idx), simd::gather(a.r[3 + c], idx), simd::gather(a.r[6 + c], idx)};
+  }
+  V3<F> nl;
+  F offl;
+  local_plane(pa, ra, nh, pb, &nl, &offl);
+
+  // Slot lists: vertex indices (absolute) per slot and lane.
+  uint32_t ns = 0;
+  for (uint32_t l = 0; l < kW; ++l) {
+    const auto c = static_cast<uint32_t>(std::popcount(bits_l[l]));
+    ns = c > ns ? c : ns;
+  }
+  int32_t vi[kLaneVerts][kW];
+  for (uint32_t l = 0; l < kW; ++l) {
+    uint64_t m = bits_l[l];
+    const auto first = static_cast<int32_t>(vb_l[l] + static_cast<uint32_t>(std::countr_zero(m)));
+    for (uint32_t j = 0; j < ns; ++j) {
+      vi[j][l] = m != 0 ? static_cast<int32_t>(vb_l[l] + static_cast<uint32_t>(std::countr_zero(m))) : first;
+      m &= m - 1u;
+    }
+  }
+  struct Buf {
+    F x[kLaneVerts], y[kLaneVerts], z[kLaneVerts];
+  } buf;
+  const F zero(0.0f), half(0.5f);
+  FirstMax<F> deepest(zero, V3<F>{zero, zero, zero});
+  for (uint32_t j = 0; j < ns; ++j) {
+    const I v = I::load(vi[j]);
+    const F x = simd::gather(h.vx, v), y = simd::gather(h.vy, v), z = simd::gather(h.vz, v);
+    const F d = vertex_depth(nl, offl, x, y, z);
+    buf.x[j] = x, buf.y[j] = y, buf.z[j] = z;
+    if (j % 2 == 0) {
+      deepest.template offer<0>(d, typename F::Mask(true), j, x, y, z);
+    } else {
+      deepest.template offer<1>(d, typename F::Mask(true), j, x, y, z);
     }
   }
   V3<F> p0;
-  F d0;
-  deepest.result(&p0, &d0);
+  deepest.result(&p0);
+  const F d0 = vertex_depth(nl, offl, p0.x, p0.y, p0.z);
   const auto hit = d0 > zero;
-  if (simd::none(hit)) {
-    store_no_contact<F>(out, k);
-    return;
-  }
-  // Offers slot below[q] to m (alternating between its two chains).
-  auto offer_below = [&](FirstMax<F>& m, uint32_t q, F s) {
-    const uint32_t i = below[q];
-    if (q % 2 == 0) {
-      m.template offer<0>(s, buf.d[i] > zero, i, buf.x[i], buf.y[i], buf.z[i], buf.d[i]);
+  auto offer = [&](FirstMax<F>& m, uint32_t j, F s) {
+    if (j % 2 == 0) {
+      m.template offer<0>(s, typename F::Mask(true), j, buf.x[j], buf.y[j], buf.z[j]);
     } else {
-      m.template offer<1>(s, buf.d[i] > zero, i, buf.x[i], buf.y[i], buf.z[i], buf.d[i]);
+      m.template offer<1>(s, typename F::Mask(true), j, buf.x[j], buf.y[j], buf.z[j]);
     }
   };
   // Farthest from p0 among the vertices below (first strict maximum, as every pick).
-  FirstMax<F> farthest(zero, p0, d0);
-  for (uint32_t q = 0; q < nbelow; ++q) {
-    const uint32_t i = below[q];
-    const F dx = buf.x[i] - p0.x, dy = buf.y[i] - p0.y, dz = buf.z[i] - p0.z;
-    offer_below(farthest, q, dx * dx + dy * dy + dz * dz);
+  FirstMax<F> farthest(zero, p0);
+  for (uint32_t j = 0; j < ns; ++j) {
+    const F dx = buf.x[j] - p0.x, dy = buf.y[j] - p0.y, dz = buf.z[j] - p0.z;
+    offer(farthest, j, dx * dx + dy * dy + dz * dz);
   }
   V3<F> p1;
-  F d1;
-  const F far = farthest.result(&p1, &d1);
+  const F far = farthest.result(&p1);
   const auto has1 = hit & (far > zero);
   // Largest |area| with p0, p1 about nl: a = (x - p0).c, c = nl x (p1 - p0).
   const V3<F> c = cross(nl, p1 - p0);
@@ -216,34 +234,30 @@ IMPACT_INLINE void convex_halfspace_block(const LeafSoA& a, const LeafSoA& b, co
   auto area = [&](const F& x, const F& y, const F& z) {
     return (x - p0.x) * c.x + (y - p0.y) * c.y + (z - p0.z) * c.z;
   };
-  F amax = tiny, d2 = d0;
+  F amax = tiny;
   V3<F> p2 = p0;
   if (simd::any(has1)) {
-    FirstMax<F> widest(tiny, p0, d0);
-    for (uint32_t q = 0; q < nbelow; ++q) {
-      const uint32_t i = below[q];
-      offer_below(widest, q, abs(area(buf.x[i], buf.y[i], buf.z[i])));
-    }
-    amax = widest.result(&p2, &d2);
+    FirstMax<F> widest(tiny, p0);
+    for (uint32_t j = 0; j < ns; ++j) offer(widest, j, abs(area(buf.x[j], buf.y[j], buf.z[j])));
+    amax = widest.result(&p2);
   }
   const auto has2 = has1 & (amax > tiny);
   // Farthest outside the triangle p0 p1 p2: the largest of its three edge distances
   // (times the edge lengths), each (x - pj).gj with gj = -sgn nl x (pj+1 - pj).
-  F omax = tiny, d3 = d0;
+  F omax = tiny;
   V3<F> p3 = p0;
   if (simd::any(has2)) {
     const F sgn = select(area(p2.x, p2.y, p2.z) >= zero, F(-1.0f), F(1.0f));
     const V3<F> g0 = c * sgn, g1 = cross(nl, p2 - p1) * sgn, g2 = cross(nl, p0 - p2) * sgn;
-    FirstMax<F> outmost(tiny, p0, d0);
-    for (uint32_t q = 0; q < nbelow; ++q) {
-      const uint32_t i = below[q];
-      const F x = buf.x[i], y = buf.y[i], z = buf.z[i];
+    FirstMax<F> outmost(tiny, p0);
+    for (uint32_t j = 0; j < ns; ++j) {
+      const F x = buf.x[j], y = buf.y[j], z = buf.z[j];
       auto edge = [&](const V3<F>& p, const V3<F>& g) {
         return (x - p.x) * g.x + (y - p.y) * g.y + (z - p.z) * g.z;
       };
-      offer_below(outmost, q, max(edge(p0, g0), max(edge(p1, g1), edge(p2, g2))));
+      offer(outmost, j, max(edge(p0, g0), max(edge(p1, g1), edge(p2, g2))));
     }
-    omax = outmost.result(&p3, &d3);
+    omax = outmost.result(&p3);
   }
   const auto has3 = has2 & (omax > tiny);
   Lanes<F, 4> m;
@@ -251,25 +265,91 @@ IMPACT_INLINE void convex_halfspace_block(const LeafSoA& a, const LeafSoA& b, co
   m.n = -nh;
   m.depth = d0;
   const V3<F> pl[4] = {p0, p1, p2, p3};
-  const F dep[4] = {d0, d1, d2, d3};
+  const F dep[4] = {d0, vertex_depth(nl, offl, p1.x, p1.y, p1.z), vertex_depth(nl, offl, p2.x, p2.y, p2.z),
+                    vertex_depth(nl, offl, p3.x, p3.y, p3.z)};
   for (int j = 0; j < 4; ++j) {
     const V3<F> x = ra.c[0] * pl[j].x + ra.c[1] * pl[j].y + ra.c[2] * pl[j].z;
     m.point[j] = madd(x, half * dep[j], nh);
     m.pdepth[j] = dep[j];
   }
-  store(out, k, m, pa);
+  // Scatter to the group's lanes: rows of the manifold's fields, then per lane.
+  float v[21][kW];
+  m.n.x.store(v[0]), m.n.y.store(v[1]), m.n.z.store(v[2]);
+  m.depth.store(v[3]);
+  for (int j = 0; j < 4; ++j) {
+    (pa.x + m.point[j].x).store(v[4 + 4 * j]);
+    (pa.y + m.point[j].y).store(v[5 + 4 * j]);
+    (pa.z + m.point[j].z).store(v[6 + 4 * j]);
+    m.pdepth[j].store(v[7 + 4 * j]);
+  }
+  for (uint32_t l = 0; l < cnt; ++l) {
+    const auto i = static_cast<uint32_t>(live[l]);
+    out.count[i] = static_cast<uint8_t>(m.count.lane(l));
+    for (int q = 0; q < 3; ++q) out.n[q][i] = v[q][l];
+    out.depth[i] = v[3][l];
+    for (int j = 0; j < 4; ++j) {
+      for (int q = 0; q < 3; ++q) out.point[j][q][i] = v[4 + 4 * j + q][l];
+      out.pdepth[j][i] = v[7 + 4 * j][l];
+    }
+  }
 }
 
-/// The lane walk over every block of r (prim::for_each_block: the tail through padded
-/// local copies); then the big-hull lanes, one at a time, by collide_support_halfspace.
+/// The range, kChunk pairs at a time. A first pass over blocks of W lanes moves each
+/// plane into its hull's frame and lists, per lane, the hull's vertices below it (W
+/// consecutive vertices of that lane's hull per step); a lane with none gets count 0,
+/// the others are gathered W at a time into full groups for the picks
+/// (touching_group). Then the big-hull lanes, one at a time, by
+/// collide_support_halfspace. Every computation is lane-wise, so a pair's bytes do not
+/// depend on which lanes share its block or group.
 template <class F>
 void convex_halfspace_range(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out, Range r,
                             const NarrowConfig& cfg) {
   const HullView& h = cfg.hulls;
-  for_each_block<F, 4>(a, b, out, r,
-                       [&](const LeafSoA& la, const LeafSoA& lb, const ManifoldSoA& lo, uint32_t k) {
-                         convex_halfspace_block<F>(la, lb, h, lo, k);
-                       });
+  constexpr uint32_t W = F::kWidth;
+  constexpr uint32_t kChunk = 16 * W;
+  for (uint32_t k0 = r.begin; k0 < r.end; k0 += kChunk) {
+    const uint32_t n = r.end - k0 < kChunk ? r.end - k0 : kChunk;
+    int32_t live[kChunk + W];
+    uint64_t live_bits[kChunk + W];
+    uint32_t live_vb[kChunk + W];
+    uint32_t nlive = 0;
+    for (uint32_t j = 0; j < n; j += W) {
+      const uint32_t k = k0 + j, nb = n - j < W ? n - j : W;
+      TailSide<W> ta, tb;
+      const LeafSoA* va = &a;
+      const LeafSoA* vb = &b;
+      uint32_t at = k;
+      if (nb < W) {
+        ta.fill(a, k, nb);
+        tb.fill(b, k, nb);
+        va = &ta.view, vb = &tb.view, at = 0;
+      }
+      V3<F> nl;
+      F offl;
+      local_plane(load_p<F>(*va, at), load_r<F>(*va, at), load_e<F>(*vb, at), load_p<F>(*vb, at), &nl, &offl);
+      float lx[W], ly[W], lz[W], lo[W];
+      nl.x.store(lx), nl.y.store(ly), nl.z.store(lz), offl.store(lo);
+      for (uint32_t l = 0; l < nb; ++l) {
+        const uint32_t hb = h.vert_begin[a.ref[k + l]], c = h.vert_begin[a.ref[k + l] + 1] - hb;
+        if (c > kLaneVerts) continue;  // collide_support_halfspace, below
+        const uint64_t bits = below_bits<F>(h, hb, c, V3<F>{F(lx[l]), F(ly[l]), F(lz[l])}, F(lo[l]));
+        out.count[k + l] = 0;
+        live[nlive] = static_cast<int32_t>(k + l);
+        live_bits[nlive] = bits;
+        live_vb[nlive] = hb;
+        nlive += bits != 0 ? 1u : 0u;
+      }
+    }
+    for (uint32_t g = 0; g < nlive; g += W) {
+      const uint32_t cnt = nlive - g < W ? nlive - g : W;
+      for (uint32_t l = cnt; l < W; ++l) {  // padding repeats the last
+        live[g + l] = live[g + cnt - 1];
+        live_bits[g + l] = live_bits[g + cnt - 1];
+        live_vb[g + l] = live_vb[g + cnt - 1];
+      }
+      touching_group<F>(a, b, h, out, live + g, live_bits + g, live_vb + g, cnt);
+    }
+  }
   for (uint32_t l = r.begin; l < r.end; ++l) {
     if (h.vert_begin[a.ref[l] + 1] - h.vert_begin[a.ref[l]] > kLaneVerts) {
       collide_support_halfspace(a, b, out, Range{l, l + 1}, cfg, kLeafConvex);

@@ -16,8 +16,8 @@
 // (convex_ellipsoid.cpp); capsule-cylinder and cylinder-triangle lane kernels
 // (capsule_cylinder.cpp, cylinder_triangle.cpp: candidate normals of the Minkowski
 // difference's pieces, rims by rim_solve.h); hull-half-space a lane kernel over the
-// hull's vertices (convex_halfspace.cpp; hulls over 64 vertices per pair by the
-// support-function routine). Everything else goes through the general convex path
+// hull's vertices, the picks over compacted touching lanes (convex_halfspace.cpp; hulls
+// over 64 vertices per pair by the support-function routine). Everything else goes through the general convex path
 // (kernels/narrowphase/gjk_epa.cpp): GJK + EPA on the leaves' support functions, with
 // face clipping for polytope manifolds, and a support-function kernel against
 // half-spaces.
@@ -90,7 +90,8 @@ void collide_convex_ellipsoid(const LeafSoA&, const LeafSoA&, const ManifoldSoA&
 /// cap or side clipped to the triangle (1-4 points), SIMD across pairs.
 void collide_cylinder_triangle(const LeafSoA&, const LeafSoA&, const ManifoldSoA&, Range, const NarrowConfig&);
 /// Convex hull (A) against half-space (B): the deepest vertex and up to 3 more vertices
-/// below the plane, one pair per SIMD lane, each lane walking its own hull's vertices
+/// below the plane, one pair per SIMD lane: each lane lists its own hull's vertices
+/// below, then the touching lanes, compacted into full groups, pick over those
 /// (convex_halfspace.cpp); hulls of more than 64 vertices take collide_support_halfspace.
 void collide_convex_halfspace(const LeafSoA&, const LeafSoA&, const ManifoldSoA&, Range, const NarrowConfig&);
 

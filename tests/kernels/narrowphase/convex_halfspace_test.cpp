@@ -46,11 +46,14 @@ struct Case {
 };
 
 enum HullId : uint32_t { kTetra, kBox, kCloud24, kCloud64, kCloud65, kBig, kTiny, kHuge, kNeedle, kPancake, kHullKinds };
+/// Hulls whose vertex counts are no multiple of the SIMD width (the listing pass's
+/// clamped last step), used by the tests that name them.
+enum OddHullId : uint32_t { kCloud13 = kHullKinds, kCloud30, kCloud47, kAllHulls };
 
 struct TestHulls {
   Hulls h;
-  uint32_t id[kHullKinds];
-  double size[kHullKinds];  // bounding radius
+  uint32_t id[kAllHulls];
+  double size[kAllHulls];  // bounding radius
 };
 
 /// An ellipsoid cloud whose hull has exactly `want` vertices (draws until it has).
@@ -82,6 +85,9 @@ const TestHulls& hulls() {
     add(kHuge, test::hull_input::ellipsoid_points(g, 24, 1e4));
     add(kNeedle, test::hull_input::box_corners(1.0f, 1e-4f, 1e-4f));
     add(kPancake, test::hull_input::box_corners(1.0f, 1.0f, 1e-4f));
+    add(static_cast<HullId>(kCloud13), cloud_with(g, 13));
+    add(static_cast<HullId>(kCloud30), cloud_with(g, 30));
+    add(static_cast<HullId>(kCloud47), cloud_with(g, 47));
     return r;
   }();
   return t;
@@ -414,6 +420,82 @@ TEST(ConvexHalfspace, PartitionsAndShuffledBucketsGiveTheSameBytes) {
       }
     }
   }
+}
+
+
+/// The kernel lists the touching lanes of a chunk and runs the picks over groups of
+/// them: buckets where no lane touches, where every lane does (deep), where they
+/// alternate, and where hulls over 64 vertices (the per-pair fallback) sit between
+/// lane-walk hulls (also of 13, 30 and 47 vertices: no multiple of the width); longer
+/// than a chunk, with partly filled groups. Every lane against
+/// the brute force on both paths, and its bytes the same as when it runs alone.
+TEST(ConvexHalfspace, NoneEveryAndMixedTouchingLanesAndBigHullsBetween) {
+  ASSERT_EQ(hulls().h.data[hulls().id[kCloud13]].vertices.size(), 13u);
+  ASSERT_EQ(hulls().h.data[hulls().id[kCloud47]].vertices.size(), 47u);
+  std::mt19937 g(17);
+  const HullId small[] = {kTetra,
+                          kBox,
+                          kCloud24,
+                          kCloud64,
+                          kTiny,
+                          kHuge,
+                          kNeedle,
+                          kPancake,
+                          static_cast<HullId>(kCloud13),
+                          static_cast<HullId>(kCloud30),
+                          static_cast<HullId>(kCloud47)};
+  const HullId big[] = {kCloud65, kBig};
+  const uint32_t n = 300;  // more than one chunk of lanes, not a multiple of the width
+  auto bucket = [&](int mode) {
+    std::vector<Case> cs;
+    for (uint32_t k = 0; k < n; ++k) {
+      const bool is_big = mode == 3 && k % 3 == 1;
+      const HullId kind = is_big ? big[k % 2] : small[k % 11];
+      double sink = 0.0;
+      if (mode == 0) sink = -0.5;                           // none touches
+      if (mode == 1) sink = 2.5;                            // every lane, entirely below
+      if (mode >= 2) sink = (k / 2) % 2 == 0 ? 0.3 : -0.3;  // pairs of lanes alternate
+      // (1e5 from the origin except the 1e-4 hull: there float poses cannot keep it apart)
+      cs.push_back(random_case(g, kind, k % 5 == 4 && kind != kTiny ? 1e5 : 0.0, sink));
+    }
+    return cs;
+  };
+  for (int mode = 0; mode < 4; ++mode) {
+    const std::vector<Case> cs = bucket(mode);
+    for (KernelPath path : {KernelPath::kSimd, KernelPath::kScalar}) {
+      const test::ManifoldLanes out = run(cs, path);
+      int bad = 0, touching = 0;
+      for (uint32_t k = 0; k < n && bad < 10; ++k) {
+        bad += !check(cs[k], out.result(k), "mode", static_cast<int>(k));
+        touching += out.count[k] > 0 ? 1 : 0;
+      }
+      EXPECT_EQ(bad, 0) << "mode " << mode;
+      if (mode == 0) {
+        EXPECT_EQ(touching, 0);
+      }
+      if (mode == 1) {
+        EXPECT_EQ(touching, static_cast<int>(n));
+      }
+      if (mode >= 2) {
+        EXPECT_GT(touching, static_cast<int>(n) / 4);
+        EXPECT_LT(touching, 3 * static_cast<int>(n) / 4);
+      }
+      for (uint32_t k = 0; k < n; k += 7) {
+        const test::ManifoldLanes alone = run({cs[k]}, path);
+        ASSERT_EQ(lane_bytes(alone, 0), lane_bytes(out, k)) << "mode " << mode << ", lane " << k;
+      }
+    }
+  }
+}
+
+/// Both paths run the same template over the same per-lane arithmetic: the one-lane
+/// path gives the SIMD path's bytes, lane for lane (random poses, 1e5 from the origin,
+/// every hull kind).
+TEST(ConvexHalfspace, ScalarPathGivesTheSimdPathsBytes) {
+  const auto cs = random_cases(test::scaled(1200), 29);
+  const test::ManifoldLanes simd = run(cs, KernelPath::kSimd);
+  const test::ManifoldLanes one = run(cs, KernelPath::kScalar);
+  for (uint32_t k = 0; k < cs.size(); ++k) ASSERT_EQ(lane_bytes(one, k), lane_bytes(simd, k)) << "lane " << k;
 }
 
 }  // namespace
