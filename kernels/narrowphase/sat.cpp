@@ -53,8 +53,8 @@
 // A's frame on the hull data already there (box_hull_manifold). Against brute-force SAT
 // in double it is the more exact route (sat_test.cpp SatBoxHull: 1e-5 L; the general
 // route's edge axes near a face's arc end can be off by ~4e-5 L). Cost on the bench's
-// 24-point hulls: ~414 ns per pair against ~961 by the general route and FCL ~1070 in
-// the same runs (loaded 2-core machine); the manifold is a third of it.
+// 24-point hulls: ~313-414 ns per pair against ~914-961 by the general route and FCL
+// ~1043-1084 in the same runs (loaded 2-core machine); the manifold is a third of it.
 // Inputs: lanes loaded by load_leaf (finite, R orthonormal, positive sizes); hulls
 // with edge adjacency (HullView adj_*; sat_vertex_count() says when SAT applies).
 // Outputs: as collide_convex_lane; touching (separation >= 0) gives count 0.
