@@ -99,7 +99,8 @@ void collide_convex_halfspace(const LeafSoA&, const LeafSoA&, const ManifoldSoA&
 /// GJK + EPA for any two convex leaf types ta <= tb (neither a half-space), one pair
 /// per lane; polytope pairs (box, convex, triangle) get a clipped face manifold. Small
 /// box / hull pairs take the separating axis test instead (sat.cpp,
-/// NarrowConfig::sat_max_vertices).
+/// NarrowConfig::sat_max_vertices); box-hull there runs an exact route with the box in
+/// closed form (held to the specialised kernels' tolerance by the matrix test).
 void collide_gjk_epa(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out, Range r,
                      const NarrowConfig& cfg, LeafType ta, LeafType tb);
 /// Any convex leaf type ta against a half-space (B): the deepest point by the support

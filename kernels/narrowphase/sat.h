@@ -26,4 +26,9 @@ struct SatStats {
 /// collide_convex_lane. stats may be null.
 void collide_sat_lane(const Leaf& A, const Leaf& B, LaneContact* out, SatStats* stats = nullptr);
 
+/// The general route of collide_sat_lane (both sides as vertex / face / edge lists),
+/// which collide_sat_lane leaves only for box A against hull B: kept callable for the
+/// tests and benchmarks that compare the two.
+void collide_sat_general_lane(const Leaf& A, const Leaf& B, LaneContact* out, SatStats* stats = nullptr);
+
 }  // namespace impact::kernels::cvx

@@ -22,7 +22,8 @@
 // tol = rel * L, L = the larger bounding radius, rel = 1e-4 for the specialised kernels
 // (sphere/capsule/box/triangle/half-space pairs of pair_kernels.h, triangle-triangle,
 // sphere-hull, capsule-hull, hull-triangle, sphere-ellipsoid, capsule-ellipsoid,
-// ellipsoid-triangle, capsule-cylinder, cylinder-triangle and hull-half-space),
+// ellipsoid-triangle, capsule-cylinder, cylinder-triangle, hull-half-space and
+// box-hull, whose SAT box-hull route is exact: sat.cpp),
 // 1e-3 for the general GJK/EPA and support kernels (100x cfg.epa_tolerance); the inputs
 // are exact floats, so poses far from the origin get no extra depth tolerance; contact
 // points, being world floats, get one ulp of the largest coordinate on top (0.008 at 1e5).
@@ -408,6 +409,8 @@ std::string literal(const char* name, const LeafF& l, const HullBank& w) {
 
 bool specialised(LeafType a, LeafType b) {
   const auto kp = k::pair_kernel(a, b);
+  // Box-hull: the generic entry, whose SAT takes the exact box-hull route (sat.cpp).
+  if (a == k::kLeafBox && b == k::kLeafConvex) return true;
   return kp != nullptr &&
          (kp == &k::collide_sphere_sphere || kp == &k::collide_sphere_capsule || kp == &k::collide_sphere_box ||
           kp == &k::collide_capsule_capsule || kp == &k::collide_capsule_box || kp == &k::collide_box_box ||

@@ -4,7 +4,12 @@
 // NarrowConfig::sat_max_vertices = 0), (3) the specialised box-box kernel; on random
 // poses and on the extremes: touching, deep, coincident centres, near-parallel edges,
 // aspect 1e4, 1e-4 / 1e4 sizes, 1e5 offsets; swap symmetry; the hull store's edge
-// adjacency; the dispatch knob.
+// adjacency; the dispatch knob. SatBoxHull: the box-hull route of collide_sat_lane
+// against the brute force (depth within 1e-5 L, the normal a minimum direction, each
+// manifold point midway between the two surfaces), GJK/EPA and the general route, on
+// random poses, coincident centres, deep, touching, needle / pancake boxes and hulls,
+// 1e-4 / 1e4 boxes, 1e5 offsets, hull edges parallel and near parallel to a box axis,
+// parallel faces; SIMD and scalar paths, range partitions, shuffled buckets.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -458,6 +463,263 @@ TEST(Sat, BigHullAndTheKnob) {
       EXPECT_NEAR(x.depth, y.depth, 2e-4);
     }
   }
+}
+
+// --- box-hull route -------------------------------------------------------------------------
+
+/// collide_sat_lane on one (box, hull) pair through its box-hull route and through the
+/// general route (the box as an 8-vertex polytope), with the routes' statistics.
+struct TwoRoutes {
+  cvx::LaneContact fast, general;
+  cvx::SatStats sf, sg;
+};
+
+TwoRoutes two_routes(const Shape& a, const Shape& b) {
+  const NarrowConfig cfg = config(true);
+  Lanes la, lb;
+  la.push(a), lb.push(b);
+  const cvx::V3 o{la.p[0][0], la.p[1][0], la.p[2][0]};
+  const cvx::Leaf A = cvx::load_leaf(la.soa(), 0, a.type, &cfg.hulls, o);
+  const cvx::Leaf B = cvx::load_leaf(lb.soa(), 0, b.type, &cfg.hulls, o);
+  TwoRoutes r;
+  cvx::collide_sat_lane(A, B, &r.fast, &r.sf);
+  cvx::collide_sat_general_lane(A, B, &r.general, &r.sg);
+  return r;
+}
+
+/// The box-hull route against the brute force, GJK/EPA (check_pair) and the general
+/// route: the same hit outside the touching band, the depth within rel_route * L of the
+/// brute force's (the general route's within 1e-4 L: near a face's arc end its edge
+/// axes carry errors up to ~4e-5 L), the normal a minimum direction (its separation
+/// -depth within rel_route * L), the manifold's depths within [0, depth].
+void check_box_hull(const Shape& box, const Shape& hull, double rel, double rel_route, const char* what) {
+  check_pair(box, hull, rel, what);
+  SCOPED_TRACE(what);
+  const TwoRoutes r = two_routes(box, hull);
+  const double L = std::max(bound_radius(box), bound_radius(hull));
+  const double tol = rel_route * L;
+  const Poly A = world_poly(box), B = world_poly(hull);
+  Vec3d axis;
+  const double s = -brute_sat(A, B, &axis);
+  if (std::fabs(s) > tol) {
+    EXPECT_EQ(r.fast.count > 0, s > 0) << "brute depth " << s;
+  }
+  if (std::fabs(s) > 1e-4 * L) {
+    EXPECT_EQ(r.fast.count > 0, r.general.count > 0);
+  }
+  if (r.fast.count == 0) return;
+  EXPECT_NEAR(r.fast.depth, s, tol) << "feature " << r.sf.feature << ", general " << r.sg.feature;
+  if (r.general.count > 0) {
+    EXPECT_NEAR(r.fast.depth, r.general.depth, 1e-4 * L);
+  }
+  const Vec3d nf(r.fast.n.x, r.fast.n.y, r.fast.n.z);
+  EXPECT_NEAR(nf.norm(), 1.0, 1e-6);
+  EXPECT_NEAR(separation(A, B, nf), -r.fast.depth, tol);
+  EXPECT_GE(r.fast.count, 1u);
+  EXPECT_LE(r.fast.count, 4u);
+  // Each point lies midway between the surfaces: p + n pd / 2 on A's, p - n pd / 2 on
+  // B's (signed plane distances in double; the points are relative to A's centre).
+  const Vec3d o(static_cast<float>(box.p.x()), static_cast<float>(box.p.y()), static_cast<float>(box.p.z()));
+  const auto dist = [](const Poly& P, const Vec3d& q) {
+    double sd = -INFINITY;
+    for (const Vec3d& nn : P.n) {
+      double d = -INFINITY;
+      for (const Vec3d& v : P.v) d = std::max(d, nn.dot(v));
+      sd = std::max(sd, nn.dot(q) - d);
+    }
+    return sd;
+  };
+  const double tol_pt = tol + 4e-7 * o.cwiseAbs().maxCoeff();
+  for (uint32_t j = 0; j < r.fast.count; ++j) {
+    EXPECT_GE(r.fast.pdepth[j], 0.0f);
+    EXPECT_LE(r.fast.pdepth[j], r.fast.depth + tol);
+    if (r.sf.feature == 2) continue;  // the edge points: the closest points of the edges
+    const Vec3d p = o + Vec3d(r.fast.point[j].x, r.fast.point[j].y, r.fast.point[j].z);
+    const double h = 0.5 * r.fast.pdepth[j];
+    EXPECT_NEAR(dist(A, p + nf * h), 0.0, tol_pt) << "point " << j;
+    EXPECT_NEAR(dist(B, p - nf * h), 0.0, tol_pt) << "point " << j;
+  }
+}
+
+/// A rotation taking unit u to unit x (rows: u and two unit vectors normal to it).
+Mat3d turn_onto(const Vec3d& u, const Vec3d& x) {
+  auto frame = [](const Vec3d& a) {
+    const Vec3d b = (std::fabs(a.x()) < 0.6 ? Vec3d::UnitX() : Vec3d::UnitY()).cross(a).normalized();
+    Mat3d F;
+    F.row(0) = a, F.row(1) = b, F.row(2) = a.cross(b);
+    return F;
+  };
+  return frame(x).transpose() * frame(u);  // both frames right-handed: a rotation
+}
+
+/// Rotation taking unit u to the x axis, then turned by ang about z and y.
+Mat3d align_to_x(const Vec3d& u, double ang) {
+  return Mat3d(Eigen::AngleAxisd(ang, Vec3d::UnitZ()).toRotationMatrix() *
+               Eigen::AngleAxisd(0.7 * ang, Vec3d::UnitY()).toRotationMatrix() * turn_onto(u, Vec3d::UnitX()));
+}
+
+TEST(SatBoxHull, RandomPoses) {
+  std::mt19937 g(21);
+  std::uniform_real_distribution<double> f(0.0, 1.3);
+  const uint32_t n = test::scaled(400);
+  uint32_t edge = 0, face_a = 0, face_b = 0, hits = 0;
+  for (uint32_t i = 0; i < n; ++i) {
+    const Shape a = random_box(g, Vec3d::Zero());
+    Shape b = random_hull(g, i % kRandomHulls, Vec3d::Zero());
+    b.p = random_unit(g) * f(g) * (bound_radius(a) + bound_radius(b)) * 0.8;
+    check_box_hull(a, b, 1e-4, 1e-5, "random");
+    const TwoRoutes r = two_routes(a, b);
+    edge += r.sf.feature == 2, face_a += r.sf.feature == 0, face_b += r.sf.feature == 1;
+    hits += r.fast.count > 0;
+  }
+  // Every feature kind is exercised, and about half the pairs overlap.
+  EXPECT_GT(edge, n / 20);
+  EXPECT_GT(face_a, n / 20);
+  EXPECT_GT(face_b, n / 40);
+  EXPECT_GT(hits, n / 4);
+  EXPECT_LT(hits, 3 * n / 4);
+}
+
+TEST(SatBoxHull, Extremes) {
+  std::mt19937 g(22);
+  for (int rep = 0; rep < static_cast<int>(test::scaled(20)); ++rep) {
+    const uint32_t h = rep % kRandomHulls;
+    // Coincident centres and deep.
+    {
+      Shape a = random_box(g, Vec3d::Zero());
+      Shape b = random_hull(g, h, Vec3d::Zero());
+      check_box_hull(a, b, 1e-4, 1e-5, "coincident centres");
+      b.p = random_unit(g) * 0.1;
+      check_box_hull(a, b, 1e-4, 1e-5, "deep");
+    }
+    // Touching: the brute-force touching distance along a random direction.
+    {
+      Shape a = random_box(g, Vec3d::Zero());
+      Shape b = random_hull(g, h, Vec3d::Zero());
+      const Vec3d u = random_unit(g);
+      double lo = 0, hi = 10;
+      for (int it = 0; it < 60; ++it) {
+        b.p = u * (0.5 * (lo + hi));
+        Vec3d ax;
+        (brute_sat(world_poly(a), world_poly(b), &ax) < 0 ? lo : hi) = 0.5 * (lo + hi);
+      }
+      b.p = test::round_to_float(Vec3d(u * hi));
+      check_box_hull(a, b, 1e-4, 1e-5, "touching");
+    }
+    // Needle and pancake boxes (1e-4), needle and pancake hulls (aspect 1e4).
+    {
+      Shape a = random_box(g, Vec3d::Zero());
+      a.e = Vec3d(1, 1e-4, 1e-4);
+      Shape b = random_hull(g, h, random_unit(g) * 0.5);
+      check_box_hull(a, b, 1e-4, 1e-5, "needle box");
+      a.e = Vec3d(1, 1, 1e-4);
+      check_box_hull(a, b, 1e-4, 1e-5, "pancake box");
+      const Shape c = random_box(g, Vec3d::Zero());
+      check_box_hull(c, random_hull(g, kNeedle, random_unit(g) * 0.5), 1e-4, 1e-5, "needle hull");
+      check_box_hull(c, random_hull(g, kPancake, random_unit(g) * 0.005), 1e-4, 1e-5, "pancake hull");
+    }
+    // Tiny and huge boxes against a unit hull; a 400-point hull.
+    for (double sc : {1e-4, 1e4}) {
+      const Shape a = random_box(g, Vec3d::Zero(), sc);
+      const Shape b = random_hull(g, h, random_unit(g) * (sc < 1 ? 0.5 : 0.5 * sc));
+      check_box_hull(a, b, 1e-4, 1e-5, sc < 1 ? "box 1e-4" : "box 1e4");
+    }
+    check_box_hull(random_box(g, Vec3d::Zero()), random_hull(g, kBig, random_unit(g) * 1.2), 1e-4, 1e-5, "400 points");
+    // 1e5 from the origin (the float pose is exact to ~4e-3: as Sat.Extremes).
+    {
+      const Vec3d far(1e5, -1e5, 1e5);
+      const Shape a = random_box(g, far);
+      const Shape b = random_hull(g, h, far + random_unit(g) * 0.9);
+      check_box_hull(a, b, 1e-3, 1e-5, "far 1e5");
+    }
+  }
+}
+
+TEST(SatBoxHull, ParallelAndNearParallelFeatures) {
+  // A hull edge turned onto the box's x axis (skipped as parallel by both routes), and
+  // by small angles off it; a hull face turned onto the box's +z face (parallel faces).
+  std::mt19937 g(23);
+  const HullView hv = hulls().store.view();
+  for (uint32_t h = 0; h < kRandomHulls; ++h) {
+    const uint32_t k = hv.adj_begin[h];
+    const Vec3d d(hv.edx[k], hv.edy[k], hv.edz[k]);
+    const Vec3d n0 = hulls().normals[h][hv.ef0[k]];
+    for (double ang : {0.0, 1e-7, 1e-5, 1e-3, 1e-2}) {
+      Shape a = random_box(g, Vec3d::Zero());
+      a.R = Mat3d::Identity();
+      Shape b = random_hull(g, h, Vec3d::Zero());
+      b.R = align_to_x(d.normalized(), ang);
+      // Move B along -(its first face normal) so the edge meets the box near an edge.
+      const Vec3d dir = -(b.R * n0).normalized();
+      for (double f : {0.6, 0.9, 1.0}) {
+        b.p = test::round_to_float(Vec3d(dir * f * (bound_radius(a) + bound_radius(b)) * 0.7));
+        check_box_hull(a, b, 1e-4, 1e-5, "near-parallel edge");
+      }
+    }
+    for (double ang : {0.0, 1e-6, 1e-3}) {
+      Shape a = random_box(g, Vec3d::Zero());
+      a.R = Mat3d::Identity();
+      Shape b = random_hull(g, h, Vec3d::Zero());
+      const Vec3d nf = hulls().normals[h][0];
+      b.R = Eigen::AngleAxisd(ang, Vec3d::UnitX()).toRotationMatrix() * turn_onto(nf.normalized(), -Vec3d::UnitZ());
+      // Face 0 sunk 0.02 into the box's top: a face contact (never an edge axis, whose
+      // separation ties the faces' here), the hull face clipped to >= 3 points.
+      const double d0 = hv.fd[hv.face_begin[h]];
+      b.p = test::round_to_float(Vec3d(0.05, -0.05, a.e.z() + d0 - 0.02));
+      check_box_hull(a, b, 1e-4, 1e-5, "parallel faces");
+      if (ang == 0.0) {
+        const TwoRoutes r = two_routes(a, b);
+        EXPECT_NE(r.sf.feature, 2);
+        EXPECT_GE(r.fast.count, 3u);
+        EXPECT_NEAR(r.fast.depth, 0.02, 1e-5);
+      }
+    }
+  }
+}
+
+TEST(SatBoxHull, PathsPartitionsAndShuffledBuckets) {
+  // A bucket of box-hull lanes: the SIMD and scalar paths, any partition of the range,
+  // and any order of the lanes give the same bytes per lane.
+  std::mt19937 g(24);
+  const uint32_t n = 97;
+  std::vector<Shape> as, bs;
+  for (uint32_t i = 0; i < n; ++i) {
+    as.push_back(random_box(g, Vec3d::Zero()));
+    Shape b = random_hull(g, i % kRandomHulls, Vec3d::Zero());
+    b.p = random_unit(g) * (0.3 + 0.01 * i);
+    bs.push_back(b);
+  }
+  auto run_bucket = [&](const std::vector<uint32_t>& order, KernelPath path, uint32_t chunk) {
+    Lanes la, lb;
+    for (uint32_t i : order) la.push(as[i]), lb.push(bs[i]);
+    test::ManifoldLanes out(n);
+    NarrowConfig cfg = config(true);
+    cfg.path = path;
+    const PairKernel k = pair_kernel(kLeafBox, kLeafConvex);
+    for (uint32_t b0 = 0; b0 < n; b0 += chunk) k(la.soa(), lb.soa(), out.view(), Range{b0, std::min(n, b0 + chunk)}, cfg);
+    std::vector<test::PairResult> r(n);
+    for (uint32_t j = 0; j < n; ++j) r[order[j]] = out.result(j);
+    return r;
+  };
+  std::vector<uint32_t> id(n);
+  for (uint32_t i = 0; i < n; ++i) id[i] = i;
+  const auto ref = run_bucket(id, KernelPath::kSimd, n);
+  std::vector<uint32_t> sh = id;
+  std::shuffle(sh.begin(), sh.end(), g);
+  uint32_t hits = 0;
+  for (const auto& [order, path, chunk] : {std::tuple{id, KernelPath::kScalar, n}, std::tuple{id, KernelPath::kSimd, 7u},
+                                           std::tuple{sh, KernelPath::kSimd, 13u}}) {
+    const auto r = run_bucket(order, path, chunk);
+    for (uint32_t i = 0; i < n; ++i) {
+      ASSERT_EQ(r[i].count, ref[i].count) << i;
+      if (ref[i].count == 0) continue;
+      EXPECT_EQ(r[i].n, ref[i].n) << i;
+      EXPECT_EQ(r[i].depth, ref[i].depth) << i;
+      for (uint32_t j = 0; j < ref[i].count; ++j) EXPECT_EQ(r[i].pt[j], ref[i].pt[j]) << i;
+    }
+  }
+  for (const auto& r : ref) hits += r.count > 0;
+  EXPECT_GT(hits, n / 4);
 }
 
 }  // namespace
