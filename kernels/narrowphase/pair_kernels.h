@@ -89,6 +89,13 @@ void collide_convex_ellipsoid(const LeafSoA&, const LeafSoA&, const ManifoldSoA&
 /// vertices against rims, edges against rims by the 2D root solve of rim_solve.h), the
 /// cap or side clipped to the triangle (1-4 points), SIMD across pairs.
 void collide_cylinder_triangle(const LeafSoA&, const LeafSoA&, const ManifoldSoA&, Range, const NarrowConfig&);
+/// Ellipsoid against ellipsoid: the least support overlap f(n) = h_A(n) + h_B(n) - n.d over
+/// the unit sphere by a trust-region Newton solve from the three best of 22 candidate
+/// directions (d, the six axes, their nine cross products, d perpendicular to each axis;
+/// ellipsoid_ellipsoid.cpp), one point midway, SIMD across pairs. Not registered in
+/// pair_kernel(): it can miss the global minimum (see its file), so ellipsoid pairs
+/// still take GJK / EPA.
+void collide_ellipsoid_ellipsoid(const LeafSoA&, const LeafSoA&, const ManifoldSoA&, Range, const NarrowConfig&);
 /// Convex hull (A) against half-space (B): the deepest vertex and up to 3 more vertices
 /// below the plane, one pair per SIMD lane, each lane walking its own hull's vertices
 /// (convex_halfspace.cpp); hulls of more than 64 vertices take collide_support_halfspace.
