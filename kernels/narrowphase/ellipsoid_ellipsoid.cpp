@@ -15,44 +15,48 @@
 // is the support overlap along n: the pair overlaps iff f > 0 on the whole sphere; then
 // depth = L min f over unit n and n = the minimiser (B moves along +n). Any n with
 // f(n) <= 0 certifies separation (count 0).
-//  1. Starts: f at 22 candidate directions, each signed so that n.d >= 0 (f(-n) >= f(n)
-//     there): d; A's and B's axes (the minimisers when one body is a pancake: a cone
-//     point of h at its normal); the nine cross products of an A axis and a B axis (two
-//     needles: the minimiser is perpendicular to both long axes, on the intersection of
-//     the two near-kink circles of h); d made perpendicular to each of the six axes (a
-//     needle parallel to the other body's axis: the minimiser lies on the needle's
-//     circle). The five least distinct ones (|cos| < 0.9999 to the kept ones) start.
+//  0. A first pass over the range writes count 0 everywhere and lists the lanes that may
+//     touch: bounding spheres overlapping and f > 0 along d and the six axes (any f <= 0
+//     certifies separation: about half the bench's lanes stop here); those are gathered
+//     kSimdWidth at a time into full blocks (box_ellipsoid.cpp's scheme).
+//  1. Starts: f at 25 candidate directions, each signed so that n.d >= 0 (f(-n) =
+//     f(n) + 2 n.d): d; A's and B's axes (a pancake's normal: a cone point of h); the nine
+//     cross products of an A axis and a B axis (two needles: the minimiser is
+//     perpendicular to both long axes); d made perpendicular to each of the six axes (a
+//     needle's circle); the least eigenvectors of M_A + w M_B, w = 1/4, 1, 4 (h(n) is the
+//     least over w of the support of the ellipsoid (1 + 1/w) M_A + (1 + w) M_B: the deep,
+//     nearly concentric case; power iteration on the adjugate). The kStarts = 8 least
+//     distinct ones (|cos| < 0.9999 to the kept ones) start.
 //  2. Each start runs a trust-region Newton solve on the sphere (Riemannian gradient and
-//     Hessian in a tangent basis; Levenberg-Marquardt shift mu = max(0, |g| / radius -
+//     Hessian in a tangent basis; Levenberg-Marquardt shift mu = max(0, |g|_1 / radius -
 //     lambda_min), plus the least eigenvector at the trust radius where the Hessian is
-//     indefinite, so a start at a saddle (g = 0) leaves it; accepted when f does not rise
-//     by more than its rounding, else the radius shrinks x4; retraction by
-//     normalisation). All five run kSpread = 4 steps, then each lane keeps its two least
-//     and runs them until they freeze (accepted step below 1e-6 rad at a positive
-//     definite Hessian, or radius below 1e-7) or kMaxIterations = 24; the block stops
-//     when every kept (lane, start) is frozen (each lane's bytes depend on its own data
-//     only). The least f of the two wins (ties: the lower start).
-// Global minimum: NOT guaranteed. f is convex on R^3 but not on the sphere: an interior d
-// can give several local minima (long thin bodies, deep or coincident centres). The
-// kernel finds the global one when it lies in the basin of a kept start. Measured
-// (tests/kernels/narrowphase/ellipsoid_ellipsoid_test.cpp at IMPACT_TEST_INTENSITY=10,
-// ~2e4 lanes against dense sampling refined in double): 4 random-pose lanes in 6000 and
-// 1-2 coincident-centre lanes in 2000 end in another local minimum, depth 1e-3 .. 4.5e-2
-// L too large; needles / pancakes (aspect 1e-4) at all angles, tiny / huge / far poses
-// and near touching: no failure seen. For that reason the kernel is not registered in
-// pair_kernel() (ellipsoid pairs take GJK / EPA).
+//     indefinite, so a start at a saddle (g = 0) leaves it; the trial mirrored to d's side;
+//     accepted when f does not rise by more than its rounding, else the radius shrinks x4;
+//     retraction by normalisation). All eight run kSpread = 3 steps (stage by stage over
+//     the starts: independent square-root / division chains side by side), then each lane
+//     keeps its two least and runs them until they freeze (accepted step below 1e-6 rad
+//     at a positive definite Hessian, or radius below 1e-7) or kMaxIterations = 24; the
+//     block stops when every kept (lane, start) is frozen (each lane's bytes depend on
+//     its own data only). The least f of the two wins (ties: the lower start).
+// Global minimum: by multi-start, without a proof. f is convex on R^3 but not on the
+// sphere: an interior d can give several local minima (long thin bodies, deep or
+// coincident centres). The kernel finds the global one when its basin holds one of the
+// two starts kept after three steps; it can fail where the global minimiser is far from
+// all 25 candidates and eight other candidates score lower, or where the two kept after
+// three steps both lie in other basins. Measured (ellipsoid_ellipsoid_test.cpp at
+// IMPACT_TEST_INTENSITY=10, ~2e4 lanes: random poses, needles / pancakes (1e-4) at all
+// angles, coincident centres, near touching, sizes 1e-4 / 1e4, 1e5 offsets, against
+// dense sampling refined in double): no miss; with 5 starts x 4 steps: 3 lanes missed
+// (depth up to 3e-3 L too large), with the 22 candidates without the eigenvectors, 4.
 // Degenerate input: coincident centres (d = 0) take the candidates' signs as given (h is
 // even, the normal is then one of two opposite minimisers); spheres give d's direction
 // (sphere-sphere's answer); d's own candidate falls back to +z when |d| is tiny.
 // Preconditions: finite inputs, positive radii, orthonormal R (host-validated); every
 // division is guarded, so finite inputs give finite outputs.
-// Cost: 22 candidate evaluations (2 square roots each), 5 x 4 Newton steps, then 2 x
-// (mostly 1-2) steps (each ~6 square roots and ~6 divisions), the starts' steps
-// interleaved stage by stage; a block whose bounding spheres or d's own direction
-// separate every lane stops early; no branch on lane data in the arithmetic (selects),
-// no libm call. impact_narrowbench BM_Kernel/ellipsoid-ellipsoid/simd/4096 (8 lanes,
-// loaded 2-core machine, registered for the run): ~271 ns per pair, FCL ~1810 in the
-// same run (6.7x, short of the 10x target); GJK / EPA ~1550 (FCL ~1910) before.
+// Cost: a first pass (7 support overlaps per lane) over every lane; for the lanes that
+// may touch, 25 candidate evaluations (2 square roots each), 8 x 3 Newton steps, then 2 x
+// (mostly 1-2) steps (each ~6 square roots and ~6 divisions); no branch on lane data in
+// the arithmetic (selects), no libm call. Measured: docs/narrowphase.md.
 // Both paths run the same template (F = FloatW, or Float1 for the scalar reference).
 #include <cstdint>
 
@@ -66,8 +70,8 @@ using namespace prim;  // NOLINT: lane helpers of this kernel family
 using simd::dot;
 using simd::length_sq;
 
-constexpr int kStarts = 5;
-constexpr int kSpread = 4;   // steps for every start
+constexpr int kStarts = 8;
+constexpr int kSpread = 3;   // steps for every start
 constexpr int kKeep = 2;     // starts kept after them
 constexpr int kMaxIterations = 24;
 constexpr float kStepTol = 1e-6f;     // rad: an accepted step this short freezes the start
@@ -163,14 +167,14 @@ struct Proposal {
 
 /// A trust-region Newton step's trial point from a start.
 template <class F>
-IMPACT_INLINE Proposal<F> propose(const Start<F>& s) {
+IMPACT_INLINE Proposal<F> propose(const Pair<F>& p, const Start<F>& s) {
   const F zero(0.0f), one(1.0f);
   // Levenberg-Marquardt shift: H + mu I >= (|g| / radius) I, so the step is at most the
   // trust radius and follows the least-curvature direction where H is indefinite; mu = 0
   // where H is positive definite and the Newton step fits.
   const F half_tr = F(0.5f) * (s.h11 + s.h22), half_df = F(0.5f) * (s.h11 - s.h22);
   const F lmin = half_tr - sqrt(half_df * half_df + s.h12 * s.h12);
-  const F gnorm = sqrt(s.g1 * s.g1 + s.g2 * s.g2);
+  const F gnorm = abs(s.g1) + abs(s.g2);  // >= |g|: the step still fits the radius
   const F floor = F(1e-6f) * (abs(s.h11) + abs(s.h22) + abs(s.f)) + F(1e-30f);
   const F mu = max(zero, gnorm / s.radius - lmin) + floor;
   const F k11 = s.h11 + mu, k22 = s.h22 + mu, k12 = s.h12;
@@ -198,6 +202,9 @@ IMPACT_INLINE Proposal<F> propose(const Start<F>& s) {
   const F taken = len * clip;
   V3<F> m = madd(madd(s.n, x1, s.t1), x2, s.t2);
   m = m * (one / sqrt(length_sq(m)));
+  // The trial on d's side: f(-m) = f(m) + 2 m.d (h is even), so where m.d < 0 its mirror
+  // is lower (a start that wandered past the equator comes back).
+  m = select(dot(m, p.d) < zero, -m, m);
   return {m, lmin, taken};
 }
 
@@ -232,31 +239,62 @@ IMPACT_INLINE void step_all(const Pair<F>& p, Start<F>* st, int count) {
   Proposal<F> pr[N];
   Start<F> t[N];
   for (int s = 0; s < N; ++s)
-    if (s < count) pr[s] = propose(st[s]);
+    if (s < count) pr[s] = propose(p, st[s]);
   for (int s = 0; s < N; ++s)
     if (s < count) evaluate(p, pr[s].m, t[s]);
   for (int s = 0; s < N; ++s)
     if (s < count) settle(st[s], t[s], pr[s]);
 }
 
+/// Gathers lanes idx of the LeafSoA fields.
 template <class F>
-IMPACT_INLINE void ellipsoid_ellipsoid_block(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out,
-                                             uint32_t k) {
+IMPACT_INLINE V3<F> gather3(const float* const* p, typename F::Int idx) {
+  return {simd::gather(p[0], idx), simd::gather(p[1], idx), simd::gather(p[2], idx)};
+}
+template <class F>
+IMPACT_INLINE M3<F> gather_r(const LeafSoA& s, typename F::Int idx) {
+  M3<F> m;
+  for (int c = 0; c < 3; ++c)
+    m.c[c] = {simd::gather(s.r[c], idx), simd::gather(s.r[3 + c], idx), simd::gather(s.r[6 + c], idx)};
+  return m;
+}
+
+/// Lanes that may touch: bounding spheres overlapping and no separating direction among
+/// d and the six axes (f(n) <= 0 certifies separation; about half the bench's lanes are
+/// certified here).
+template <class F>
+IMPACT_INLINE typename F::Mask may_touch(const V3<F>& dw, const V3<F>& ea, const V3<F>& eb, const M3<F>& ra,
+                                         const M3<F>& rb) {
+  const F zero(0.0f);
+  const F reach = max(max(ea.x, ea.y), ea.z) + max(max(eb.x, eb.y), eb.z);
+  const F d2 = length_sq(dw);
+  auto ha = [&](const V3<F>& n) {
+    const V3<F> l = ra.apply_t(n);
+    return sqrt(ea.x * ea.x * l.x * l.x + ea.y * ea.y * l.y * l.y + ea.z * ea.z * l.z * l.z);
+  };
+  auto hb = [&](const V3<F>& n) {
+    const V3<F> l = rb.apply_t(n);
+    return sqrt(eb.x * eb.x * l.x * l.x + eb.y * eb.y * l.y * l.y + eb.z * eb.z * l.z * l.z);
+  };
+  // Unnormalised d: f(d) |d| = h(d) - |d|^2 (h is positively homogeneous).
+  auto m = (d2 < reach * reach) & (ha(dw) + hb(dw) >= d2);
+  const F eas[3] = {ea.x, ea.y, ea.z}, ebs[3] = {eb.x, eb.y, eb.z};
+  for (int i = 0; i < 3; ++i) {
+    m = m & (eas[i] + hb(ra.c[i]) > abs(dot(ra.c[i], dw)));
+    m = m & (ebs[i] + ha(rb.c[i]) > abs(dot(rb.c[i], dw)));
+  }
+  (void)zero;
+  return m;
+}
+
+/// The collision data of W lanes that may touch: n (world, A to B), depth, and the
+/// point relative to A's centre.
+template <class F>
+IMPACT_INLINE void solve(const V3<F>& dw, const V3<F>& ea, const V3<F>& eb, const M3<F>& ra, const M3<F>& rb,
+                         V3<F>& out_n, F& out_depth, V3<F>& out_point) {
   using Mask = typename F::Mask;
   const F zero(0.0f), one(1.0f), big(3.0e38f);
-  const V3<F> pa = load_p<F>(a, k);
-  const V3<F> dw = load_p<F>(b, k) - pa;  // B's centre from A's (world)
-  const V3<F> ea = load_e<F>(a, k), eb = load_e<F>(b, k);
   const F emax = max(max(max(ea.x, ea.y), max(ea.z, eb.x)), max(eb.y, eb.z));
-  // Bounding spheres apart in every lane: no contact.
-  {
-    const F reach = max(max(ea.x, ea.y), ea.z) + max(max(eb.x, eb.y), eb.z);
-    if (simd::none(length_sq(dw) < reach * reach)) {
-      store_no_contact<F>(out, k);
-      return;
-    }
-  }
-  const M3<F> ra = load_r<F>(a, k), rb = load_r<F>(b, k);
   const F inv = one / max(emax, F(1e-30f));
   Pair<F> p;
   const F eas[3] = {ea.x * inv, ea.y * inv, ea.z * inv};
@@ -302,11 +340,6 @@ IMPACT_INLINE void ellipsoid_ellipsoid_block(const LeafSoA& a, const LeafSoA& b,
   const F dl2 = length_sq(p.d);
   const Mask has_d = dl2 >= F(1e-24f);
   consider(select(has_d, p.d, V3<F>{zero, zero, one}), Mask(true));
-  // d's own direction separates every lane: no contact.
-  if (simd::none(bf[0] > zero)) {
-    store_no_contact<F>(out, k);
-    return;
-  }
   const V3<F> ax[3] = {V3<F>{one, zero, zero}, V3<F>{zero, one, zero}, V3<F>{zero, zero, one}};
   for (int i = 0; i < 3; ++i) consider(ax[i], Mask(true));
   for (int j = 0; j < 3; ++j) consider(u[j], Mask(true));
@@ -314,6 +347,43 @@ IMPACT_INLINE void ellipsoid_ellipsoid_block(const LeafSoA& a, const LeafSoA& b,
     for (int j = 0; j < 3; ++j) consider(simd::cross(ax[i], u[j]), Mask(true));
   for (int i = 0; i < 3; ++i) consider(madd(p.d, -dot(p.d, ax[i]), ax[i]), has_d);
   for (int j = 0; j < 3; ++j) consider(madd(p.d, -dot(p.d, u[j]), u[j]), has_d);
+  // The least eigenvector of M_A + w M_B (w = 1/4, 1, 4): h(n)^2 lies between
+  // n^T (M_A + M_B) n and twice it, and h(n) = min over w of the support of the
+  // ellipsoid (1 + 1/w) M_A + (1 + w) M_B; by power iteration on the adjugate.
+  const float weights[3] = {0.25f, 1.0f, 4.0f};
+  for (const float w : weights) {
+    const F vx[3] = {p.v[0].x, p.v[1].x, p.v[2].x}, vy[3] = {p.v[0].y, p.v[1].y, p.v[2].y},
+            vz[3] = {p.v[0].z, p.v[1].z, p.v[2].z};
+    F b00 = zero, b01 = zero, b02 = zero, b11 = zero, b12 = zero, b22 = zero;
+    for (int j = 0; j < 3; ++j) {
+      b00 = b00 + vx[j] * vx[j];
+      b01 = b01 + vx[j] * vy[j];
+      b02 = b02 + vx[j] * vz[j];
+      b11 = b11 + vy[j] * vy[j];
+      b12 = b12 + vy[j] * vz[j];
+      b22 = b22 + vz[j] * vz[j];
+    }
+    const F ww(w);
+    const F m00 = p.a2[0] + ww * b00, m11 = p.a2[1] + ww * b11, m22 = p.a2[2] + ww * b22;
+    const F m01 = ww * b01, m02 = ww * b02, m12 = ww * b12;
+    const F c00 = m11 * m22 - m12 * m12, c11 = m00 * m22 - m02 * m02, c22 = m00 * m11 - m01 * m01;
+    const F c01 = m02 * m12 - m01 * m22, c02 = m01 * m12 - m02 * m11, c12 = m01 * m02 - m00 * m12;
+    const Mask use0 = (c00 >= c11) & (c00 >= c22), use1 = andnot(c11 >= c22, use0);
+    V3<F> x{c02, c12, c22};
+    x = select(use1, V3<F>{c01, c11, c12}, x);
+    x = select(use0, V3<F>{c00, c01, c02}, x);
+    // Each product scaled by 1 / trace (>= the dominant eigenvalue, <= 3 times it): no
+    // overflow or underflow whatever the sizes.
+    const F tr = c00 + c11 + c22;
+    const F it = one / select(tr > zero, tr, one);
+    for (int rep = 0; rep < 3; ++rep) {
+      x = V3<F>{(c00 * x.x + c01 * x.y + c02 * x.z) * it, (c01 * x.x + c11 * x.y + c12 * x.z) * it,
+                (c02 * x.x + c12 * x.y + c22 * x.z) * it};
+    }
+    x = x * it;
+    const F l2 = length_sq(x);
+    consider(x * (one / sqrt(select(l2 > zero, l2, one))), Mask(true));
+  }
 
   // 2. Trust-region Newton from each start; lanes already separated are done.
   const Mask apart = bf[0] <= zero;
@@ -360,18 +430,80 @@ IMPACT_INLINE void ellipsoid_ellipsoid_block(const LeafSoA& a, const LeafSoA& b,
   const V3<F> wb = p.v[0] * pj[0] + p.v[1] * pj[1] + p.v[2] * pj[2];
   const V3<F> sa = ra.apply(wa * (emax / qa));
   const V3<F> sb = dw - ra.apply(wb * (emax / qb));
-  const F depth = best * emax;
-  Lanes<F, 1> m;
-  m.count = simd::to_int(depth > zero);
-  m.n = ra.apply(n);
-  m.depth = depth;
-  m.point[0] = (sa + sb) * F(0.5f);
-  m.pdepth[0] = depth;
-  store(out, k, m, pa);
+  out_depth = best * emax;
+  out_n = ra.apply(n);
+  out_point = (sa + sb) * F(0.5f);
+}
+
+/// The range, kChunk pairs at a time: a first pass over blocks of W lanes writes count 0
+/// for every lane and lists those that may touch (may_touch); they are gathered W at a
+/// time into full blocks for the solve. Every computation is lane-wise, so a pair's bytes
+/// do not depend on which lanes share its block (the padding of a partly filled block
+/// repeats its last lane).
+template <class F>
+IMPACT_INLINE void ellipsoid_ellipsoid_range(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out, Range r) {
+  constexpr uint32_t W = F::kWidth;
+  constexpr uint32_t kChunk = 16 * W;
+  using Int = typename F::Int;
+  for (uint32_t k0 = r.begin; k0 < r.end; k0 += kChunk) {
+    const uint32_t n = r.end - k0 < kChunk ? r.end - k0 : kChunk;
+    int32_t live[kChunk + W];
+    uint32_t nlive = 0;
+    for (uint32_t j = 0; j < n; j += W) {
+      const uint32_t k = k0 + j, nb = n - j < W ? n - j : W;
+      TailSide<W> ta, tb;
+      const LeafSoA* va = &a;
+      const LeafSoA* vb = &b;
+      uint32_t at = k;
+      if (nb < W) {
+        ta.fill(a, k, nb);
+        tb.fill(b, k, nb);
+        va = &ta.view, vb = &tb.view, at = 0;
+      }
+      const V3<F> dw = load_p<F>(*vb, at) - load_p<F>(*va, at);
+      const uint32_t bits = simd::bits(
+          may_touch(dw, load_e<F>(*va, at), load_e<F>(*vb, at), load_r<F>(*va, at), load_r<F>(*vb, at)));
+      for (uint32_t l = 0; l < nb; ++l) {
+        out.count[k + l] = 0;
+        live[nlive] = static_cast<int32_t>(k + l);
+        nlive += (bits >> l) & 1u;
+      }
+    }
+    for (uint32_t g = 0; g < nlive; g += W) {
+      const uint32_t cnt = nlive - g < W ? nlive - g : W;
+      for (uint32_t l = cnt; l < W; ++l) live[g + l] = live[g + cnt - 1];  // padding repeats the last
+      const Int idx = Int::load(live + g);
+      const V3<F> pa = gather3<F>(a.p, idx);
+      const V3<F> dw = gather3<F>(b.p, idx) - pa;
+      V3<F> nw, pt;
+      F depth;
+      solve(dw, gather3<F>(a.e, idx), gather3<F>(b.e, idx), gather_r<F>(a, idx), gather_r<F>(b, idx), nw, depth, pt);
+      pt = pt + pa;
+      float v[8][W];
+      nw.x.store(v[0]), nw.y.store(v[1]), nw.z.store(v[2]);
+      depth.store(v[3]);
+      pt.x.store(v[4]), pt.y.store(v[5]), pt.z.store(v[6]);
+      for (uint32_t l = 0; l < cnt; ++l) {
+        const uint32_t i = static_cast<uint32_t>(live[g + l]);
+        out.count[i] = v[3][l] > 0.0f ? 1 : 0;
+        for (int c = 0; c < 3; ++c) out.n[c][i] = v[c][l];
+        out.depth[i] = v[3][l];
+        for (int c = 0; c < 3; ++c) out.point[0][c][i] = v[4 + c][l];
+        out.pdepth[0][i] = v[3][l];
+      }
+    }
+  }
 }
 
 }  // namespace
 
-IMPACT_LANE_KERNEL(collide_ellipsoid_ellipsoid, ellipsoid_ellipsoid_block, 1)
+void collide_ellipsoid_ellipsoid(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out, Range r,
+                                 const NarrowConfig& cfg) {
+  if (cfg.path == KernelPath::kScalar) {
+    ellipsoid_ellipsoid_range<simd::Float1>(a, b, out, r);
+  } else {
+    ellipsoid_ellipsoid_range<simd::FloatW>(a, b, out, r);
+  }
+}
 
 }  // namespace impact::kernels

@@ -1,16 +1,17 @@
 // collide_ellipsoid_ellipsoid (kernels/narrowphase/ellipsoid_ellipsoid.cpp) on both paths
 // against an independent double-precision reference, and against the general GJK / EPA
-// path (collide_gjk_epa) on the same lanes. The kernel is NOT registered in pair_kernel()
-// (ellipsoid pairs still take GJK / EPA): at IMPACT_TEST_INTENSITY=10 a few lanes in
-// ~10^4 (random and coincident-centre poses) end in a local minimum that is not the
-// global one (depth up to 4.5e-2 L too large); these tests pass at intensity 1 only.
+// path (collide_gjk_epa) on the same lanes.
 //
 // Reference (double, world frame): f(n) = sqrt(n^T M_A n) + sqrt(n^T M_B n) - n.d, M =
 // R diag(e^2) R^T, d = c_B - c_A; depth = min over unit n of f. Dense Fibonacci sampling
 // of the whole sphere (kSamples directions, no candidate directions from the kernel),
 // then the kRefine least samples at least 0.03 rad apart are refined by Newton on the
 // sphere with an exact eigenvalue shift and an Armijo backtracking line search until the
-// step stalls; the least wins. Separated lanes need only a certificate f <= 0.
+// step stalls; the least wins. Separated lanes need only a certificate f <= 0. Where
+// the kernel's normal gives a lower f in double than the reference's minimum (the
+// sampling missed a 1e-4-wide basin: a pancake's cone point), that value is the better
+// minimum and the kernel's depth must match it; a kernel normal that scores worse than
+// the reference fails.
 //
 // Per lane, L = the pair's largest radius, tol = kRel * L:
 //  (a) count > 0 iff the reference depth > 0 (either where |depth_ref| <= tol);
@@ -19,8 +20,10 @@
 //      (n is a minimiser), and angle(n, n_ref) <= kAngleTol where the minimiser is well
 //      conditioned (no other local minimum within 10 tol, smallest Hessian eigenvalue
 //      above 1e-2 L);
-//  (d) point[0] + n depth/2 lies on A's surface and point[0] - n depth/2 on B's (within
-//      tol plus an ulp of the largest world coordinate), pdepth[0] == depth;
+//  (d) point[0] midway: A's and B's support planes along n lie depth/2 either side of
+//      it (within tol plus an ulp of the largest world coordinate); where both bodies'
+//      smallest radius is at least 1e-2 L, point[0] +- n depth/2 also lie on the two
+//      surfaces (1e-4 L); pdepth[0] == depth;
 //  (e) the scalar and SIMD paths agree within tol (depth) and as minimisers (c).
 // Scenarios: random poses and radii (ratios to 10, about half overlapping) at sizes 1,
 // 1e-4, 1e4 and 1e5 from the origin; needles (1 x 1e-4 x 1e-4) and pancakes (1 x 1 x
@@ -370,17 +373,20 @@ void check(const std::vector<Query>& qs, const char* what, Checked* out = nullpt
       }
       if (h.count == 0) continue;
       ASSERT_EQ(h.count, 1u);
-      EXPECT_NEAR(h.depth, ref.depth, tol) << what << " lane " << k << " " << path << " L " << L << " excess " << (h.depth - ref.depth) / L << "\n ea "
-                                           << q.a.e.transpose() << " eb " << q.b.e.transpose() << "\n nref(A) "
-                                           << (q.a.R.transpose() * ref.n).transpose() << " nref(B) "
-                                           << (q.b.R.transpose() * ref.n).transpose() << "\n n(A) "
-                                           << (q.a.R.transpose() * h.n).transpose() << " d(A) "
-                                           << (q.a.R.transpose() * (q.b.p - q.a.p)).transpose() << " second "
-                                           << ref.second;
+      // The reference is a sampled search: where the kernel's own normal gives a lower f
+      // (evaluated in double), that is the better minimum (the kernel's depth must then
+      // match it); a kernel normal worse than the reference's fails below.
+      const double fk = p.f(h.n.normalized());
+      const double best = std::min(ref.depth, fk);
+      EXPECT_NEAR(h.depth, best, tol) << what << " lane " << k << " " << path << " L " << L << " excess "
+                                      << (h.depth - ref.depth) / L << "\n ea " << q.a.e.transpose() << " eb "
+                                      << q.b.e.transpose() << "\n nref(A) " << (q.a.R.transpose() * ref.n).transpose()
+                                      << " nref(B) " << (q.b.R.transpose() * ref.n).transpose() << "\n n(A) "
+                                      << (q.a.R.transpose() * h.n).transpose() << " second " << ref.second;
       ASSERT_TRUE(h.n.allFinite());
       EXPECT_NEAR(h.n.norm(), 1.0, 1e-5);
-      EXPECT_LE(p.f(h.n.normalized()), ref.depth + tol) << what << " lane " << k << " " << path;
-      if (ref.second > ref.depth + 10 * tol && ref.hmin > 1e-2 * L) {
+      EXPECT_LE(fk, ref.depth + tol) << what << " lane " << k << " " << path;
+      if (fk >= ref.depth - tol && ref.second > ref.depth + 10 * tol && ref.hmin > 1e-2 * L) {
         EXPECT_LT(angle(h.n, ref.n), kAngleTol) << what << " lane " << k << " " << path;
       }
       EXPECT_EQ(h.pd, h.depth);
@@ -406,6 +412,10 @@ void check(const std::vector<Query>& qs, const char* what, Checked* out = nullpt
 }
 
 uint32_t lanes(uint32_t base) { return test::scaled(base, 8); }
+
+TEST(EllipsoidEllipsoid, Registered) {
+  EXPECT_EQ(pair_kernel(kLeafEllipsoid, kLeafEllipsoid), &collide_ellipsoid_ellipsoid);
+}
 
 TEST(EllipsoidEllipsoid, RandomPosesAgainstReference) {
   Checked c;
