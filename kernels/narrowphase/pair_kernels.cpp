@@ -65,6 +65,7 @@ struct Table {
     k[kLeafConvex][kLeafEllipsoid] = &collide_convex_ellipsoid;
     k[kLeafCylinder][kLeafTriangle] = &collide_cylinder_triangle;
     k[kLeafConvex][kLeafHalfSpace] = &collide_convex_halfspace;
+    k[kLeafEllipsoid][kLeafEllipsoid] = &collide_ellipsoid_ellipsoid;
   }
 };
 

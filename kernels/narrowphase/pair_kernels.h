@@ -17,7 +17,9 @@
 // (capsule_cylinder.cpp, cylinder_triangle.cpp: candidate normals of the Minkowski
 // difference's pieces, rims by rim_solve.h); hull-half-space a lane kernel over the
 // hull's vertices, the picks over compacted touching lanes (convex_halfspace.cpp; hulls
-// over 64 vertices per pair by the support-function routine). Everything else goes through the general convex path
+// over 64 vertices per pair by the support-function routine); ellipsoid-ellipsoid a lane
+// kernel (ellipsoid_ellipsoid.cpp: multi-start trust-region Newton on the support overlap
+// over the sphere). Everything else goes through the general convex path
 // (kernels/narrowphase/gjk_epa.cpp): GJK + EPA on the leaves' support functions, with
 // face clipping for polytope manifolds, and a support-function kernel against
 // half-spaces.
@@ -89,6 +91,13 @@ void collide_convex_ellipsoid(const LeafSoA&, const LeafSoA&, const ManifoldSoA&
 /// vertices against rims, edges against rims by the 2D root solve of rim_solve.h), the
 /// cap or side clipped to the triangle (1-4 points), SIMD across pairs.
 void collide_cylinder_triangle(const LeafSoA&, const LeafSoA&, const ManifoldSoA&, Range, const NarrowConfig&);
+/// Ellipsoid against ellipsoid: the least support overlap f(n) = h_A(n) + h_B(n) - n.d over
+/// the unit sphere by a trust-region Newton solve on the sphere from the eight least of 25
+/// candidate directions (d, the six axes, their nine cross products, d perpendicular to
+/// each axis, the least eigenvectors of M_A + w M_B), two kept after three steps; lanes
+/// certified apart first, the rest gathered into full blocks (ellipsoid_ellipsoid.cpp);
+/// one point midway, SIMD across pairs. Global minimum by multi-start (no proof; tested).
+void collide_ellipsoid_ellipsoid(const LeafSoA&, const LeafSoA&, const ManifoldSoA&, Range, const NarrowConfig&);
 /// Convex hull (A) against half-space (B): the deepest vertex and up to 3 more vertices
 /// below the plane, one pair per SIMD lane: each lane lists its own hull's vertices
 /// below, then the touching lanes, compacted into full groups, pick over those
