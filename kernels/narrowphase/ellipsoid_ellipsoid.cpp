@@ -382,9 +382,10 @@ IMPACT_INLINE void solve(const V3<F>& dw, const V3<F>& ea, const V3<F>& eb, cons
   for (int s = 0; s < kStarts; ++s) {
     F m = key[0];
     for (int i = 1; i < kCand; ++i) m = min(m, key[i]);
-    const typename F::Int idx = simd::tag_index(m);
-    const V3<F> c{simd::gather_lanes(cx, idx), simd::gather_lanes(cy, idx), simd::gather_lanes(cz, idx)};
     const Mask any_left = m < F(1e30f);
+    // A knocked-out key is untagged, so a lane with none left points at candidate 0.
+    const typename F::Int idx = select(any_left, simd::tag_index(m), typename F::Int(0));
+    const V3<F> c{simd::gather_lanes(cx, idx), simd::gather_lanes(cy, idx), simd::gather_lanes(cz, idx)};
     bf[s] = select(any_left, simd::gather_lanes(cf, idx), big);
     bn[s] = select(any_left, c, V3<F>{zero, zero, one});
     for (int i = 0; i < kCand; ++i) {
