@@ -22,8 +22,8 @@ BroadPhaseKind choose_broad_phase(const uint64_t* level_counts, uint64_t n, cons
   }
   // hashed == n: every populated level hashes (a few huge boxes that widen the
   // extent sit in a level of their own that does not, so they do not count).
-  const bool sparse = 2 * hashed >= n, spread = crowded >= kAutoLevels;
-  return sparse && (spread || hashed == n) ? BroadPhaseKind::kLbvh : BroadPhaseKind::kGrid;
+  const bool spread = crowded >= kAutoLevels;
+  return spread || hashed == n ? BroadPhaseKind::kLbvh : BroadPhaseKind::kGrid;
 }
 
 void BroadPhaseStage::set_kind(BroadPhaseKind kind) {

@@ -28,18 +28,17 @@
 namespace impact::host {
 
 /// The automatic choice (docs/broadphase.md, "Automatic choice"): the LBVH when the
-/// grid would have to hash the cells of at least half of the boxes (a sparse world:
-/// more cells than grid_dense_limit even with 2x coarser cells) AND either the
 /// boxes' sizes spread over at least kAutoLevels of the grid's size levels (4x
-/// apart) with at least 1/kAutoLevelShare of the boxes in each, or every populated
-/// level hashes (sparse at every size: uniform sparse worlds, clustered worlds);
-/// else the grid. Both are estimated per level l
+/// apart) with at least 1/kAutoLevelShare of the boxes in each, or when the grid
+/// would have to hash the cells of every populated level (a sparse world: more cells
+/// than grid_dense_limit even with 2x coarser cells; uniform sparse worlds,
+/// clustered worlds); else the grid. Both are estimated per level l
 /// (kernels::grid_levels; level_counts has kernels::kGridMaxLevels entries) from
 /// the scene extent and the level's largest possible edge, top_edge / 4^l.
 /// Measured basis: docs/broadphase.md (bench BM_AutoChoice).
 BroadPhaseKind choose_broad_phase(const uint64_t* level_counts, uint64_t n, const double extent[3],
                                   double top_edge);
-inline constexpr uint32_t kAutoLevels = 3;
+inline constexpr uint32_t kAutoLevels = 2;
 inline constexpr uint32_t kAutoLevelShare = 10;
 
 class BroadPhaseStage {

@@ -160,9 +160,9 @@ TEST(BroadPhaseStage, UpdateWithNewCountRebuilds) {
   }
 }
 
-// The automatic choice: the LBVH when most boxes would land in hashed grids and
-// either the sizes spread over many of the grid's levels or every level hashes, the
-// grid otherwise (docs/broadphase.md has the measurements);
+// The automatic choice: the LBVH when the sizes spread over many of the grid's
+// levels or every level hashes, the grid otherwise (docs/broadphase.md has the
+// measurements);
 // pairs equal the reference either way.
 TEST(BroadPhaseStage, AutoChoosesByTheSizeSpread) {
   struct Case {
@@ -173,19 +173,22 @@ TEST(BroadPhaseStage, AutoChoosesByTheSizeSpread) {
   std::vector<Case> cases;
   cases.push_back({test::uniform_boxes(scaled(4000), 31, 0.3f, 0.6f), BroadPhaseKind::kGrid, "uniform"});
   // Clustered: the blobs leave most of the extent empty, so every level hashes: the
-  // LBVH (measured 1.2x faster at 1M, 0.9x at 10k-100k: BM_AutoChoice/clustered).
+  // LBVH (measured 1.7-2.1x faster at 10k-1M: BM_AutoChoice/clustered).
   cases.push_back({test::clustered_boxes(scaled(4000), 32), BroadPhaseKind::kLbvh, "clustered"});
-  // Dense but 1000x spread: the fine levels' grids would hash, so the LBVH (measured
-  // within 10% of the grid there; 1.6x faster once the world is sparse too).
+  // Dense but 1000x spread: the sizes span many levels, so the LBVH (3.5x faster at
+  // 1M; 5.8x once the world is sparse too).
   cases.push_back({log_uniform_boxes(scaled(4000), 33, 0.01f, 10.0f), BroadPhaseKind::kLbvh, "1000x log-uniform"});
   cases.push_back({log_uniform_boxes(scaled(4000), 35, 0.01f, 10.0f, 10.0f), BroadPhaseKind::kLbvh,
                    "1000x log-uniform, sparse"});
-  // One size, sparse: hashed at its only level, the LBVH (1.7-2.7x faster).
+  // One size, sparse: hashed at its only level, the LBVH (5.4x faster at 1M).
   cases.push_back({log_uniform_boxes(scaled(4000), 36, 0.5f, 0.6f, 10.0f), BroadPhaseKind::kLbvh,
                    "one size, sparse"});
-  // Sizes 16x, dense: the fine level hashes, the coarse one does not: the grid.
-  cases.push_back({log_uniform_boxes(scaled(4000), 37, 1.0f / 16, 1.0f), BroadPhaseKind::kGrid,
+  // Sizes 16x, dense: two levels, the LBVH (1.25-1.7x faster at 10k-1M).
+  cases.push_back({log_uniform_boxes(scaled(4000), 37, 1.0f / 16, 1.0f), BroadPhaseKind::kLbvh,
                    "16x log-uniform"});
+  // Sizes 4x, dense: one level, the grid (1.3-1.6x faster).
+  cases.push_back({log_uniform_boxes(scaled(4000), 38, 1.0f / 4, 1.0f), BroadPhaseKind::kGrid,
+                   "4x log-uniform"});
   {
     // A few huge boxes among small ones: the grid's levels handle it (2 levels).
     Boxes b = test::uniform_boxes(scaled(4000), 34, 0.2f, 0.4f);
