@@ -593,6 +593,51 @@ std::vector<uint32_t> clusters_of(const kernels::LbvhView& t) {
   return cluster;
 }
 
+// The kernel over any partition of the leaves into ranges (cuts inside clusters, at
+// their ends, one-leaf ranges, empty ones) concatenates to the whole range's bytes;
+// with too little room it writes the first pairs and still returns the full count.
+TEST(Lbvh, PairRangesConcatenateToTheWhole) {
+  for (const char* what : {"uniform", "crowd"}) {
+    SCOPED_TRACE(what);
+    Boxes b = uniform_boxes(3000, 121, 0.2f, 0.8f);
+    if (std::string(what) == "crowd")
+      for (uint32_t i = 0; i < 300; ++i) b.min_x[i] = b.max_x[i] = b.min_y[i] = b.max_y[i] = 0.5f;
+    LbvhBroadPhase bp;
+    Buffer<Pair> out;
+    IMPACT_ASSERT_OK(bp.find_pairs(serial(), soa(b), filter_of(b), count(b), &out));
+    const kernels::LbvhView t = bp.view();
+    const uint64_t total = kernels::lbvh_find_pairs(t, nullptr, 0, {0, t.n});
+    ASSERT_EQ(total, out.size());
+    std::vector<Pair> whole(total);
+    ASSERT_EQ(kernels::lbvh_find_pairs(t, whole.data(), total, {0, t.n}), total);
+    ASSERT_EQ(0, std::memcmp(whole.data(), out.data(), total * sizeof(Pair)));
+    std::mt19937 rng(122);
+    for (int trial = 0; trial < 20; ++trial) {
+      std::vector<uint32_t> cuts{0, t.n};
+      // trial 0-1: every leaf its own range
+      const uint32_t k = trial < 2 ? t.n - 1 : 1 + static_cast<uint32_t>(rng() % 40);
+      for (uint32_t i = 0; i < k; ++i) cuts.push_back(trial < 2 ? i + 1 : static_cast<uint32_t>(rng() % (t.n + 1)));
+      std::sort(cuts.begin(), cuts.end());
+      std::vector<Pair> cat;
+      for (size_t i = 0; i + 1 < cuts.size(); ++i) {
+        const kernels::Range r{cuts[i], cuts[i + 1]};
+        const uint64_t c = kernels::lbvh_find_pairs(t, nullptr, 0, r);
+        std::vector<Pair> part(c + 1, Pair{7, 7});
+        ASSERT_EQ(kernels::lbvh_find_pairs(t, part.data(), c, r), c);
+        ASSERT_EQ(part[c].a, 7u) << "wrote past its capacity";
+        if (c > 2) {  // short of room: the prefix, the full count
+          std::vector<Pair> head(c / 2);
+          ASSERT_EQ(kernels::lbvh_find_pairs(t, head.data(), head.size(), r), c);
+          ASSERT_EQ(0, std::memcmp(head.data(), part.data(), head.size() * sizeof(Pair)));
+        }
+        cat.insert(cat.end(), part.begin(), part.begin() + static_cast<ptrdiff_t>(c));
+      }
+      ASSERT_EQ(cat.size(), whole.size());
+      ASSERT_EQ(0, std::memcmp(cat.data(), whole.data(), whole.size() * sizeof(Pair)));
+    }
+  }
+}
+
 TEST(Lbvh, PairOrderIsByClusterThenLaterLeaf) {
   // Pairs come grouped by the cluster of the earlier leaf (sorted position), clusters
   // in leaf order; within one, by the later leaf's position, then the earlier one's.
