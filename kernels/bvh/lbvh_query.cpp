@@ -5,30 +5,44 @@ namespace {
 
 template <QueryShape S, bool kFiltered>
 void run(const LbvhView& t, const QueryView& qv, uint32_t* out_count, HitSink& sink, Range r) {
-  uint32_t stack[kLbvhMaxDepth + 1];
+  struct Item {
+    uint32_t node, first;
+  };
+  Item stack[kLbvhMaxDepth + 1];
   for (uint32_t p = r.begin; p < r.end; ++p) {
     const uint32_t i = qv.order ? qv.order[p] : p;
     const QueryItem q = make_query_item<S>(qv, i);
     const uint64_t k0 = sink.k;
-    auto leaf = [&](uint32_t u) {
-      if constexpr (kFiltered) {
-        if ((t.layer[u] & q.mask) == 0) return;
+    auto leaves = [&](uint32_t first, uint32_t last) {
+      for (uint32_t u = first; u <= last; ++u) {
+        if constexpr (kFiltered) {
+          if ((t.layer[u] & q.mask) == 0) continue;
+        }
+        const SortedBox& b = t.leaves[u];
+        if (query_hits<S>(q, b)) sink.push(b.index);
       }
-      const SortedBox& b = t.leaves[u];
-      if (query_hits<S>(q, b)) sink.push(b.index);
     };
-    if (t.n == 1) {
-      leaf(0);
-    } else if (t.n >= 2 && query_hits<S>(q, t.nodes[0])) {
+    if (t.n >= 1 && t.n <= kLbvhQueryRun) {
+      leaves(0, t.n - 1);
+    } else if (t.n > kLbvhQueryRun && query_hits<S>(q, t.nodes[0])) {
       uint32_t top = 0;
-      stack[top++] = 0;
+      stack[top++] = Item{0, 0};
       while (top > 0) {
-        const LbvhNode& m = t.nodes[stack[--top]];
+        const Item cur = stack[--top];
+        const LbvhNode& m = t.nodes[cur.node];
         const uint32_t h = m.split & kLbvhSplitMask;
-        if (m.split & kLbvhLeftLeaf) leaf(h);
-        else if (query_hits<S>(q, t.nodes[h])) stack[top++] = h;
-        if (m.split & kLbvhRightLeaf) leaf(h + 1);
-        else if (query_hits<S>(q, t.nodes[h + 1])) stack[top++] = h + 1;
+        // A child of at most kLbvhQueryRun leaves is scanned (contiguous records)
+        // once its bounds pass; a bigger one is pushed.
+        if (h - cur.first < kLbvhQueryRun) {
+          if ((m.split & kLbvhLeftLeaf) != 0 || query_hits<S>(q, t.nodes[h])) leaves(cur.first, h);
+        } else if (query_hits<S>(q, t.nodes[h])) {
+          stack[top++] = Item{h, cur.first};
+        }
+        if (m.last - h <= kLbvhQueryRun) {
+          if ((m.split & kLbvhRightLeaf) != 0 || query_hits<S>(q, t.nodes[h + 1])) leaves(h + 1, m.last);
+        } else if (query_hits<S>(q, t.nodes[h + 1])) {
+          stack[top++] = Item{h + 1, h + 1};
+        }
         // Each level below the root leaves at most one pending sibling, plus the two
         // just pushed: within kLbvhMaxDepth + 1 (lbvh_build.h).
         IMPACT_ASSERT(top <= kLbvhMaxDepth + 1);

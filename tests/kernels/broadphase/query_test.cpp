@@ -338,6 +338,25 @@ TEST(BroadPhaseQuery, ZeroOneTwoBoxes) {
   }
 }
 
+// Small trees around the LBVH's leaf-scan size (kLbvhQueryRun: subtrees of up to 64
+// leaves are scanned, a tree of up to 64 leaves entirely) and the pair clusters' 32.
+TEST(BroadPhaseQuery, SmallCountsAroundTheScanSizes) {
+  for (uint32_t n : {3u, 7u, 8u, 9u, 31u, 32u, 33u, 63u, 64u, 65u, 127u, 128u, 129u}) {
+    SCOPED_TRACE("n=" + std::to_string(n));
+    const Boxes b = test::uniform_boxes(n, 40 + n, 0.3f, 1.0f);
+    Structures s(b);
+    for (QShape shape : {QShape::kAabb, QShape::kSphere, QShape::kPoint}) {
+      const Queries q = random_queries(b, shape, 60, 60 + n, 2.0f);
+      const Csr ref = test::reference_query(b, q);
+      ASSERT_GT(ref.hits.size(), 0u);
+      s.each(serial(), q, [&](const char* name, const Status& st, const Csr& got) {
+        ASSERT_TRUE(test::IsOk(st)) << name;
+        EXPECT_TRUE(test::SameCsr(got, ref)) << name;
+      });
+    }
+  }
+}
+
 TEST(BroadPhaseQuery, EmptyBatch) {
   const Boxes b = test::uniform_boxes(100, 15, 0.2f, 1.0f);
   Structures s(b);
