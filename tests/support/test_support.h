@@ -23,8 +23,8 @@
 
 namespace impact::test {
 
-/// True in a -DIMPACT_SANITIZE=ON build (for tests that must shorten runs there;
-/// none needs to today).
+/// True in a -DIMPACT_SANITIZE=ON build, for the tests that shorten their runs there
+/// (determinism, extremes, broad-phase stage): the same checks over fewer steps.
 inline constexpr bool kSanitized = IMPACT_TEST_SANITIZE != 0;
 
 /// x rounded to float and back: what a kernel sees of a double input. Through a

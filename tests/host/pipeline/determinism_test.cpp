@@ -93,7 +93,10 @@ RunResult simulate(const Scene& scene, Backend backend, uint32_t threads, uint32
   return r;
 }
 
-constexpr uint32_t kSteps = 300;
+// Under ASan + UBSan the run stops at 120 steps (~20k contacts by then; 10 s instead
+// of 61 s on this 2-core machine): the sanitizers see every pass with contacts, and the
+// Release suite checks the hashes of the settled pile at 300.
+constexpr uint32_t kSteps = test::kSanitized ? 120 : 300;
 
 TEST(Determinism, SameHashForEveryBackendAndThreadCount) {
   const Scene scene = box_scene(test::scaled(10000, 100), 1);
