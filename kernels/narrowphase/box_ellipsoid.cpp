@@ -347,24 +347,10 @@ IMPACT_INLINE void pieces(const Frame<F>& fr, Best<F>& best) {
   }
 }
 
-/// Gathers lanes idx of the LeafSoA fields.
-template <class F>
-IMPACT_INLINE V3<F> gather3(const float* const* p, typename F::Int idx) {
-  return {simd::gather(p[0], idx), simd::gather(p[1], idx), simd::gather(p[2], idx)};
-}
-template <class F>
-IMPACT_INLINE M3<F> gather_r(const LeafSoA& s, typename F::Int idx) {
-  M3<F> m;
-  for (int c = 0; c < 3; ++c)
-    m.c[c] = {simd::gather(s.r[c], idx), simd::gather(s.r[3 + c], idx), simd::gather(s.r[6 + c], idx)};
-  return m;
-}
-
 /// Writes the collision data of lanes 0 .. n of the block to out at the pair indices idx.
 template <class F>
 IMPACT_INLINE void finish(const Frame<F>& fr, const Best<F>& best, const ManifoldSoA& out, const int32_t* idx,
                           uint32_t n) {
-  constexpr uint32_t W = F::kWidth;
   const F zero(0.0f), one(1.0f);
   // n from A to B: minus m; B's surface point: its support along m (towards the box).
   const V3<F> ml = best.m * (one / best.len);
@@ -374,70 +360,36 @@ IMPACT_INLINE void finish(const Frame<F>& fr, const Best<F>& best, const Manifol
   const F he = sqrt(length_sq(am));
   const F s = fr.emax / select(he > zero, he, one);
   const V3<F> xb{fr.av[0] * am.x * s, fr.av[1] * am.y * s, fr.av[2] * am.z * s};
-  const V3<F> pt = fr.pe + madd(fr.re.apply(xb), F(0.5f) * depth, nw);
-  float v[8][W];
-  nw.x.store(v[0]), nw.y.store(v[1]), nw.z.store(v[2]);
-  depth.store(v[3]);
-  pt.x.store(v[4]), pt.y.store(v[5]), pt.z.store(v[6]);
-  for (uint32_t l = 0; l < n; ++l) {
-    const uint32_t i = static_cast<uint32_t>(idx[l]);
-    out.count[i] = v[3][l] > 0.0f ? 1 : 0;
-    for (int j = 0; j < 3; ++j) out.n[j][i] = v[j][l];
-    out.depth[i] = v[3][l];
-    for (int j = 0; j < 3; ++j) out.point[0][j][i] = v[4 + j][l];
-    out.pdepth[0][i] = v[3][l];
-  }
+  Lanes<F, 1> m;
+  m.count = simd::to_int(depth > zero);
+  m.n = nw;
+  m.depth = depth;
+  m.point[0] = madd(fr.re.apply(xb), F(0.5f) * depth, nw);  // relative to fr.pe
+  m.pdepth[0] = depth;
+  scatter(out, idx, n, m, fr.pe);
 }
 
-/// The range, kChunk pairs at a time: a first pass over blocks of W lanes writes count 0
-/// for the lanes that cannot touch (bounding spheres apart or a face axis separating:
-/// about half on the bench) and lists the others; they are gathered W at a time into
-/// full blocks for the pieces. Every computation is lane-wise, so a pair's bytes do not
-/// depend on which lanes share its block.
+/// The range through prim::for_each_live_group: the screen writes count 0 for every lane
+/// and lists those that may touch (bounding spheres overlapping and no face axis
+/// separating: about half on the bench); the pieces run on full groups of them.
 template <class F>
 IMPACT_INLINE void box_ellipsoid_range(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out, Range r) {
-  constexpr uint32_t W = F::kWidth;
-  // 16 blocks: the last, partly filled live block of a chunk pads about W / 2 lanes (with
-  // 4 blocks that was ~20% of the live lanes' work; measured ~12% faster on the bench)
-  constexpr uint32_t kChunk = 16 * W;
   using Int = typename F::Int;
-  for (uint32_t k0 = r.begin; k0 < r.end; k0 += kChunk) {
-    const uint32_t n = r.end - k0 < kChunk ? r.end - k0 : kChunk;
-    int32_t live[kChunk + W];
-    uint32_t nlive = 0;
-    for (uint32_t j = 0; j < n; j += W) {
-      const uint32_t k = k0 + j, nb = n - j < W ? n - j : W;
-      TailSide<W> ta, tb;
-      const LeafSoA* va = &a;
-      const LeafSoA* vb = &b;
-      uint32_t at = k;
-      if (nb < W) {
-        ta.fill(a, k, nb);
-        tb.fill(b, k, nb);
-        va = &ta.view, vb = &tb.view, at = 0;
-      }
-      const Frame<F> fr = make_frame(load_p<F>(*va, at), load_r<F>(*va, at), load_e<F>(*va, at),
-                                     load_p<F>(*vb, at), load_r<F>(*vb, at), load_e<F>(*vb, at));
-      const uint32_t bits = simd::bits(may_touch(fr, face_best(fr)));
-      // branch-free (the lanes' bits are data): every lane gets count 0 here, the live
-      // ones their result from finish() below
-      for (uint32_t l = 0; l < nb; ++l) {
-        out.count[k + l] = 0;
-        live[nlive] = static_cast<int32_t>(k + l);
-        nlive += (bits >> l) & 1u;
-      }
-    }
-    for (uint32_t g = 0; g < nlive; g += W) {
-      const uint32_t cnt = nlive - g < W ? nlive - g : W;
-      for (uint32_t l = cnt; l < W; ++l) live[g + l] = live[g + cnt - 1];  // padding repeats the last
-      const Int idx = Int::load(live + g);
-      const Frame<F> fr = make_frame(gather3<F>(a.p, idx), gather_r<F>(a, idx), gather3<F>(a.e, idx),
-                                     gather3<F>(b.p, idx), gather_r<F>(b, idx), gather3<F>(b.e, idx));
-      Best<F> best = face_best(fr);
-      pieces(fr, best);
-      finish(fr, best, out, live + g, cnt);
-    }
-  }
+  for_each_live_group<F>(
+      a, b, out, r,
+      [&](const LeafSoA& va, const LeafSoA& vb, uint32_t at, uint32_t, uint32_t, NoExtra*) {
+        const Frame<F> fr = make_frame(load_p<F>(va, at), load_r<F>(va, at), load_e<F>(va, at),
+                                       load_p<F>(vb, at), load_r<F>(vb, at), load_e<F>(vb, at));
+        return simd::bits(may_touch(fr, face_best(fr)));
+      },
+      [&](const int32_t* index, const NoExtra*, uint32_t cnt) {
+        const Int idx = Int::load(index);
+        const Frame<F> fr = make_frame(gather3<F>(a.p, idx), gather_r<F>(a, idx), gather3<F>(a.e, idx),
+                                       gather3<F>(b.p, idx), gather_r<F>(b, idx), gather3<F>(b.e, idx));
+        Best<F> best = face_best(fr);
+        pieces(fr, best);
+        finish(fr, best, out, index, cnt);
+      });
 }
 
 }  // namespace

@@ -154,25 +154,27 @@ IMPACT_INLINE uint64_t below_bits(const HullView& h, uint32_t vb, uint32_t c, co
   return bits;
 }
 
+/// A touching lane's hull vertices below the plane: bit j for vertex vb + j.
+struct Below {
+  uint64_t bits;
+  uint32_t vb;
+};
+
 /// The picks for F::kWidth touching lanes: lane l is pair live[l] (global index; the
-/// group padded with repeats), bits[l] its hull's vertices below (non-zero), vb[l] their
-/// start. Slot j of lane l holds its j-th vertex below (in vertex order; past its count,
+/// group padded with repeats), below[l] its hull's vertices below the plane (non-zero). Slot j of lane l holds its j-th vertex below (in vertex order; past its count,
 /// its first again: a vertex seen again changes no first strict maximum), so every
 /// slot of every lane is below and the picks run over full vectors. Writes lanes
 /// live[0 .. cnt) of out.
 template <class F>
 IMPACT_INLINE void touching_group(const LeafSoA& a, const LeafSoA& b, const HullView& h, const ManifoldSoA& out,
-                                  const int32_t* live, const uint64_t* bits_l, const uint32_t* vb_l, uint32_t cnt) {
+                                  const int32_t* live, const Below* below, uint32_t cnt) {
   using I = typename F::Int;
   constexpr uint32_t kW = F::kWidth;
   const I idx = I::load(live);
-  const V3<F> pa{simd::gather(a.p[0], idx), simd::gather(a.p[1], idx), simd::gather(a.p[2], idx)};
-  const V3<F> nh{simd::gather(b.e[0], idx), simd::gather(b.e[1], idx), simd::gather(b.e[2], idx)};
-  const V3<F> pb{simd::gather(b.p[0], idx), simd::gather(b.p[1], idx), simd::gather(b.p[2], idx)};
-  M3<F> ra;
-  for (int c = 0; c < 3; ++c) {
-    ra.c[c] = {simd::gather(a.r[c], idx), simd::gather(a.r[3 + c], idx), simd::gather(a.r[6 + c], idx)};
-  }
+  const V3<F> pa = gather3<F>(a.p, idx);
+  const V3<F> nh = gather3<F>(b.e, idx);
+  const V3<F> pb = gather3<F>(b.p, idx);
+  const M3<F> ra = gather_r<F>(a, idx);
   V3<F> nl;
   F offl;
   local_plane(pa, ra, nh, pb, &nl, &offl);
@@ -180,15 +182,16 @@ IMPACT_INLINE void touching_group(const LeafSoA& a, const LeafSoA& b, const Hull
   // Slot lists: vertex indices (absolute) per slot and lane.
   uint32_t ns = 0;
   for (uint32_t l = 0; l < kW; ++l) {
-    const auto c = static_cast<uint32_t>(std::popcount(bits_l[l]));
+    const auto c = static_cast<uint32_t>(std::popcount(below[l].bits));
     ns = c > ns ? c : ns;
   }
   int32_t vi[kLaneVerts][kW];
   for (uint32_t l = 0; l < kW; ++l) {
-    uint64_t m = bits_l[l];
-    const auto first = static_cast<int32_t>(vb_l[l] + static_cast<uint32_t>(std::countr_zero(m)));
+    uint64_t m = below[l].bits;
+    const uint32_t vb = below[l].vb;
+    const auto first = static_cast<int32_t>(vb + static_cast<uint32_t>(std::countr_zero(m)));
     for (uint32_t j = 0; j < ns; ++j) {
-      vi[j][l] = m != 0 ? static_cast<int32_t>(vb_l[l] + static_cast<uint32_t>(std::countr_zero(m))) : first;
+      vi[j][l] = m != 0 ? static_cast<int32_t>(vb + static_cast<uint32_t>(std::countr_zero(m))) : first;
       m &= m - 1u;
     }
   }
@@ -272,30 +275,11 @@ IMPACT_INLINE void touching_group(const LeafSoA& a, const LeafSoA& b, const Hull
     m.point[j] = madd(x, half * dep[j], nh);
     m.pdepth[j] = dep[j];
   }
-  // Scatter to the group's lanes: rows of the manifold's fields, then per lane.
-  float v[21][kW];
-  m.n.x.store(v[0]), m.n.y.store(v[1]), m.n.z.store(v[2]);
-  m.depth.store(v[3]);
-  for (int j = 0; j < 4; ++j) {
-    (pa.x + m.point[j].x).store(v[4 + 4 * j]);
-    (pa.y + m.point[j].y).store(v[5 + 4 * j]);
-    (pa.z + m.point[j].z).store(v[6 + 4 * j]);
-    m.pdepth[j].store(v[7 + 4 * j]);
-  }
-  for (uint32_t l = 0; l < cnt; ++l) {
-    const auto i = static_cast<uint32_t>(live[l]);
-    out.count[i] = static_cast<uint8_t>(m.count.lane(l));
-    for (int q = 0; q < 3; ++q) out.n[q][i] = v[q][l];
-    out.depth[i] = v[3][l];
-    for (int j = 0; j < 4; ++j) {
-      for (int q = 0; q < 3; ++q) out.point[j][q][i] = v[4 + 4 * j + q][l];
-      out.pdepth[j][i] = v[7 + 4 * j][l];
-    }
-  }
+  scatter(out, live, cnt, m, pa);
 }
 
-/// The range, kChunk pairs at a time. A first pass over blocks of W lanes moves each
-/// plane into its hull's frame and lists, per lane, the hull's vertices below it (W
+/// The range through prim::for_each_live_group: the screen moves each block's planes
+/// into their hulls' frames and lists, per lane, the hull's vertices below it (W
 /// consecutive vertices of that lane's hull per step); a lane with none gets count 0,
 /// the others are gathered W at a time into full groups for the picks
 /// (touching_group). Then the big-hull lanes, one at a time, by
@@ -306,50 +290,26 @@ void convex_halfspace_range(const LeafSoA& a, const LeafSoA& b, const ManifoldSo
                             const NarrowConfig& cfg) {
   const HullView& h = cfg.hulls;
   constexpr uint32_t W = F::kWidth;
-  constexpr uint32_t kChunk = 16 * W;
-  for (uint32_t k0 = r.begin; k0 < r.end; k0 += kChunk) {
-    const uint32_t n = r.end - k0 < kChunk ? r.end - k0 : kChunk;
-    int32_t live[kChunk + W];
-    uint64_t live_bits[kChunk + W];
-    uint32_t live_vb[kChunk + W];
-    uint32_t nlive = 0;
-    for (uint32_t j = 0; j < n; j += W) {
-      const uint32_t k = k0 + j, nb = n - j < W ? n - j : W;
-      TailSide<W> ta, tb;
-      const LeafSoA* va = &a;
-      const LeafSoA* vb = &b;
-      uint32_t at = k;
-      if (nb < W) {
-        ta.fill(a, k, nb);
-        tb.fill(b, k, nb);
-        va = &ta.view, vb = &tb.view, at = 0;
-      }
-      V3<F> nl;
-      F offl;
-      local_plane(load_p<F>(*va, at), load_r<F>(*va, at), load_e<F>(*vb, at), load_p<F>(*vb, at), &nl, &offl);
-      float lx[W], ly[W], lz[W], lo[W];
-      nl.x.store(lx), nl.y.store(ly), nl.z.store(lz), offl.store(lo);
-      for (uint32_t l = 0; l < nb; ++l) {
-        const uint32_t hb = h.vert_begin[a.ref[k + l]], c = h.vert_begin[a.ref[k + l] + 1] - hb;
-        if (c > kLaneVerts) continue;  // collide_support_halfspace, below
-        const uint64_t bits = below_bits<F>(h, hb, c, V3<F>{F(lx[l]), F(ly[l]), F(lz[l])}, F(lo[l]));
-        out.count[k + l] = 0;
-        live[nlive] = static_cast<int32_t>(k + l);
-        live_bits[nlive] = bits;
-        live_vb[nlive] = hb;
-        nlive += bits != 0 ? 1u : 0u;
-      }
-    }
-    for (uint32_t g = 0; g < nlive; g += W) {
-      const uint32_t cnt = nlive - g < W ? nlive - g : W;
-      for (uint32_t l = cnt; l < W; ++l) {  // padding repeats the last
-        live[g + l] = live[g + cnt - 1];
-        live_bits[g + l] = live_bits[g + cnt - 1];
-        live_vb[g + l] = live_vb[g + cnt - 1];
-      }
-      touching_group<F>(a, b, h, out, live + g, live_bits + g, live_vb + g, cnt);
-    }
-  }
+  for_each_live_group<F, Below>(
+      a, b, out, r,
+      [&](const LeafSoA& va, const LeafSoA& vb, uint32_t at, uint32_t k, uint32_t nb, Below* below) {
+        V3<F> nl;
+        F offl;
+        local_plane(load_p<F>(va, at), load_r<F>(va, at), load_e<F>(vb, at), load_p<F>(vb, at), &nl, &offl);
+        float lx[W], ly[W], lz[W], lo[W];
+        nl.x.store(lx), nl.y.store(ly), nl.z.store(lz), offl.store(lo);
+        uint32_t go = 0;
+        for (uint32_t l = 0; l < nb; ++l) {
+          const uint32_t hb = h.vert_begin[a.ref[k + l]], c = h.vert_begin[a.ref[k + l] + 1] - hb;
+          if (c > kLaneVerts) continue;  // collide_support_halfspace, below
+          below[l] = Below{below_bits<F>(h, hb, c, V3<F>{F(lx[l]), F(ly[l]), F(lz[l])}, F(lo[l])), hb};
+          go |= (below[l].bits != 0 ? 1u : 0u) << l;
+        }
+        return go;
+      },
+      [&](const int32_t* index, const Below* below, uint32_t cnt) {
+        touching_group<F>(a, b, h, out, index, below, cnt);
+      });
   for (uint32_t l = r.begin; l < r.end; ++l) {
     if (h.vert_begin[a.ref[l] + 1] - h.vert_begin[a.ref[l]] > kLaneVerts) {
       collide_support_halfspace(a, b, out, Range{l, l + 1}, cfg, kLeafConvex);

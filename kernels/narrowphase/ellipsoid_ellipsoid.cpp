@@ -18,7 +18,7 @@
 //  0. A first pass over the range writes count 0 everywhere and lists the lanes that may
 //     touch: bounding spheres overlapping and f > 0 along d and the six axes (any f <= 0
 //     certifies separation: about half the bench's lanes stop here); those are gathered
-//     kSimdWidth at a time into full blocks (box_ellipsoid.cpp's scheme).
+//     kSimdWidth at a time into full blocks (prim::for_each_live_group).
 //  1. Starts: f at 25 candidate directions, each signed so that n.d >= 0 (f(-n) =
 //     f(n) + 2 n.d): d; A's and B's axes (a pancake's normal: a cone point of h); the nine
 //     cross products of an A axis and a B axis (two needles: the minimiser is
@@ -252,19 +252,6 @@ IMPACT_INLINE void step_all(const Pair<F>& p, Start<F>* st, int count) {
     if (s < count) settle(st[s], t[s], pr[s]);
 }
 
-/// Gathers lanes idx of the LeafSoA fields.
-template <class F>
-IMPACT_INLINE V3<F> gather3(const float* const* p, typename F::Int idx) {
-  return {simd::gather(p[0], idx), simd::gather(p[1], idx), simd::gather(p[2], idx)};
-}
-template <class F>
-IMPACT_INLINE M3<F> gather_r(const LeafSoA& s, typename F::Int idx) {
-  M3<F> m;
-  for (int c = 0; c < 3; ++c)
-    m.c[c] = {simd::gather(s.r[c], idx), simd::gather(s.r[3 + c], idx), simd::gather(s.r[6 + c], idx)};
-  return m;
-}
-
 /// Lanes that may touch: bounding spheres overlapping and no separating direction among
 /// d and the six axes (f(n) <= 0 certifies separation; about half the bench's lanes are
 /// certified here).
@@ -446,64 +433,29 @@ IMPACT_INLINE void solve(const V3<F>& dw, const V3<F>& ea, const V3<F>& eb, cons
   out_point = (sa + sb) * F(0.5f);
 }
 
-/// The range, kChunk pairs at a time: a first pass over blocks of W lanes writes count 0
-/// for every lane and lists those that may touch (may_touch); they are gathered W at a
-/// time into full blocks for the solve. Every computation is lane-wise, so a pair's bytes
-/// do not depend on which lanes share its block (the padding of a partly filled block
-/// repeats its last lane).
+/// The range through prim::for_each_live_group: the screen writes count 0 for every lane
+/// and lists those that may touch (may_touch); the solve runs on full groups of them.
 template <class F>
 IMPACT_INLINE void ellipsoid_ellipsoid_range(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out, Range r) {
-  constexpr uint32_t W = F::kWidth;
-  constexpr uint32_t kChunk = 16 * W;
   using Int = typename F::Int;
-  for (uint32_t k0 = r.begin; k0 < r.end; k0 += kChunk) {
-    const uint32_t n = r.end - k0 < kChunk ? r.end - k0 : kChunk;
-    int32_t live[kChunk + W];
-    uint32_t nlive = 0;
-    for (uint32_t j = 0; j < n; j += W) {
-      const uint32_t k = k0 + j, nb = n - j < W ? n - j : W;
-      TailSide<W> ta, tb;
-      const LeafSoA* va = &a;
-      const LeafSoA* vb = &b;
-      uint32_t at = k;
-      if (nb < W) {
-        ta.fill(a, k, nb);
-        tb.fill(b, k, nb);
-        va = &ta.view, vb = &tb.view, at = 0;
-      }
-      const V3<F> dw = load_p<F>(*vb, at) - load_p<F>(*va, at);
-      const uint32_t bits = simd::bits(
-          may_touch(dw, load_e<F>(*va, at), load_e<F>(*vb, at), load_r<F>(*va, at), load_r<F>(*vb, at)));
-      for (uint32_t l = 0; l < nb; ++l) {
-        out.count[k + l] = 0;
-        live[nlive] = static_cast<int32_t>(k + l);
-        nlive += (bits >> l) & 1u;
-      }
-    }
-    for (uint32_t g = 0; g < nlive; g += W) {
-      const uint32_t cnt = nlive - g < W ? nlive - g : W;
-      for (uint32_t l = cnt; l < W; ++l) live[g + l] = live[g + cnt - 1];  // padding repeats the last
-      const Int idx = Int::load(live + g);
-      const V3<F> pa = gather3<F>(a.p, idx);
-      const V3<F> dw = gather3<F>(b.p, idx) - pa;
-      V3<F> nw, pt;
-      F depth;
-      solve(dw, gather3<F>(a.e, idx), gather3<F>(b.e, idx), gather_r<F>(a, idx), gather_r<F>(b, idx), nw, depth, pt);
-      pt = pt + pa;
-      float v[8][W];
-      nw.x.store(v[0]), nw.y.store(v[1]), nw.z.store(v[2]);
-      depth.store(v[3]);
-      pt.x.store(v[4]), pt.y.store(v[5]), pt.z.store(v[6]);
-      for (uint32_t l = 0; l < cnt; ++l) {
-        const uint32_t i = static_cast<uint32_t>(live[g + l]);
-        out.count[i] = v[3][l] > 0.0f ? 1 : 0;
-        for (int c = 0; c < 3; ++c) out.n[c][i] = v[c][l];
-        out.depth[i] = v[3][l];
-        for (int c = 0; c < 3; ++c) out.point[0][c][i] = v[4 + c][l];
-        out.pdepth[0][i] = v[3][l];
-      }
-    }
-  }
+  for_each_live_group<F>(
+      a, b, out, r,
+      [&](const LeafSoA& va, const LeafSoA& vb, uint32_t at, uint32_t, uint32_t, NoExtra*) {
+        const V3<F> dw = load_p<F>(vb, at) - load_p<F>(va, at);
+        return simd::bits(
+            may_touch(dw, load_e<F>(va, at), load_e<F>(vb, at), load_r<F>(va, at), load_r<F>(vb, at)));
+      },
+      [&](const int32_t* index, const NoExtra*, uint32_t cnt) {
+        const Int idx = Int::load(index);
+        const V3<F> pa = gather3<F>(a.p, idx);
+        const V3<F> dw = gather3<F>(b.p, idx) - pa;
+        Lanes<F, 1> m;
+        solve(dw, gather3<F>(a.e, idx), gather3<F>(b.e, idx), gather_r<F>(a, idx), gather_r<F>(b, idx), m.n,
+              m.depth, m.point[0]);
+        m.count = simd::to_int(m.depth > F(0.0f));
+        m.pdepth[0] = m.depth;
+        scatter(out, index, cnt, m, pa);
+      });
 }
 
 }  // namespace

@@ -21,6 +21,7 @@
 
 #include <cfloat>
 #include <cstdint>
+#include <cstring>
 
 #include "kernels/narrowphase/leaf.h"
 #include "kernels/simd/lanes.h"
@@ -79,7 +80,13 @@ struct Lanes {
 template <class F, uint32_t P, uint32_t S = P>
 IMPACT_INLINE void store(const ManifoldSoA& out, uint32_t k, const Lanes<F, P>& m, const V3<F>& origin) {
   static_assert(S <= P);
-  for (uint32_t i = 0; i < F::kWidth; ++i) out.count[k + i] = static_cast<uint8_t>(m.count.lane(i));
+  // The counts narrowed in a local array, then one copy: a byte store through
+  // out.count may alias `out` itself, so storing lane by lane made GCC reload the
+  // pointer after every byte (8 loads and 8 byte stores per block, measured on
+  // sphere-halfspace).
+  uint8_t counts[F::kWidth];
+  for (uint32_t i = 0; i < F::kWidth; ++i) counts[i] = static_cast<uint8_t>(m.count.lane(i));
+  std::memcpy(out.count + k, counts, sizeof(counts));
   m.n.x.store(out.n[0] + k);
   m.n.y.store(out.n[1] + k);
   m.n.z.store(out.n[2] + k);
@@ -96,7 +103,7 @@ IMPACT_INLINE void store(const ManifoldSoA& out, uint32_t k, const Lanes<F, P>& 
 /// every other field of a count-0 lane stay unwritten).
 template <class F>
 IMPACT_INLINE void store_no_contact(const ManifoldSoA& out, uint32_t k) {
-  for (uint32_t i = 0; i < F::kWidth; ++i) out.count[k + i] = 0;
+  std::memset(out.count + k, 0, F::kWidth);
 }
 
 // ---------------------------------------------------------------------------------------
@@ -174,6 +181,109 @@ IMPACT_INLINE void for_each_block(const LeafSoA& a, const LeafSoA& b, const Mani
       const ManifoldSoA lo = to.view();
       block(ta.view, tb.view, lo, 0u);
       to.copy_to(out, k, n);
+    }
+  }
+}
+
+// ---------------------------------------------------------------------------------------
+// Live-lane driver: kernels whose lanes mostly stop at a cheap screen (about half the
+// pairs of a bucket are apart) screen every block first, then run the expensive solve on
+// the survivors only, gathered W at a time into full blocks.
+// ---------------------------------------------------------------------------------------
+
+/// Lanes idx of three LeafSoA fields (p, e or w rows) / of R by columns.
+template <class F>
+IMPACT_INLINE V3<F> gather3(const float* const* p, typename F::Int idx) {
+  return {simd::gather(p[0], idx), simd::gather(p[1], idx), simd::gather(p[2], idx)};
+}
+template <class F>
+IMPACT_INLINE M3<F> gather_r(const LeafSoA& s, typename F::Int idx) {
+  M3<F> m;
+  for (uint32_t c = 0; c < 3; ++c)
+    m.c[c] = {simd::gather(s.r[c], idx), simd::gather(s.r[3 + c], idx), simd::gather(s.r[6 + c], idx)};
+  return m;
+}
+
+/// No per-lane payload.
+struct NoExtra {};
+
+/// The range kChunk = 16 W pairs at a time (16 blocks: a chunk's last, partly filled
+/// group pads about W / 2 lanes; with 4 blocks that was ~20% of box-ellipsoid's live work):
+///   bits = screen(va, vb, at, k, nb, extra): block k .. k + nb of the range (nb < W only
+///     at the range's end), its lanes at `at` of the views va / vb (full-width copies in
+///     a tail); bit l set: lane k + l goes on, with payload extra[l]. The driver writes
+///     count 0 for every lane of the block first (the groups overwrite their lanes').
+///   group(index, extra, cnt): W listed lanes (cnt real ones, the rest repeating the last),
+///     writes lanes index[0 .. cnt) of the output.
+/// The list and its length stay local here: appending through a struct member after the
+/// byte stores of out.count made GCC reload and store the length around every lane (a
+/// uint8_t store may alias anything; convex-halfspace measured ~30% slower that way).
+/// Every computation is lane-wise, so a pair's bytes do not depend on which lanes share
+/// its block or group.
+template <class F, class Extra = NoExtra, class Screen, class Group>
+IMPACT_INLINE void for_each_live_group(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out, Range r,
+                                       Screen&& screen, Group&& group) {
+  constexpr uint32_t W = F::kWidth;
+  constexpr uint32_t kChunk = 16 * W;
+  for (uint32_t k0 = r.begin; k0 < r.end; k0 += kChunk) {
+    const uint32_t n = r.end - k0 < kChunk ? r.end - k0 : kChunk;
+    int32_t index[kChunk + W];
+    Extra extra[kChunk + W];
+    uint32_t nlive = 0;
+    for (uint32_t j = 0; j < n; j += W) {
+      const uint32_t k = k0 + j, nb = n - j < W ? n - j : W;
+      Extra ex[W]{};
+      uint32_t bits;
+      if (nb == W) {
+        bits = screen(a, b, k, k, nb, ex);
+      } else {
+        TailSide<W> ta, tb;
+        ta.fill(a, k, nb);
+        tb.fill(b, k, nb);
+        bits = screen(ta.view, tb.view, 0u, k, nb, ex);
+      }
+      std::memset(out.count + k, 0, nb);
+      for (uint32_t l = 0; l < nb; ++l) {  // branch-free: written, then counted
+        index[nlive] = static_cast<int32_t>(k + l);
+        extra[nlive] = ex[l];
+        nlive += (bits >> l) & 1u;
+      }
+    }
+    for (uint32_t g = 0; g < nlive; g += W) {
+      const uint32_t cnt = nlive - g < W ? nlive - g : W;
+      for (uint32_t l = cnt; l < W; ++l) {  // padding repeats the last
+        index[g + l] = index[g + cnt - 1];
+        extra[g + l] = extra[g + cnt - 1];
+      }
+      group(index + g, extra + g, cnt);
+    }
+  }
+}
+
+/// Writes one group's lanes 0 .. cnt to out at pair indices index[l]: count, n, depth and
+/// point slots 0 .. S-1 (points made absolute by adding origin), as store() does for a block.
+template <class F, uint32_t P, uint32_t S = P>
+IMPACT_INLINE void scatter(const ManifoldSoA& out, const int32_t* index, uint32_t cnt, const Lanes<F, P>& m,
+                           const V3<F>& origin) {
+  static_assert(S <= P);
+  constexpr uint32_t W = F::kWidth;
+  float v[4 + 4 * S][W];
+  m.n.x.store(v[0]), m.n.y.store(v[1]), m.n.z.store(v[2]);
+  m.depth.store(v[3]);
+  for (uint32_t j = 0; j < S; ++j) {
+    (origin.x + m.point[j].x).store(v[4 + 4 * j]);
+    (origin.y + m.point[j].y).store(v[5 + 4 * j]);
+    (origin.z + m.point[j].z).store(v[6 + 4 * j]);
+    m.pdepth[j].store(v[7 + 4 * j]);
+  }
+  for (uint32_t l = 0; l < cnt; ++l) {
+    const auto i = static_cast<uint32_t>(index[l]);
+    out.count[i] = static_cast<uint8_t>(m.count.lane(l));
+    for (uint32_t q = 0; q < 3; ++q) out.n[q][i] = v[q][l];
+    out.depth[i] = v[3][l];
+    for (uint32_t j = 0; j < S; ++j) {
+      for (uint32_t q = 0; q < 3; ++q) out.point[j][q][i] = v[4 + 4 * j + q][l];
+      out.pdepth[j][i] = v[7 + 4 * j][l];
     }
   }
 }
