@@ -26,6 +26,7 @@ class BroadPhaseImpl {
   host::Buffer<kernels::Pair> pairs;
   host::Buffer<float> swept[6];
   host::Buffer<uint8_t> chunk_ok;  // check_boxes: one validity flag per chunk
+  host::Buffer<kernels::BoundsSummary> chunk_bounds;  // check_boxes: one summary per chunk
   host::Executor exec;
   Backend exec_backend = Backend::kDefault;
   uint32_t exec_threads = 0;
@@ -90,7 +91,12 @@ bool boxes_valid(const AabbInput& in, bool swept, size_t begin, size_t end) {
   return ok;
 }
 
-Status check_boxes(const host::Executor& exec, const AabbInput& in, host::Buffer<uint8_t>& chunk_flags) {
+// Validates the boxes. Unswept input is summarised in the same pass (*summary, for the
+// stage, which would otherwise read the bounds again); *has_summary says whether it was.
+Status check_boxes(const host::Executor& exec, const AabbInput& in, host::Buffer<uint8_t>& chunk_flags,
+                   host::Buffer<kernels::BoundsSummary>& chunk_bounds, kernels::BoundsSummary* summary,
+                   bool* has_summary) {
+  *has_summary = false;
   const size_t n = in.size();
   const std::span<const float>* f[6] = {&in.min_x, &in.min_y, &in.min_z, &in.max_x, &in.max_y, &in.max_z};
   const char* names[6] = {"min_x", "min_y", "min_z", "max_x", "max_y", "max_z"};
@@ -112,10 +118,29 @@ Status check_boxes(const host::Executor& exec, const AabbInput& in, host::Buffer
   // One flag per chunk (each written by its chunk only), then all of them.
   const uint32_t chunks = host::chunk_count(n, kCheckGrain);
   uint8_t* chunk_ok = host::scratch(chunk_flags, chunks);
-  exec.for_each_chunk(n, kCheckGrain, [&](uint32_t b, uint32_t e, uint32_t c) {
-    chunk_ok[c] = boxes_valid(in, swept, b, e) ? 1 : 0;
-  });
-  if (std::all_of(chunk_ok, chunk_ok + chunks, [](uint8_t v) { return v != 0; })) return Status();
+  if (swept) {
+    exec.for_each_chunk(n, kCheckGrain, [&](uint32_t b, uint32_t e, uint32_t c) {
+      chunk_ok[c] = boxes_valid(in, swept, b, e) ? 1 : 0;
+    });
+  } else {
+    const kernels::AabbSoA soa{in.min_x.data(), in.min_y.data(), in.min_z.data(),
+                               in.max_x.data(), in.max_y.data(), in.max_z.data()};
+    kernels::BoundsSummary* partial = host::scratch(chunk_bounds, chunks);
+    exec.for_each_chunk(n, kCheckGrain, [&](uint32_t b, uint32_t e, uint32_t c) {
+      bool ok = false;
+      partial[c] = kernels::reduce_valid_bounds(soa, {b, e}, &ok);
+      chunk_ok[c] = ok ? 1 : 0;
+    });
+  }
+  if (std::all_of(chunk_ok, chunk_ok + chunks, [](uint8_t v) { return v != 0; })) {
+    if (!swept && n > 0) {  // min / max are exact: the same summary as the stage's own pass
+      kernels::BoundsSummary sum = kernels::empty_bounds_summary();
+      for (uint32_t c = 0; c < chunks; ++c) sum = kernels::combine(sum, chunk_bounds[c]);
+      *summary = sum;
+      *has_summary = true;
+    }
+    return Status();
+  }
   // Something is wrong: find the first offending box for the message.
   for (size_t i = 0; i < n; ++i) {
     for (int k = 0; k < 6; ++k) {
@@ -185,7 +210,9 @@ Status BroadPhaseImpl::ready(const ExecConfig& e) {
 
 Status BroadPhaseImpl::ingest(const AabbInput& boxes, const ExecConfig& e, bool from_scratch) {
   if (Status s = ready(e); !s.ok()) return s;
-  if (Status s = check_boxes(exec, boxes, chunk_ok); !s.ok()) {
+  kernels::BoundsSummary sum{};
+  bool has_sum = false;
+  if (Status s = check_boxes(exec, boxes, chunk_ok, chunk_bounds, &sum, &has_sum); !s.ok()) {
     stage.invalidate();
     return s;
   }
@@ -204,7 +231,8 @@ Status BroadPhaseImpl::ingest(const AabbInput& boxes, const ExecConfig& e, bool 
   const kernels::PairFilter filter{boxes.layer.empty() ? nullptr : boxes.layer.data(),
                                    boxes.mask.empty() ? nullptr : boxes.mask.data(),
                                    boxes.is_static.empty() ? nullptr : boxes.is_static.data()};
-  const Status s = from_scratch ? stage.build(exec, soa, filter, n) : stage.update(exec, soa, filter, n);
+  const kernels::BoundsSummary* summary = has_sum ? &sum : nullptr;
+  const Status s = from_scratch ? stage.build(exec, soa, filter, n, summary) : stage.update(exec, soa, filter, n, summary);
   if (!s.ok()) stage.invalidate();
   return s;
 }

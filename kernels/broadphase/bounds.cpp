@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <limits>
 
+#include "kernels/simd/lanes.h"
+
 namespace impact::kernels {
 
 BoundsSummary empty_bounds_summary() {
@@ -95,25 +97,72 @@ void sweep_boxes(AabbSoA boxes, const float* IMPACT_RESTRICT dx, const float* IM
   }
 }
 
-BoundsSummary reduce_bounds(AabbSoA b, Range r) {
+namespace {
+
+// reduce_bounds / reduce_valid_bounds over lanes of the SIMD vocabulary: GCC 12 does not
+// vectorise the omp simd min / max reductions of the plain loop ("no vectype for stmt"
+// on the loads, -fopt-info-vec-missed), which left both scalar.
+template <bool kCheck>
+BoundsSummary reduce_lanes(AabbSoA b, Range r, bool* valid) {
+  using F = simd::FloatW;
+  constexpr uint32_t W = simd::kSimdWidth;
   constexpr float inf = std::numeric_limits<float>::infinity();
-  float lx = inf, ly = inf, lz = inf, hx = -inf, hy = -inf, hz = -inf, edge = 0.0f, small = inf;
-#pragma omp simd reduction(min : lx, ly, lz, small) reduction(max : hx, hy, hz, edge)
-  for (uint32_t i = r.begin; i < r.end; ++i) {
-    lx = std::min(lx, b.min_x[i]);
-    ly = std::min(ly, b.min_y[i]);
-    lz = std::min(lz, b.min_z[i]);
-    hx = std::max(hx, b.max_x[i]);
-    hy = std::max(hy, b.max_y[i]);
-    hz = std::max(hz, b.max_z[i]);
-    const float ex = b.max_x[i] - b.min_x[i];
-    const float ey = b.max_y[i] - b.min_y[i];
-    const float ez = b.max_z[i] - b.min_z[i];
-    const float e = std::max(ex, std::max(ey, ez));
-    edge = std::max(edge, e);
-    small = std::min(small, e);
+  constexpr float kMax = 1e18f;
+  F lx(inf), ly(inf), lz(inf), hx(-inf), hy(-inf), hz(-inf), edge(0.0f), small(inf);
+  typename F::Mask good(true);
+  uint32_t i = r.begin;
+  for (; i + W <= r.end; i += W) {
+    const F x0 = F::load(b.min_x + i), y0 = F::load(b.min_y + i), z0 = F::load(b.min_z + i);
+    const F x1 = F::load(b.max_x + i), y1 = F::load(b.max_y + i), z1 = F::load(b.max_z + i);
+    if constexpr (kCheck) {
+      // NaN fails every comparison: -1e18 <= min <= max <= 1e18 holds only for valid boxes.
+      const F lo_max(-kMax), hi_max(kMax);
+      good = good & (x0 >= lo_max) & (x0 <= x1) & (x1 <= hi_max) & (y0 >= lo_max) & (y0 <= y1) &
+             (y1 <= hi_max) & (z0 >= lo_max) & (z0 <= z1) & (z1 <= hi_max);
+    }
+    lx = min(lx, x0), ly = min(ly, y0), lz = min(lz, z0);
+    hx = max(hx, x1), hy = max(hy, y1), hz = max(hz, z1);
+    const F e = max(x1 - x0, max(y1 - y0, z1 - z0));
+    edge = max(edge, e);
+    small = min(small, e);
   }
-  return BoundsSummary{{lx, ly, lz}, {hx, hy, hz}, edge, small};
+  bool ok = simd::all(good);
+  BoundsSummary out{{inf, inf, inf}, {-inf, -inf, -inf}, 0.0f, inf};
+  for (uint32_t l = 0; l < W; ++l) {  // lanes, then the tail, as scalars
+    out.lo[0] = std::min(out.lo[0], lx.lane(l));
+    out.lo[1] = std::min(out.lo[1], ly.lane(l));
+    out.lo[2] = std::min(out.lo[2], lz.lane(l));
+    out.hi[0] = std::max(out.hi[0], hx.lane(l));
+    out.hi[1] = std::max(out.hi[1], hy.lane(l));
+    out.hi[2] = std::max(out.hi[2], hz.lane(l));
+    out.max_edge = std::max(out.max_edge, edge.lane(l));
+    out.min_edge = std::min(out.min_edge, small.lane(l));
+  }
+  for (; i < r.end; ++i) {
+    const float x0 = b.min_x[i], y0 = b.min_y[i], z0 = b.min_z[i];
+    const float x1 = b.max_x[i], y1 = b.max_y[i], z1 = b.max_z[i];
+    if constexpr (kCheck) {
+      ok = ok && x0 >= -kMax && x0 <= x1 && x1 <= kMax && y0 >= -kMax && y0 <= y1 && y1 <= kMax &&
+           z0 >= -kMax && z0 <= z1 && z1 <= kMax;
+    }
+    out.lo[0] = std::min(out.lo[0], x0);
+    out.lo[1] = std::min(out.lo[1], y0);
+    out.lo[2] = std::min(out.lo[2], z0);
+    out.hi[0] = std::max(out.hi[0], x1);
+    out.hi[1] = std::max(out.hi[1], y1);
+    out.hi[2] = std::max(out.hi[2], z1);
+    const float e = std::max(x1 - x0, std::max(y1 - y0, z1 - z0));
+    out.max_edge = std::max(out.max_edge, e);
+    out.min_edge = std::min(out.min_edge, e);
+  }
+  if (valid != nullptr) *valid = ok;
+  return out;
 }
+
+}  // namespace
+
+BoundsSummary reduce_bounds(AabbSoA b, Range r) { return reduce_lanes<false>(b, r, nullptr); }
+
+BoundsSummary reduce_valid_bounds(AabbSoA b, Range r, bool* valid) { return reduce_lanes<true>(b, r, valid); }
 
 }  // namespace impact::kernels

@@ -6,6 +6,9 @@
 //   largest edge. The host combines one partial per
 //   chunk in chunk order, so the result does not depend on thread count (min/max
 //   are exact anyway).
+// reduce_valid_bounds: reduce_bounds and the input check of the standalone broad
+//   phase in the same pass (valid: every coordinate in [-1e18, 1e18], min <= max, no
+//   NaN), so validating the boxes and summarising them read the bounds once.
 // swept_sphere_bounds: per body, the AABB of the sphere at p and at p + v dt (the
 //   motion over the step, for fast bodies: pairs that meet within the step are
 //   candidates even when their start boxes are apart). Covers both end poses
@@ -64,5 +67,6 @@ void sweep_boxes(AabbSoA boxes, const float* IMPACT_RESTRICT dx, const float* IM
                  const float* IMPACT_RESTRICT dz, AabbSoAOut out, Range r);
 
 BoundsSummary reduce_bounds(AabbSoA boxes, Range r);
+BoundsSummary reduce_valid_bounds(AabbSoA boxes, Range r, bool* valid);
 
 }  // namespace impact::kernels

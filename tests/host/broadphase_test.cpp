@@ -286,6 +286,40 @@ TEST(BroadPhase, RejectsNonFiniteAndInvertedBoxes) {
   EXPECT_TRUE(IsError(brute.find_pairs(b.input(), &pairs), StatusCode::kInvalidArgument, {"box 4", "max_x"}));
 }
 
+TEST(BroadPhase, RejectsBadBoxesInAnyChunkAndLane) {
+  // Validation runs in 65536-box chunks of 8-lane blocks plus a scalar tail, together with
+  // the bounds summary: a bad box anywhere (a later chunk, the last block, the tail) is
+  // still found, and the good input's pairs are still right.
+  const uint32_t n = 3 * 65536 + 13;
+  Boxes good = uniform_boxes(n, 7, 0.2f, 0.6f);
+  BroadPhase bp(BroadPhaseKind::kLbvh);
+  std::vector<BodyPair> pairs;
+  IMPACT_ASSERT_OK(bp.find_pairs(good.input(), &pairs));
+  expect_same_set(pairs, reference_pairs(good), good.size(), "lbvh");
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  for (const uint32_t at : {70001u, n - 14, n - 9, n - 1}) {
+    const std::string box = "box " + std::to_string(at) + " ";
+    {
+      Boxes b = good;
+      b.max_y[at] = nan;
+      EXPECT_TRUE(IsError(bp.find_pairs(b.input(), &pairs), StatusCode::kInvalidArgument,
+                          {(box + "max_y").c_str()}));
+    }
+    {
+      Boxes b = good;
+      b.min_x[at] = -2e18f;
+      EXPECT_TRUE(IsError(bp.find_pairs(b.input(), &pairs), StatusCode::kInvalidArgument,
+                          {(box + "min_x").c_str()}));
+    }
+    {
+      Boxes b = good;
+      b.min_z[at] = b.max_z[at] + 1e-3f;
+      EXPECT_TRUE(IsError(bp.find_pairs(b.input(), &pairs), StatusCode::kInvalidArgument,
+                          {(box + "min_z").c_str()}));
+    }
+  }
+}
+
 // --- world level ------------------------------------------------------------------------
 
 struct SphereScene {
