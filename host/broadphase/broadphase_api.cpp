@@ -57,42 +57,33 @@ namespace {
 constexpr uint32_t kPairCopyGrain = 1u << 16;  // pairs per chunk when copying out
 constexpr uint32_t kCheckGrain = 1u << 16;     // boxes per chunk when validating
 
-// Branch-free validity of all boxes (vectorised; the common case), the same rules
-// as the per-box messages below: finite, |v| <= 1e18, min <= max, moved box in range.
-bool boxes_valid(const AabbInput& in, bool swept, size_t begin, size_t end) {
+// Branch-free validity of the moves of swept boxes (vectorised; the common case), the
+// same rule as the per-box messages below: dx, dy, dz finite and the moved box within
+// 1e18. The boxes themselves are checked by kernels::reduce_valid_bounds.
+bool moves_valid(const AabbInput& in, size_t begin, size_t end) {
   const float* lo[3] = {in.min_x.data(), in.min_y.data(), in.min_z.data()};
   const float* hi[3] = {in.max_x.data(), in.max_y.data(), in.max_z.data()};
   const float* d[3] = {in.dx.data(), in.dy.data(), in.dz.data()};
   constexpr float kMax = 1e18f;
-  bool ok = true;
+  int bad = 0;
   for (int k = 0; k < 3; ++k) {
     const float* a = lo[k];
     const float* b = hi[k];
-    int bad = 0;
+    const float* m = d[k];
 #pragma omp simd reduction(| : bad)
     for (size_t i = begin; i < end; ++i) {
-      // NaN fails every comparison, so !(x <= y) catches it; -1e18 <= a <= b <= 1e18.
-      bad |= static_cast<int>(!(a[i] >= -kMax)) | static_cast<int>(!(a[i] <= b[i])) |
-             static_cast<int>(!(b[i] <= kMax));
-    }
-    ok = ok && bad == 0;
-    if (swept) {
-      const float* m = d[k];
-      int bad_d = 0;
-#pragma omp simd reduction(| : bad_d)
-      for (size_t i = begin; i < end; ++i) {
-        const float l = a[i] + m[i], h = b[i] + m[i];
-        bad_d |= static_cast<int>(!(l >= -kMax)) | static_cast<int>(!(h <= kMax)) |
-                 static_cast<int>(!(m[i] - m[i] == 0.0f));
-      }
-      ok = ok && bad_d == 0;
+      // NaN fails every comparison, so !(x <= y) catches it.
+      const float l = a[i] + m[i], h = b[i] + m[i];
+      bad |= static_cast<int>(!(l >= -kMax)) | static_cast<int>(!(h <= kMax)) |
+             static_cast<int>(!(m[i] - m[i] == 0.0f));
     }
   }
-  return ok;
+  return bad == 0;
 }
 
-// Validates the boxes. Unswept input is summarised in the same pass (*summary, for the
-// stage, which would otherwise read the bounds again); *has_summary says whether it was.
+// Validates the boxes (and the moves of swept ones). Unswept input's summary comes from
+// the same pass (*summary, for the stage, which would otherwise read the bounds again);
+// *has_summary says whether it was set.
 Status check_boxes(const host::Executor& exec, const AabbInput& in, host::Buffer<uint8_t>& chunk_flags,
                    host::Buffer<kernels::BoundsSummary>& chunk_bounds, kernels::BoundsSummary* summary,
                    bool* has_summary) {
@@ -118,21 +109,16 @@ Status check_boxes(const host::Executor& exec, const AabbInput& in, host::Buffer
   // One flag per chunk (each written by its chunk only), then all of them.
   const uint32_t chunks = host::chunk_count(n, kCheckGrain);
   uint8_t* chunk_ok = host::scratch(chunk_flags, chunks);
-  if (swept) {
-    exec.for_each_chunk(n, kCheckGrain, [&](uint32_t b, uint32_t e, uint32_t c) {
-      chunk_ok[c] = boxes_valid(in, swept, b, e) ? 1 : 0;
-    });
-  } else {
-    const kernels::AabbSoA soa{in.min_x.data(), in.min_y.data(), in.min_z.data(),
-                               in.max_x.data(), in.max_y.data(), in.max_z.data()};
-    kernels::BoundsSummary* partial = host::scratch(chunk_bounds, chunks);
-    exec.for_each_chunk(n, kCheckGrain, [&](uint32_t b, uint32_t e, uint32_t c) {
-      bool ok = false;
-      partial[c] = kernels::reduce_valid_bounds(soa, {b, e}, &ok);
-      chunk_ok[c] = ok ? 1 : 0;
-    });
-  }
+  const kernels::AabbSoA soa{in.min_x.data(), in.min_y.data(), in.min_z.data(),
+                             in.max_x.data(), in.max_y.data(), in.max_z.data()};
+  kernels::BoundsSummary* partial = host::scratch(chunk_bounds, chunks);
+  exec.for_each_chunk(n, kCheckGrain, [&](uint32_t b, uint32_t e, uint32_t c) {
+    bool ok = false;
+    partial[c] = kernels::reduce_valid_bounds(soa, {b, e}, &ok);
+    chunk_ok[c] = ok && (!swept || moves_valid(in, b, e)) ? 1 : 0;
+  });
   if (std::all_of(chunk_ok, chunk_ok + chunks, [](uint8_t v) { return v != 0; })) {
+    // Swept input: the stage needs the summary of the swept boxes (its own pass).
     if (!swept && n > 0) {  // min / max are exact: the same summary as the stage's own pass
       kernels::BoundsSummary sum = kernels::empty_bounds_summary();
       for (uint32_t c = 0; c < chunks; ++c) sum = kernels::combine(sum, chunk_bounds[c]);

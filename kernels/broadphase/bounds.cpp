@@ -101,61 +101,55 @@ namespace {
 
 // reduce_bounds / reduce_valid_bounds over lanes of the SIMD vocabulary: GCC 12 does not
 // vectorise the omp simd min / max reductions of the plain loop ("no vectype for stmt"
-// on the loads, -fopt-info-vec-missed), which left both scalar.
-template <bool kCheck>
-BoundsSummary reduce_lanes(AabbSoA b, Range r, bool* valid) {
-  using F = simd::FloatW;
-  constexpr uint32_t W = simd::kSimdWidth;
-  constexpr float inf = std::numeric_limits<float>::infinity();
-  constexpr float kMax = 1e18f;
-  F lx(inf), ly(inf), lz(inf), hx(-inf), hy(-inf), hz(-inf), edge(0.0f), small(inf);
-  typename F::Mask good(true);
-  uint32_t i = r.begin;
-  for (; i + W <= r.end; i += W) {
+// on the loads, -fopt-info-vec-missed), which left both scalar. The same accumulator runs
+// on full blocks (FloatW) and on the tail (Float1).
+template <class F, bool kCheck>
+struct BoundsAcc {
+  static constexpr float kInf = std::numeric_limits<float>::infinity();
+  F lo[3] = {F(kInf), F(kInf), F(kInf)}, hi[3] = {F(-kInf), F(-kInf), F(-kInf)};
+  F edge = F(0.0f), small = F(kInf);
+  typename F::Mask good = typename F::Mask(true);
+
+  IMPACT_INLINE void add(const AabbSoA& b, uint32_t i) {
     const F x0 = F::load(b.min_x + i), y0 = F::load(b.min_y + i), z0 = F::load(b.min_z + i);
     const F x1 = F::load(b.max_x + i), y1 = F::load(b.max_y + i), z1 = F::load(b.max_z + i);
     if constexpr (kCheck) {
       // NaN fails every comparison: -1e18 <= min <= max <= 1e18 holds only for valid boxes.
-      const F lo_max(-kMax), hi_max(kMax);
+      const F lo_max(-1e18f), hi_max(1e18f);
       good = good & (x0 >= lo_max) & (x0 <= x1) & (x1 <= hi_max) & (y0 >= lo_max) & (y0 <= y1) &
              (y1 <= hi_max) & (z0 >= lo_max) & (z0 <= z1) & (z1 <= hi_max);
     }
-    lx = min(lx, x0), ly = min(ly, y0), lz = min(lz, z0);
-    hx = max(hx, x1), hy = max(hy, y1), hz = max(hz, z1);
+    lo[0] = min(lo[0], x0), lo[1] = min(lo[1], y0), lo[2] = min(lo[2], z0);
+    hi[0] = max(hi[0], x1), hi[1] = max(hi[1], y1), hi[2] = max(hi[2], z1);
     const F e = max(x1 - x0, max(y1 - y0, z1 - z0));
     edge = max(edge, e);
     small = min(small, e);
   }
-  bool ok = simd::all(good);
-  BoundsSummary out{{inf, inf, inf}, {-inf, -inf, -inf}, 0.0f, inf};
-  for (uint32_t l = 0; l < W; ++l) {  // lanes, then the tail, as scalars
-    out.lo[0] = std::min(out.lo[0], lx.lane(l));
-    out.lo[1] = std::min(out.lo[1], ly.lane(l));
-    out.lo[2] = std::min(out.lo[2], lz.lane(l));
-    out.hi[0] = std::max(out.hi[0], hx.lane(l));
-    out.hi[1] = std::max(out.hi[1], hy.lane(l));
-    out.hi[2] = std::max(out.hi[2], hz.lane(l));
-    out.max_edge = std::max(out.max_edge, edge.lane(l));
-    out.min_edge = std::min(out.min_edge, small.lane(l));
-  }
-  for (; i < r.end; ++i) {
-    const float x0 = b.min_x[i], y0 = b.min_y[i], z0 = b.min_z[i];
-    const float x1 = b.max_x[i], y1 = b.max_y[i], z1 = b.max_z[i];
-    if constexpr (kCheck) {
-      ok = ok && x0 >= -kMax && x0 <= x1 && x1 <= kMax && y0 >= -kMax && y0 <= y1 && y1 <= kMax &&
-           z0 >= -kMax && z0 <= z1 && z1 <= kMax;
+  /// Folds every lane into s.
+  void fold(BoundsSummary& s) const {
+    for (uint32_t l = 0; l < F::kWidth; ++l) {
+      for (int k = 0; k < 3; ++k) {
+        s.lo[k] = std::min(s.lo[k], lo[k].lane(l));
+        s.hi[k] = std::max(s.hi[k], hi[k].lane(l));
+      }
+      s.max_edge = std::max(s.max_edge, edge.lane(l));
+      s.min_edge = std::min(s.min_edge, small.lane(l));
     }
-    out.lo[0] = std::min(out.lo[0], x0);
-    out.lo[1] = std::min(out.lo[1], y0);
-    out.lo[2] = std::min(out.lo[2], z0);
-    out.hi[0] = std::max(out.hi[0], x1);
-    out.hi[1] = std::max(out.hi[1], y1);
-    out.hi[2] = std::max(out.hi[2], z1);
-    const float e = std::max(x1 - x0, std::max(y1 - y0, z1 - z0));
-    out.max_edge = std::max(out.max_edge, e);
-    out.min_edge = std::min(out.min_edge, e);
   }
-  if (valid != nullptr) *valid = ok;
+};
+
+template <bool kCheck>
+BoundsSummary reduce_lanes(AabbSoA b, Range r, bool* valid) {
+  constexpr uint32_t W = simd::kSimdWidth;
+  BoundsAcc<simd::FloatW, kCheck> full;
+  BoundsAcc<simd::Float1, kCheck> tail;
+  uint32_t i = r.begin;
+  for (; i + W <= r.end; i += W) full.add(b, i);
+  for (; i < r.end; ++i) tail.add(b, i);
+  BoundsSummary out = empty_bounds_summary();
+  full.fold(out);
+  tail.fold(out);
+  if (valid != nullptr) *valid = simd::all(full.good) && simd::all(tail.good);
   return out;
 }
 

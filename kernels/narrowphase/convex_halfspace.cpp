@@ -161,10 +161,11 @@ struct Below {
 };
 
 /// The picks for F::kWidth touching lanes: lane l is pair live[l] (global index; the
-/// group padded with repeats), below[l] its hull's vertices below the plane (non-zero). Slot j of lane l holds its j-th vertex below (in vertex order; past its count,
-/// its first again: a vertex seen again changes no first strict maximum), so every
-/// slot of every lane is below and the picks run over full vectors. Writes lanes
-/// live[0 .. cnt) of out.
+/// group padded with repeats), below[l] its hull's vertices below the plane (non-zero).
+/// Slot j of lane l holds its j-th vertex below (in vertex order; past its count, its
+/// first again: a vertex seen again changes no first strict maximum), so every slot of
+/// every lane is below and the picks run over full vectors. Writes lanes live[0 .. cnt)
+/// of out.
 template <class F>
 IMPACT_INLINE void touching_group(const LeafSoA& a, const LeafSoA& b, const HullView& h, const ManifoldSoA& out,
                                   const int32_t* live, const Below* below, uint32_t cnt) {

@@ -297,6 +297,14 @@ TEST(BroadPhaseStage, RejectsBadOptionsAndSweptInput) {
   EXPECT_TRUE(IsError(bp.update(in), StatusCode::kInvalidArgument, {"box 7", "dy"}));
   dy[7] = 1.0f;
   IMPACT_ASSERT_OK(bp.find_pairs(in, &got));
+  // Swept input's boxes are checked too (the same pass as unswept input's).
+  Boxes bad = b;
+  bad.min_x[5] = bad.max_x[5] + 1.0f;
+  AabbInput bad_in = bad.input();
+  bad_in.dx = dx;
+  bad_in.dy = dy;
+  bad_in.dz = dz;
+  EXPECT_TRUE(IsError(bp.update(bad_in), StatusCode::kInvalidArgument, {"box 5", "min_x"}));
 }
 
 // Same bytes for every backend and thread count through build/update/pairs, for the
