@@ -62,6 +62,7 @@ struct Table {
     k[kLeafEllipsoid][kLeafTriangle] = &collide_ellipsoid_triangle;
     k[kLeafCapsule][kLeafCylinder] = &collide_capsule_cylinder;
     k[kLeafBox][kLeafEllipsoid] = &collide_box_ellipsoid;
+    k[kLeafBox][kLeafCylinder] = &collide_box_cylinder;
     k[kLeafConvex][kLeafEllipsoid] = &collide_convex_ellipsoid;
     k[kLeafCylinder][kLeafTriangle] = &collide_cylinder_triangle;
     k[kLeafConvex][kLeafHalfSpace] = &collide_convex_halfspace;

@@ -75,6 +75,12 @@ void collide_ellipsoid_triangle(const LeafSoA&, const LeafSoA&, const ManifoldSo
 /// the candidate normals of their Minkowski difference's boundary pieces (caps, side,
 /// rims by a fixed-count 2D root solve, end-rim edges), 1-2 points, SIMD across pairs.
 void collide_capsule_cylinder(const LeafSoA&, const LeafSoA&, const ManifoldSoA&, Range, const NarrowConfig&);
+/// Box (A) against cylinder (B): exact, the least support overlap over the candidate normals
+/// of their Minkowski difference's pieces (faces, caps, edges and vertices against the
+/// side, vertices against the rims in closed form, edges against the rims by the 2D root
+/// solve of rim_solve.h, packed across lanes after a distance bound), the cap or side
+/// clipped to the box (1-4 points; box_cylinder.cpp), SIMD across pairs.
+void collide_box_cylinder(const LeafSoA&, const LeafSoA&, const ManifoldSoA&, Range, const NarrowConfig&);
 /// Box against ellipsoid: exact, the least support overlap over the box's face normals and
 /// the candidate normals of the vertex and edge pieces that can hold one (pruned along
 /// each candidate's solution curve, the rest solved packed; box_ellipsoid.cpp), SIMD

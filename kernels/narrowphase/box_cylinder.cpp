@@ -1,0 +1,868 @@
+// Box (A) against cylinder (B): exact collision data of 1 to 4 points per pair,
+// vectorised across pairs (one lane = one pair), no GJK / EPA.
+//
+// Inputs: LeafSoA lanes per leaf.h (A a box: p centre, R, e0..e2 half extents; B a
+// cylinder C: p centre, R column 2 = unit axis, e0 = radius rc, e1 = half length h, flat
+// caps with sharp rims), Range r of the bucket. Outputs: ManifoldSoA lanes r.begin ..
+// r.end: count (0..4), n (unit, A to B), depth, point slots midway between the surfaces
+// with their depths along n; count-0 lanes leave the other fields unspecified.
+//
+// Method, in the cylinder's frame relative to its centre (c the box centre, a_i its unit
+// axes, e_i its half extents): o(n) = h_box(n) + h_C(-n) = n.c + sum_i e_i |n.a_i| +
+// h |n_z| + rc |n_xy| is the support function of the Minkowski difference box - C. Its
+// minimum over unit n is minus the distance when apart and the depth when they meet (no
+// case split), and every unit n gives an upper bound, so the answer is the least o over
+// a candidate set sure to hold the minimiser (as capsule_cylinder.cpp and
+// cylinder_triangle.cpp). One candidate per boundary piece of box - C (a box feature
+// summed with a cylinder feature whose normal sets meet):
+//  - face x anything: n = +-a_i (6); anything x cap: n = +-z (2);
+//  - edge x side (two lines): n = +-(a_i x z) / |a_i x z| (6);
+//  - vertex x side: n horizontal, from the vertex towards the axis (8);
+//  - vertex x rim: n from the rim circle's point nearest the vertex, with the sign the
+//    rim's normal cone allows (16);
+//  - edge interior x rim: n on the great circle n.a_i = 0, where o is the 2D signed
+//    distance from the edge's shadow point to the rim's shadow along a_i (an ellipse:
+//    the upper / lower half for the one rim / the other), by the fixed-step solve of
+//    Eberly's secular equation shared with capsule-cylinder (rim_solve.h): 24 slots
+//    (12 edges x 2 rims), the only costly pieces. They are pruned per lane (the
+//    edge's normal cone must reach the rim's half sphere; the edge segment's distance to
+//    the rim circle, a lower bound of that piece's |o|, must not exceed the best o so
+//    far where the pair is certified to meet: a box vertex in the cylinder, the axis
+//    centre in the box, or the best candidate's witnesses in both), and the survivors
+//    of a chunk of 16 blocks are solved packed, kSimdWidth slots at a time.
+// Those are all the pieces: the cylinder's normal sets are the cap normals, the
+// horizontal circle (side lines) and the half spheres' open quarter arcs (rim points);
+// the box's the face normals, the quarter arcs of the edges and the vertices' regions.
+// A candidate counts as the minimiser only where its witnesses x on the box and y on the
+// cylinder (points of the two support features) satisfy x - y = o n within kSlackRel of
+// the pair's size (the Minkowski point along n: a critical point of the distance from
+// the origin to the piece; x and y are then supports along +-n). Near the minimum o is
+// flat, and a candidate off its piece could tie the true one within rounding with a
+// direction 1e-4 rad off. The least o of every candidate, valid or not, is kept as well
+// (an exact upper bound): where it is below the least valid o by more than rounding, it
+// is the answer, with its own witness. Ties keep the first in the order caps, faces,
+// edge-sides, vertex-sides, vertex-rims, edge-rims. Supports with ties (a face or line
+// parallel to n) take the feature's point nearest the other shape's centre line
+// (kFree: |n.a| at or below it counts as parallel).
+// Contact points: one, midway between the witnesses. Where n is within kParallelSin of
+// the axis (a cap): the box face most aligned with n, seen along n on the cap plane,
+// clipped to the disk (its corners inside, its edges' rim crossings, 8 rim samples
+// inside it) with each point's gap along n, reduced to 4 (reduce4). Where n is within
+// kParallelSin of the horizontal (the side): the side's line along n clipped to that
+// face, and the face's edges clipped to the side's height (depth = where the line from
+// the point along -n leaves the cylinder), reduced to 4. Points with no positive gap
+// are dropped; the witness stays only where no other point is as deep.
+// Preconditions: finite inputs, positive sizes, unit axes, orthonormal R. Degenerate
+// input: an edge along the axis takes x as its horizontal normal; a vertex on the axis
+// takes x as its radial direction; coincident centres give a finite unit normal (the
+// ties above decide it).
+// Cost: 38 candidate directions in closed form per lane, the pruned rim solves packed
+// (kArcIterations steps of 3 divisions and 2 square roots each), the two manifold
+// clips only where a lane of the block needs them; a block whose lanes are all farther
+// apart than their bounding spheres stops at that screen.
+// Both paths run the same template (F = FloatW, or Float1 for the scalar reference); a
+// lane's arithmetic is the same wherever it is packed, so its bytes do not depend on its
+// neighbours.
+// References: Minkowski-difference support functions for penetration depth (van den
+// Bergen, Collision Detection in Interactive 3D Environments, 2003, ch. 4); the
+// secular equation of the point-ellipse distance (Eberly, "Distance from a Point to an
+// Ellipse, an Ellipsoid, or a Hyperellipsoid", Geometric Tools, 2013).
+#include <cstdint>
+
+#include "kernels/narrowphase/pair_kernels.h"
+#include "kernels/narrowphase/primitives.h"
+#include "kernels/narrowphase/rim_solve.h"
+
+// No FMA contraction in this file, for the reason capsule_cylinder.cpp gives: directions
+// built from rounding noise (an edge's horizontal part for an edge along the axis) must
+// round alike in every copy the compiler makes, or a "unit" n is not unit and o(n) no
+// upper bound.
+#if defined(__clang__)
+#pragma STDC FP_CONTRACT OFF
+#elif defined(__GNUC__)
+#pragma GCC optimize("fp-contract=off")
+#endif
+
+namespace impact::kernels {
+namespace {
+
+using namespace prim;  // NOLINT: lane helpers of this kernel family
+using simd::cross;
+using simd::dot;
+using simd::length_sq;
+
+/// Witness tests accept x - y = o n within this times the pair's size.
+constexpr float kSlackRel = 4e-6f;
+/// |n.a| at or below this: the box's support feature extends along a (and likewise
+/// the cylinder's along z / across the cap).
+constexpr float kFree = 1e-6f;
+/// |sin| between n and the axis (the cap plane) below which the contact is a cap (side)
+/// contact with a clipped manifold.
+constexpr float kParallelSin = 0.05f;
+/// Rim samples of the cap manifold: cos of multiples of 45 degrees.
+constexpr int kRimSamples = 8;
+constexpr float kRimCos[kRimSamples] = {1.0f,  0.70710678f,  0.0f, -0.70710678f,
+                                        -1.0f, -0.70710678f, 0.0f, 0.70710678f};
+constexpr float kNever = 3.0e38f;
+/// Edge-rim slots per lane: 3 directions x 4 edges x 2 rims.
+constexpr int kSlots = 24;
+
+/// Per-slot constants: the edge's direction i, the signs of the other two axes
+/// (j = i + 1, k = i + 2 mod 3), the rim slot (0: the rim's shadow's upper half).
+struct SlotTable {
+  float dir[kSlots], sj[kSlots], sk[kSlots], slot[kSlots];
+  constexpr SlotTable() : dir(), sj(), sk(), slot() {
+    for (int s = 0; s < kSlots; ++s) {
+      dir[s] = static_cast<float>(s >> 3);
+      sj[s] = (s & 2) != 0 ? -1.0f : 1.0f;
+      sk[s] = (s & 4) != 0 ? -1.0f : 1.0f;
+      slot[s] = static_cast<float>(s & 1);
+    }
+  }
+};
+constexpr SlotTable kSlotTable{};
+
+/// One lane's pair in the cylinder frame.
+template <class F>
+struct Geo {
+  V3<F> c;     // box centre
+  V3<F> a[3];  // box axes
+  F e[3];      // half extents
+  F rc, h;
+};
+
+template <class F>
+IMPACT_INLINE Geo<F> load_geo(const LeafSoA& a, const LeafSoA& b, uint32_t k, V3<F>& cb, M3<F>& rot) {
+  Geo<F> g;
+  cb = load_p<F>(b, k) - load_p<F>(a, k);
+  rot = load_r<F>(b, k);
+  const M3<F> ra = load_r<F>(a, k);
+  g.c = rot.apply_t(-cb);
+  for (int i = 0; i < 3; ++i) g.a[i] = rot.apply_t(ra.c[i]);
+  g.e[0] = ld<F>(a.e[0], k), g.e[1] = ld<F>(a.e[1], k), g.e[2] = ld<F>(a.e[2], k);
+  g.rc = ld<F>(b.e[0], k), g.h = ld<F>(b.e[1], k);
+  return g;
+}
+
+/// o(n) for unit n.
+template <class F>
+IMPACT_INLINE F score(const Geo<F>& g, const V3<F>& n) {
+  F s = dot(n, g.c);
+  for (int i = 0; i < 3; ++i) s = s + g.e[i] * abs(dot(n, g.a[i]));
+  return s + g.h * abs(n.z) + g.rc * sqrt(n.x * n.x + n.y * n.y);
+}
+
+/// o(n) and o(-n) for unit n: the even part plus / minus n.c.
+template <class F>
+IMPACT_INLINE void score_pm(const Geo<F>& g, const V3<F>& n, F& plus, F& minus) {
+  F s = g.h * abs(n.z) + g.rc * sqrt(n.x * n.x + n.y * n.y);
+  for (int i = 0; i < 3; ++i) s = s + g.e[i] * abs(dot(n, g.a[i]));
+  const F nc = dot(n, g.c);
+  plus = s + nc, minus = s - nc;
+}
+
+template <class F>
+IMPACT_INLINE F pair_slack(const Geo<F>& g) {
+  const F cm = max(max(abs(g.c.x), abs(g.c.y)), abs(g.c.z));
+  return F(kSlackRel) * (g.rc + g.h + g.e[0] + g.e[1] + g.e[2] + cm);
+}
+
+/// x - y = o n within slack, x in the box, y in the cylinder (each within slack).
+template <class F>
+IMPACT_INLINE typename F::Mask witnessed(const Geo<F>& g, F slack, F o, const V3<F>& n, const V3<F>& x,
+                                         const V3<F>& y) {
+  const V3<F> r = x - y - o * n;
+  auto m = length_sq(r) <= slack * slack;
+  const V3<F> q = x - g.c;
+  for (int i = 0; i < 3; ++i) m = m & (abs(dot(q, g.a[i])) <= g.e[i] + slack);
+  const F rr = g.rc + slack;
+  m = m & (y.x * y.x + y.y * y.y <= rr * rr) & (abs(y.z) <= g.h + slack);
+  return m;
+}
+
+/// The least valid candidate (o, n, box witness x) and the least of all (any_*).
+template <class F>
+struct Best {
+  F o, any_o;
+  V3<F> n, x, any_n, any_x;
+  IMPACT_INLINE void init() {
+    o = any_o = F(kNever);
+    n = any_n = V3<F>{F(0.0f), F(0.0f), F(1.0f)};
+    x = any_x = n;
+  }
+  IMPACT_INLINE void take(F o2, const V3<F>& n2, const V3<F>& x2, typename F::Mask valid) {
+    const auto ma = o2 < any_o;
+    any_o = select(ma, o2, any_o);
+    any_n = select(ma, n2, any_n);
+    any_x = select(ma, x2, any_x);
+    const auto m = valid & (o2 < o);
+    o = select(m, o2, o);
+    n = select(m, n2, n);
+    x = select(m, x2, x);
+  }
+};
+
+/// The cylinder's support point along -n nearest (in its support feature) to the point f.
+template <class F>
+IMPACT_INLINE V3<F> cyl_support_near(const Geo<F>& g, const V3<F>& n, const V3<F>& f) {
+  const F one(1.0f), zero(0.0f);
+  const F nxy2 = n.x * n.x + n.y * n.y;
+  const auto disk = nxy2 <= F(kFree * kFree);
+  const F inv = one / sqrt(select(disk, one, nxy2));
+  // across the cap: f's shadow clamped to the disk
+  const F f2 = f.x * f.x + f.y * f.y;
+  const F fs = select(f2 > g.rc * g.rc, g.rc / sqrt(select(f2 > zero, f2, one)), one);
+  V3<F> y;
+  y.x = select(disk, f.x * fs, -g.rc * n.x * inv);
+  y.y = select(disk, f.y * fs, -g.rc * n.y * inv);
+  y.z = select(abs(n.z) <= F(kFree), clamp(f.z, -g.h, g.h), -g.h * simd::sign_nonneg(n.z));
+  return y;
+}
+
+/// The box's support point along n nearest (in its support feature) to the axis.
+template <class F>
+IMPACT_INLINE V3<F> box_support_near_axis(const Geo<F>& g, const V3<F>& n) {
+  typename F::Mask freei[3];
+  V3<F> p = g.c;
+  for (int i = 0; i < 3; ++i) {
+    const F d = dot(n, g.a[i]);
+    freei[i] = abs(d) <= F(kFree);
+    p = select(freei[i], p, madd(p, simd::sign_nonneg(d) * g.e[i], g.a[i]));
+  }
+  for (int i = 0; i < 3; ++i) {
+    const F t = clamp(-(p.x * g.a[i].x + p.y * g.a[i].y), -g.e[i], g.e[i]);
+    p = select(freei[i], madd(p, t, g.a[i]), p);
+  }
+  return p;
+}
+
+template <class F>
+IMPACT_INLINE V3<F> box_support(const Geo<F>& g, const V3<F>& n) {
+  V3<F> p = g.c;
+  for (int i = 0; i < 3; ++i) p = madd(p, simd::sign_nonneg(dot(n, g.a[i])) * g.e[i], g.a[i]);
+  return p;
+}
+
+// ---------------------------------------------------------------------------------------
+// Chunk state: phase A (closed-form candidates) writes it, phase B (packed rim solves)
+// updates it, phase C (manifold) reads it.
+// ---------------------------------------------------------------------------------------
+
+template <uint32_t W>
+struct Chunk {
+  static constexpr uint32_t kLanes = 16 * W;
+  // geometry: c 0..2, a 3..11, e 12..14, rc 15, h 16
+  float geo[17][kLanes];
+  // best: o 0, n 1..3, x 4..6, any_o 7, any_n 8..10, any_x 11..13
+  float st[14][kLanes];
+  int32_t lane[kSlots * kLanes + 4 * W];
+  int32_t kind[kSlots * kLanes + 4 * W];
+  uint32_t nitems = 0;
+};
+
+template <class F, uint32_t W>
+IMPACT_INLINE void save_geo(Chunk<W>& ch, uint32_t j, const Geo<F>& g) {
+  g.c.x.store(ch.geo[0] + j), g.c.y.store(ch.geo[1] + j), g.c.z.store(ch.geo[2] + j);
+  for (int i = 0; i < 3; ++i) {
+    g.a[i].x.store(ch.geo[3 + 3 * i] + j);
+    g.a[i].y.store(ch.geo[4 + 3 * i] + j);
+    g.a[i].z.store(ch.geo[5 + 3 * i] + j);
+  }
+  for (int i = 0; i < 3; ++i) g.e[i].store(ch.geo[12 + i] + j);
+  g.rc.store(ch.geo[15] + j), g.h.store(ch.geo[16] + j);
+}
+
+template <class F, uint32_t W>
+IMPACT_INLINE Geo<F> gather_geo(const Chunk<W>& ch, typename F::Int idx) {
+  Geo<F> g;
+  auto gt = [&](int f) { return simd::gather(ch.geo[f], idx); };
+  g.c = V3<F>{gt(0), gt(1), gt(2)};
+  for (int i = 0; i < 3; ++i) g.a[i] = V3<F>{gt(3 + 3 * i), gt(4 + 3 * i), gt(5 + 3 * i)};
+  for (int i = 0; i < 3; ++i) g.e[i] = gt(12 + i);
+  g.rc = gt(15), g.h = gt(16);
+  return g;
+}
+
+template <class F, uint32_t W>
+IMPACT_INLINE void save_best(Chunk<W>& ch, uint32_t j, const Best<F>& b) {
+  auto st3 = [&](int f, const V3<F>& v) {
+    v.x.store(ch.st[f] + j), v.y.store(ch.st[f + 1] + j), v.z.store(ch.st[f + 2] + j);
+  };
+  b.o.store(ch.st[0] + j);
+  st3(1, b.n);
+  st3(4, b.x);
+  b.any_o.store(ch.st[7] + j);
+  st3(8, b.any_n);
+  st3(11, b.any_x);
+}
+
+template <class F, uint32_t W>
+IMPACT_INLINE Best<F> load_best(const Chunk<W>& ch, uint32_t j) {
+  auto l1 = [&](int f) { return F::load(ch.st[f] + j); };
+  auto l3 = [&](int f) { return V3<F>{l1(f), l1(f + 1), l1(f + 2)}; };
+  Best<F> b;
+  b.o = l1(0), b.n = l3(1), b.x = l3(4), b.any_o = l1(7), b.any_n = l3(8), b.any_x = l3(11);
+  return b;
+}
+
+/// Phase A for one block (lanes k.. of a / b, chunk lanes j..): the closed-form
+/// candidates, and the edge-rim slots each lane still needs, appended to the chunk.
+template <class F, uint32_t W>
+IMPACT_INLINE void phase_a(const LeafSoA& a, const LeafSoA& b, uint32_t k, uint32_t j, uint32_t nb,
+                           Chunk<W>& ch) {
+  using Mask = typename F::Mask;
+  const F zero(0.0f), one(1.0f), tiny(kTinySq), never(kNever);
+  V3<F> cb;
+  M3<F> rot;
+  const Geo<F> g = load_geo<F>(a, b, k, cb, rot);
+  save_geo<F, W>(ch, j, g);
+  Best<F> best;
+  best.init();
+  // Every lane's bounding spheres apart: no contact (o = -1 marks it).
+  const F reach = sqrt(g.e[0] * g.e[0] + g.e[1] * g.e[1] + g.e[2] * g.e[2]) + sqrt(g.rc * g.rc + g.h * g.h);
+  const Mask near = length_sq(cb) < reach * reach;
+  if (simd::none(near)) {
+    best.o = best.any_o = F(-1.0f);
+    save_best<F, W>(ch, j, best);
+    return;
+  }
+  const F slack = pair_slack(g);
+  const V3<F> ez{zero, zero, one};
+  // x and y built inside their shapes: only x - y = o n is left to test
+  auto along = [&](F o, const V3<F>& n, const V3<F>& x, const V3<F>& y) {
+    return length_sq(x - y - o * n) <= slack * slack;
+  };
+  auto consider = [&](F o, const V3<F>& n, const V3<F>& x, const V3<F>& y) {
+    best.take(o, n, x, along(o, n, x, y));
+  };
+  const V3<F> A[3] = {g.a[0] * g.e[0], g.a[1] * g.e[1], g.a[2] * g.e[2]};
+  const F ext_z = g.e[0] * abs(g.a[0].z) + g.e[1] * abs(g.a[1].z) + g.e[2] * abs(g.a[2].z);
+
+  // --- caps: n = +-z; x: the box's support feature's point nearest the axis ---
+  for (int s = 0; s < 2; ++s) {
+    const F sg(s == 0 ? 1.0f : -1.0f);
+    const V3<F> n{zero, zero, sg};
+    const F o = sg * g.c.z + ext_z + g.h;
+    const V3<F> x = box_support_near_axis(g, n);  // y = x - o n: on the cap plane
+    const F rr = g.rc + slack;
+    best.take(o, n, x, x.x * x.x + x.y * x.y <= rr * rr);
+  }
+  // --- faces: n = +-a_i; y: the cylinder's support feature's point nearest the face
+  // centre, x above it on the face plane ---
+  for (int i = 0; i < 3; ++i) {
+    F op, om;
+    score_pm(g, g.a[i], op, om);
+    for (int s = 0; s < 2; ++s) {
+      const V3<F> n = s == 0 ? g.a[i] : -g.a[i];
+      const F o = s == 0 ? op : om;
+      const V3<F> f = s == 0 ? g.c + A[i] : g.c - A[i];
+      const V3<F> y = cyl_support_near(g, n, f);
+      const V3<F> x = madd(y, o, n);  // on the face's plane: in the box where in the face
+      const V3<F> q = x - f;
+      const int j1 = (i + 1) % 3, j2 = (i + 2) % 3;
+      best.take(o, n, x, (abs(dot(q, g.a[j1])) <= g.e[j1] + slack) & (abs(dot(q, g.a[j2])) <= g.e[j2] + slack));
+    }
+  }
+  // --- edge x side: n = +-(a_i x z) / |.|, the edge against the side line ---
+  for (int i = 0; i < 3; ++i) {
+    const V3<F>& u = g.a[i];
+    const F uxy2 = u.x * u.x + u.y * u.y;
+    const Mask tilted = uxy2 > tiny;
+    const F inv = one / sqrt(select(tilted, uxy2, one));
+    const F wx = select(tilted, u.y * inv, one), wy = select(tilted, -u.x * inv, zero);
+    F op, om;
+    score_pm(g, V3<F>{wx, wy, zero}, op, om);
+    for (int s = 0; s < 2; ++s) {
+      const F sg(s == 0 ? 1.0f : -1.0f);
+      const V3<F> n{sg * wx, sg * wy, zero};
+      const F o = s == 0 ? op : om;
+      V3<F> pe = g.c;
+      for (int q = 1; q < 3; ++q) {
+        const int jj = (i + q) % 3;
+        pe = madd(pe, simd::sign_nonneg(dot(n, g.a[jj])), A[jj]);
+      }
+      const V3<F> g0{-g.rc * n.x, -g.rc * n.y, zero};
+      const V3<F> r = pe - g0;
+      const F bz = u.z, d1 = dot(u, r);
+      const F den = one - bz * bz;
+      const F sv = clamp((bz * r.z - d1) / select(tilted, den, one), -g.e[i], g.e[i]);
+      const V3<F> x = madd(pe, sv, u);
+      const V3<F> y{g0.x, g0.y, clamp(x.z, -g.h, g.h)};
+      consider(o, n, x, y);
+    }
+  }
+  // --- vertices against the side: n horizontal, from the vertex towards the axis ---
+  V3<F> vtx[8];
+  F vrho[8], vmx[8], vmy[8];
+  for (int q = 0; q < 8; ++q) {
+    V3<F> v = g.c;
+    for (int i = 0; i < 3; ++i) v = (q >> i) & 1 ? v - A[i] : v + A[i];
+    const F rho2 = v.x * v.x + v.y * v.y;
+    const Mask off = rho2 > tiny;
+    const F rho = sqrt(rho2);
+    const F ri = one / select(off, rho, one);
+    const F mx = select(off, v.x * ri, one), my = select(off, v.y * ri, zero);
+    vtx[q] = v, vrho[q] = rho, vmx[q] = mx, vmy[q] = my;
+    const V3<F> n{-mx, -my, zero};
+    const V3<F> y{g.rc * mx, g.rc * my, clamp(v.z, -g.h, g.h)};
+    consider(score(g, n), n, v, y);
+  }
+  // Certified to meet: a vertex in the cylinder, either centre in the other shape, or
+  // the best valid candidate's witnesses in both shapes.
+  Mask meets(false);
+  for (int q = 0; q < 8; ++q) meets = meets | ((vrho[q] <= g.rc) & (abs(vtx[q].z) <= g.h));
+  {
+    Mask inb(true);
+    for (int i = 0; i < 3; ++i) inb = inb & (abs(dot(g.c, g.a[i])) <= g.e[i]);
+    const Mask cin = (g.c.x * g.c.x + g.c.y * g.c.y <= g.rc * g.rc) & (abs(g.c.z) <= g.h);
+    meets = meets | inb | cin;
+    const Mask has = best.o < never;
+    const V3<F>& x = best.x;
+    const V3<F> y = x - best.o * best.n;
+    const Mask x_in = (x.x * x.x + x.y * x.y <= g.rc * g.rc) & (abs(x.z) <= g.h);
+    Mask y_in(true);
+    const V3<F> q = y - g.c;
+    for (int i = 0; i < 3; ++i) y_in = y_in & (abs(dot(q, g.a[i])) <= g.e[i]);
+    meets = meets | (has & (x_in | y_in));
+  }
+  const Mask live = near & (best.any_o > zero);
+  // --- vertices against the rims (n from the rim point nearest the vertex): an edge of
+  // box - C, a minimiser only when the pair is apart, so only where it is not certified
+  // to meet ---
+  if (simd::any(live & ~meets)) {
+    for (int q = 0; q < 8; ++q) {
+      const V3<F>& v = vtx[q];
+      const F mx = vmx[q], my = vmy[q];
+      for (int s = 0; s < 2; ++s) {
+        const F zs(s == 0 ? 1.0f : -1.0f);
+        const V3<F> y{g.rc * mx, g.rc * my, zs * g.h};
+        const F radial = abs(vrho[q] - g.rc), vert = abs(v.z - zs * g.h);
+        F len;
+        const V3<F> n = normalize_or(V3<F>{-radial * mx, -radial * my, -zs * vert},
+                                     V3<F>{-mx * F(0.70710678f), -my * F(0.70710678f), -zs * F(0.70710678f)}, len);
+        consider(score(g, n), n, v, y);
+      }
+    }
+  }
+
+  // --- which edge-rim slots each lane still needs ---
+  const F bound = min(best.o, best.any_o) + slack;
+  uint32_t cnt = ch.nitems;
+  for (int i = 0; i < 3; ++i) {
+    const V3<F>& u = g.a[i];
+    const int ja = (i + 1) % 3, ka = (i + 2) % 3;
+    const F uxy2 = u.x * u.x + u.y * u.y;
+    const Mask tilted = uxy2 > tiny;
+    const F iu = one / select(tilted, uxy2, one);
+    for (int q = 0; q < 4; ++q) {
+      const F sj((q & 1) != 0 ? -1.0f : 1.0f), sk((q & 2) != 0 ? -1.0f : 1.0f);
+      const V3<F> pe = madd(madd(g.c, sj, A[ja]), sk, A[ka]);
+      // the edge's end points (vertices)
+      const int qv = (((q & 1) != 0 ? 1 : 0) << ja) | (((q & 2) != 0 ? 1 : 0) << ka);
+      const F rho_p = vrho[qv], rho_m = vrho[qv | (1 << i)];
+      const F z_p = vtx[qv].z, z_m = vtx[qv | (1 << i)].z;
+      const F ts = clamp(select(tilted, -(pe.x * u.x + pe.y * u.y) * iu, zero), -g.e[i], g.e[i]);
+      const F mx = mul_add(ts, u.x, pe.x), my = mul_add(ts, u.y, pe.y);
+      const F rho_min = sqrt(mx * mx + my * my);
+      const F lb_r = max(max(rho_min - g.rc, g.rc - max(rho_p, rho_m)), zero);
+      const F za = sj * g.a[ja].z, zk = sk * g.a[ka].z;
+      for (int s = 0; s < 2; ++s) {
+        // slot 0: n_z >= 0 (the rim at -h); slot 1: n_z <= 0 (the rim at +h)
+        const F z0(s == 0 ? -1.0f : 1.0f);
+        const F rz = z0 * g.h;
+        const F dp = z_p - rz, dm = z_m - rz;
+        const F lb_z = select(dp * dm <= zero, zero, min(abs(dp), abs(dm)));
+        const F lb = max(lb_r, lb_z);
+        const F cone_eps(-1e-6f);
+        const Mask cone = s == 0 ? ((za >= cone_eps) | (zk >= cone_eps)) : ((za <= -cone_eps) | (zk <= -cone_eps));
+        const Mask need = live & cone & ((lb <= bound) | ~meets);
+        uint32_t bits = simd::bits(need);
+        if (nb < W) bits &= (1u << nb) - 1u;
+        const int32_t kind = static_cast<int32_t>(8 * i + 2 * q + s);
+        while (bits != 0) {
+          const uint32_t l = static_cast<uint32_t>(__builtin_ctz(bits));
+          bits &= bits - 1;
+          ch.lane[cnt] = static_cast<int32_t>(j + l);
+          ch.kind[cnt] = kind;
+          ++cnt;
+        }
+      }
+    }
+  }
+  ch.nitems = cnt;
+  best.o = select(near, best.o, F(-1.0f));
+  best.any_o = select(near, best.any_o, F(-1.0f));
+  save_best<F, W>(ch, j, best);
+}
+
+/// Phase B, one batch: M groups of W listed edge-rim slots from item g0 (their solves
+/// interleaved: independent chains, so the divisions and square roots overlap); each
+/// result offered to its lane, in list order.
+template <class F, uint32_t W, int M>
+IMPACT_INLINE void solve_batch(Chunk<W>& ch, uint32_t g0, uint32_t total) {
+  using Int = typename F::Int;
+  using Mask = typename F::Mask;
+  const F zero(0.0f), one(1.0f), tiny(kTinySq);
+  Geo<F> g[M];
+  V3<F> u[M], pe[M], w[M], v[M];
+  F eu[M], rb[M], rx[M], ry[M], ex[M], ey[M], sg[M];
+  for (int m = 0; m < M; ++m) {
+    const uint32_t at = g0 + static_cast<uint32_t>(m) * W;
+    const Int idx = Int::load(ch.lane + at), kind = Int::load(ch.kind + at);
+    g[m] = gather_geo<F, W>(ch, idx);
+    const F dir = simd::gather(kSlotTable.dir, kind), sj = simd::gather(kSlotTable.sj, kind);
+    const F sk = simd::gather(kSlotTable.sk, kind), slot = simd::gather(kSlotTable.slot, kind);
+    const Mask d0 = dir == zero, d1 = dir == one;
+    u[m] = select(d0, g[m].a[0], select(d1, g[m].a[1], g[m].a[2]));
+    const V3<F> aj = select(d0, g[m].a[1], select(d1, g[m].a[2], g[m].a[0]));
+    const V3<F> ak = select(d0, g[m].a[2], select(d1, g[m].a[0], g[m].a[1]));
+    eu[m] = select(d0, g[m].e[0], select(d1, g[m].e[1], g[m].e[2]));
+    const F ej = select(d0, g[m].e[1], select(d1, g[m].e[2], g[m].e[0]));
+    const F ek = select(d0, g[m].e[2], select(d1, g[m].e[0], g[m].e[1]));
+    pe[m] = madd(madd(g[m].c, sj * ej, aj), sk * ek, ak);
+    // the shadow along u: w = z x u / |z x u| (x for an edge along the axis), v = u x w
+    const F uxy2 = u[m].x * u[m].x + u[m].y * u[m].y;
+    const Mask tl = uxy2 > tiny;
+    const F ie = one / sqrt(select(tl, uxy2, one));
+    w[m] = V3<F>{select(tl, -u[m].y * ie, one), select(tl, u[m].x * ie, zero), zero};
+    v[m] = cross(u[m], w[m]);
+    v[m] = select(v[m].z < zero, -v[m], v[m]);
+    const F inv_rc = one / g[m].rc;
+    const F lr = g[m].h * v[m].z * inv_rc;
+    const F by = -dot(pe[m], v[m]) * inv_rc;
+    const Mask top = slot == zero;
+    rb[m] = abs(u[m].z);
+    rx[m] = -dot(pe[m], w[m]) * inv_rc;
+    ry[m] = select(top, by - lr, -(by + lr));
+    sg[m] = select(top, one, F(-1.0f));
+  }
+  rim::half_ellipse_normals(rb, rx, ry, ex, ey);
+  for (int m = 0; m < M; ++m) {
+    const uint32_t at = g0 + static_cast<uint32_t>(m) * W;
+    F len;
+    const V3<F> n = normalize_or(madd(w[m] * ex[m], sg[m] * ey[m], v[m]), w[m], len);
+    const F o = score(g[m], n);
+    // witnesses: the rim point along -n, the edge point level with it
+    const F nxy2 = n.x * n.x + n.y * n.y;
+    const F sr = g[m].rc / sqrt(select(nxy2 > tiny, nxy2, one));
+    const V3<F> y{-sr * n.x, -sr * n.y, -g[m].h * simd::sign_nonneg(n.z)};
+    const F tw = clamp(dot(y - pe[m], u[m]), -eu[m], eu[m]);
+    const V3<F> x = madd(pe[m], tw, u[m]);
+    const Mask valid = witnessed(g[m], pair_slack(g[m]), o, n, x, y);
+    float ro[W], rv[W], rn[3][W], rxw[3][W];
+    o.store(ro);
+    select(valid, one, zero).store(rv);
+    n.x.store(rn[0]), n.y.store(rn[1]), n.z.store(rn[2]);
+    x.x.store(rxw[0]), x.y.store(rxw[1]), x.z.store(rxw[2]);
+    const uint32_t cnt = at >= total ? 0u : (total - at < W ? total - at : W);
+    for (uint32_t l = 0; l < cnt; ++l) {
+      const auto ln = static_cast<uint32_t>(ch.lane[at + l]);
+      if (ro[l] < ch.st[7][ln]) {
+        ch.st[7][ln] = ro[l];
+        for (int q = 0; q < 3; ++q) ch.st[8 + q][ln] = rn[q][l], ch.st[11 + q][ln] = rxw[q][l];
+      }
+      if (rv[l] != 0.0f && ro[l] < ch.st[0][ln]) {
+        ch.st[0][ln] = ro[l];
+        for (int q = 0; q < 3; ++q) ch.st[1 + q][ln] = rn[q][l], ch.st[4 + q][ln] = rxw[q][l];
+      }
+    }
+  }
+}
+
+/// Phase B: the listed edge-rim slots, padded to whole groups (repeating the last),
+/// solved 4 groups at a time, then 2, then 1.
+template <class F, uint32_t W>
+IMPACT_INLINE void phase_b(Chunk<W>& ch) {
+  const uint32_t total = ch.nitems;
+  if (total == 0) return;
+  const uint32_t groups = (total + W - 1) / W;
+  for (uint32_t l = total; l < groups * W; ++l) ch.lane[l] = ch.lane[total - 1], ch.kind[l] = ch.kind[total - 1];
+  uint32_t gi = 0;
+  for (; gi + 4 <= groups; gi += 4) solve_batch<F, W, 4>(ch, gi * W, total);
+  if (gi + 2 <= groups) solve_batch<F, W, 2>(ch, gi * W, total), gi += 2;
+  if (gi < groups) solve_batch<F, W, 1>(ch, gi * W, total);
+  ch.nitems = 0;
+}
+
+/// Candidate 0 of a clipped manifold is the winning candidate's witness. It stays only
+/// where no other candidate is that deep (within tol): else it lies among them and would
+/// keep reduce4 from picking the contact's ends.
+template <class F, int M>
+IMPACT_INLINE void drop_shadowed_witness(const F (&d)[M], typename F::Mask (&valid)[M], F o, F tol) {
+  F deepest(-3.0e38f);
+  for (int i = 1; i < M; ++i) deepest = max(deepest, select(valid[i], d[i], F(-3.0e38f)));
+  valid[0] = valid[0] & (deepest < o - tol);
+}
+
+/// Phase C for one block: the answer, the manifold, the store.
+template <class F, uint32_t W>
+IMPACT_INLINE void phase_c(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out, uint32_t k, uint32_t j,
+                           const Chunk<W>& ch) {
+  using Mask = typename F::Mask;
+  using Int = typename F::Int;
+  const F zero(0.0f), one(1.0f), half(0.5f), tiny(kTinySq), never(kNever);
+  const Best<F> best = load_best<F, W>(ch, j);
+  if (simd::none(best.any_o > zero)) {
+    store_no_contact<F>(out, k);
+    return;
+  }
+  V3<F> cb;
+  M3<F> rot;
+  const Geo<F> g = load_geo<F>(a, b, k, cb, rot);
+  const F slack = pair_slack(g);
+  // The least valid candidate, unless an invalid one is below it by more than rounding.
+  const Mask use_any = (best.o >= never) | (best.any_o < best.o - F(4.0f) * slack);
+  const F o = select(use_any, best.any_o, best.o);
+  const V3<F> n = select(use_any, best.any_n, best.n);
+  const V3<F> x = select(use_any, best.any_x, best.x);
+  const Mask hit = o > zero;
+  const F size = g.rc + g.h + g.e[0] + g.e[1] + g.e[2];
+  const F tol = F(1e-5f) * size;
+  const F nxy2 = n.x * n.x + n.y * n.y;
+  const F par2(kParallelSin * kParallelSin);
+
+  Lanes<F, 4> m;
+  {
+    const V3<F> p1 = madd(x, F(-0.5f) * o, n);
+    m.count = select(hit, Int(1), Int(0));
+    for (int i = 0; i < 4; ++i) m.point[i] = p1, m.pdepth[i] = o;
+  }
+  // The box face most aligned with n (outward normal f = s a_i), its centre and corners.
+  F al[3];
+  for (int i = 0; i < 3; ++i) al[i] = dot(n, g.a[i]);
+  const Mask f0 = (abs(al[0]) >= abs(al[1])) & (abs(al[0]) >= abs(al[2]));
+  const Mask f1 = andnot(abs(al[1]) >= abs(al[2]), f0);
+  const V3<F> fa = select(f0, g.a[0], select(f1, g.a[1], g.a[2]));
+  const V3<F> ua = select(f0, g.a[1], select(f1, g.a[2], g.a[0]));
+  const V3<F> va = select(f0, g.a[2], select(f1, g.a[0], g.a[1]));
+  const F fe = select(f0, g.e[0], select(f1, g.e[1], g.e[2]));
+  const F ue = select(f0, g.e[1], select(f1, g.e[2], g.e[0]));
+  const F ve = select(f0, g.e[2], select(f1, g.e[0], g.e[1]));
+  const F fs = simd::sign_nonneg(dot(n, fa));
+  const V3<F> fn = fa * fs;  // outward, along n
+  const V3<F> fc = madd(g.c, fs * fe, fa);
+  V3<F> corner[4];
+  {
+    const V3<F> U = ua * ue, Vv = va * ve;
+    corner[0] = fc + U + Vv, corner[1] = fc - U + Vv, corner[2] = fc - U - Vv, corner[3] = fc + U - Vv;
+  }
+  const F fdn = dot(fn, n);
+
+  // Cap contact: the face seen along n on the cap plane z = zc facing the box, clipped
+  // to the disk, each point with its gap along n.
+  // (only where a face or an edge of the box lies within kParallelSin of the cap plane:
+  // else the box touches the cap at a vertex, one point)
+  const F amin = min(min(abs(al[0]), abs(al[1])), abs(al[2]));
+  const Mask cap_like = hit & (nxy2 < par2) & (amin < F(kParallelSin));
+  if (simd::any(cap_like)) {
+    constexpr int M = 1 + 4 + 8 + kRimSamples;
+    F cx[M], cy[M], cd[M];
+    Mask cv[M];
+    const F zc = -g.h * simd::sign_nonneg(n.z);
+    const F nz = select(abs(n.z) > half, n.z, one);
+    const F rr = g.rc * g.rc;
+    const F rin = g.rc + slack;
+    F px[4], py[4], pd[4];
+    for (int q = 0; q < 4; ++q) {
+      const F mu = (corner[q].z - zc) / nz;
+      px[q] = corner[q].x - mu * n.x, py[q] = corner[q].y - mu * n.y, pd[q] = mu;
+    }
+    {
+      const V3<F> y = x - o * n;
+      cx[0] = y.x, cy[0] = y.y, cd[0] = o;
+      cv[0] = y.x * y.x + y.y * y.y <= rin * rin;
+    }
+    for (int q = 0; q < 4; ++q) {
+      cx[1 + q] = px[q], cy[1 + q] = py[q], cd[1 + q] = pd[q];
+      cv[1 + q] = px[q] * px[q] + py[q] * py[q] <= rr;
+    }
+    for (int q = 0; q < 4; ++q) {
+      const int q1 = (q + 1) % 4;
+      const F dx = px[q1] - px[q], dy = py[q1] - py[q], dd = pd[q1] - pd[q];
+      const F qa = dx * dx + dy * dy, qb = px[q] * dx + py[q] * dy, qc = px[q] * px[q] + py[q] * py[q] - rr;
+      const F disc = qb * qb - qa * qc;
+      const Mask ok = (qa > tiny) & (disc >= zero);
+      const F root = sqrt(max(disc, zero)), ia = one / select(ok, qa, one);
+      for (int c = 0; c < 2; ++c) {
+        const F t = (c == 0 ? -qb - root : root - qb) * ia;
+        const int i = 5 + 2 * q + c;
+        cx[i] = mul_add(t, dx, px[q]), cy[i] = mul_add(t, dy, py[q]), cd[i] = mul_add(t, dd, pd[q]);
+        cv[i] = ok & (t >= zero) & (t <= one);
+      }
+    }
+    {
+      // rim samples inside the face's shadow (a parallelogram, either orientation), with
+      // the gap to the face plane along n (only for a face within 60 degrees of n)
+      const Mask ok = fdn >= half;
+      const F ifd = one / select(ok, fdn, one);
+      const F fcd = dot(fn, fc);
+      F cz[4];
+      for (int i = 0; i < kRimSamples; ++i) {
+        const F sx = g.rc * F(kRimCos[i]), sy = g.rc * F(kRimCos[(i + 6) % 8]);
+        Mask pos(true), neg(true);
+        for (int q = 0; q < 4; ++q) {
+          const int q1 = (q + 1) % 4;
+          cz[q] = (px[q1] - px[q]) * (sy - py[q]) - (py[q1] - py[q]) * (sx - px[q]);
+          pos = pos & (cz[q] >= zero), neg = neg & (cz[q] <= zero);
+        }
+        const int c = 13 + i;
+        cx[c] = sx, cy[c] = sy;
+        cd[c] = (fcd - (fn.x * sx + fn.y * sy + fn.z * zc)) * ifd;
+        cv[c] = ok & (pos | neg);
+      }
+    }
+    for (int i = 0; i < M; ++i) cv[i] = cv[i] & (cd[i] > zero);
+    drop_shadowed_witness<F, M>(cd, cv, o, tol);
+    F ox[4], oy[4], od[4];
+    Int cnt;
+    reduce4<F, M>(cx, cy, cd, cv, tol, ox, oy, od, cnt);
+    const Mask use = cap_like & (cnt > Int(0));
+    m.count = select(use, cnt, m.count);
+    for (int i = 0; i < 4; ++i) {
+      const V3<F> p = madd(V3<F>{ox[i], oy[i], zc}, half * od[i], n);
+      m.point[i] = select(use, p, m.point[i]);
+      m.pdepth[i] = select(use, min(od[i], o), m.pdepth[i]);
+    }
+  }
+  // Side contact: the side's line along -n clipped to the face seen along n, the face's
+  // edges clipped to the side's height (each point's gap: where the line from it along
+  // -n leaves the cylinder), the witness; reduced to 4.
+  // (only where a face of the box lies within kParallelSin of the side, or an edge within
+  // kParallelSin of the axis: else one point)
+  const F azmax = max(max(abs(g.a[0].z), abs(g.a[1].z)), abs(g.a[2].z));
+  const Mask side_like = andnot(hit & (n.z * n.z < par2) & ((fdn * fdn > one - par2) | (azmax * azmax > one - par2)), cap_like);
+  if (simd::any(side_like)) {
+    constexpr int M = 1 + 2 + 8;
+    V3<F> ca[M];
+    F cd[M], c2x[M], c2y[M];
+    Mask cv[M];
+    const Mask okxy = nxy2 > tiny;
+    const F ixy = one / sqrt(select(okxy, nxy2, one));
+    const F mx = select(okxy, n.x * ixy, one), my = select(okxy, n.y * ixy, zero);
+    ca[0] = madd(x, F(-0.5f) * o, n), cd[0] = o, cv[0] = Mask(true);
+    {
+      // G(t) = (-rc m, t) + lam(t) n on the face plane: lam = lam0 + lam1 t
+      const Mask flat = fdn > F(0.01f);
+      const F inn = one / select(flat, fdn, one);
+      const V3<F> s0{-g.rc * mx, -g.rc * my, zero};
+      const F lam0 = dot(fn, fc - s0) * inn, lam1 = -fn.z * inn;
+      F tlo = -g.h, thi = g.h;
+      Mask ok = flat;
+      for (int c = 0; c < 2; ++c) {
+        const V3<F>& ax = c == 0 ? ua : va;
+        const F ext = c == 0 ? ue : ve;
+        // (G(t) + lam(t) n - fc).ax = g0 + g1 t in [-ext, ext]
+        const F g0 = dot(s0 - fc, ax) + lam0 * dot(n, ax), g1 = ax.z + lam1 * dot(n, ax);
+        const Mask moves = abs(g1) > tiny;
+        const F ig = one / select(moves, g1, one);
+        const F ta = (-ext - g0) * ig, tb = (ext - g0) * ig;
+        tlo = select(moves, max(tlo, min(ta, tb)), tlo);
+        thi = select(moves, min(thi, max(ta, tb)), thi);
+        ok = ok & (moves | (abs(g0) <= ext));
+      }
+      ok = ok & (tlo <= thi);
+      for (int c = 0; c < 2; ++c) {
+        const F t = c == 0 ? tlo : thi;
+        const F lam = mul_add(lam1, t, lam0);
+        ca[1 + c] = madd(V3<F>{s0.x, s0.y, t}, half * lam, n);
+        cd[1 + c] = lam;
+        cv[1 + c] = ok;
+      }
+    }
+    for (int q = 0; q < 4; ++q) {
+      const V3<F>& p0 = corner[q];
+      const V3<F> e = corner[(q + 1) % 4] - p0;
+      const Mask rises = abs(e.z) > tiny;
+      const F iz = one / select(rises, e.z, one);
+      const F za = (-g.h - p0.z) * iz, zb = (g.h - p0.z) * iz;
+      const F s0 = select(rises, max(min(za, zb), zero), zero);
+      const F s1 = select(rises, min(max(za, zb), one), select(abs(p0.z) <= g.h, one, F(-1.0f)));
+      for (int c = 0; c < 2; ++c) {
+        V3<F> bq = madd(p0, c == 0 ? s0 : s1, e);
+        const Mask within = abs(bq.z) <= g.h + slack;
+        bq.z = clamp(bq.z, -g.h, g.h);
+        const F bb = bq.x * n.x + bq.y * n.y, cc = bq.x * bq.x + bq.y * bq.y - g.rc * g.rc;
+        const F d_side = (bb + sqrt(max(bb * bb - nxy2 * cc, zero))) / select(okxy, nxy2, one);
+        const Mask up = abs(n.z) > tiny;
+        const F d_cap = select(up, (bq.z + simd::sign_nonneg(n.z) * g.h) / select(up, n.z, one), F(3.0e38f));
+        const F d = select(abs(n.z) * (d_side - d_cap) > slack, min(d_side, d_cap), d_side);
+        const int i = 3 + 2 * q + c;
+        ca[i] = madd(bq, F(-0.5f) * d, n), cd[i] = d;
+        cv[i] = (s0 <= s1) & (cc <= zero) & within;
+      }
+    }
+    for (int i = 0; i < M; ++i) {
+      cv[i] = cv[i] & (cd[i] > zero);
+      c2x[i] = ca[i].y * mx - ca[i].x * my, c2y[i] = ca[i].z;
+    }
+    drop_shadowed_witness<F, M>(cd, cv, o, tol);
+    Int idx[4], cnt;
+    F ox[4], oy[4];
+    reduce4_indices<F, M>(c2x, c2y, cd, cv, tol, idx, cnt, ox, oy);
+    F axv[M], ayv[M], azv[M];
+    for (int i = 0; i < M; ++i) axv[i] = ca[i].x, ayv[i] = ca[i].y, azv[i] = ca[i].z;
+    const Mask use = side_like & (cnt > Int(0));
+    m.count = select(use, cnt, m.count);
+    for (int i = 0; i < 4; ++i) {
+      const V3<F> aq{simd::gather_lanes(axv, idx[i]), simd::gather_lanes(ayv, idx[i]),
+                     simd::gather_lanes(azv, idx[i])};
+      const F dq = simd::gather_lanes(cd, idx[i]);
+      m.point[i] = select(use, aq, m.point[i]);
+      m.pdepth[i] = select(use, min(dq, o), m.pdepth[i]);
+    }
+  }
+
+  m.count = select(hit, m.count, Int(0));
+  m.n = rot.apply(n);
+  m.depth = o;
+  for (int i = 0; i < 4; ++i) m.point[i] = cb + rot.apply(m.point[i]);
+  store(out, k, m, load_p<F>(a, k));
+}
+
+template <class F>
+void box_cylinder_range(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out, Range r) {
+  constexpr uint32_t W = F::kWidth;
+  using C = Chunk<W>;
+  C ch;
+  for (uint32_t k0 = r.begin; k0 < r.end; k0 += C::kLanes) {
+    const uint32_t n = r.end - k0 < C::kLanes ? r.end - k0 : C::kLanes;
+    ch.nitems = 0;
+    for (uint32_t j = 0; j < n; j += W) {
+      const uint32_t k = k0 + j, nb = n - j < W ? n - j : W;
+      if (nb == W) {
+        phase_a<F, W>(a, b, k, j, nb, ch);
+      } else {
+        TailSide<W> ta, tb;
+        ta.fill(a, k, nb);
+        tb.fill(b, k, nb);
+        phase_a<F, W>(ta.view, tb.view, 0u, j, nb, ch);
+      }
+    }
+    phase_b<F, W>(ch);
+    for (uint32_t j = 0; j < n; j += W) {
+      const uint32_t k = k0 + j, nb = n - j < W ? n - j : W;
+      if (nb == W) {
+        phase_c<F, W>(a, b, out, k, j, ch);
+      } else {
+        TailSide<W> ta, tb;
+        ta.fill(a, k, nb);
+        tb.fill(b, k, nb);
+        TailOut<W, 4> to{};
+        phase_c<F, W>(ta.view, tb.view, to.view(), 0u, j, ch);
+        to.copy_to(out, k, nb);
+      }
+    }
+  }
+}
+
+}  // namespace
+
+void collide_box_cylinder(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out, Range r,
+                          const NarrowConfig& cfg) {
+  if (cfg.path == KernelPath::kScalar)
+    box_cylinder_range<simd::Float1>(a, b, out, r);
+  else
+    box_cylinder_range<simd::FloatW>(a, b, out, r);
+}
+
+}  // namespace impact::kernels
