@@ -1,0 +1,1189 @@
+// collide_box_cylinder (kernels/narrowphase/box_cylinder.cpp) on both paths against
+// independent double-precision references, and against the general GJK / EPA path
+// (collide_gjk_epa) on the same lanes.
+//
+// References (double, the inputs rounded to float as the kernel sees them; no candidate
+// enumeration, no root solve by steps):
+//  - the signed distances of a point to the solid box and to the solid cylinder in
+//    closed form (each in its own frame: the box's excess per axis; the cylinder's
+//    radial and axial excess; inside, minus the nearest face);
+//  - the gap: the least signed distance to the cylinder over the box's six faces, by
+//    nested golden-section search over each face's two coordinates (the signed distance
+//    to a convex set is convex, and so is its minimum over one coordinate). The two
+//    are apart iff the gap is > 0 and the cylinder's centre lies outside the box (a
+//    cylinder that meets no face of the box and is not inside it misses it); the gap is
+//    then their distance;
+//  - apart: depth_ref = -gap, normal from the box's point at the minimum to its closest
+//    cylinder point (unique: the offset of two disjoint convex sets' closest points is);
+//  - meeting: depth_ref = the least support overlap h_A(n) + h_B(-n) over unit n by
+//    dense sampling and Nelder-Mead (tests/support/narrow_reference.h);
+//  - the translation check, with the gap alone: B moved by n (depth + d) is apart by at
+//    least d - 2 tol, and moved by n (depth - d) still meets A.
+// The references are checked against closed forms and each other first
+// (ReferenceMatchesClosedForms), and every feature scenario against its construction
+// (apart: the built features are each other's closest points, at the built distance;
+// meeting: the overlap along the built normal is the built depth, an upper bound).
+// Per lane, L = the larger bounding radius (the box's half diagonal, sqrt(rc^2 + h^2)),
+// tol = kRel L:
+//  (a) count > 0 iff depth_ref > 0 (either answer where |depth_ref| <= tol), count <= 4;
+//  (b) |depth - depth_ref| <= tol;
+//  (c) n finite and unit; as good a direction as the reference's (the support overlap
+//      along n within tol of depth_ref); angle(n, n_ref) <= kAngleTol where the minimum
+//      is unique and well conditioned (no direction outside a 0.02 rad cone around
+//      n_ref within 2 tol of depth_ref, by nref's own probes, a dense ring on the cone
+//      and dense probes of the great circles where whole circles of minima occur: the
+//      cylinder's horizontal one and those perpendicular to each box axis; and the
+//      overlap rising by >= 1e-6 L 3e-3 rad from n_ref);
+//  (d) each point p with depth d: p + n d/2 on the box's surface, p - n d/2 on the
+//      cylinder's (within tol plus ulps of the largest coordinate), 0 < d <= depth, a
+//      single point carries the depth;
+//  (e) the scalar and SIMD paths give the same bytes.
+// Scenarios: random poses at sizes 1, 1e-4, 1e4 and 1e5 from the origin (about half
+// meeting); deep (a long box through the middle, coincident centres, a box wholly
+// inside, the cylinder wholly inside a big box, a box over a rim); feature pairs built in
+// closed form, apart and meeting: a box edge across a rim (the minimum on an edge-rim
+// piece), a box vertex at a rim, an edge against the side (normal edge x axis), a vertex
+// against the side, a face against a rim, a vertex into a cap; manifolds (axis-aligned,
+// both paths): a box resting flat on the cap (its 4 face corners, or rim points within
+// the face), the cylinder standing on a box face (rim points), lying on it (the side
+// line's 2 ends, clipped to the face); near-parallel tilts (0..1e-2 rad) of those;
+// exactly touching (count 0); needle and pancake boxes and cylinders (1e-4); symmetries
+// (a rotation and translation of the whole pair, the cylinder's axis reversed, the box's
+// axes relabelled); range partitions and shuffled buckets (same bytes, nothing written
+// outside the range); agreement with GJK / EPA.
+#include <gtest/gtest.h>
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <cstring>
+#include <limits>
+#include <numeric>
+#include <random>
+#include <vector>
+
+#include "kernels/narrowphase/pair_kernels.h"
+#include "support/leaf_lanes.h"
+#include "support/narrow_reference.h"
+#include "support/random_input.h"
+#include "support/test_support.h"
+
+namespace impact::kernels {
+namespace {
+
+using Vec3d = Eigen::Vector3d;
+using Mat3d = Eigen::Matrix3d;
+namespace nref = test::nref;
+
+constexpr double kRel = 1e-5;       // depth tolerance, of L
+constexpr double kAngleTol = 1e-4;  // rad, where the minimum is unique and conditioned
+/// Golden-section steps per coordinate of the gap: brackets of 0.618^48 ~ 1e-10 of a face.
+constexpr int kGoldenIters = 48;
+
+double angle(const Vec3d& a, const Vec3d& b) {
+  return std::atan2(a.cross(b).norm(), a.dot(b));
+}
+
+struct Query {
+  Vec3d c;       // box centre
+  Mat3d Q;       // box rotation (columns: its axes)
+  Vec3d e;       // box half extents
+  Vec3d p;       // cylinder centre
+  Mat3d R;       // cylinder rotation (column 2 = axis)
+  double rc, h;  // cylinder radius, half length
+};
+
+/// The query as the kernel sees it: every input rounded to float.
+Query rounded(Query q) {
+  q.c = test::round_to_float(q.c);
+  q.Q = test::round_to_float(q.Q);
+  q.e = test::round_to_float(q.e);
+  q.p = test::round_to_float(q.p);
+  q.R = test::round_to_float(q.R);
+  q.rc = test::round_to_float(q.rc);
+  q.h = test::round_to_float(q.h);
+  return q;
+}
+
+double size_of(const Query& q) {
+  return std::max(q.e.norm(), std::hypot(q.rc, q.h));
+}
+
+double coord_ulp(const Query& q) {
+  const double m = std::max(q.c.cwiseAbs().maxCoeff(), q.p.cwiseAbs().maxCoeff()) + size_of(q);
+  return m * std::ldexp(1.0, -23);
+}
+
+// --- running the kernel -----------------------------------------------------------------------
+
+struct Lanes {
+  std::vector<float> ap[3], ar[9], ae[3], bp[3], br[9], be[3];
+  LeafSoA a{}, b{};
+  explicit Lanes(const std::vector<Query>& qs) {
+    for (const Query& q : qs) {
+      for (int i = 0; i < 3; ++i) {
+        ap[i].push_back(float(q.c[i]));
+        ae[i].push_back(float(q.e[i]));
+        bp[i].push_back(float(q.p[i]));
+      }
+      for (int i = 0; i < 9; ++i) {
+        ar[i].push_back(float(q.Q(i / 3, i % 3)));
+        br[i].push_back(float(q.R(i / 3, i % 3)));
+      }
+      be[0].push_back(float(q.rc)), be[1].push_back(float(q.h)), be[2].push_back(0.0f);
+    }
+    for (int i = 0; i < 3; ++i)
+      a.p[i] = ap[i].data(), a.e[i] = ae[i].data(), b.p[i] = bp[i].data(), b.e[i] = be[i].data();
+    for (int i = 0; i < 9; ++i) a.r[i] = ar[i].data(), b.r[i] = br[i].data();
+  }
+};
+
+/// Runs `kern` (the kernel under test unless given) on lanes [begin, end) of one bucket.
+std::vector<test::PairResult> run(const std::vector<Query>& qs, KernelPath path, PairKernel kern = nullptr,
+                                  uint32_t begin = 0, uint32_t end = ~0u,
+                                  test::ManifoldLanes* keep = nullptr) {
+  if (kern == nullptr) kern = &collide_box_cylinder;
+  const uint32_t n = static_cast<uint32_t>(qs.size());
+  end = std::min(end, n);
+  Lanes l(qs);
+  test::ManifoldLanes o(n);
+  NarrowConfig cfg;
+  cfg.path = path;
+  kern(l.a, l.b, o.view(), Range{begin, end}, cfg);
+  std::vector<test::PairResult> out(n);
+  for (uint32_t k = begin; k < end; ++k) out[k] = o.result(k);
+  if (keep != nullptr) *keep = o;
+  return out;
+}
+
+void gjk_kernel(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out, Range r,
+                const NarrowConfig& cfg) {
+  collide_gjk_epa(a, b, out, r, cfg, kLeafBox, kLeafCylinder);
+}
+
+// --- references -------------------------------------------------------------------------------
+
+/// Signed distance of x to the solid box of q (< 0 inside).
+double box_sd(const Query& q, const Vec3d& x) {
+  const Vec3d l = (q.Q.transpose() * (x - q.c)).cwiseAbs() - q.e;
+  const double inside = l.maxCoeff();
+  return inside > 0 ? l.cwiseMax(0.0).norm() : inside;
+}
+
+/// Signed distance of x to the solid cylinder of q moved by `shift` (< 0 inside).
+double cyl_sd(const Query& q, const Vec3d& x, const Vec3d& shift = Vec3d::Zero()) {
+  const Vec3d l = q.R.transpose() * (x - q.p - shift);
+  const double dr = std::hypot(l.x(), l.y()) - q.rc, dz = std::fabs(l.z()) - q.h;
+  if (dr <= 0 && dz <= 0) return std::max(dr, dz);
+  return std::hypot(std::max(dr, 0.0), std::max(dz, 0.0));
+}
+
+/// The closest point of the solid cylinder to an outside point x.
+Vec3d cyl_closest(const Query& q, const Vec3d& x) {
+  const Vec3d l = q.R.transpose() * (x - q.p);
+  const double rho = std::hypot(l.x(), l.y());
+  const double s = rho > q.rc ? q.rc / rho : 1.0;
+  return q.p + q.R * Vec3d(l.x() * s, l.y() * s, std::clamp(l.z(), -q.h, q.h));
+}
+
+/// The least signed distance to the cylinder (moved by `shift`) over the box's surface:
+/// per face, nested golden-section search over its two coordinates; where = the point.
+double surface_minimum(const Query& q, const Vec3d& shift, Vec3d* where) {
+  double best = std::numeric_limits<double>::infinity();
+  for (int i = 0; i < 3; ++i)
+    for (double s : {-1.0, 1.0}) {
+      const int j = (i + 1) % 3, k = (i + 2) % 3;
+      auto point = [&](double u, double v) {
+        Vec3d l;
+        l[i] = s * q.e[i], l[j] = u, l[k] = v;
+        return Vec3d(q.c + q.Q * l);
+      };
+      auto inner = [&](double u, double* v_at) {
+        return test::golden_section_min([&](double v) { return cyl_sd(q, point(u, v), shift); }, -q.e[k],
+                                        q.e[k], kGoldenIters, v_at);
+      };
+      double u = 0, v = 0;
+      const double m = test::golden_section_min(
+          [&](double uu) {
+            double vv;
+            return inner(uu, &vv);
+          },
+          -q.e[j], q.e[j], kGoldenIters, &u);
+      if (m < best) {
+        best = m;
+        inner(u, &v);
+        if (where != nullptr) *where = point(u, v);
+      }
+    }
+  return best;
+}
+
+/// > 0: the distance between the box and the cylinder moved by `shift` (where = the
+/// box's closest point); <= 0: they meet (the value is then only an upper bound of the
+/// least signed distance over the box).
+double gap(const Query& q, const Vec3d& shift = Vec3d::Zero(), Vec3d* where = nullptr) {
+  const double m = surface_minimum(q, shift, where);
+  if (m > 0 && box_sd(q, q.p + shift) < 0) return -std::min(q.rc, q.h);  // the cylinder inside the box
+  return m;
+}
+
+nref::V3 v3(const Vec3d& v) {
+  return {v.x(), v.y(), v.z()};
+}
+Vec3d ev(const nref::V3& v) {
+  return {v.x, v.y, v.z};
+}
+nref::Shape box_shape(const Query& q) {
+  nref::Shape s;
+  s.type = kLeafBox;
+  s.p = v3(q.c);
+  for (int i = 0; i < 9; ++i) s.r[i] = q.Q(i / 3, i % 3);
+  for (int i = 0; i < 3; ++i) s.e[i] = q.e[i];
+  return s;
+}
+nref::Shape cylinder_shape(const Query& q) {
+  nref::Shape s;
+  s.type = kLeafCylinder;
+  s.p = v3(q.p);
+  for (int i = 0; i < 9; ++i) s.r[i] = q.R(i / 3, i % 3);
+  s.e[0] = q.rc;
+  s.e[1] = q.h;
+  return s;
+}
+
+/// The support overlap of A and B along n.
+double overlap_along(const Query& q, const Vec3d& n) {
+  return nref::overlap(box_shape(q), cylinder_shape(q), v3(n.normalized()));
+}
+
+nref::Options dense_options() {
+  nref::Options o;
+  o.samples = 6000;
+  o.starts = 8;
+  return o;
+}
+
+/// Whether n_ref is the only minimiser within 0.02 rad: every direction outside that
+/// cone overlaps by more than depth + 2 tol (nref's second best, a dense ring at 0.02 rad,
+/// and the great circles where whole circles of minima occur: the cylinder's horizontal
+/// one, those perpendicular to each box axis), and the overlap rises by >= 1e-6 L at
+/// 3e-3 rad from n_ref in every direction (its flat valleys).
+bool unique_minimum(const Query& q, const Vec3d& n_ref, double depth, double second, double tol) {
+  const nref::Shape sa = box_shape(q), sb = cylinder_shape(q);
+  auto o = [&](const Vec3d& n) { return nref::overlap(sa, sb, v3(n.normalized())); };
+  const Vec3d t1 = n_ref.unitOrthogonal(), t2 = n_ref.cross(t1);
+  auto ring = [&](double cone, int count) {
+    double r = std::numeric_limits<double>::infinity();
+    for (int i = 0; i < count; ++i) {
+      const double a = 2 * M_PI * i / count;
+      r = std::min(r, o(n_ref + std::tan(cone) * (std::cos(a) * t1 + std::sin(a) * t2)));
+    }
+    return r;
+  };
+  double best = std::min(second, ring(0.02, 720));
+  const Vec3d axes[4] = {q.R.col(2), q.Q.col(0), q.Q.col(1), q.Q.col(2)};
+  for (const Vec3d& ax : axes) {
+    const Vec3d e1 = ax.normalized().unitOrthogonal(), e2 = ax.normalized().cross(e1);
+    for (int i = 0; i < 6284; ++i) {
+      const double a = 1e-3 * i;
+      const Vec3d n = std::cos(a) * e1 + std::sin(a) * e2;
+      if (angle(n, n_ref) > 0.02) best = std::min(best, o(n));
+    }
+  }
+  if (!(best > depth + 2 * tol)) return false;
+  return ring(3e-3, 96) - depth >= 1e-6 * size_of(q);
+}
+
+struct Ref {
+  double depth = 0;  // > 0: penetration depth; else minus the gap
+  Vec3d n = Vec3d::UnitZ();
+  bool apart = false;
+  bool unique = false;  // the normal is unique at this tolerance
+};
+
+Ref reference(const Query& q) {
+  Ref f;
+  Vec3d x = q.c;
+  const double m = gap(q, Vec3d::Zero(), &x);
+  const double tol = kRel * size_of(q);
+  if (m > 0) {
+    f.apart = true;
+    f.depth = -m;
+    f.n = (cyl_closest(q, x) - x).normalized();
+    f.unique = m > 1e-3 * size_of(q);
+    return f;
+  }
+  const nref::PairResult s = nref::solve_pair(box_shape(q), cylinder_shape(q), {}, dense_options());
+  f.depth = s.s;
+  f.n = ev(s.n);
+  f.unique = s.unique(2 * tol) && unique_minimum(q, f.n, s.s, s.second, tol);
+  return f;
+}
+
+// --- the per-lane check -----------------------------------------------------------------------
+
+struct Stats {
+  int lanes = 0, hits = 0, multi = 0, normals_checked = 0;
+  int counts[5] = {0, 0, 0, 0, 0};
+  double worst_depth = 0, worst_angle = 0;
+};
+
+bool same_bytes(const test::PairResult& x, const test::PairResult& y) {
+  bool same = x.count == y.count;
+  if (same && x.count > 0) {
+    same = std::memcmp(&x.depth, &y.depth, sizeof x.depth) == 0 && std::memcmp(&x.n, &y.n, sizeof x.n) == 0;
+    for (uint32_t i = 0; i < x.count; ++i)
+      same = same && std::memcmp(&x.pt[i], &y.pt[i], sizeof x.pt[i]) == 0 &&
+             std::memcmp(&x.pd[i], &y.pd[i], sizeof x.pd[i]) == 0;
+  }
+  return same;
+}
+
+/// Checks a lane's points: on both surfaces, 0 < pdepth <= depth, one point carries it.
+void check_points(const Query& q, const test::PairResult& h, double ptol, const char* what, size_t k,
+                  const char* path) {
+  for (uint32_t i = 0; i < h.count; ++i) {
+    ASSERT_TRUE(h.pt[i].allFinite()) << what << " lane " << k;
+    EXPECT_GT(h.pd[i], 0.0) << what << " lane " << k << " point " << i << path;
+    EXPECT_LE(h.pd[i], h.depth) << what << " lane " << k << " point " << i << path;
+    const Vec3d on_a = h.pt[i] + 0.5 * h.pd[i] * h.n, on_b = h.pt[i] - 0.5 * h.pd[i] * h.n;
+    EXPECT_LE(std::fabs(box_sd(q, on_a)), ptol) << what << " lane " << k << " point " << i << path;
+    EXPECT_LE(std::fabs(cyl_sd(q, on_b)), ptol) << what << " lane " << k << " point " << i << path;
+  }
+  if (h.count == 1) {
+    EXPECT_EQ(h.pd[0], h.depth) << what << " lane " << k << path;
+  }
+}
+
+/// Checks (a)-(e) and the translation check for every lane of qs (already rounded).
+void check_all(const std::vector<Query>& qs, const char* what, Stats* out_stats = nullptr) {
+  SCOPED_TRACE(what);
+  const auto simd = run(qs, KernelPath::kSimd), scal = run(qs, KernelPath::kScalar);
+  Stats st;
+  for (size_t k = 0; k < qs.size(); ++k) {
+    const Query& q = qs[k];
+    const Ref f = reference(q);
+    const double L = size_of(q), tol = kRel * L, ptol = tol + 4 * coord_ulp(q);
+    ++st.lanes;
+    for (const test::PairResult* hp : {&simd[k], &scal[k]}) {
+      const test::PairResult& h = *hp;
+      const bool is_simd = hp == &simd[k];
+      const char* path = is_simd ? " simd" : " scalar";
+      ASSERT_LE(h.count, 4u) << what << " lane " << k;
+      if (std::fabs(f.depth) <= tol) continue;
+      ASSERT_EQ(h.count > 0, f.depth > 0) << what << " lane " << k << " depth_ref " << f.depth << " got "
+                                          << (h.count > 0 ? h.depth : 0.0) << path;
+      if (f.depth <= 0) continue;
+      if (is_simd) {
+        ++st.hits;
+        st.multi += h.count > 1;
+        ++st.counts[h.count];
+      }
+      const double dd = std::fabs(h.depth - f.depth);
+      st.worst_depth = std::max(st.worst_depth, dd / L);
+      EXPECT_LE(dd, tol) << what << " lane " << k << " depth " << h.depth << " ref " << f.depth << path;
+      ASSERT_TRUE(h.n.allFinite()) << what << " lane " << k;
+      EXPECT_NEAR(h.n.norm(), 1.0, 1e-6) << what << " lane " << k;
+      // (c) as good a separating direction as the reference's, and the same where unique
+      EXPECT_LE(overlap_along(q, h.n), f.depth + tol) << what << " lane " << k << path;
+      if (f.unique) {
+        const double ang = angle(h.n, f.n);
+        if (is_simd) ++st.normals_checked, st.worst_angle = std::max(st.worst_angle, ang);
+        EXPECT_LE(ang, kAngleTol) << what << " lane " << k << " n " << h.n.transpose() << " ref "
+                                  << f.n.transpose() << path;
+      }
+      check_points(q, h, ptol, what, k, path);
+    }
+    // (e) the paths give the same bytes (the same IEEE operations, no contraction)
+    EXPECT_TRUE(same_bytes(simd[k], scal[k])) << what << " lane " << k << ": the SIMD and scalar paths differ";
+    // the translation check, by the gap alone
+    const test::PairResult& h = simd[k];
+    if (h.count > 0 && h.depth > 20 * tol) {
+      const double d = 0.05 * h.depth;
+      const double apart = gap(q, (h.depth + d) * h.n);
+      EXPECT_GE(apart, d - 2 * tol) << what << " lane " << k << ": moved by n (depth + d) not apart by d";
+      const double meets = gap(q, (h.depth - d) * h.n);
+      EXPECT_LT(meets, 0.0) << what << " lane " << k << ": moved by n (depth - d) already apart";
+    }
+  }
+  if (out_stats != nullptr) *out_stats = st;
+  std::printf(
+      "  %-28s lanes %4d hits %4d points 1/2/3/4 %d/%d/%d/%d normals %4d | worst |depth-ref| %.2g L, "
+      "angle %.2g rad\n",
+      what, st.lanes, st.hits, st.counts[1], st.counts[2], st.counts[3], st.counts[4],
+      st.normals_checked, st.worst_depth, st.worst_angle);
+}
+
+// --- inputs -----------------------------------------------------------------------------------
+
+Vec3d random_unit(std::mt19937& g) {
+  std::normal_distribution<double> d;
+  for (;;) {
+    const Vec3d v(d(g), d(g), d(g));
+    if (v.norm() > 1e-3) return v.normalized();
+  }
+}
+
+Mat3d columns(const Vec3d& a, const Vec3d& b, const Vec3d& c) {
+  Mat3d m;
+  m.col(0) = a, m.col(1) = b, m.col(2) = c;
+  return m;
+}
+
+Mat3d rot(double a, const Vec3d& axis) {
+  return Eigen::AngleAxisd(a, axis.normalized()).toRotationMatrix();
+}
+
+/// The rotation about from x to (not opposite) that turns `from` onto `to`.
+Mat3d turn_to(const Vec3d& from, const Vec3d& to) {
+  const Vec3d a = from.normalized(), b = to.normalized();
+  return rot(angle(a, b), a.cross(b));
+}
+
+/// A random pair at size `size`, `offset` from the origin, the box centre within
+/// `spread` (of the pair's reach) of the cylinder's.
+Query random_query(std::mt19937& g, double size, double offset, double spread) {
+  std::uniform_real_distribution<double> uni(0, 1);
+  Query q;
+  q.p = Vec3d(offset, -offset, 0.5 * offset) + size * Vec3d(uni(g) - 0.5, uni(g) - 0.5, uni(g) - 0.5);
+  q.R = test::random_rotation(g);
+  q.rc = size * (0.1 + 0.9 * uni(g));
+  q.h = size * (0.1 + 0.9 * uni(g));
+  q.Q = test::random_rotation(g);
+  q.e = size * Vec3d(0.1 + 0.9 * uni(g), 0.1 + 0.9 * uni(g), 0.1 + 0.9 * uni(g));
+  const double reach = q.e.norm() + std::hypot(q.rc, q.h);
+  q.c = q.p + spread * reach * uni(g) * random_unit(g);
+  return rounded(q);
+}
+
+std::vector<Query> random_queries(std::mt19937& g, int n, double size, double offset) {
+  std::vector<Query> qs;
+  for (int i = 0; i < n; ++i) qs.push_back(random_query(g, size, offset, 1.3));
+  return qs;
+}
+
+/// A query in the cylinder's frame (centre 0, axis z): the box's centre c and axes Qb are
+/// local; posed by a random rotation and offset.
+Query posed(std::mt19937& g, const Vec3d& c, const Mat3d& Qb, const Vec3d& e, double rc, double h,
+            double offset = 0.0) {
+  Query q;
+  q.R = test::random_rotation(g);
+  q.p = Vec3d(offset, 0.3 * offset, -0.7 * offset) + Vec3d(0.25, -0.5, 0.75);
+  q.c = q.p + q.R * c;
+  q.Q = q.R * Qb;
+  q.e = e, q.rc = rc, q.h = h;
+  return rounded(q);
+}
+
+/// An axis-aligned cylinder (R = I) at p, the box at p + c: exact in float for the
+/// analytic cases (dyadic values, Qb = I).
+Query aligned(const Vec3d& p, const Vec3d& c, const Mat3d& Qb, const Vec3d& e, double rc, double h) {
+  Query q;
+  q.R = Mat3d::Identity();
+  q.p = p;
+  q.c = p + c;
+  q.Q = Qb;
+  q.e = e, q.rc = rc, q.h = h;
+  return rounded(q);
+}
+
+/// A box with the edge along unit e through x0 (its midpoint) as its support along unit
+/// n (n perpendicular to e): the edge's two faces at psi and pi/2 - psi from n.
+void edge_box(const Vec3d& x0, const Vec3d& e, const Vec3d& n, double psi, const Vec3d& half, Vec3d* c,
+              Mat3d* Qb) {
+  const Vec3d w = e.cross(n);
+  const Vec3d f1 = std::cos(psi) * n - std::sin(psi) * w, f2 = std::sin(psi) * n + std::cos(psi) * w;
+  *Qb = columns(e, f1, f2);  // right-handed: f1 x f2 = n x w = e
+  *c = x0 - half[1] * f1 - half[2] * f2;
+}
+
+/// A box with its vertex at v as its support along unit n, n at least 0.25 (in each
+/// local coordinate) inside the vertex's normal cone: a pointed vertex.
+void vertex_box(std::mt19937& g, const Vec3d& v, const Vec3d& n, const Vec3d& half, Vec3d* c, Mat3d* Qb) {
+  Vec3d l;
+  do {
+    *Qb = test::random_rotation(g);
+    l = Qb->transpose() * n;
+  } while (l.cwiseAbs().minCoeff() < 0.25);
+  const Vec3d s(l.x() > 0 ? 1 : -1, l.y() > 0 ? 1 : -1, l.z() > 0 ? 1 : -1);
+  *c = v - *Qb * s.cwiseProduct(half);
+}
+
+Vec3d radial(double a) {
+  return {std::cos(a), std::sin(a), 0.0};
+}
+Vec3d tangential(double a) {
+  return {-std::sin(a), std::cos(a), 0.0};
+}
+
+/// Whether x lies (across the cylinder's axis) at a corner of the box's face across that
+/// axis (box axes 0 and 1) inside the cap's disk, or on the rim within that face: the
+/// vertices of the face clipped to the disk.
+bool corner_or_rim(const Query& q, const Vec3d& x, double eps) {
+  const Vec3d l = q.R.transpose() * (x - q.p);
+  const double rho = std::hypot(l.x(), l.y());
+  const Vec3d b = q.Q.transpose() * (x - q.c);
+  const double bx = std::fabs(b.x()), by = std::fabs(b.y());
+  const bool corner = std::fabs(bx - q.e.x()) <= eps && std::fabs(by - q.e.y()) <= eps && rho <= q.rc + eps;
+  const bool rim = std::fabs(rho - q.rc) <= eps && bx <= q.e.x() + eps && by <= q.e.y() + eps;
+  return corner || rim;
+}
+
+double spread(const test::PairResult& r) {
+  double far = 0;
+  for (uint32_t i = 0; i < r.count; ++i)
+    for (uint32_t j = 0; j < r.count; ++j) far = std::max(far, (r.pt[i] - r.pt[j]).norm());
+  return far;
+}
+
+// ---------------------------------------------------------------------------------------------
+
+TEST(BoxCylinder, RegisteredForTheBucket) {
+  EXPECT_EQ(pair_kernel(kLeafBox, kLeafCylinder), &collide_box_cylinder);
+}
+
+/// The references against closed forms: point distances; a box beside the side, on the
+/// cap, an edge and a vertex off a rim (apart), an edge across a rim, a level box through
+/// the middle, a small box inside, the cylinder inside a big box; and nref against the
+/// gap (distance and normal) on random separated lanes.
+TEST(BoxCylinder, ReferenceMatchesClosedForms) {
+  Query q;
+  q.p = Vec3d(1, 2, 3);
+  q.R = Mat3d::Identity();
+  q.rc = 1.0, q.h = 2.0;
+  q.c = Vec3d(-1, 0.5, 2);
+  q.Q = Mat3d::Identity();
+  q.e = Vec3d(0.5, 1, 2);
+  EXPECT_NEAR(cyl_sd(q, q.p + Vec3d(3, 0, 0)), 2.0, 1e-15);
+  EXPECT_NEAR(cyl_sd(q, q.p + Vec3d(0, 0, 2.5)), 0.5, 1e-15);
+  EXPECT_NEAR(cyl_sd(q, q.p + Vec3d(0, 4, 6)), 5.0, 1e-15);  // rim (0, 1, 2): (3, 4)
+  EXPECT_NEAR(cyl_sd(q, q.p + Vec3d(0.5, 0, 0)), -0.5, 1e-15);
+  EXPECT_NEAR(cyl_sd(q, q.p + Vec3d(0, 0, 1.9)), -0.1, 1e-15);
+  EXPECT_NEAR(box_sd(q, q.c + Vec3d(1.5, 0, 0)), 1.0, 1e-15);
+  EXPECT_NEAR(box_sd(q, q.c + Vec3d(1.5, 2, 0)), std::sqrt(2.0), 1e-15);
+  EXPECT_NEAR(box_sd(q, q.c + Vec3d(-1.5, -4, 6)), std::sqrt(1 + 9 + 16.0), 1e-14);
+  EXPECT_NEAR(box_sd(q, q.c + Vec3d(0.25, 0, 0)), -0.25, 1e-15);
+  EXPECT_NEAR(box_sd(q, q.c + Vec3d(0.5, 1, 2)), 0.0, 1e-15);
+  {
+    const Mat3d turn = rot(0.7, Vec3d(1, 2, 3));
+    Query t = q;
+    t.Q = turn;
+    EXPECT_NEAR(box_sd(t, t.c + turn * Vec3d(0.5, -1.25, 2.5)), std::hypot(0.25, 0.5), 1e-14);
+  }
+  struct Case {
+    Vec3d c, e;
+    Mat3d Q;
+    double depth;
+    Vec3d n;
+  };
+  const Mat3d I = Mat3d::Identity();
+  const Vec3d m = Vec3d(0.6, 0, 0.8);  // a direction in the rim (1, 0, 2)'s normal cone
+  const Mat3d diag = turn_to(Vec3d(1, 1, 1), m);
+  const Vec3d diag_vertex = Vec3d(1, 0, 2) + 0.25 * m;
+  // an edge across the rim (1, 0, 2), 0.1 inside along -(1, 0, 1)/sqrt 2
+  const Vec3d nd = -Vec3d(1, 0, 1).normalized();
+  Vec3d edge_c;
+  Mat3d edge_Q;
+  edge_box(Vec3d(1, 0, 2) + 0.1 * nd, Vec3d(-1, 0, 1).normalized(), nd, M_PI / 4, Vec3d(1, 0.5, 0.5), &edge_c,
+           &edge_Q);
+  const Case cases[] = {
+      {Vec3d(1.4, 0, 0.3), Vec3d(0.5, 0.5, 0.5), I, 0.1, Vec3d(-1, 0, 0)},    // beside the side
+      {Vec3d(0.2, 0.1, 2.4), Vec3d(0.3, 0.3, 0.5), I, 0.1, Vec3d(0, 0, -1)},  // on the cap
+      {Vec3d(1.8, 0, 2.9), Vec3d(0.5, 0.5, 0.5), I, -0.5, -m},                // an edge off the rim
+      {diag_vertex + 0.5 * std::sqrt(3.0) * m, Vec3d(0.5, 0.5, 0.5), diag, -0.25, -m},  // a vertex off it
+      {edge_c, Vec3d(1, 0.5, 0.5), edge_Q, 0.1, nd},                          // an edge across it
+      {Vec3d(0, 0.1, 0), Vec3d(3, 0.25, 0.25), I, 1.15, Vec3d(0, -1, 0)},     // level through the middle
+      {Vec3d(0.3, 0, 0), Vec3d(0.1, 0.1, 0.1), I, 0.8, Vec3d(-1, 0, 0)},      // small, inside
+      {Vec3d(-0.5, 0, 0), Vec3d(3, 3, 3), I, 3.5, Vec3d(1, 0, 0)},            // the cylinder inside
+  };
+  for (const Case& cs : cases) {
+    Query w = q;
+    w.c = q.p + cs.c, w.e = cs.e, w.Q = cs.Q;
+    const Ref f = reference(w);
+    EXPECT_NEAR(f.depth, cs.depth, 1e-9) << cs.c.transpose();
+    EXPECT_TRUE(f.unique) << cs.c.transpose();
+    EXPECT_LT(angle(f.n, cs.n), 1e-6) << cs.c.transpose() << " n " << f.n.transpose();
+  }
+  // ties: a long box along the axis (4 horizontal directions), coincident centres
+  {
+    Query w = q;
+    w.c = q.p, w.e = Vec3d(0.25, 0.25, 3), w.Q = I;
+    const Ref f = reference(w);
+    EXPECT_NEAR(f.depth, 1.25, 1e-9);
+    EXPECT_FALSE(f.unique);
+  }
+  // nref against the gap where the two are apart
+  std::mt19937 g(5);
+  int compared = 0;
+  for (int i = 0; i < 60; ++i) {
+    const Query w = random_query(g, 1.0, 0.0, 1.1);
+    Vec3d x;
+    const double d = gap(w, Vec3d::Zero(), &x);
+    if (d <= 1e-3) continue;
+    const nref::PairResult s = nref::solve_pair(box_shape(w), cylinder_shape(w), {}, dense_options());
+    // (the float-rounded rotations are orthonormal to ~1e-8: the point distances read
+    // all of R and Q, nref's cylinder only the axis)
+    EXPECT_NEAR(s.s, -d, 1e-7) << i;
+    EXPECT_LT(angle(ev(s.n), cyl_closest(w, x) - x), 1e-5) << i;
+    ++compared;
+  }
+  EXPECT_GT(compared, 10);
+}
+
+class BoxCylinderScales : public ::testing::TestWithParam<std::tuple<double, double>> {};
+
+TEST_P(BoxCylinderScales, RandomPosesAgainstReference) {
+  const auto [size, offset] = GetParam();
+  std::mt19937 g(17 + static_cast<uint32_t>(std::log10(size) + 10 * (offset > 0)));
+  const int n = static_cast<int>(test::scaled(offset == 0 && size == 1.0 ? 300 : 200));
+  Stats st;
+  check_all(random_queries(g, n, size, offset), "random", &st);
+  EXPECT_GT(st.hits, n / 4);
+  EXPECT_LT(st.hits, n * 9 / 10);
+  EXPECT_GT(st.normals_checked, st.hits / 2);
+}
+
+INSTANTIATE_TEST_SUITE_P(Scales, BoxCylinderScales,
+                         ::testing::Values(std::make_tuple(1.0, 0.0), std::make_tuple(1e-4, 0.0),
+                                           std::make_tuple(1e4, 0.0), std::make_tuple(1.0, 1e5)));
+
+TEST(BoxCylinder, DeepBoxes) {
+  std::mt19937 g(29);
+  std::uniform_real_distribution<double> uni(-1, 1);
+  std::vector<Query> qs;
+  const int n = static_cast<int>(test::scaled(16));
+  for (int i = 0; i < n; ++i) {
+    const double rc = 0.3 + 0.7 * std::fabs(uni(g)), h = 0.3 + 0.7 * std::fabs(uni(g));
+    const Vec3d e(0.1 + 0.5 * std::fabs(uni(g)), 0.1 + 0.5 * std::fabs(uni(g)), 0.1 + 0.5 * std::fabs(uni(g)));
+    // a long box through the middle, any direction
+    qs.push_back(posed(g, 0.05 * Vec3d(uni(g), uni(g), uni(g)), test::random_rotation(g),
+                       Vec3d(1.5 + std::fabs(uni(g)), 0.05 + 0.3 * std::fabs(uni(g)), 0.05 + 0.3 * std::fabs(uni(g))),
+                       rc, h));
+    // coincident centres
+    Query c = posed(g, Vec3d::Zero(), test::random_rotation(g), e, rc, h);
+    c.c = c.p;
+    qs.push_back(c);
+    // a box wholly inside
+    const double s = 0.25 * std::min(rc, h);
+    qs.push_back(posed(g, Vec3d(0.3 * rc * uni(g), 0.3 * rc * uni(g), 0.3 * h * uni(g)), test::random_rotation(g),
+                       s * Vec3d(0.3 + 0.7 * std::fabs(uni(g)), 0.3 + 0.7 * std::fabs(uni(g)), 1.0), rc, h));
+    // the cylinder wholly inside a big box
+    const double big = 1.2 * std::hypot(rc, h);
+    qs.push_back(posed(g, 0.2 * Vec3d(uni(g), uni(g), uni(g)), test::random_rotation(g),
+                       big * Vec3d(1 + std::fabs(uni(g)), 1 + std::fabs(uni(g)), 1 + std::fabs(uni(g))), rc, h));
+    // a box centred near a rim
+    const double a = M_PI * uni(g);
+    const Vec3d rim = rc * radial(a) + Vec3d(0, 0, h * (uni(g) > 0 ? 1 : -1));
+    qs.push_back(posed(g, rim + 0.1 * Vec3d(uni(g), uni(g), uni(g)), test::random_rotation(g), e, rc, h));
+  }
+  Stats st;
+  check_all(qs, "deep", &st);
+  EXPECT_EQ(st.hits, static_cast<int>(qs.size()));
+  EXPECT_GT(st.normals_checked, st.hits / 3);
+}
+
+/// Feature pairs built in closed form (the cylinder's frame, then posed): the box's
+/// feature at `delta` along the built normal n past the cylinder's (delta < 0: apart).
+enum class Feature { kEdgeRim, kVertexRim, kEdgeSide, kVertexSide, kFaceRim, kVertexCap };
+
+struct Built {
+  Query q;
+  double delta;  // > 0: overlap along n; < 0: minus the distance
+  Vec3d n;       // world, from the box to the cylinder
+};
+
+Built build(Feature f, std::mt19937& g, int i) {
+  std::uniform_real_distribution<double> uni(-1, 1);
+  const double rc = 0.3 + 0.7 * std::fabs(uni(g)), h = 0.3 + 0.7 * std::fabs(uni(g));
+  const double a = M_PI * uni(g), s = uni(g) > 0 ? 1.0 : -1.0;
+  const double delta = (i % 3 == 0 ? -1.0 : 1.0) * (0.01 + 0.09 * std::fabs(uni(g)));
+  const Vec3d rim = rc * radial(a) + s * h * Vec3d::UnitZ();
+  const double phi = 0.3 + 0.97 * std::fabs(uni(g));
+  const Vec3d m = std::cos(phi) * radial(a) + std::sin(phi) * s * Vec3d::UnitZ();  // the rim's outward normal
+  const Vec3d side = rc * radial(a) + 0.5 * h * uni(g) * Vec3d::UnitZ();
+  const double psi = 0.3 + 0.97 * std::fabs(uni(g));
+  Vec3d c, n, x0;
+  Mat3d Qb;
+  Vec3d half(0.5 + 0.7 * std::fabs(uni(g)), 0.1 + 0.4 * std::fabs(uni(g)), 0.1 + 0.4 * std::fabs(uni(g)));
+  switch (f) {
+    case Feature::kEdgeRim: {
+      n = -m;
+      const double al = uni(g);
+      const Vec3d e = std::cos(al) * m.cross(tangential(a)).normalized() + std::sin(al) * tangential(a);
+      edge_box(rim + delta * n, e, n, psi, half, &c, &Qb);
+      break;
+    }
+    case Feature::kEdgeSide: {
+      n = -radial(a);
+      const double al = i % 5 == 1 ? 0.0 : 1.3 * uni(g);  // some exactly level
+      const Vec3d e = std::cos(al) * tangential(a) + std::sin(al) * Vec3d::UnitZ();
+      half[0] = 0.2 + 0.5 * std::fabs(uni(g));
+      edge_box(side + delta * n, e, n, psi, half, &c, &Qb);
+      break;
+    }
+    case Feature::kVertexRim:
+    case Feature::kVertexSide:
+    case Feature::kVertexCap: {
+      const Vec3d cap = 0.7 * rc * std::fabs(uni(g)) * radial(a) + s * h * Vec3d::UnitZ();
+      n = f == Feature::kVertexRim ? -m : (f == Feature::kVertexSide ? -radial(a) : Vec3d(0, 0, -s));
+      x0 = (f == Feature::kVertexRim ? rim : (f == Feature::kVertexSide ? side : cap)) + delta * n;
+      half = Vec3d(0.1 + 0.5 * std::fabs(uni(g)), 0.1 + 0.5 * std::fabs(uni(g)), 0.1 + 0.5 * std::fabs(uni(g)));
+      vertex_box(g, x0, n, half, &c, &Qb);
+      break;
+    }
+    case Feature::kFaceRim: {
+      n = -m;
+      const Vec3d t1 = rot(M_PI * uni(g), n) * n.unitOrthogonal(), t2 = n.cross(t1);
+      Qb = columns(t1, t2, n);
+      half = Vec3d(0.2 + 0.5 * std::fabs(uni(g)), 0.2 + 0.5 * std::fabs(uni(g)), 0.1 + 0.4 * std::fabs(uni(g)));
+      c = rim + delta * n - half[2] * n + 0.5 * uni(g) * half[0] * t1 + 0.5 * uni(g) * half[1] * t2;
+      break;
+    }
+  }
+  Built b;
+  b.q = posed(g, c, Qb, half, rc, h);
+  b.delta = delta;
+  b.n = (b.q.R * n).normalized();
+  return b;
+}
+
+/// check_all on the built lanes, and the references against the construction: apart
+/// lanes at exactly -delta along n (the built features are each other's closest
+/// points); meeting ones at most delta (the overlap along n). Returns how many meeting
+/// lanes have their minimum at the built pair (depth_ref = delta, n_ref = n).
+int check_built(Feature f, uint32_t seed, const char* what, Stats* st, int* meeting_lanes) {
+  std::mt19937 g(seed);
+  std::vector<Built> bs;
+  std::vector<Query> qs;
+  for (int i = 0; i < static_cast<int>(test::scaled(48)); ++i) {
+    bs.push_back(build(f, g, i));
+    qs.push_back(bs.back().q);
+  }
+  check_all(qs, what, st);
+  int on_feature = 0, apart = 0;
+  *meeting_lanes = 0;
+  for (size_t k = 0; k < bs.size(); ++k) {
+    const Ref r = reference(bs[k].q);
+    if (bs[k].delta < 0) {
+      ++apart;
+      EXPECT_TRUE(r.apart) << what << " lane " << k;
+      EXPECT_NEAR(r.depth, bs[k].delta, 1e-6) << what << " lane " << k;
+      EXPECT_LT(angle(r.n, bs[k].n), 1e-4) << what << " lane " << k;
+    } else {
+      ++*meeting_lanes;
+      EXPECT_LE(r.depth, bs[k].delta + 1e-6) << what << " lane " << k;
+      on_feature += std::fabs(r.depth - bs[k].delta) <= 1e-6 && angle(r.n, bs[k].n) <= 1e-4;
+    }
+  }
+  EXPECT_GT(apart, static_cast<int>(bs.size()) / 4);
+  std::printf("  %-28s meeting %d, of which at the built pair %d\n", what, *meeting_lanes, on_feature);
+  return on_feature;
+}
+
+/// A box edge across a rim: the minimum on the edge-rim piece of the Minkowski
+/// difference (normal perpendicular to the edge and the rim's tangent).
+TEST(BoxCylinder, EdgeAcrossARim) {
+  Stats st;
+  int meeting = 0;
+  const int on = check_built(Feature::kEdgeRim, 71, "edge across a rim", &st, &meeting);
+  EXPECT_GE(on, meeting * 3 / 4);
+  EXPECT_EQ(st.hits, meeting);
+}
+
+/// A box vertex at a rim: apart, the vertex and the rim point are the closest pair;
+/// meeting, the vertex pokes past the rim (cap, side, edge and face pieces nearly tie).
+TEST(BoxCylinder, VertexAtARim) {
+  Stats st;
+  int meeting = 0;
+  check_built(Feature::kVertexRim, 73, "vertex at a rim", &st, &meeting);
+  EXPECT_EQ(st.hits, meeting);
+}
+
+/// A box edge against the side, skew to the axis (normal edge x axis), some level.
+TEST(BoxCylinder, EdgeAgainstTheSide) {
+  Stats st;
+  int meeting = 0;
+  const int on = check_built(Feature::kEdgeSide, 79, "edge against the side", &st, &meeting);
+  EXPECT_GE(on, meeting * 3 / 4);
+  EXPECT_EQ(st.hits, meeting);
+}
+
+/// A box vertex against the side (normal radial through the vertex).
+TEST(BoxCylinder, VertexAgainstTheSide) {
+  Stats st;
+  int meeting = 0;
+  const int on = check_built(Feature::kVertexSide, 83, "vertex against the side", &st, &meeting);
+  EXPECT_GE(on, meeting * 3 / 4);
+  EXPECT_EQ(st.hits, meeting);
+}
+
+/// A box face against a rim (the face's normal), and a box vertex into a cap.
+TEST(BoxCylinder, FaceAgainstARimAndVertexIntoACap) {
+  Stats st;
+  int meeting = 0;
+  int on = check_built(Feature::kFaceRim, 89, "face against a rim", &st, &meeting);
+  EXPECT_GE(on, meeting * 3 / 4);
+  EXPECT_EQ(st.hits, meeting);
+  on = check_built(Feature::kVertexCap, 97, "vertex into a cap", &st, &meeting);
+  EXPECT_GE(on, meeting * 3 / 4);
+  EXPECT_EQ(st.hits, meeting);
+}
+
+/// A box resting flat on the top cap, 0.125 deep (axis-aligned, exact), both paths: its
+/// bottom face within the disk gives its 4 corners; overhanging the rim or covering the
+/// disk, the points are corners inside the disk or rim points within the face.
+TEST(BoxCylinder, BoxRestingOnTheCap) {
+  const Vec3d p(1, -2, 0.5);
+  const double rc = 0.5, h = 1.0, d = 0.125;
+  struct Case {
+    Vec3d off;  // the box centre across the axis
+    double yaw;
+    Vec3d e;
+    bool within;  // the face within the disk
+    bool covers;  // the face covers the disk
+  };
+  const Case cases[] = {
+      {Vec3d(0.0625, 0.0625, 0), 0.0, Vec3d(0.25, 0.125, 0.5), true, false},
+      {Vec3d(-0.125, 0, 0), 0.5, Vec3d(0.25, 0.125, 0.25), true, false},
+      {Vec3d(0.25, 0, 0), 0.0, Vec3d(0.5, 0.25, 0.5), false, false},
+      {Vec3d(0.125, -0.25, 0), 0.3, Vec3d(0.375, 0.375, 0.25), false, false},
+      {Vec3d(0.0625, 0, 0), 0.3, Vec3d(1, 0.75, 0.5), false, true},
+  };
+  for (KernelPath path : {KernelPath::kSimd, KernelPath::kScalar}) {
+    SCOPED_TRACE(path == KernelPath::kSimd ? "simd" : "scalar");
+    for (const Case& cs : cases) {
+      SCOPED_TRACE(cs.off.transpose());
+      const Query q = aligned(p, cs.off + Vec3d(0, 0, h + cs.e.z() - d), rot(cs.yaw, Vec3d::UnitZ()), cs.e, rc, h);
+      const auto r = run({q}, path)[0];
+      if (cs.within) {
+        ASSERT_EQ(r.count, 4u);
+      } else {
+        ASSERT_GE(r.count, 3u);
+      }
+      EXPECT_LT(angle(r.n, Vec3d(0, 0, -1)), 1e-6);
+      EXPECT_NEAR(r.depth, d, 1e-6);
+      int corners = 0;
+      for (uint32_t i = 0; i < r.count; ++i) {
+        EXPECT_NEAR(r.pt[i].z() - p.z(), h - d / 2, 1e-6) << i;
+        EXPECT_NEAR(r.pd[i], d, 1e-6) << i;
+        EXPECT_TRUE(corner_or_rim(q, r.pt[i], 1e-6)) << i << " " << (r.pt[i] - p).transpose();
+        const Vec3d b = q.Q.transpose() * (r.pt[i] - q.c);
+        corners |= 1 << ((b.x() > 0 ? 1 : 0) + 2 * (b.y() > 0 ? 1 : 0));
+      }
+      if (cs.within) {
+        EXPECT_EQ(corners & 0xf, 0xf) << "not the face's 4 corners";
+      }
+      if (cs.covers) {
+        EXPECT_GE(spread(r), 1.7 * rc);
+      }
+    }
+  }
+}
+
+/// The cylinder standing on a box's top face, 0.125 deep (axis-aligned, exact), both
+/// paths: within the face, several rim points spanning the disk; overhanging an edge or
+/// a corner, rim points within the face or face corners inside the disk.
+TEST(BoxCylinder, CylinderStandingOnABoxFace) {
+  const Vec3d p(-1, 0.5, 2);
+  const double rc = 0.5, h = 1.0, d = 0.125;
+  const Vec3d e(2, 1.5, 0.5);
+  const Vec3d offs[] = {Vec3d(0.25, -0.125, 0), Vec3d(1.75, 0, 0), Vec3d(1.875, 1.375, 0)};
+  for (KernelPath path : {KernelPath::kSimd, KernelPath::kScalar}) {
+    SCOPED_TRACE(path == KernelPath::kSimd ? "simd" : "scalar");
+    for (int c = 0; c < 3; ++c) {
+      SCOPED_TRACE(c);
+      // the box's top face at the cylinder's bottom cap + d
+      const Query q = aligned(p, -offs[c] - Vec3d(0, 0, h - d + e.z()), Mat3d::Identity(), e, rc, h);
+      const auto r = run({q}, path)[0];
+      ASSERT_GE(r.count, 3u);
+      EXPECT_LT(angle(r.n, Vec3d(0, 0, 1)), 1e-6);
+      EXPECT_NEAR(r.depth, d, 1e-6);
+      for (uint32_t i = 0; i < r.count; ++i) {
+        EXPECT_NEAR(r.pt[i].z() - p.z(), -h + d / 2, 1e-6) << i;
+        EXPECT_NEAR(r.pd[i], d, 1e-6) << i;
+        EXPECT_TRUE(corner_or_rim(q, r.pt[i], 1e-6)) << i << " " << (r.pt[i] - p).transpose();
+        if (c == 0) {
+          const Vec3d l = r.pt[i] - p;
+          EXPECT_NEAR(std::hypot(l.x(), l.y()), rc, 1e-6) << i;
+        }
+      }
+      if (c == 0) {
+        EXPECT_GE(spread(r), 1.7 * rc);
+      }
+    }
+  }
+}
+
+/// The cylinder lying on a box's top face (axis along x), 0.125 deep, both paths: the
+/// side line's 2 ends, clipped to the face where it is shorter.
+TEST(BoxCylinder, CylinderLyingOnABoxFace) {
+  const Vec3d p(2, 1, -0.5);
+  const double rc = 0.5, h = 1.0, d = 0.125;
+  Mat3d along_x;
+  along_x << 0, 0, 1, 0, 1, 0, -1, 0, 0;  // column 2 = +x
+  struct Case {
+    double box_x, ex;  // the box centre's x (from the cylinder's centre), half extent along x
+    double x0, x1;     // the expected ends
+  };
+  const Case cases[] = {{0.25, 3.0, -h, h}, {0.5, 1.0, -0.5, h}, {-0.75, 1.0, -h, 0.25}};
+  for (KernelPath path : {KernelPath::kSimd, KernelPath::kScalar}) {
+    SCOPED_TRACE(path == KernelPath::kSimd ? "simd" : "scalar");
+    for (const Case& cs : cases) {
+      SCOPED_TRACE(cs.box_x);
+      Query q = aligned(p, Vec3d(cs.box_x, 0.25, -(rc - d) - 0.5), Mat3d::Identity(), Vec3d(cs.ex, 3, 0.5), rc, h);
+      q.R = along_x;
+      const auto r = run({q}, path)[0];
+      ASSERT_EQ(r.count, 2u);
+      EXPECT_LT(angle(r.n, Vec3d(0, 0, 1)), 1e-6);
+      EXPECT_NEAR(r.depth, d, 1e-6);
+      const double x0 = std::min(r.pt[0].x(), r.pt[1].x()) - p.x(),
+                   x1 = std::max(r.pt[0].x(), r.pt[1].x()) - p.x();
+      EXPECT_NEAR(x0, cs.x0, 1e-6);
+      EXPECT_NEAR(x1, cs.x1, 1e-6);
+      for (int i = 0; i < 2; ++i) {
+        EXPECT_NEAR(r.pt[i].y() - p.y(), 0.0, 1e-6);
+        EXPECT_NEAR(r.pt[i].z() - p.z(), -rc + d / 2, 1e-6);
+        EXPECT_NEAR(r.pd[i], d, 1e-6);
+      }
+    }
+  }
+}
+
+/// Near-parallel tilts (0..1e-2 rad) of the three manifolds, posed: a box on the cap
+/// (within the disk: 4 points), the cylinder standing on a large face (3-4 points),
+/// lying on it (2 points).
+TEST(BoxCylinder, NearParallelManifolds) {
+  std::mt19937 g(37);
+  std::uniform_real_distribution<double> uni(-1, 1);
+  const double tilts[] = {0.0, 1e-7, 1e-5, 1e-3, 1e-2};
+  std::vector<Query> on_cap, standing, lying;
+  const double rc = 0.5, h = 1.0, d = 0.05;
+  for (int i = 0; i < static_cast<int>(test::scaled(5)); ++i)
+    for (double tilt : tilts) {
+      const double a = M_PI * uni(g);
+      const Mat3d tilted = rot(tilt, radial(a)) * rot(M_PI * uni(g), Vec3d::UnitZ());
+      // a box on the top cap, within the disk
+      const Vec3d e(0.1 + 0.15 * std::fabs(uni(g)), 0.1 + 0.15 * std::fabs(uni(g)), 0.3);
+      const Vec3d foot(0.08 * uni(g), 0.08 * uni(g), h - d);
+      on_cap.push_back(posed(g, foot + e.z() * tilted.col(2), tilted, e, rc, h));
+      // standing on a large face below the bottom cap
+      const Vec3d big(2, 2, 0.5);
+      const Vec3d top(0.2 * uni(g), 0.2 * uni(g), -h + d);
+      standing.push_back(posed(g, top - big.z() * tilted.col(2), tilted, big, rc, h));
+      // lying on a large face beside the side (its normal tilted from -radial about the
+      // tangent: the side line's ends at depths d +- tilt h)
+      const Vec3d f = -(rot(tilt, tangential(a)) * radial(a));
+      const Vec3d t1 = rot(M_PI * uni(g), f) * f.unitOrthogonal();
+      const Vec3d foot2 = (rc - d) * radial(a) + 0.2 * uni(g) * Vec3d::UnitZ();
+      lying.push_back(posed(g, foot2 - big.z() * f, columns(t1, f.cross(t1), f), big, rc, h));
+    }
+  Stats st;
+  check_all(on_cap, "box on the cap", &st);
+  EXPECT_EQ(st.hits, static_cast<int>(on_cap.size()));
+  EXPECT_GE(st.counts[4], st.hits * 9 / 10);
+  check_all(standing, "standing on a face", &st);
+  EXPECT_EQ(st.hits, static_cast<int>(standing.size()));
+  EXPECT_GE(st.counts[3] + st.counts[4], st.hits * 9 / 10);
+  check_all(lying, "lying on a face", &st);
+  EXPECT_EQ(st.hits, static_cast<int>(lying.size()));
+  EXPECT_EQ(st.counts[2], st.hits);
+}
+
+/// Exactly touching (representable) configurations: count 0; B moved onto touching by
+/// the reference's depth along its normal: depth within tol.
+TEST(BoxCylinder, Touching) {
+  const Vec3d p(4, 5, -6);
+  const double rc = 0.5, h = 1.0;
+  const Mat3d I = Mat3d::Identity();
+  for (KernelPath path : {KernelPath::kSimd, KernelPath::kScalar}) {
+    // a box face on the cap's plane
+    EXPECT_EQ(run({aligned(p, Vec3d(0.125, 0, h + 0.25), I, Vec3d(0.25, 0.25, 0.25), rc, h)}, path)[0].count, 0u);
+    // a box face on the side's tangent plane
+    EXPECT_EQ(run({aligned(p, Vec3d(rc + 0.25, 0, 0.25), I, Vec3d(0.25, 0.25, 0.25), rc, h)}, path)[0].count, 0u);
+    // a box edge on the rim's tangent line
+    EXPECT_EQ(run({aligned(p, Vec3d(rc + 0.5, 0, h + 0.5), I, Vec3d(0.5, 0.5, 0.5), rc, h)}, path)[0].count, 0u);
+    // a box vertex on the rim
+    EXPECT_EQ(run({aligned(p, Vec3d(rc + 0.5, 0.5, h + 0.5), I, Vec3d(0.5, 0.5, 0.5), rc, h)}, path)[0].count, 0u);
+    // a box vertex on the cap, the box standing on it on that vertex (a diagonal
+    // vertical): touching up to the rounding of Q and c
+    {
+      const Mat3d diag = turn_to(Vec3d(1, 1, 1), Vec3d(0, 0, 1));
+      const Query q = aligned(p, Vec3d(0.125, 0, h) + diag * Vec3d(0.25, 0.25, 0.25), diag,
+                              Vec3d(0.25, 0.25, 0.25), rc, h);
+      const auto r = run({q}, path)[0];
+      if (r.count > 0) {
+        EXPECT_LE(r.depth, 4 * kRel * size_of(q));
+      }
+    }
+  }
+  std::mt19937 g(43);
+  std::vector<Query> qs;
+  for (int i = 0; i < 400 && static_cast<int>(qs.size()) < static_cast<int>(test::scaled(40)); ++i) {
+    Query q = random_query(g, 1.0, 0.0, 0.5);
+    const Ref f = reference(q);
+    if (f.depth <= 1e-3) continue;
+    q.p = test::round_to_float(Vec3d(q.p + f.depth * f.n));
+    qs.push_back(q);
+  }
+  const auto res = run(qs, KernelPath::kSimd);
+  for (size_t k = 0; k < qs.size(); ++k) {
+    const double tol = 4 * kRel * size_of(qs[k]);
+    if (res[k].count > 0) {
+      EXPECT_LE(res[k].depth, tol) << k;
+    }
+  }
+}
+
+/// Needles and pancakes (1e-4 proportions) of both shapes: boxes 1 x 1e-4 x 1e-4 and
+/// 1 x 1 x 1e-4, cylinders of radius 1e-4 h and of half length 1e-4 rc.
+TEST(BoxCylinder, NeedlesAndPancakes) {
+  std::mt19937 g(53);
+  std::vector<Query> qs;
+  const int n = static_cast<int>(test::scaled(48));
+  for (int i = 0; i < n; ++i) {
+    Query q = random_query(g, 1.0, 0.0, 0.0);
+    switch (i % 4) {
+      case 0:
+        q.e = Vec3d(q.e.x(), 1e-4 * q.e.x(), 1e-4 * q.e.x());
+        break;  // needle box
+      case 1:
+        q.e = Vec3d(q.e.x(), q.e.y(), 1e-4 * std::max(q.e.x(), q.e.y()));
+        break;  // pancake box
+      case 2:
+        q.rc = 1e-4 * q.h;
+        break;  // needle cylinder
+      default:
+        q.h = 1e-4 * q.rc;
+        break;  // pancake cylinder (a disk)
+    }
+    const double reach = q.e.norm() + std::hypot(q.rc, q.h);
+    q.c = q.p + 0.3 * reach * random_unit(g);
+    qs.push_back(rounded(q));
+  }
+  Stats st;
+  check_all(qs, "needle / pancake", &st);
+  EXPECT_GT(st.hits, n / 5);
+}
+
+/// Symmetries: turning and moving the whole pair turns the normal and keeps the depth;
+/// the cylinder's axis reversed (R's columns 0 and 2 negated) and the box's axes
+/// relabelled (cycled, two negated) are the same solids: the same answer within tol.
+TEST(BoxCylinder, Symmetries) {
+  std::mt19937 g(59);
+  std::vector<Query> base, turned, flipped, relabelled;
+  std::vector<Mat3d> turns;
+  for (int i = 0; i < static_cast<int>(test::scaled(100)); ++i) {
+    const Query q = random_query(g, 1.0, 0.0, 0.7);
+    base.push_back(q);
+    const Mat3d turn = test::random_rotation(g);
+    const Vec3d move = random_unit(g);
+    Query t = q;
+    t.c = test::round_to_float(Vec3d(turn * q.c + move));
+    t.p = test::round_to_float(Vec3d(turn * q.p + move));
+    t.Q = test::round_to_float(Mat3d(turn * q.Q));
+    t.R = test::round_to_float(Mat3d(turn * q.R));
+    turned.push_back(t);
+    turns.push_back(turn);
+    Query f = q;
+    f.R.col(0) = -q.R.col(0);
+    f.R.col(2) = -q.R.col(2);
+    flipped.push_back(f);
+    Query r = q;
+    r.Q = columns(-q.Q.col(1), -q.Q.col(2), q.Q.col(0));
+    r.e = Vec3d(q.e.y(), q.e.z(), q.e.x());
+    relabelled.push_back(r);
+  }
+  const auto a = run(base, KernelPath::kSimd), b = run(turned, KernelPath::kSimd),
+             c = run(flipped, KernelPath::kSimd), d = run(relabelled, KernelPath::kSimd);
+  int compared = 0;
+  for (size_t k = 0; k < base.size(); ++k) {
+    const Ref f = reference(base[k]);
+    const double tol = kRel * size_of(base[k]);
+    if (std::fabs(f.depth) <= 4 * tol) continue;
+    for (const auto* other : {&b, &c, &d}) ASSERT_EQ(a[k].count > 0, (*other)[k].count > 0) << k;
+    if (a[k].count == 0) continue;
+    ++compared;
+    EXPECT_NEAR(a[k].depth, b[k].depth, 2 * tol) << k;
+    EXPECT_NEAR(a[k].depth, c[k].depth, tol) << k;
+    EXPECT_NEAR(a[k].depth, d[k].depth, tol) << k;
+    if (f.unique) {
+      EXPECT_LT(angle(turns[k] * a[k].n, b[k].n), kAngleTol) << k;
+      EXPECT_LT(angle(a[k].n, c[k].n), kAngleTol) << k;
+      EXPECT_LT(angle(a[k].n, d[k].n), kAngleTol) << k;
+    }
+  }
+  EXPECT_GT(compared, static_cast<int>(base.size()) / 4);
+}
+
+/// Any partition of a bucket's range gives the same bytes, nothing outside the range is
+/// written (the output lanes start poisoned), and a lane's bytes do not depend on which
+/// lanes share its block (a shuffled bucket).
+TEST(BoxCylinder, RangePartitionsAndTail) {
+  std::mt19937 g(61);
+  const std::vector<Query> qs = random_queries(g, 37, 1.0, 0.0);
+  for (KernelPath path : {KernelPath::kSimd, KernelPath::kScalar}) {
+    test::ManifoldLanes all(37);
+    const auto whole = run(qs, path, nullptr, 0, 37, &all);
+    int hits = 0;
+    for (uint32_t k = 0; k < 37; ++k) hits += all.count[k] > 0 && all.count[k] <= 4;
+    EXPECT_GT(hits, 5);
+    for (uint32_t cut : {1u, 3u, 8u, 11u, 36u}) {
+      test::ManifoldLanes lo(37), hi(37);
+      run(qs, path, nullptr, 0, cut, &lo);
+      run(qs, path, nullptr, cut, 37, &hi);
+      for (uint32_t k = 0; k < 37; ++k) {
+        const test::ManifoldLanes& m = k < cut ? lo : hi;
+        const test::ManifoldLanes& other = k < cut ? hi : lo;
+        EXPECT_EQ(other.count[k], 0xff) << "lane " << k << " written outside its range";
+        EXPECT_TRUE(std::isnan(other.depth[k])) << "lane " << k << " written outside its range";
+        for (int i = 0; i < 3; ++i) EXPECT_TRUE(std::isnan(other.n[i][k])) << "lane " << k;
+        for (int j = 0; j < 4; ++j) EXPECT_TRUE(std::isnan(other.pd[j][k])) << "lane " << k;
+        ASSERT_EQ(m.count[k], all.count[k]) << cut << " " << k;
+        if (m.count[k] == 0) continue;
+        EXPECT_EQ(std::memcmp(&m.depth[k], &all.depth[k], 4), 0) << k;
+        for (int i = 0; i < 3; ++i) EXPECT_EQ(std::memcmp(&m.n[i][k], &all.n[i][k], 4), 0) << k;
+        for (uint32_t j = 0; j < m.count[k]; ++j) {
+          EXPECT_EQ(std::memcmp(&m.pd[j][k], &all.pd[j][k], 4), 0) << k;
+          for (int i = 0; i < 3; ++i) EXPECT_EQ(std::memcmp(&m.pt[j][i][k], &all.pt[j][i][k], 4), 0) << k;
+        }
+      }
+    }
+    // shuffled: every lane in other company
+    std::vector<uint32_t> perm(qs.size());
+    std::iota(perm.begin(), perm.end(), 0u);
+    std::shuffle(perm.begin(), perm.end(), g);
+    std::vector<Query> sh;
+    for (uint32_t i : perm) sh.push_back(qs[i]);
+    const auto shuffled = run(sh, path);
+    for (size_t i = 0; i < perm.size(); ++i)
+      EXPECT_TRUE(same_bytes(shuffled[i], whole[perm[i]])) << "lane " << perm[i] << " moved to " << i;
+  }
+}
+
+/// The general GJK / EPA path on the same lanes: same hits away from touching (1e-3 L),
+/// depth within 1e-3 L, normal within 0.02 rad where unique.
+TEST(BoxCylinder, AgreesWithGjkEpa) {
+  std::mt19937 g(67);
+  const std::vector<Query> qs = random_queries(g, static_cast<int>(test::scaled(240)), 1.0, 0.0);
+  const auto mine = run(qs, KernelPath::kSimd), gjk = run(qs, KernelPath::kSimd, &gjk_kernel);
+  int compared = 0;
+  for (size_t k = 0; k < qs.size(); ++k) {
+    const Ref f = reference(qs[k]);
+    const double L = size_of(qs[k]);
+    if (std::fabs(f.depth) < 1e-3 * L) continue;
+    ASSERT_EQ(mine[k].count > 0, gjk[k].count > 0) << k << " depth_ref " << f.depth;
+    if (mine[k].count == 0) continue;
+    ++compared;
+    EXPECT_NEAR(mine[k].depth, gjk[k].depth, 1e-3 * L) << k;
+    if (f.unique) {
+      EXPECT_LT(angle(mine[k].n, gjk[k].n), 0.02) << k;
+    }
+  }
+  EXPECT_GT(compared, static_cast<int>(qs.size()) / 5);
+}
+
+}  // namespace
+}  // namespace impact::kernels
