@@ -584,16 +584,6 @@ IMPACT_INLINE void phase_b(Chunk<W>& ch) {
   ch.nitems = 0;
 }
 
-/// Candidate 0 of a clipped manifold is the winning candidate's witness. It stays only
-/// where no other candidate is that deep (within tol): else it lies among them and would
-/// keep reduce4 from picking the contact's ends.
-template <class F, int M>
-IMPACT_INLINE void drop_shadowed_witness(const F (&d)[M], typename F::Mask (&valid)[M], F o, F tol) {
-  F deepest(-3.0e38f);
-  for (int i = 1; i < M; ++i) deepest = max(deepest, select(valid[i], d[i], F(-3.0e38f)));
-  valid[0] = valid[0] & (deepest < o - tol);
-}
-
 /// Phase C for one block: the answer, the manifold, the store.
 template <class F, uint32_t W>
 IMPACT_INLINE void phase_c(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out, uint32_t k, uint32_t j,

@@ -548,4 +548,15 @@ IMPACT_INLINE void reduce4(const F (&x)[M], const F (&y)[M], const F (&d)[M], co
   for (int i = 0; i < 4; ++i) od[i] = simd::gather_lanes(d, idx[i]);
 }
 
+/// Candidate 0 of a clipped manifold is the winning candidate's witness (as deep as the
+/// contact, on both surfaces, so never none). It stays only where no other candidate is
+/// that deep (within tol): else it lies among them (the middle of a segment contact) and
+/// would keep reduce4 from picking the contact's ends.
+template <class F, int M>
+IMPACT_INLINE void drop_shadowed_witness(const F (&d)[M], typename F::Mask (&valid)[M], F o, F tol) {
+  F deepest(-3.0e38f);
+  for (int i = 1; i < M; ++i) deepest = max(deepest, select(valid[i], d[i], F(-3.0e38f)));
+  valid[0] = valid[0] & (deepest < o - tol);
+}
+
 }  // namespace impact::kernels::prim
