@@ -24,12 +24,20 @@
 //    distance from the edge's shadow point to the rim's shadow along a_i (an ellipse:
 //    the upper / lower half for the one rim / the other), by the fixed-step solve of
 //    Eberly's secular equation shared with capsule-cylinder (rim_solve.h): 24 slots
-//    (12 edges x 2 rims), the only costly pieces. They are pruned per lane (the
-//    edge's normal cone must reach the rim's half sphere; the edge segment's distance to
-//    the rim circle, a lower bound of that piece's |o|, must not exceed the best o so
-//    far where the pair is certified to meet: a box vertex in the cylinder, the axis
-//    centre in the box, or the best candidate's witnesses in both), and the survivors
-//    of a chunk of 16 blocks are solved packed, kSimdWidth slots at a time.
+//    (12 edges x 2 rims), the only costly pieces. They are pruned per lane, and the
+//    survivors of a chunk of 16 blocks are solved packed, kSimdWidth slots at a time.
+//    A slot is kept where (1) the edge's normal cone reaches the rim's half sphere;
+//    (2) a lower bound of o on that cone (the box's part is least at an end of the
+//    quarter arc unless both ends are negative; the cylinder's is at least min(h, rc))
+//    is at most the least o so far; (3) the edge segment's distance to the rim circle
+//    (at least sqrt(radial gap^2 + height gap^2), both bounded along the edge), a lower
+//    bound of the piece's |o|, is at most the least o so far where the pair is certified
+//    to meet (a box vertex in the cylinder, either centre in the other shape, or the
+//    best candidate's witnesses in both), and elsewhere at most the larger of that and
+//    the distance of a point pair of the two shapes (which bounds the distance if they
+//    are apart): the pair from three alternating nearest-point steps starting at the
+//    box centre, whose direction is also offered as a candidate (it usually separates
+//    a lane that is apart, which then needs no slot at all).
 // Those are all the pieces: the cylinder's normal sets are the cap normals, the
 // horizontal circle (side lines) and the half spheres' open quarter arcs (rim points);
 // the box's the face normals, the quarter arcs of the edges and the vertices' regions.
@@ -41,7 +49,8 @@
 // direction 1e-4 rad off. The least o of every candidate, valid or not, is kept as well
 // (an exact upper bound): where it is below the least valid o by more than rounding, it
 // is the answer, with its own witness. Ties keep the first in the order caps, faces,
-// edge-sides, vertex-sides, vertex-rims, edge-rims. Supports with ties (a face or line
+// edge-sides, vertex-sides, vertex-rims, the point pair's direction, edge-rims. The
+// vertex-rims and the point pair run only on lanes not certified to meet. Supports with ties (a face or line
 // parallel to n) take the feature's point nearest the other shape's centre line
 // (kFree: |n.a| at or below it counts as parallel).
 // Contact points: one, midway between the witnesses. Where n is within kParallelSin of
@@ -56,8 +65,10 @@
 // input: an edge along the axis takes x as its horizontal normal; a vertex on the axis
 // takes x as its radial direction; coincident centres give a finite unit normal (the
 // ties above decide it).
-// Cost: 38 candidate directions in closed form per lane, the pruned rim solves packed
-// (kArcIterations steps of 3 divisions and 2 square roots each), the two manifold
+// Cost: 22 candidate directions in closed form per lane (+16 vertex-rims and the point
+// pair where the lane is not certified to meet), the pruned rim solves packed (at most
+// kArcIterations steps of 3 divisions and 2 square roots each; in the bench ~1.1 slots
+// per lane, 2.3 before the cone bound and the point pair), the two manifold
 // clips only where a lane of the block needs them; a block whose lanes are all farther
 // apart than their bounding spheres stops at that screen.
 // Both paths run the same template (F = FloatW, or Float1 for the scalar reference); a
@@ -426,10 +437,13 @@ IMPACT_INLINE void phase_a(const LeafSoA& a, const LeafSoA& b, uint32_t k, uint3
     meets = meets | (has & (x_in | y_in));
   }
   const Mask live = near & (best.any_o > zero);
+  // Lanes not certified to meet; the two passes below run where a block has one, and
+  // count only on those lanes (a lane's bytes must not depend on its neighbours).
+  const Mask uncertified = live & ~meets;
   // --- vertices against the rims (n from the rim point nearest the vertex): an edge of
   // box - C, a minimiser only when the pair is apart, so only where it is not certified
   // to meet ---
-  if (simd::any(live & ~meets)) {
+  if (simd::any(uncertified)) {
     for (int q = 0; q < 8; ++q) {
       const V3<F>& v = vtx[q];
       const F mx = vmx[q], my = vmy[q];
@@ -440,13 +454,46 @@ IMPACT_INLINE void phase_a(const LeafSoA& a, const LeafSoA& b, uint32_t k, uint3
         F len;
         const V3<F> n = normalize_or(V3<F>{-radial * mx, -radial * my, -zs * vert},
                                      V3<F>{-mx * F(0.70710678f), -my * F(0.70710678f), -zs * F(0.70710678f)}, len);
-        consider(score(g, n), n, v, y);
+        consider(select(uncertified, score(g, n), never), n, v, y);
       }
     }
   }
 
+  // --- lanes that may be apart: a point pair (x in the box, y in the cylinder) by
+  // alternating nearest points from the box centre. |x - y| bounds the distance, and
+  // the direction y - x usually separates (o <= 0: the lane is done) ---
+  Mask live2 = live;
+  F apart_bound = best.o;
+  if (simd::any(uncertified)) {
+    auto to_cyl = [&](const V3<F>& p) {
+      const F r2 = p.x * p.x + p.y * p.y;
+      const F sc = select(r2 > g.rc * g.rc, g.rc / sqrt(select(r2 > zero, r2, one)), one);
+      return V3<F>{p.x * sc, p.y * sc, clamp(p.z, -g.h, g.h)};
+    };
+    auto to_box = [&](const V3<F>& p) {
+      const V3<F> q = p - g.c;
+      V3<F> x = g.c;
+      for (int i = 0; i < 3; ++i) x = madd(x, clamp(dot(q, g.a[i]), -g.e[i], g.e[i]), g.a[i]);
+      return x;
+    };
+    V3<F> y = to_cyl(g.c);
+    V3<F> x = to_box(y);
+    y = to_cyl(x);
+    x = to_box(y);
+    y = to_cyl(x);
+    F len;
+    const V3<F> n = normalize_or(y - x, ez, len);
+    best.take(select(uncertified, score(g, n), never), n, x, Mask(false));
+    live2 = near & (best.any_o > zero);
+    apart_bound = select(uncertified, min(apart_bound, len), apart_bound);
+  }
+
   // --- which edge-rim slots each lane still needs ---
-  const F bound = min(best.o, best.any_o) + slack;
+  // A slot's candidate has o = |x - y| for x on the edge, y on the rim: at least lb, a
+  // lower bound of the edge-to-rim distance. Where the pair meets, it only matters below
+  // every candidate's o (any_o >= the least o); where it may be apart, it also matters as
+  // the closest features, no farther apart than a point pair of the two shapes.
+  const F bound = select(meets, best.any_o, max(best.any_o, apart_bound)) + slack;
   uint32_t cnt = ch.nitems;
   for (int i = 0; i < 3; ++i) {
     const V3<F>& u = g.a[i];
@@ -466,16 +513,23 @@ IMPACT_INLINE void phase_a(const LeafSoA& a, const LeafSoA& b, uint32_t k, uint3
       const F rho_min = sqrt(mx * mx + my * my);
       const F lb_r = max(max(rho_min - g.rc, g.rc - max(rho_p, rho_m)), zero);
       const F za = sj * g.a[ja].z, zk = sk * g.a[ka].z;
+      // o on the edge's normal cone (n = cos t sj a_ja + sin t sk a_ka, t in [0, pi/2]):
+      // the box's part A cos t + B sin t is least at an end unless both ends are
+      // negative; the cylinder's h |n_z| + rc |n_xy| is at least min(h, rc).
+      const F ea = g.e[ja] + sj * dot(g.a[ja], g.c), eb = g.e[ka] + sk * dot(g.a[ka], g.c);
+      const F box_min = select((ea <= zero) & (eb <= zero), -sqrt(ea * ea + eb * eb), min(ea, eb));
+      const Mask arc_ok = box_min + min(g.h, g.rc) <= best.any_o + slack;
       for (int s = 0; s < 2; ++s) {
         // slot 0: n_z >= 0 (the rim at -h); slot 1: n_z <= 0 (the rim at +h)
         const F z0(s == 0 ? -1.0f : 1.0f);
         const F rz = z0 * g.h;
         const F dp = z_p - rz, dm = z_m - rz;
         const F lb_z = select(dp * dm <= zero, zero, min(abs(dp), abs(dm)));
-        const F lb = max(lb_r, lb_z);
+        // |x - y|^2 >= (rho(x) - rc)^2 + (x.z - rz)^2, each term bounded along the edge
+        const F lb = sqrt(lb_r * lb_r + lb_z * lb_z);
         const F cone_eps(-1e-6f);
         const Mask cone = s == 0 ? ((za >= cone_eps) | (zk >= cone_eps)) : ((za <= -cone_eps) | (zk <= -cone_eps));
-        const Mask need = live & cone & ((lb <= bound) | ~meets);
+        const Mask need = live2 & arc_ok & cone & (lb <= bound);
         uint32_t bits = simd::bits(need);
         if (nb < W) bits &= (1u << nb) - 1u;
         const int32_t kind = static_cast<int32_t>(8 * i + 2 * q + s);
