@@ -47,6 +47,10 @@
 //     (Sutherland-Hodgman), the points below the face, midway between the triangle and
 //     the face plane; the triangle's normal wins: the hull face most aligned with n,
 //     clipped by the triangle's side planes, the points beyond the triangle's plane;
+//     where no point carries the depth (within cvx::kWitnessJoin), the deepest vertex of
+//     the incident side (the triangle's, or the hull's) joins them if it lies within
+//     the reference face's side planes (the clip misses it when the depth comes from a
+//     vertex beyond the clipped face: deep pairs);
 //     reduced to 4 (deepest, farthest, largest area: cvx::reduce_manifold); nothing left
 //     after rounding (grazing), or a face of more than 64 vertices: one point at the
 //     deepest vertex. An edge axis wins: one point midway between the closest points of
@@ -459,13 +463,22 @@ uint32_t clip_plane(const V3* in, uint32_t n, V3 o, float od, V3* out) {
 
 struct Manifold {
   uint32_t count = 0;
-  V3 p[kMaxClip];
-  float d[kMaxClip];
+  V3 p[kMaxClip + 1];
+  float d[kMaxClip + 1];
+
+  /// The deepest point so far.
+  float deepest() const {
+    float m = 0.0f;
+    for (uint32_t i = 0; i < count; ++i) m = simd::fmax_nn(m, d[i]);
+    return m;
+  }
 };
 
 /// Reference face f of the hull (n = its normal): the triangle clipped by the face's
 /// side planes; points below the face plane, midway between the triangle and the plane.
-void hull_face_manifold(const HullView& h, uint32_t f, const Tri& T, float depth, Manifold* mf) {
+/// Then (cvx::kWitnessJoin) the triangle's deepest vertex wit, where it is inside the
+/// side planes.
+void hull_face_manifold(const HullView& h, uint32_t f, const Tri& T, float depth, V3 wit, Manifold* mf) {
   const uint32_t b = h.face_vert_begin[f], e = h.face_vert_begin[f + 1];
   if (e - b < 3 || e - b > kMaxFaceVerts) return;
   const V3 n = face_normal(h, f);
@@ -482,41 +495,60 @@ void hull_face_manifold(const HullView& h, uint32_t f, const Tri& T, float depth
     a = q;
   }
   const float fd = h.fd[f];
-  for (uint32_t i = 0; i < cnt; ++i) {
-    const float s = fd - dot(n, buf[cur][i]);
-    if (!(s > 0.0f)) continue;
+  const auto keep = [&](V3 x) {
+    const float s = fd - dot(n, x);
+    if (!(s > 0.0f)) return;
     const float pd = simd::fmin_nn(s, depth);
-    mf->p[mf->count] = buf[cur][i] + n * (0.5f * pd);
+    mf->p[mf->count] = x + n * (0.5f * pd);
     mf->d[mf->count] = pd;
     ++mf->count;
+  };
+  for (uint32_t i = 0; i < cnt; ++i) keep(buf[cur][i]);
+  if (!(mf->deepest() < depth * (1.0f - cvx::kWitnessJoin))) return;
+  bool inside = true;
+  a = vertex(h, h.face_verts[e - 1]);
+  for (uint32_t i = b; i < e; ++i) {
+    const V3 q = vertex(h, h.face_verts[i]);
+    const V3 o = cross(q - a, n);
+    inside = inside && dot(o, wit) <= dot(o, a);
+    a = q;
   }
+  if (inside) keep(wit);
 }
 
 /// Reference face: the triangle (n = +-its normal, hull to triangle); incident: hull face
 /// g, clipped by the triangle's side planes; points beyond the triangle's plane, midway.
-void triangle_face_manifold(const HullView& h, uint32_t g, const Tri& T, V3 n, float depth, Manifold* mf) {
+/// Then (cvx::kWitnessJoin) the hull's deepest vertex wit, where it is inside the side
+/// planes.
+void triangle_face_manifold(const HullView& h, uint32_t g, const Tri& T, V3 n, float depth, V3 wit,
+                            Manifold* mf) {
   const uint32_t b = h.face_vert_begin[g], e = h.face_vert_begin[g + 1];
   if (e - b < 3 || e - b > kMaxFaceVerts) return;
   V3 buf[2][kMaxClip];
   uint32_t cnt = e - b;
   for (uint32_t i = b; i < e; ++i) buf[0][i - b] = vertex(h, h.face_verts[i]);
   uint32_t cur = 0;
-  for (uint32_t j = 0; j < 3 && cnt > 0; ++j) {
+  bool inside = true;  // wit
+  for (uint32_t j = 0; j < 3; ++j) {
     const V3 a = T.v[j], q = T.v[j == 2 ? 0 : j + 1], opp = T.v[j == 0 ? 2 : j - 1];
     V3 o = cross(q - a, T.nraw);  // out of the triangle for counter-clockwise about nraw
     if (dot(o, opp - a) > 0.0f) o = -o;
+    inside = inside && dot(o, wit) <= dot(o, a);
+    if (cnt == 0) continue;
     cnt = clip_plane(buf[cur], cnt, o, dot(o, a), buf[1 - cur]);
     cur = 1 - cur;
   }
   const float nd = dot(n, T.v[0]);
-  for (uint32_t i = 0; i < cnt; ++i) {
-    const float s = dot(n, buf[cur][i]) - nd;
-    if (!(s > 0.0f)) continue;
+  const auto keep = [&](V3 x) {
+    const float s = dot(n, x) - nd;
+    if (!(s > 0.0f)) return;
     const float pd = simd::fmin_nn(s, depth);
-    mf->p[mf->count] = buf[cur][i] - n * (0.5f * pd);
+    mf->p[mf->count] = x - n * (0.5f * pd);
     mf->d[mf->count] = pd;
     ++mf->count;
-  }
+  };
+  for (uint32_t i = 0; i < cnt; ++i) keep(buf[cur][i]);
+  if (inside && mf->deepest() < depth * (1.0f - cvx::kWitnessJoin)) keep(wit);
 }
 
 // ---------------------------------------------------------------------------------------
@@ -653,11 +685,11 @@ void convex_triangle_lane(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA&
   Manifold mf;
   if (feature == 0) {
     nl = face_normal(h, fb + fp.face);
-    hull_face_manifold(h, fb + fp.face, T, depth, &mf);
-    if (mf.count == 0) {  // nothing below the face after rounding: the deepest vertex
-      uint32_t i = 0;
-      for (uint32_t q = 1; q < 3; ++q)
-        if (dot(nl, T.v[q]) < dot(nl, T.v[i])) i = q;
+    uint32_t i = 0;  // the triangle's deepest vertex
+    for (uint32_t q = 1; q < 3; ++q)
+      if (dot(nl, T.v[q]) < dot(nl, T.v[i])) i = q;
+    hull_face_manifold(h, fb + fp.face, T, depth, T.v[i], &mf);
+    if (mf.count == 0) {  // nothing below the face after rounding: that vertex
       mf.count = 1;
       mf.p[0] = T.v[i] + nl * (0.5f * depth);
       mf.d[0] = depth;
@@ -666,10 +698,11 @@ void convex_triangle_lane(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA&
     nl = s_np >= s_nm ? nu : -nu;
     const uint32_t g = nf >= W ? face_argmax<F>(h.fnx + fb, h.fny + fb, h.fnz + fb, nf, nl)
                                : face_argmax<F1>(h.fnx + fb, h.fny + fb, h.fnz + fb, nf, nl);
-    triangle_face_manifold(h, fb + g, T, nl, depth, &mf);
-    if (mf.count == 0) {  // the hull's deepest vertex
-      const uint32_t i = nv >= W ? vertex_argmax<F>(h.vx + vb, h.vy + vb, h.vz + vb, nv, nl)
-                                 : vertex_argmax<F1>(h.vx + vb, h.vy + vb, h.vz + vb, nv, nl);
+    // the hull's deepest vertex
+    const uint32_t i = nv >= W ? vertex_argmax<F>(h.vx + vb, h.vy + vb, h.vz + vb, nv, nl)
+                               : vertex_argmax<F1>(h.vx + vb, h.vy + vb, h.vz + vb, nv, nl);
+    triangle_face_manifold(h, fb + g, T, nl, depth, vertex(h, vb + i), &mf);
+    if (mf.count == 0) {  // nothing beyond the triangle after rounding: that vertex
       mf.count = 1;
       mf.p[0] = vertex(h, vb + i) - nl * (0.5f * depth);
       mf.d[0] = depth;

@@ -47,8 +47,12 @@
 //     against side planes through the reference edges along n); points below the
 //     reference plane are kept, with their penetration along n (where the ray along n
 //     leaves the reference shape), reduced to 4 (deepest, farthest, then largest
-//     area). Otherwise (edge-edge, rims, ellipsoids, spheres), one point midway
-//     between EPA's / GJK's witnesses. Either way point +- n pdepth/2 lie on B and A.
+//     area); where no clipped point carries the depth (within kWitnessJoin: the
+//     incident face need not hold the support point, the octagon misses the rim
+//     between its vertices), the witnesses' midpoint joins them with the whole depth,
+//     if each witness moved by the depth along n lies in the other shape. Otherwise
+//     (edge-edge, rims, ellipsoids, spheres), one point midway between EPA's / GJK's
+//     witnesses. Either way point +- n pdepth/2 lie on B and A.
 // Triangles are two-sided and zero-thickness: the normal is whichever side separates
 // with less motion; two coplanar triangles have depth 0 (count 0).
 // Precision: supports are float; the simplex and polytope arithmetic is double (no
@@ -1268,6 +1272,13 @@ uint32_t clip_faces(const Face& ref, const Face& inc, const Leaf& ref_leaf, V3 n
   return k;
 }
 
+/// Whether x + t dir lies in leaf l at t = depth (within tol; leaves without a chord,
+/// e.g. cylinders, count as holding it).
+bool reaches_at(const Leaf& l, V3 x, V3 dir, float depth, float tol) {
+  const Chord ch = chord(l, x, dir);
+  return ch.t_in <= depth + tol && depth - tol <= ch.t_out;
+}
+
 }  // namespace
 
 uint32_t reduce_manifold(V3* pts, float* depth, uint32_t n, V3 normal) {
@@ -1376,10 +1387,23 @@ void contact_manifold(const Leaf& A, const Leaf& B, V3 n, float depth, V3 pa, V3
         const bool ref_is_a = ca && (!cb || fa.align >= fb.align);
         const Face& ref = ref_is_a ? fa : fb;
         const Face& inc = ref_is_a ? fb : fa;
-        V3 pts[kMaxClip];
-        float pd[kMaxClip];
+        V3 pts[kMaxClip + 1];
+        float pd[kMaxClip + 1];
         uint32_t m = clip_faces(ref, inc, ref_is_a ? A : B, n, ref_is_a, depth, pts, pd);
         if (m > 0) {
+          // The witnesses' midpoint joins where no clipped point carries the depth
+          // (kWitnessJoin): where each witness moved by the depth along n lands in the
+          // other shape (GJK / EPA's always do; SAT's face witness, one vertex and its
+          // shadow on the face, may land beside the face on near-parallel features).
+          float deepest = 0.0f;
+          for (uint32_t i = 0; i < m; ++i) deepest = fmax_nn(deepest, pd[i]);
+          const V3 sa = pa + n * ra, sb = pb - n * rb;  // on the surfaces
+          const float tol = kWitnessJoin * depth + 1e-6f * (leaf_size(A) + leaf_size(B));
+          if (deepest < depth - tol && reaches_at(A, sb, n, depth, tol) && reaches_at(B, sa, -n, depth, tol)) {
+            pts[m] = (sa + sb) * 0.5f;
+            pd[m] = depth;
+            ++m;
+          }
           m = reduce_manifold(pts, pd, m, n);
           out->count = m;
           for (uint32_t i = 0; i < m; ++i) {

@@ -89,4 +89,12 @@ void contact_manifold(const Leaf& A, const Leaf& B, V3 n, float depth, V3 pa, V3
 /// it, then the two that add most area (normal n). Returns the new count.
 uint32_t reduce_manifold(V3* pts, float* depth, uint32_t n, V3 normal);
 
+/// Face clipping can miss the deepest point: the incident face (the one most aligned
+/// with the normal) need not hold the incident side's support point, and a cylinder's
+/// cap is clipped as an inscribed polygon. Where no clipped point carries (1 - this) of
+/// the pair's depth, the witnesses' midpoint (depth apart along the normal) joins with
+/// the whole depth, if each witness lies in the other shape once moved by the depth
+/// (contact_manifold, the box-hull and the hull-triangle manifolds).
+inline constexpr float kWitnessJoin = 1e-3f;
+
 }  // namespace impact::kernels::cvx

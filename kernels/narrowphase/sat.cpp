@@ -49,8 +49,8 @@
 // the stored bisector and half-angle: m_i^2 cos^2 |d|^2 < ((d x m)_i)^2 sin^2, no
 // gather), its separation n.p - sum |n_j| e_j (the box's support in closed form),
 // ranked by s |s| (no root per axis); (4) the same feature rule (bias) and witnesses;
-// (5) contact_manifold's reference-face choice, clipping, chords and reduction, done in
-// A's frame on the hull data already there (box_hull_manifold). Against brute-force SAT
+// (5) contact_manifold's reference-face choice, clipping, chords, witness join and
+// reduction, done in A's frame on the hull data already there (box_hull_manifold). Against brute-force SAT
 // in double it is the more exact route (sat_test.cpp SatBoxHull: 1e-5 L; the general
 // route's edge axes near a face's arc end can be off by ~4e-5 L). Cost on the bench's
 // 24-point hulls: ~313-414 ns per pair against ~914-961 by the general route and FCL
@@ -398,8 +398,8 @@ void box_hull_manifold(const Leaf& A, const Leaf& B, const Poly& PB, const BoxHu
       outp = tmp;
     }
     const float cosn = ref_is_a ? dot(ref.normal, n) : -dot(ref.normal, n);
-    V3 pts[kMaxClip];
-    float pd[kMaxClip];
+    V3 pts[kMaxClip + 1];
+    float pd[kMaxClip + 1];
     uint32_t k = 0;
     const V3 dir = ref_is_a ? n : -n;
     for (uint32_t i = 0; i < cnt; ++i) {
@@ -446,6 +446,21 @@ void box_hull_manifold(const Leaf& A, const Leaf& B, const Poly& PB, const BoxHu
       ++k;
     }
     if (k > 0) {
+      // The witnesses' midpoint joins where no clipped point carries the depth, as in
+      // contact_manifold (kWitnessJoin): where pa lies in the box and pb in the hull.
+      float deepest = 0.0f;
+      for (uint32_t i = 0; i < k; ++i) deepest = fmax_nn(deepest, pd[i]);
+      bool held = deepest < depth - kWitnessJoin * depth;
+      const float tol = kWitnessJoin * depth + 1e-6f * (A.e[0] + A.e[1] + A.e[2]);
+      held = held && std::fabs(pa.x) <= A.e[0] + tol && std::fabs(pa.y) <= A.e[1] + tol &&
+             std::fabs(pa.z) <= A.e[2] + tol;
+      for (uint32_t f = 0; f < PB.nf && held; ++f)
+        held = S.fx[f] * (pb.x - t[0]) + S.fy[f] * (pb.y - t[1]) + S.fz[f] * (pb.z - t[2]) <= S.fo[f] + tol;
+      if (held) {
+        pts[k] = (pa + pb) * 0.5f;
+        pd[k] = depth;
+        ++k;
+      }
       k = reduce_manifold(pts, pd, k, n);
       out->count = k;
       for (uint32_t i = 0; i < k; ++i) {

@@ -434,6 +434,41 @@ TEST(GjkEpa, CylinderManifolds) {
   }
 }
 
+/// A cylinder tilted onto its rim, its lowest rim point halfway between two vertices of
+/// the octagon that stands for its cap in the face clip: the clipped octagon alone
+/// carries ~2/3 of the depth; the witnesses' midpoint joins with all of it.
+TEST(GjkEpa, TiltedCylinderRimCarriesTheDepth) {
+  const Shape ground = box({0, 0, -1}, Mat3d::Identity(), {5, 5, 1});
+  const double rc = 0.5, h = 1.0, depth = 0.02;
+  for (const double tilt_deg : {5.0, 10.0, 20.0}) {
+    const double tilt = tilt_deg * M_PI / 180;
+    // spun 22.5 degrees about its own axis, then tilted about x: the lowest rim point
+    // lies at -112.5 degrees in the cylinder's frame
+    const Mat3d R = (Eigen::AngleAxisd(tilt, Vec3d::UnitX()) * Eigen::AngleAxisd(M_PI / 8, Vec3d::UnitZ())).toRotationMatrix();
+    const Vec3d a = R.col(2);
+    const Vec3d w = (-Vec3d::UnitZ() + a.z() * a).normalized();  // down, across the cap
+    const Vec3d low_rel = -h * a + rc * w;                       // the lowest point, from the centre
+    const Vec3d c(0.2, -0.1, -low_rel.z() - depth);
+    const Shape cyl = cylinder(c, R, rc, h);
+    const Result r = run_pair(ground, cyl);
+    ASSERT_GE(r.count, 1u) << tilt_deg;
+    EXPECT_NEAR(r.depth, depth, 1e-4) << tilt_deg;
+    EXPECT_GT(r.n.z(), 1 - 1e-4) << tilt_deg;  // A (the ground) to B
+    uint32_t deepest = 0;
+    for (uint32_t j = 1; j < r.count; ++j)
+      if (r.pd[j] > r.pd[deepest]) deepest = j;
+    EXPECT_NEAR(r.pd[deepest], r.depth, 1e-4) << tilt_deg;
+    // near the lowest rim point (EPA's witness slides along the rim, where the height
+    // changes with the square of the angle)
+    const Vec3d low = c + low_rel;
+    EXPECT_LT((r.pt[deepest] - (low + Vec3d(0, 0, 0.5 * depth))).norm(), 2e-2) << tilt_deg;
+    for (uint32_t j = 0; j < r.count; ++j) {
+      EXPECT_TRUE(inside_leaf(ground, r.pt[j] + r.n * (0.5 * r.pd[j]), 1e-4)) << tilt_deg << " point " << j;
+      EXPECT_TRUE(inside_leaf(cyl, r.pt[j] - r.n * (0.5 * r.pd[j]), 1e-4)) << tilt_deg << " point " << j;
+    }
+  }
+}
+
 TEST(GjkEpa, OrientedBoxesAgreeWithSat) {
   std::mt19937 rng(13);
   std::uniform_real_distribution<double> u(-1, 1);

@@ -15,7 +15,8 @@
 //  (d) every contact point (count <= 4, finite) lies within depth/2 + 2 tol of both
 //      surfaces (exact signed distances for sphere, capsule, box, triangle, plane; the
 //      support-based signed distance for hulls, cylinders, ellipsoids), with
-//      -tol <= pdepth <= depth + tol;
+//      -tol <= pdepth <= depth + tol, and the deepest point carries the depth
+//      (max pdepth >= depth - tol);
 //  (e) safe displacement: moving B by n*(depth + tol) separates along n
 //      (o(n) <= depth + tol), and moving it by n*(depth - 2 tol) leaves it overlapping
 //      by the reference (a fresh reference solve for the moved B).
@@ -561,6 +562,11 @@ std::string check_lane(const Lane& l, const KernelLane& kl, double tol, Stats& s
     const double lim = 0.5 * std::max(kl.depth, 0.0) + 2 * tol + point_slack(l);
     if (std::fabs(da) > lim || std::fabs(db) > lim)
       why << " point " << q << " off the surfaces: sd_A=" << da << " sd_B=" << db << " (limit " << lim << ");";
+  }
+  if (kl.count > 0) {
+    double deepest = -1e300;
+    for (uint32_t q = 0; q < kl.count; ++q) deepest = std::max(deepest, static_cast<double>(kl.pd[q]));
+    if (deepest < kl.depth - tol) why << " DEEPEST point carries " << deepest << " of depth " << kl.depth << ";";
   }
   return why.str();
 }
