@@ -513,7 +513,7 @@ IMPACT_INLINE void cylinder_triangle_block(const LeafSoA& a, const LeafSoA& b, c
   if (simd::any(side_like)) {
     constexpr int M = 1 + 2 + 6;
     V3<F> ca[M];
-    F cd[M], c2x[M], c2y[M];
+    F cd[M];
     Mask cv[M];
     const Mask okxy = nxy2 > tiny;
     const F ixy = one / sqrt(select(okxy, nxy2, one));
@@ -567,25 +567,7 @@ IMPACT_INLINE void cylinder_triangle_block(const LeafSoA& a, const LeafSoA& b, c
         cv[i] = (s0 <= s1) & (cc <= zero) & within;
       }
     }
-    for (int i = 0; i < M; ++i) {
-      cv[i] = cv[i] & (cd[i] > zero);
-      c2x[i] = ca[i].y * mx - ca[i].x * my, c2y[i] = ca[i].z;
-    }
-    drop_shadowed_witness<F, M>(cd, cv, o, tol);
-    Int idx[4], cnt;
-    F ox[4], oy[4];
-    reduce4_indices<F, M>(c2x, c2y, cd, cv, tol, idx, cnt, ox, oy);
-    F ax[M], ay[M], az[M];
-    for (int i = 0; i < M; ++i) ax[i] = ca[i].x, ay[i] = ca[i].y, az[i] = ca[i].z;
-    const Mask use = side_like & (cnt > Int(0));
-    m.count = select(use, cnt, m.count);
-    for (int i = 0; i < 4; ++i) {
-      const V3<F> aq{simd::gather_lanes(ax, idx[i]), simd::gather_lanes(ay, idx[i]),
-                     simd::gather_lanes(az, idx[i])};
-      const F dq = simd::gather_lanes(cd, idx[i]);
-      m.point[i] = select(use, madd(aq, F(-0.5f) * dq, n), m.point[i]);
-      m.pdepth[i] = select(use, min(dq, o), m.pdepth[i]);
-    }
+    side_manifold_tail<F, M, true>(ca, cd, cv, o, tol, mx, my, n, side_like, m);
   }
 
   m.count = select(hit, m.count, Int(0));

@@ -559,4 +559,36 @@ IMPACT_INLINE void drop_shadowed_witness(const F (&d)[M], typename F::Mask (&val
   valid[0] = valid[0] & (deepest < o - tol);
 }
 
+/// The tail of a side-contact manifold against a cylinder (box-cylinder,
+/// cylinder-triangle): M candidate points ca (0: the witness) with their gaps d and
+/// validity, in the cylinder's frame, where (mx, my) is the side's horizontal unit
+/// normal along n: candidates without a positive gap and a shadowed witness dropped,
+/// reduced to 4 in the side's own 2-D coordinates (across (mx, my), and z), and the
+/// chosen ones written to m where `use` (count, points, pdepth = min(gap, o)). kHalfBack:
+/// each chosen point is moved by -gap/2 along n (candidates on the far surface).
+template <class F, int M, bool kHalfBack>
+IMPACT_INLINE void side_manifold_tail(const V3<F> (&ca)[M], F (&d)[M], typename F::Mask (&valid)[M], F o, F tol,
+                                      F mx, F my, const V3<F>& n, typename F::Mask use, Lanes<F, 4>& m) {
+  using Int = typename F::Int;
+  F c2x[M], c2y[M], ax[M], ay[M], az[M];
+  for (int i = 0; i < M; ++i) {
+    valid[i] = valid[i] & (d[i] > F(0.0f));
+    c2x[i] = ca[i].y * mx - ca[i].x * my, c2y[i] = ca[i].z;
+    ax[i] = ca[i].x, ay[i] = ca[i].y, az[i] = ca[i].z;
+  }
+  drop_shadowed_witness<F, M>(d, valid, o, tol);
+  Int idx[4], cnt;
+  F ox[4], oy[4];
+  reduce4_indices<F, M>(c2x, c2y, d, valid, tol, idx, cnt, ox, oy);
+  const typename F::Mask on = use & (cnt > Int(0));
+  m.count = select(on, cnt, m.count);
+  for (int i = 0; i < 4; ++i) {
+    V3<F> q{simd::gather_lanes(ax, idx[i]), simd::gather_lanes(ay, idx[i]), simd::gather_lanes(az, idx[i])};
+    const F dq = simd::gather_lanes(d, idx[i]);
+    if constexpr (kHalfBack) q = madd(q, F(-0.5f) * dq, n);
+    m.point[i] = select(on, q, m.point[i]);
+    m.pdepth[i] = select(on, min(dq, o), m.pdepth[i]);
+  }
+}
+
 }  // namespace impact::kernels::prim
