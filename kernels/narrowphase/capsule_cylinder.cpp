@@ -82,19 +82,8 @@
 #include "kernels/narrowphase/primitives.h"
 #include "kernels/narrowphase/rim_solve.h"
 
-// No FMA contraction in this file. Several quantities here are rounding noise by nature
-// (u's horizontal part for a core along the axis, the offset of a core end on the axis,
-// the 2D closest point of a core crossing the axis in projection); any unit direction
-// built from them is as good as another, but it must be unit, or o(n) is no upper bound.
-// GCC 12 at -O3 (SLP vectorisation of the one-lane path) was seen to evaluate such a
-// quantity twice, contracted differently, and normalise one copy by the other's length
-// (|n| = 0.93, a depth 6% short). Without contraction every copy rounds alike; the cost
-// was not measurable (the kernel is bound by its divisions and square roots).
-#if defined(__clang__)
-#pragma STDC FP_CONTRACT OFF
-#elif defined(__GNUC__)
-#pragma GCC optimize("fp-contract=off")
-#endif
+// No FMA contraction in this file (see no_contract.h).
+#include "kernels/narrowphase/no_contract.h"  // last: its pragma covers what follows
 
 namespace impact::kernels {
 namespace {

@@ -73,15 +73,8 @@
 #include "kernels/narrowphase/primitives.h"
 #include "kernels/narrowphase/rim_solve.h"
 
-// No FMA contraction in this file, for the reason capsule_cylinder.cpp gives: directions
-// built from rounding noise (an edge's horizontal part for an edge along the axis, the
-// shadow point of an edge passing the axis) must round alike in every copy the compiler
-// makes, or a "unit" n is not unit and o(n) no upper bound.
-#if defined(__clang__)
-#pragma STDC FP_CONTRACT OFF
-#elif defined(__GNUC__)
-#pragma GCC optimize("fp-contract=off")
-#endif
+// No FMA contraction in this file (see no_contract.h).
+#include "kernels/narrowphase/no_contract.h"  // last: its pragma covers what follows
 
 namespace impact::kernels {
 namespace {
