@@ -1398,8 +1398,10 @@ void contact_manifold(const Leaf& A, const Leaf& B, V3 n, float depth, V3 pa, V3
           float deepest = 0.0f;
           for (uint32_t i = 0; i < m; ++i) deepest = fmax_nn(deepest, pd[i]);
           const V3 sa = pa + n * ra, sb = pb - n * rb;  // on the surfaces
-          const float tol = kWitnessJoin * depth + 1e-6f * (leaf_size(A) + leaf_size(B));
-          if (deepest < depth - tol && reaches_at(A, sb, n, depth, tol) && reaches_at(B, sa, -n, depth, tol)) {
+          const float tol = kWitnessReach * depth + 1e-6f * (leaf_size(A) + leaf_size(B));
+          const float miss = kWitnessJoin * (depth + leaf_size(A) + leaf_size(B));
+          if (deepest < depth - miss && reaches_at(A, sb, n, depth, tol) &&
+              reaches_at(B, sa, -n, depth, tol)) {
             pts[m] = (sa + sb) * 0.5f;
             pd[m] = depth;
             ++m;

@@ -93,8 +93,12 @@ uint32_t reduce_manifold(V3* pts, float* depth, uint32_t n, V3 normal);
 /// with the normal) need not hold the incident side's support point, and a cylinder's
 /// cap is clipped as an inscribed polygon. Where no clipped point carries (1 - this) of
 /// the pair's depth, the witnesses' midpoint (depth apart along the normal) joins with
-/// the whole depth, if each witness lies in the other shape once moved by the depth
-/// (contact_manifold, the box-hull and the hull-triangle manifolds).
-inline constexpr float kWitnessJoin = 1e-3f;
+/// the whole depth, if each witness lies in the other shape once moved by the depth,
+/// within kWitnessReach of the depth (contact_manifold, the box-hull and the
+/// hull-triangle manifolds). "Carries" allows this times the depth plus the pair's size
+/// (EPA's depth on a curved side is that close to the clipped points'), so the witness
+/// joins only real misses.
+inline constexpr float kWitnessJoin = 1e-5f;
+inline constexpr float kWitnessReach = 1e-3f;
 
 }  // namespace impact::kernels::cvx

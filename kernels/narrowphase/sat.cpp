@@ -450,8 +450,8 @@ void box_hull_manifold(const Leaf& A, const Leaf& B, const Poly& PB, const BoxHu
       // contact_manifold (kWitnessJoin): where pa lies in the box and pb in the hull.
       float deepest = 0.0f;
       for (uint32_t i = 0; i < k; ++i) deepest = fmax_nn(deepest, pd[i]);
-      bool held = deepest < depth - kWitnessJoin * depth;
-      const float tol = kWitnessJoin * depth + 1e-6f * (A.e[0] + A.e[1] + A.e[2]);
+      bool held = deepest < depth - kWitnessJoin * (depth + A.e[0] + A.e[1] + A.e[2]);
+      const float tol = kWitnessReach * depth + 1e-6f * (A.e[0] + A.e[1] + A.e[2]);
       held = held && std::fabs(pa.x) <= A.e[0] + tol && std::fabs(pa.y) <= A.e[1] + tol &&
              std::fabs(pa.z) <= A.e[2] + tol;
       for (uint32_t f = 0; f < PB.nf && held; ++f)
