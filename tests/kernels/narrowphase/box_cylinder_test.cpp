@@ -43,14 +43,15 @@
 // inside, the cylinder wholly inside a big box, a box over a rim); feature pairs built in
 // closed form, apart and meeting: a box edge across a rim (the minimum on an edge-rim
 // piece), a box vertex at a rim, an edge against the side (normal edge x axis), a vertex
-// against the side, a face against a rim, a vertex into a cap; manifolds (axis-aligned,
-// both paths): a box resting flat on the cap (its 4 face corners, or rim points within
-// the face), the cylinder standing on a box face (rim points), lying on it (the side
-// line's 2 ends, clipped to the face); near-parallel tilts (0..1e-2 rad) of those;
-// exactly touching (count 0); needle and pancake boxes and cylinders (1e-4); symmetries
-// (a rotation and translation of the whole pair, the cylinder's axis reversed, the box's
-// axes relabelled); range partitions and shuffled buckets (same bytes, nothing written
-// outside the range); agreement with GJK / EPA.
+// against the side, a face against a rim, a vertex into a cap; apart pairs that only the
+// edge-rim piece separates (an edge just off a rim, D away, the least closed-form overlap
+// in (0, D/2)); manifolds (axis-aligned, both paths): a box resting flat on the cap (its
+// 4 face corners, or rim points within the face), the cylinder standing on a box face
+// (rim points), lying on it (the side line's 2 ends, clipped to the face); near-parallel
+// tilts (0..1e-2 rad) of those; exactly touching (count 0); needle and pancake boxes and
+// cylinders (1e-4); symmetries (a rotation and translation of the whole pair, the
+// cylinder's axis reversed, the box's axes relabelled); range partitions and shuffled
+// buckets (same bytes, nothing written outside the range); agreement with GJK / EPA.
 #include <gtest/gtest.h>
 
 #include <Eigen/Core>
@@ -831,6 +832,102 @@ TEST(BoxCylinder, FaceAgainstARimAndVertexIntoACap) {
   on = check_built(Feature::kVertexCap, 97, "vertex into a cap", &st, &meeting);
   EXPECT_GE(on, meeting * 3 / 4);
   EXPECT_EQ(st.hits, meeting);
+}
+
+/// The least support overlap over the closed-form directions the kernel's header lists
+/// (the caps, the faces, edge x side, every vertex towards the axis and towards each
+/// rim, and the direction of the point pair from three alternating nearest-point steps
+/// from the box centre), each evaluated by nref: an upper bound of the least overlap.
+double closed_form_least_overlap(const Query& q) {
+  const Vec3d z = q.R.col(2);
+  double least = std::numeric_limits<double>::infinity();
+  auto take = [&](const Vec3d& n) {
+    if (n.norm() > 1e-12) least = std::min(least, overlap_along(q, n));
+  };
+  auto local = [&](const Vec3d& x) { return Vec3d(q.R.transpose() * (x - q.p)); };
+  take(z), take(-z);
+  for (int i = 0; i < 3; ++i) {
+    take(q.Q.col(i)), take(-q.Q.col(i));
+    take(q.Q.col(i).cross(z)), take(z.cross(q.Q.col(i)));
+  }
+  for (int k = 0; k < 8; ++k) {
+    Vec3d v = q.c;
+    for (int i = 0; i < 3; ++i) v += ((k >> i) & 1 ? -q.e[i] : q.e[i]) * q.Q.col(i);
+    const Vec3d l = local(v);
+    const double rho = std::hypot(l.x(), l.y());
+    const Vec3d r = rho > 0 ? Vec3d(l.x() / rho, l.y() / rho, 0.0) : Vec3d::UnitX();
+    take(q.R * -r);
+    for (double zs : {1.0, -1.0}) {
+      const double radial = std::fabs(rho - q.rc), vert = std::fabs(l.z() - zs * q.h);
+      take(q.R * Vec3d(-radial * r.x(), -radial * r.y(), -zs * vert));
+    }
+  }
+  auto to_cyl = [&](const Vec3d& x) {
+    const Vec3d l = local(x);
+    const double rho = std::hypot(l.x(), l.y()), s = rho > q.rc ? q.rc / rho : 1.0;
+    return Vec3d(q.p + q.R * Vec3d(l.x() * s, l.y() * s, std::clamp(l.z(), -q.h, q.h)));
+  };
+  auto to_box = [&](const Vec3d& x) {
+    const Vec3d l = q.Q.transpose() * (x - q.c);
+    return Vec3d(q.c + q.Q * l.cwiseMax(-q.e).cwiseMin(q.e));
+  };
+  Vec3d y = to_cyl(q.c), x = to_box(y);
+  y = to_cyl(x), x = to_box(y), y = to_cyl(x);
+  take(y - x);
+  return least;
+}
+
+/// Apart pairs that only the edge-rim piece separates: a box edge D (5e-4..2e-3 of the
+/// size) off a rim, in the plane normal to the rim's normal and 0.2..0.6 rad off the rim's
+/// tangent, its nearer end within 0.3 D of the closest point; kept where the least
+/// closed-form overlap lies in (0.05 D, 0.5 D), so no closed-form direction separates
+/// them. The minimum (-D) is on that edge's and rim's slot, whose edge-to-rim lower bound
+/// (at most D) may exceed every closed-form overlap: only the point pair's distance in
+/// the pruning bound keeps it. Both paths count 0 (the reference: apart at the built D
+/// along the built normal).
+TEST(BoxCylinder, EdgeOffARimOnlyTheRimPieceSeparates) {
+  std::mt19937 g(101);
+  std::uniform_real_distribution<double> u01(0, 1);
+  auto uni = [&](double lo, double hi) { return lo + (hi - lo) * u01(g); };
+  auto logu = [&](double lo, double hi) { return lo * std::pow(hi / lo, u01(g)); };
+  const int want = static_cast<int>(test::scaled(32));
+  std::vector<Query> qs;
+  std::vector<double> ds;
+  std::vector<Vec3d> ns;
+  int tries = 0;
+  for (; tries < 4000 * want && static_cast<int>(qs.size()) < want; ++tries) {
+    const double h = uni(0.3, 1.0), rc = h * logu(0.1, 10.0), L0 = std::hypot(rc, h);
+    const double a = M_PI * uni(-1, 1), s = u01(g) < 0.5 ? 1.0 : -1.0;
+    const double phi = uni(0.7, 1.1);  // the rim normal's elevation
+    const Vec3d m = std::cos(phi) * radial(a) + std::sin(phi) * s * Vec3d::UnitZ();
+    const Vec3d rim = rc * radial(a) + s * h * Vec3d::UnitZ();
+    // the edge normal to m, at al from m x t (0.2..0.6 rad off the rim's tangent t)
+    const double al = (u01(g) < 0.5 ? 1.0 : -1.0) * uni(1.0, 1.35);
+    const Vec3d e = std::cos(al) * m.cross(tangential(a)).normalized() + std::sin(al) * tangential(a);
+    const double psi = uni(0.3, 1.3);
+    const Vec3d half = L0 * Vec3d(logu(0.05, 0.3), logu(0.05, 0.3), logu(0.05, 0.3));
+    const double d = L0 * logu(5e-4, 2e-3);
+    const double end = d * logu(0.01, 0.3);  // the nearer end's distance from the closest point
+    Vec3d c;
+    Mat3d Qb;
+    edge_box(rim + d * m, e, -m, psi, half, &c, &Qb);
+    c += (u01(g) < 0.5 ? 1.0 : -1.0) * (half[0] - end) * e;
+    const Query q = posed(g, c, Qb, half, rc, h);
+    const double least = closed_form_least_overlap(q);
+    if (!(least > 0.05 * d && least < 0.5 * d)) continue;
+    qs.push_back(q);
+    ds.push_back(d);
+    ns.push_back((q.R * -m).normalized());
+  }
+  ASSERT_EQ(static_cast<int>(qs.size()), want) << "after " << tries << " tries";
+  for (size_t k = 0; k < qs.size(); ++k) {
+    const Ref r = reference(qs[k]);
+    EXPECT_TRUE(r.apart) << k;
+    EXPECT_NEAR(r.depth, -ds[k], 1e-6 * size_of(qs[k])) << k;
+    EXPECT_LT(angle(r.n, ns[k]), 1e-5 + 2 * coord_ulp(qs[k]) / ds[k]) << k;  // the inputs' rounding over D
+  }
+  check_all(qs, "edge off a rim, rim piece");  // (a): count 0 on both paths
+  std::printf("  %d lanes from %d tries\n", want, tries);
 }
 
 /// A box resting flat on the top cap, 0.125 deep (axis-aligned, exact), both paths: its
