@@ -51,8 +51,9 @@
 // ranked by s |s| (no root per axis); (4) the same feature rule (bias) and witnesses;
 // (5) contact_manifold's reference-face choice, clipping, chords, witness join and
 // reduction, done in A's frame on the hull data already there (box_hull_manifold).
-// Against brute-force SAT in double it is the more exact route (sat_test.cpp SatBoxHull: 1e-5 L; the general
-// route's edge axes near a face's arc end can be off by ~4e-5 L). Cost on the bench's
+// Against brute-force SAT in double it is the more exact route (sat_test.cpp
+// SatBoxHull: 1e-5 L; the general route's edge axes near a face's arc end can be off
+// by ~4e-5 L). Cost on the bench's
 // 24-point hulls: ~313-414 ns per pair against ~914-961 by the general route and FCL
 // ~1043-1084 in the same runs (loaded 2-core machine); the manifold is a third of it.
 // Inputs: lanes loaded by load_leaf (finite, R orthonormal, positive sizes); hulls
