@@ -57,6 +57,7 @@ namespace {
 
 namespace nb = impact::bench::narrow;
 
+#if IMPACT_BENCH_HAVE_FCL || IMPACT_BENCH_HAVE_CCD
 constexpr uint32_t kPeerLanes = 4096;
 
 // hit[k]: the peer's answer for lane k (from one untimed pass after the timed loop).
@@ -75,6 +76,7 @@ void set_peer_counters(benchmark::State& state, const nb::PairScene& s, double n
   state.counters["hit_frac"] = n ? static_cast<double>(hits) / n : 0.0;
   state.SetItemsProcessed(static_cast<int64_t>(state.iterations()) * n);
 }
+#endif  // IMPACT_BENCH_HAVE_FCL || IMPACT_BENCH_HAVE_CCD
 
 // --- FCL ------------------------------------------------------------------------------------
 #if IMPACT_BENCH_HAVE_FCL
