@@ -832,6 +832,8 @@ IMPACT_INLINE void phase_c(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA
   }
 
   m.count = select(hit, m.count, Int(0));
+  // a single point carries the depth (a clip can leave one point a rounding short of it)
+  m.pdepth[0] = select(m.count == Int(1), o, m.pdepth[0]);
   m.n = rot.apply(n);
   m.depth = o;
   for (int i = 0; i < 4; ++i) m.point[i] = cb + rot.apply(m.point[i]);

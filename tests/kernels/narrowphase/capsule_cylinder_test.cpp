@@ -478,7 +478,7 @@ class CapsuleCylinderScales : public ::testing::TestWithParam<std::tuple<double,
 
 TEST_P(CapsuleCylinderScales, RandomPosesAgainstReference) {
   const auto [size, offset] = GetParam();
-  std::mt19937 g(17 + static_cast<uint32_t>(std::log10(size) + 10 * (offset > 0)));
+  std::mt19937 g(static_cast<uint32_t>(17 + std::lround(std::log10(size)) + 10 * (offset > 0)));
   const int n = static_cast<int>(test::scaled(offset == 0 && size == 1.0 ? 300 : 80));
   Stats st;
   check_all(random_queries(g, n, size, offset), "random", &st);
