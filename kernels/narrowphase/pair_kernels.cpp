@@ -63,6 +63,7 @@ struct Table {
     k[kLeafCapsule][kLeafCylinder] = &collide_capsule_cylinder;
     k[kLeafBox][kLeafEllipsoid] = &collide_box_ellipsoid;
     k[kLeafBox][kLeafCylinder] = &collide_box_cylinder;
+    k[kLeafCylinder][kLeafCylinder] = &collide_cylinder_cylinder;
     k[kLeafConvex][kLeafEllipsoid] = &collide_convex_ellipsoid;
     k[kLeafCylinder][kLeafTriangle] = &collide_cylinder_triangle;
     k[kLeafConvex][kLeafHalfSpace] = &collide_convex_halfspace;

@@ -13,9 +13,10 @@
 // (sphere_ellipsoid.cpp, capsule_ellipsoid.cpp, box_ellipsoid.cpp, ellipsoid_triangle.cpp:
 // candidate normals from the point solvers of ellipsoid_solve.h, SIMD across pairs);
 // hull-ellipsoid the same candidates per pair, 8 hull features per step
-// (convex_ellipsoid.cpp); capsule-cylinder and cylinder-triangle lane kernels
-// (capsule_cylinder.cpp, cylinder_triangle.cpp: candidate normals of the Minkowski
-// difference's pieces, rims by rim_solve.h); hull-half-space a lane kernel over the
+// (convex_ellipsoid.cpp); capsule-cylinder, box-cylinder, cylinder-cylinder and
+// cylinder-triangle lane kernels (capsule_cylinder.cpp, box_cylinder.cpp,
+// cylinder_cylinder.cpp, cylinder_triangle.cpp: candidate normals of the Minkowski
+// difference's pieces, rims by rim_solve.h, rim pairs by a bracketed 1-D search); hull-half-space a lane kernel over the
 // hull's vertices, the picks over compacted touching lanes (convex_halfspace.cpp; hulls
 // over 64 vertices per pair by the support-function routine); ellipsoid-ellipsoid a lane
 // kernel (ellipsoid_ellipsoid.cpp: multi-start trust-region Newton on the support overlap
@@ -81,6 +82,12 @@ void collide_capsule_cylinder(const LeafSoA&, const LeafSoA&, const ManifoldSoA&
 /// solve of rim_solve.h, packed across lanes after a distance bound), the cap or side
 /// clipped to the box (1-4 points; box_cylinder.cpp), SIMD across pairs.
 void collide_box_cylinder(const LeafSoA&, const LeafSoA&, const ManifoldSoA&, Range, const NarrowConfig&);
+/// Cylinder against cylinder: exact, the least support overlap over the candidate normals
+/// of their Minkowski difference's pieces (caps, side x side, a side against the other's
+/// rims by the 2D root solve of rim_solve.h, rim x rim by the local minima of the
+/// circle-circle distance), the caps or sides clipped against each other (1-4 points;
+/// cylinder_cylinder.cpp), SIMD across pairs.
+void collide_cylinder_cylinder(const LeafSoA&, const LeafSoA&, const ManifoldSoA&, Range, const NarrowConfig&);
 /// Box against ellipsoid: exact, the least support overlap over the box's face normals and
 /// the candidate normals of the vertex and edge pieces that can hold one (pruned along
 /// each candidate's solution curve, the rest solved packed; box_ellipsoid.cpp), SIMD
