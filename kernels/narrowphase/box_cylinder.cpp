@@ -103,10 +103,6 @@ constexpr float kFree = 1e-6f;
 /// |sin| between n and the axis (the cap plane) below which the contact is a cap (side)
 /// contact with a clipped manifold.
 constexpr float kParallelSin = 0.05f;
-/// Rim samples of the cap manifold: cos of multiples of 45 degrees.
-constexpr int kRimSamples = 8;
-constexpr float kRimCos[kRimSamples] = {1.0f,  0.70710678f,  0.0f, -0.70710678f,
-                                        -1.0f, -0.70710678f, 0.0f, 0.70710678f};
 constexpr float kNever = 3.0e38f;
 /// Edge-rim slots per lane: 3 directions x 4 edges x 2 rims.
 constexpr int kSlots = 24;
@@ -186,25 +182,7 @@ IMPACT_INLINE typename F::Mask witnessed(const Geo<F>& g, F slack, F o, const V3
 
 /// The least valid candidate (o, n, box witness x) and the least of all (any_*).
 template <class F>
-struct Best {
-  F o, any_o;
-  V3<F> n, x, any_n, any_x;
-  IMPACT_INLINE void init() {
-    o = any_o = F(kNever);
-    n = any_n = V3<F>{F(0.0f), F(0.0f), F(1.0f)};
-    x = any_x = n;
-  }
-  IMPACT_INLINE void take(F o2, const V3<F>& n2, const V3<F>& x2, typename F::Mask valid) {
-    const auto ma = o2 < any_o;
-    any_o = select(ma, o2, any_o);
-    any_n = select(ma, n2, any_n);
-    any_x = select(ma, x2, any_x);
-    const auto m = valid & (o2 < o);
-    o = select(m, o2, o);
-    n = select(m, n2, n);
-    x = select(m, x2, x);
-  }
-};
+using Best = WitnessedBest<F>;
 
 /// The cylinder's support point along -n nearest (in its support feature) to the point f.
 template <class F>
@@ -287,28 +265,6 @@ IMPACT_INLINE Geo<F> gather_geo(const Chunk<W>& ch, typename F::Int idx) {
   return g;
 }
 
-template <class F, uint32_t W>
-IMPACT_INLINE void save_best(Chunk<W>& ch, uint32_t j, const Best<F>& b) {
-  auto st3 = [&](int f, const V3<F>& v) {
-    v.x.store(ch.st[f] + j), v.y.store(ch.st[f + 1] + j), v.z.store(ch.st[f + 2] + j);
-  };
-  b.o.store(ch.st[0] + j);
-  st3(1, b.n);
-  st3(4, b.x);
-  b.any_o.store(ch.st[7] + j);
-  st3(8, b.any_n);
-  st3(11, b.any_x);
-}
-
-template <class F, uint32_t W>
-IMPACT_INLINE Best<F> load_best(const Chunk<W>& ch, uint32_t j) {
-  auto l1 = [&](int f) { return F::load(ch.st[f] + j); };
-  auto l3 = [&](int f) { return V3<F>{l1(f), l1(f + 1), l1(f + 2)}; };
-  Best<F> b;
-  b.o = l1(0), b.n = l3(1), b.x = l3(4), b.any_o = l1(7), b.any_n = l3(8), b.any_x = l3(11);
-  return b;
-}
-
 /// Phase A for one block (lanes k.. of a / b, chunk lanes j..): the closed-form
 /// candidates, and the edge-rim slots each lane still needs, appended to the chunk.
 template <class F, uint32_t W>
@@ -327,7 +283,7 @@ IMPACT_INLINE void phase_a(const LeafSoA& a, const LeafSoA& b, uint32_t k, uint3
   const Mask near = length_sq(cb) < reach * reach;
   if (simd::none(near)) {
     best.o = best.any_o = F(-1.0f);
-    save_best<F, W>(ch, j, best);
+    save_best<F>(ch.st, j, best);
     return;
   }
   const F slack = pair_slack(g);
@@ -364,7 +320,8 @@ IMPACT_INLINE void phase_a(const LeafSoA& a, const LeafSoA& b, uint32_t k, uint3
       const V3<F> x = madd(y, o, n);  // on the face's plane: in the box where in the face
       const V3<F> q = x - f;
       const int j1 = (i + 1) % 3, j2 = (i + 2) % 3;
-      best.take(o, n, x, (abs(dot(q, g.a[j1])) <= g.e[j1] + slack) & (abs(dot(q, g.a[j2])) <= g.e[j2] + slack));
+      best.take(o, n, x,
+                (abs(dot(q, g.a[j1])) <= g.e[j1] + slack) & (abs(dot(q, g.a[j2])) <= g.e[j2] + slack));
     }
   }
   // --- edge x side: n = +-(a_i x z) / |.|, the edge against the side line ---
@@ -445,8 +402,9 @@ IMPACT_INLINE void phase_a(const LeafSoA& a, const LeafSoA& b, uint32_t k, uint3
         const V3<F> y{g.rc * mx, g.rc * my, zs * g.h};
         const F radial = abs(vrho[q] - g.rc), vert = abs(v.z - zs * g.h);
         F len;
-        const V3<F> n = normalize_or(V3<F>{-radial * mx, -radial * my, -zs * vert},
-                                     V3<F>{-mx * F(0.70710678f), -my * F(0.70710678f), -zs * F(0.70710678f)}, len);
+        const V3<F> n =
+            normalize_or(V3<F>{-radial * mx, -radial * my, -zs * vert},
+                         V3<F>{-mx * F(0.70710678f), -my * F(0.70710678f), -zs * F(0.70710678f)}, len);
         consider(select(uncertified, score(g, n), never), n, v, y);
       }
     }
@@ -521,7 +479,8 @@ IMPACT_INLINE void phase_a(const LeafSoA& a, const LeafSoA& b, uint32_t k, uint3
         // |x - y|^2 >= (rho(x) - rc)^2 + (x.z - rz)^2, each term bounded along the edge
         const F lb = sqrt(lb_r * lb_r + lb_z * lb_z);
         const F cone_eps(-1e-6f);
-        const Mask cone = s == 0 ? ((za >= cone_eps) | (zk >= cone_eps)) : ((za <= -cone_eps) | (zk <= -cone_eps));
+        const Mask cone =
+            s == 0 ? ((za >= cone_eps) | (zk >= cone_eps)) : ((za <= -cone_eps) | (zk <= -cone_eps));
         const Mask need = live2 & arc_ok & cone & (lb <= bound);
         uint32_t bits = simd::bits(need);
         if (nb < W) bits &= (1u << nb) - 1u;
@@ -539,7 +498,7 @@ IMPACT_INLINE void phase_a(const LeafSoA& a, const LeafSoA& b, uint32_t k, uint3
   ch.nitems = cnt;
   best.o = select(near, best.o, F(-1.0f));
   best.any_o = select(near, best.any_o, F(-1.0f));
-  save_best<F, W>(ch, j, best);
+  save_best<F>(ch.st, j, best);
 }
 
 /// Phase B, one batch: M groups of W listed edge-rim slots from item g0 (their solves
@@ -596,23 +555,8 @@ IMPACT_INLINE void solve_batch(Chunk<W>& ch, uint32_t g0, uint32_t total) {
     const F tw = clamp(dot(y - pe[m], u[m]), -eu[m], eu[m]);
     const V3<F> x = madd(pe[m], tw, u[m]);
     const Mask valid = witnessed(g[m], pair_slack(g[m]), o, n, x, y);
-    float ro[W], rv[W], rn[3][W], rxw[3][W];
-    o.store(ro);
-    select(valid, one, zero).store(rv);
-    n.x.store(rn[0]), n.y.store(rn[1]), n.z.store(rn[2]);
-    x.x.store(rxw[0]), x.y.store(rxw[1]), x.z.store(rxw[2]);
     const uint32_t cnt = at >= total ? 0u : (total - at < W ? total - at : W);
-    for (uint32_t l = 0; l < cnt; ++l) {
-      const auto ln = static_cast<uint32_t>(ch.lane[at + l]);
-      if (ro[l] < ch.st[7][ln]) {
-        ch.st[7][ln] = ro[l];
-        for (int q = 0; q < 3; ++q) ch.st[8 + q][ln] = rn[q][l], ch.st[11 + q][ln] = rxw[q][l];
-      }
-      if (rv[l] != 0.0f && ro[l] < ch.st[0][ln]) {
-        ch.st[0][ln] = ro[l];
-        for (int q = 0; q < 3; ++q) ch.st[1 + q][ln] = rn[q][l], ch.st[4 + q][ln] = rxw[q][l];
-      }
-    }
+    merge_best(ch.st, ch.lane + at, cnt, o, n, x, valid);
   }
 }
 
@@ -623,7 +567,8 @@ IMPACT_INLINE void phase_b(Chunk<W>& ch) {
   const uint32_t total = ch.nitems;
   if (total == 0) return;
   const uint32_t groups = (total + W - 1) / W;
-  for (uint32_t l = total; l < groups * W; ++l) ch.lane[l] = ch.lane[total - 1], ch.kind[l] = ch.kind[total - 1];
+  for (uint32_t l = total; l < groups * W; ++l)
+    ch.lane[l] = ch.lane[total - 1], ch.kind[l] = ch.kind[total - 1];
   uint32_t gi = 0;
   for (; gi + 4 <= groups; gi += 4) solve_batch<F, W, 4>(ch, gi * W, total);
   if (gi + 2 <= groups) solve_batch<F, W, 2>(ch, gi * W, total), gi += 2;
@@ -638,7 +583,7 @@ IMPACT_INLINE void phase_c(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA
   using Mask = typename F::Mask;
   using Int = typename F::Int;
   const F zero(0.0f), one(1.0f), half(0.5f), tiny(kTinySq), never(kNever);
-  const Best<F> best = load_best<F, W>(ch, j);
+  const Best<F> best = load_best<F>(ch.st, j);
   if (simd::none(best.any_o > zero)) {
     store_no_contact<F>(out, k);
     return;
@@ -748,18 +693,7 @@ IMPACT_INLINE void phase_c(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA
         cv[c] = ok & (pos | neg);
       }
     }
-    for (int i = 0; i < M; ++i) cv[i] = cv[i] & (cd[i] > zero);
-    drop_shadowed_witness<F, M>(cd, cv, o, tol);
-    F ox[4], oy[4], od[4];
-    Int cnt;
-    reduce4<F, M>(cx, cy, cd, cv, tol, ox, oy, od, cnt);
-    const Mask use = cap_like & (cnt > Int(0));
-    m.count = select(use, cnt, m.count);
-    for (int i = 0; i < 4; ++i) {
-      const V3<F> p = madd(V3<F>{ox[i], oy[i], zc}, half * od[i], n);
-      m.point[i] = select(use, p, m.point[i]);
-      m.pdepth[i] = select(use, min(od[i], o), m.pdepth[i]);
-    }
+    cap_manifold_tail<F, M>(cx, cy, cd, cv, o, tol, zc, n, cap_like, m);
   }
   // Side contact: the side's line along -n clipped to the face seen along n, the face's
   // edges clipped to the side's height (each point's gap: where the line from it along
@@ -767,7 +701,8 @@ IMPACT_INLINE void phase_c(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA
   // (only where a face of the box lies within kParallelSin of the side, or an edge within
   // kParallelSin of the axis: else one point)
   const F azmax = max(max(abs(g.a[0].z), abs(g.a[1].z)), abs(g.a[2].z));
-  const Mask side_like = andnot(hit & (n.z * n.z < par2) & ((fdn * fdn > one - par2) | (azmax * azmax > one - par2)), cap_like);
+  const Mask side_like =
+      andnot(hit & (n.z * n.z < par2) & ((fdn * fdn > one - par2) | (azmax * azmax > one - par2)), cap_like);
   if (simd::any(side_like)) {
     constexpr int M = 1 + 2 + 8;
     V3<F> ca[M];
@@ -843,37 +778,8 @@ IMPACT_INLINE void phase_c(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA
 template <class F>
 void box_cylinder_range(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out, Range r) {
   constexpr uint32_t W = F::kWidth;
-  using C = Chunk<W>;
-  C ch;
-  for (uint32_t k0 = r.begin; k0 < r.end; k0 += C::kLanes) {
-    const uint32_t n = r.end - k0 < C::kLanes ? r.end - k0 : C::kLanes;
-    ch.nitems = 0;
-    for (uint32_t j = 0; j < n; j += W) {
-      const uint32_t k = k0 + j, nb = n - j < W ? n - j : W;
-      if (nb == W) {
-        phase_a<F, W>(a, b, k, j, nb, ch);
-      } else {
-        TailSide<W> ta, tb;
-        ta.fill(a, k, nb);
-        tb.fill(b, k, nb);
-        phase_a<F, W>(ta.view, tb.view, 0u, j, nb, ch);
-      }
-    }
-    phase_b<F, W>(ch);
-    for (uint32_t j = 0; j < n; j += W) {
-      const uint32_t k = k0 + j, nb = n - j < W ? n - j : W;
-      if (nb == W) {
-        phase_c<F, W>(a, b, out, k, j, ch);
-      } else {
-        TailSide<W> ta, tb;
-        ta.fill(a, k, nb);
-        tb.fill(b, k, nb);
-        TailOut<W, 4> to{};
-        phase_c<F, W>(ta.view, tb.view, to.view(), 0u, j, ch);
-        to.copy_to(out, k, nb);
-      }
-    }
-  }
+  Chunk<W> ch;
+  for_each_chunk<F, 4>(a, b, out, r, ch, phase_a<F, W>, phase_b<F, W>, phase_c<F, W>);
 }
 
 }  // namespace

@@ -116,10 +116,6 @@ constexpr float kFree = 1e-6f;
 /// contact with a clipped manifold.
 constexpr float kParallelSin = 0.05f;
 constexpr float kNever = 3.0e38f;
-/// Rim samples of the cap manifolds: cos of multiples of 45 degrees.
-constexpr int kRimSamples = 8;
-constexpr float kRimCos[kRimSamples] = {1.0f,  0.70710678f,  0.0f, -0.70710678f,
-                                        -1.0f, -0.70710678f, 0.0f, 0.70710678f};
 /// Rim x rim: samples of A's rim angle per rim pair, local minima refined per lane
 /// (at most kArcSlots of them), at most kArcSteps safeguarded Newton steps each.
 constexpr int kArcSamples = 16;
@@ -214,23 +210,9 @@ IMPACT_INLINE typename F::Mask in_a(const Geo<F>& g, const V3<F>& p) {
   return (abs(dot(q, g.u)) <= g.ha) & (qa * qa + qb * qb <= g.ra * g.ra);
 }
 
-/// The least candidate whose witness checks out, and the least of all (an upper bound
-/// either way): o, normal, A's witness point x (B's is x - o n).
+/// o, normal, A's witness point x (B's is x - o n) of the least (valid) candidate.
 template <class F>
-struct Best {
-  F o, any_o;
-  V3<F> n, x, any_n, any_x;
-  IMPACT_INLINE void take(typename F::Mask valid, F o2, const V3<F>& n2, const V3<F>& x2) {
-    const auto m = valid & (o2 < o);
-    o = select(m, o2, o);
-    n = select(m, n2, n);
-    x = select(m, x2, x);
-    const auto ma = o2 < any_o;
-    any_o = select(ma, o2, any_o);
-    any_n = select(ma, n2, any_n);
-    any_x = select(ma, x2, any_x);
-  }
-};
+using Best = WitnessedBest<F>;
 
 /// A core segment c + t u, |t| <= hs, against the rims of a cylinder (axis z, radius rc,
 /// half length h): on the great circle n.u = 0 the cylinder's support is its shadow's
@@ -580,34 +562,6 @@ IMPACT_INLINE Geo<F> read_geo(const Get& get) {
   return g;
 }
 
-template <class F, uint32_t W>
-IMPACT_INLINE void save_best(Chunk<W>& ch, uint32_t j, const Best<F>& b) {
-  auto st3 = [&](int f, const V3<F>& v) {
-    v.x.store(ch.st[f] + j), v.y.store(ch.st[f + 1] + j), v.z.store(ch.st[f + 2] + j);
-  };
-  b.o.store(ch.st[0] + j);
-  st3(1, b.n);
-  st3(4, b.x);
-  b.any_o.store(ch.st[7] + j);
-  st3(8, b.any_n);
-  st3(11, b.any_x);
-}
-
-template <class F, uint32_t W>
-IMPACT_INLINE Best<F> load_best(const Chunk<W>& ch, uint32_t j) {
-  auto ld3 = [&](int f) {
-    return V3<F>{F::load(ch.st[f] + j), F::load(ch.st[f + 1] + j), F::load(ch.st[f + 2] + j)};
-  };
-  Best<F> b;
-  b.o = F::load(ch.st[0] + j);
-  b.n = ld3(1);
-  b.x = ld3(4);
-  b.any_o = F::load(ch.st[7] + j);
-  b.any_n = ld3(8);
-  b.any_x = ld3(11);
-  return b;
-}
-
 /// The pair in B's frame (relative to B's centre), B's rotation and centre relative to A's.
 template <class F>
 IMPACT_INLINE Geo<F> load_geo(const LeafSoA& a, const LeafSoA& b, uint32_t k, V3<F>& cb, M3<F>& rot) {
@@ -644,7 +598,7 @@ IMPACT_INLINE void phase_a(const LeafSoA& a, const LeafSoA& b, uint32_t k, uint3
   const Mask near = length_sq(cb) < reach * reach;
   if (simd::none(near)) {
     best.o = F(-1.0f), best.any_o = F(-1.0f);
-    save_best<F, W>(ch, j, best);
+    save_best<F>(ch.st, j, best);
     return;
   }
   const F slack = pair_slack(g);
@@ -684,7 +638,7 @@ IMPACT_INLINE void phase_a(const LeafSoA& a, const LeafSoA& b, uint32_t k, uint3
     const F cw = dot(g.c, w), rr = g.ra + g.rb;
     for (int sg = 0; sg < 2; ++sg) {
       const V3<F> n = sg == 0 ? w : -w;
-      best.take(ok, select(crossing, (sg == 0 ? cw : -cw) + rr, never), n, madd(axis_pt, g.ra, n));
+      best.take(select(crossing, (sg == 0 ? cw : -cw) + rr, never), n, madd(axis_pt, g.ra, n), ok);
     }
   }
   // --- A's side against B's rims (n.u = 0), B's side against A's rims (n.z = 0): the
@@ -701,14 +655,14 @@ IMPACT_INLINE void phase_a(const LeafSoA& a, const LeafSoA& b, uint32_t k, uint3
     sa.finish(g.c, g.u, g.ha, g.rb, g.hb, slack, ex, ey, n, y, on);
     for (int i = 0; i < 2; ++i) {
       const F o = score(g, n[i]);
-      best.take(on[i], o, n[i], madd(y[i], o, n[i]));
+      best.take(o, n[i], madd(y[i], o, n[i]), on[i]);
     }
     sb.finish(gs.c, gs.u, g.hb, g.ra, g.ha, slack, ex + 2, ey + 2, n, y, on);
     for (int i = 0; i < 2; ++i) {
       // back from A's frame: n from A to B, A's rim point
       const V3<F> nw = -(madd(madd(g.ax * n[i].x, n[i].y, g.ay), n[i].z, g.u));
       const V3<F> x = madd(madd(madd(g.c, y[i].x, g.ax), y[i].y, g.ay), y[i].z, g.u);
-      best.take(on[i], score(g, nw), nw, x);
+      best.take(score(g, nw), nw, x, on[i]);
     }
   }
   // --- rim x rim pairs to solve, where a lane is not certified apart (some o <= 0) ---
@@ -746,7 +700,7 @@ IMPACT_INLINE void phase_a(const LeafSoA& a, const LeafSoA& b, uint32_t k, uint3
   cut.store(ch.cut + j);
   best.o = select(near, best.o, F(-1.0f));
   best.any_o = select(near, best.any_o, F(-1.0f));
-  save_best<F, W>(ch, j, best);
+  save_best<F>(ch.st, j, best);
 }
 
 /// Phase B, refinement: M groups of W units from unit `at` (the last group padded by
@@ -770,23 +724,8 @@ IMPACT_INLINE void refine_units(Chunk<W>& ch, uint32_t at, uint32_t total) {
   rim_refine<F, M>(r, k0, bst, bspan, o, n, xw, valid);
   for (int m = 0; m < M; ++m) {
     const uint32_t u = at + static_cast<uint32_t>(m) * W;
-    float ro[W], rv[W], rn[3][W], rx[3][W];
-    o[m].store(ro);
-    select(valid[m], F(1.0f), F(0.0f)).store(rv);
-    n[m].x.store(rn[0]), n[m].y.store(rn[1]), n[m].z.store(rn[2]);
-    xw[m].x.store(rx[0]), xw[m].y.store(rx[1]), xw[m].z.store(rx[2]);
     const uint32_t cnt = u >= total ? 0u : (total - u < W ? total - u : W);
-    for (uint32_t l = 0; l < cnt; ++l) {
-      const auto ln = static_cast<uint32_t>(ch.ulane[u + l]);
-      if (ro[l] < ch.st[7][ln]) {
-        ch.st[7][ln] = ro[l];
-        for (int q = 0; q < 3; ++q) ch.st[8 + q][ln] = rn[q][l], ch.st[11 + q][ln] = rx[q][l];
-      }
-      if (rv[l] != 0.0f && ro[l] < ch.st[0][ln]) {
-        ch.st[0][ln] = ro[l];
-        for (int q = 0; q < 3; ++q) ch.st[1 + q][ln] = rn[q][l], ch.st[4 + q][ln] = rx[q][l];
-      }
-    }
+    merge_best(ch.st, ch.ulane + u, cnt, o[m], n[m], xw[m], valid[m]);
   }
 }
 
@@ -859,7 +798,7 @@ IMPACT_INLINE void phase_c(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA
   using Mask = typename F::Mask;
   using Int = typename F::Int;
   const F zero(0.0f), one(1.0f), half(0.5f), tiny(kTinySq), never(kNever);
-  const Best<F> best = load_best<F, W>(ch, j);
+  const Best<F> best = load_best<F>(ch.st, j);
   if (simd::none(best.any_o > zero)) {
     store_no_contact<F>(out, k);
     return;
@@ -938,18 +877,7 @@ IMPACT_INLINE void phase_c(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA
       cx[1 + kRimSamples + i] = qx, cy[1 + kRimSamples + i] = qy, cd[1 + kRimSamples + i] = lam;
       cv[1 + kRimSamples + i] = sa * sa + sb * sb <= ra2;
     }
-    for (int i = 0; i < M; ++i) cv[i] = cv[i] & (cd[i] > zero);
-    drop_shadowed_witness<F, M>(cd, cv, o, tol);
-    F ox[4], oy[4], od[4];
-    Int cnt;
-    reduce4<F, M>(cx, cy, cd, cv, tol, ox, oy, od, cnt);
-    const Mask use = capcap & (cnt > Int(0));
-    m.count = select(use, cnt, m.count);
-    for (int i = 0; i < 4; ++i) {
-      const V3<F> p = madd(V3<F>{ox[i], oy[i], zc}, half * od[i], n);
-      m.point[i] = select(use, p, m.point[i]);
-      m.pdepth[i] = select(use, min(od[i], o), m.pdepth[i]);
-    }
+    cap_manifold_tail<F, M>(cx, cy, cd, cv, o, tol, zc, n, capcap, m);
   }
   // A lying on B's cap: A's side line along n seen on B's cap plane, clipped to B's
   // disk and A's length (a quadratic in the line's parameter).
@@ -970,30 +898,14 @@ IMPACT_INLINE void phase_c(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA
     const F m0 = (l0.z - zc) / nz, m1 = g.u.z / nz;
     const F a0x = l0.x - m0 * n.x, a0y = l0.y - m0 * n.y;
     const F a1x = g.u.x - m1 * n.x, a1y = g.u.y - m1 * n.y;
-    const F qa = a1x * a1x + a1y * a1y, qb = a0x * a1x + a0y * a1y;
-    const F qc = a0x * a0x + a0y * a0y - g.rb * g.rb;
-    const F disc = qb * qb - qa * qc;
-    const Mask moving = qa > tiny;
-    const F root = sqrt(max(disc, zero)), ia = one / select(moving, qa, one);
-    const F t0 = max(select(moving, (-qb - root) * ia, -g.ha), -g.ha);
-    const F t1 = min(select(moving, (root - qb) * ia, g.ha), g.ha);
-    const Mask ok = select(moving, disc >= zero, qc <= zero) & (t0 <= t1);
+    F t0, t1;
+    const Mask ok = clip_segment_disk(a0x, a0y, a1x, a1y, g.rb, g.ha, t0, t1);
     for (int c = 0; c < 2; ++c) {
       const F t = c == 0 ? t0 : t1;
       cx[1 + c] = mul_add(t, a1x, a0x), cy[1 + c] = mul_add(t, a1y, a0y), cd[1 + c] = mul_add(t, m1, m0);
-      cv[1 + c] = ok & (cd[1 + c] > zero);
+      cv[1 + c] = ok;
     }
-    drop_shadowed_witness<F, M>(cd, cv, o, tol);
-    F ox[4], oy[4], od[4];
-    Int cnt;
-    reduce4<F, M>(cx, cy, cd, cv, tol, ox, oy, od, cnt);
-    const Mask use = line_a & (cnt > Int(0));
-    m.count = select(use, cnt, m.count);
-    for (int i = 0; i < 4; ++i) {
-      const V3<F> p = madd(V3<F>{ox[i], oy[i], zc}, half * od[i], n);
-      m.point[i] = select(use, p, m.point[i]);
-      m.pdepth[i] = select(use, min(od[i], o), m.pdepth[i]);
-    }
+    cap_manifold_tail<F, M>(cx, cy, cd, cv, o, tol, zc, n, line_a, m);
   }
   // B lying on A's cap: B's side line along -n seen on A's cap plane, clipped to A's disk
   // and B's length; A side by side with B (axes within kParallelSin): A's side line
@@ -1016,14 +928,8 @@ IMPACT_INLINE void phase_c(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA
     const V3<F> b0 = V3<F>{-g.rb * mx, -g.rb * my, zero} - cap_ac;
     const F a0x = dot(b0, g.ax) + l0 * na, a0y = dot(b0, g.ay) + l0 * nb;
     const F a1x = g.ax.z + l1 * na, a1y = g.ay.z + l1 * nb;
-    const F qa = a1x * a1x + a1y * a1y, qb = a0x * a1x + a0y * a1y;
-    const F qc = a0x * a0x + a0y * a0y - g.ra * g.ra;
-    const F disc = qb * qb - qa * qc;
-    const Mask moving = qa > tiny;
-    const F root = sqrt(max(disc, zero)), ia = one / select(moving, qa, one);
-    const F bt0 = max(select(moving, (-qb - root) * ia, -g.hb), -g.hb);
-    const F bt1 = min(select(moving, (root - qb) * ia, g.hb), g.hb);
-    const Mask bok = select(moving, disc >= zero, qc <= zero) & (bt0 <= bt1);
+    F bt0, bt1;
+    const Mask bok = clip_segment_disk(a0x, a0y, a1x, a1y, g.ra, g.hb, bt0, bt1);
     // A's line: l(t) = la + t u; its point seen along -n on B's side at height
     // z(t) - d n_z ~ z(t) - o n_z within [-hb, hb]
     const Mask radial = nperp2 > tiny;
@@ -1079,37 +985,8 @@ IMPACT_INLINE void phase_c(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA
 template <class F>
 void cylinder_cylinder_range(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out, Range r) {
   constexpr uint32_t W = F::kWidth;
-  using C = Chunk<W>;
-  C ch;
-  for (uint32_t k0 = r.begin; k0 < r.end; k0 += C::kLanes) {
-    const uint32_t n = r.end - k0 < C::kLanes ? r.end - k0 : C::kLanes;
-    ch.nitems = 0;
-    for (uint32_t j = 0; j < n; j += W) {
-      const uint32_t k = k0 + j, nb = n - j < W ? n - j : W;
-      if (nb == W) {
-        phase_a<F, W>(a, b, k, j, nb, ch);
-      } else {
-        TailSide<W> ta, tb;
-        ta.fill(a, k, nb);
-        tb.fill(b, k, nb);
-        phase_a<F, W>(ta.view, tb.view, 0u, j, nb, ch);
-      }
-    }
-    phase_b<F, W>(ch);
-    for (uint32_t j = 0; j < n; j += W) {
-      const uint32_t k = k0 + j, nb = n - j < W ? n - j : W;
-      if (nb == W) {
-        phase_c<F, W>(a, b, out, k, j, ch);
-      } else {
-        TailSide<W> ta, tb;
-        ta.fill(a, k, nb);
-        tb.fill(b, k, nb);
-        TailOut<W, 4> to{};
-        phase_c<F, W>(ta.view, tb.view, to.view(), 0u, j, ch);
-        to.copy_to(out, k, nb);
-      }
-    }
-  }
+  Chunk<W> ch;
+  for_each_chunk<F, 4>(a, b, out, r, ch, phase_a<F, W>, phase_b<F, W>, phase_c<F, W>);
 }
 
 }  // namespace

@@ -291,20 +291,19 @@ IMPACT_INLINE void scatter(const ManifoldSoA& out, const int32_t* index, uint32_
 /// Defines the PairKernel `name` over the lane template `block<F>(a, b, out, k)`
 /// writing P point slots: the one-lane scalar path for KernelPath::kScalar, the
 /// kSimdWidth-lane path otherwise.
-#define IMPACT_LANE_KERNEL(name, block, P)                                                           \
-  void name(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out, Range r,                   \
-            const NarrowConfig& cfg) {                                                              \
-    if (cfg.path == KernelPath::kScalar) {                                                          \
-      for_each_block<simd::Float1, P>(a, b, out, r, [](const LeafSoA& aa, const LeafSoA& bb,        \
-                                                       const ManifoldSoA& o, uint32_t k) {          \
-        block<simd::Float1>(aa, bb, o, k);                                                          \
-      });                                                                                           \
-    } else {                                                                                        \
-      for_each_block<simd::FloatW, P>(a, b, out, r, [](const LeafSoA& aa, const LeafSoA& bb,        \
-                                                       const ManifoldSoA& o, uint32_t k) {          \
-        block<simd::FloatW>(aa, bb, o, k);                                                          \
-      });                                                                                           \
-    }                                                                                               \
+#define IMPACT_LANE_KERNEL(name, block, P)                                                                  \
+  void name(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out, Range r, const NarrowConfig& cfg) { \
+    if (cfg.path == KernelPath::kScalar) {                                                                  \
+      for_each_block<simd::Float1, P>(                                                                      \
+          a, b, out, r, [](const LeafSoA& aa, const LeafSoA& bb, const ManifoldSoA& o, uint32_t k) {        \
+            block<simd::Float1>(aa, bb, o, k);                                                              \
+          });                                                                                               \
+    } else {                                                                                                \
+      for_each_block<simd::FloatW, P>(                                                                      \
+          a, b, out, r, [](const LeafSoA& aa, const LeafSoA& bb, const ManifoldSoA& o, uint32_t k) {        \
+            block<simd::FloatW>(aa, bb, o, k);                                                              \
+          });                                                                                               \
+    }                                                                                                       \
   }
 
 // ---------------------------------------------------------------------------------------
@@ -541,8 +540,9 @@ IMPACT_INLINE void reduce4_indices(const F (&x)[M], const F (&y)[M], const F (&d
 /// reduce4_indices, returning the chosen candidates' values: the outputs are the
 /// candidates' exact values.
 template <class F, int M>
-IMPACT_INLINE void reduce4(const F (&x)[M], const F (&y)[M], const F (&d)[M], const typename F::Mask (&valid)[M],
-                           F tol, F (&ox)[4], F (&oy)[4], F (&od)[4], typename F::Int& count) {
+IMPACT_INLINE void reduce4(const F (&x)[M], const F (&y)[M], const F (&d)[M],
+                           const typename F::Mask (&valid)[M], F tol, F (&ox)[4], F (&oy)[4], F (&od)[4],
+                           typename F::Int& count) {
   typename F::Int idx[4];
   reduce4_indices<F, M>(x, y, d, valid, tol, idx, count, ox, oy);
   for (int i = 0; i < 4; ++i) od[i] = simd::gather_lanes(d, idx[i]);
@@ -567,8 +567,9 @@ IMPACT_INLINE void drop_shadowed_witness(const F (&d)[M], typename F::Mask (&val
 /// chosen ones written to m where `use` (count, points, pdepth = min(gap, o)). kHalfBack:
 /// each chosen point is moved by -gap/2 along n (candidates on the far surface).
 template <class F, int M, bool kHalfBack>
-IMPACT_INLINE void side_manifold_tail(const V3<F> (&ca)[M], F (&d)[M], typename F::Mask (&valid)[M], F o, F tol,
-                                      F mx, F my, const V3<F>& n, typename F::Mask use, Lanes<F, 4>& m) {
+IMPACT_INLINE void side_manifold_tail(const V3<F> (&ca)[M], F (&d)[M], typename F::Mask (&valid)[M], F o,
+                                      F tol, F mx, F my, const V3<F>& n, typename F::Mask use,
+                                      Lanes<F, 4>& m) {
   using Int = typename F::Int;
   F c2x[M], c2y[M], ax[M], ay[M], az[M];
   for (int i = 0; i < M; ++i) {
@@ -588,6 +589,162 @@ IMPACT_INLINE void side_manifold_tail(const V3<F> (&ca)[M], F (&d)[M], typename 
     if constexpr (kHalfBack) q = madd(q, F(-0.5f) * dq, n);
     m.point[i] = select(on, q, m.point[i]);
     m.pdepth[i] = select(on, min(dq, o), m.pdepth[i]);
+  }
+}
+
+/// The least candidate whose witness checks out, and the least of all (an upper bound
+/// either way), of the kernels on candidate normals (box-cylinder, cylinder-cylinder):
+/// o, the normal, A's witness point x. take() keeps the first of equal o's.
+template <class F>
+struct WitnessedBest {
+  F o, any_o;
+  V3<F> n, x, any_n, any_x;
+  IMPACT_INLINE void init() {
+    o = any_o = F(3.0e38f);
+    n = any_n = V3<F>{F(0.0f), F(0.0f), F(1.0f)};
+    x = any_x = n;
+  }
+  IMPACT_INLINE void take(F o2, const V3<F>& n2, const V3<F>& x2, typename F::Mask valid) {
+    const auto ma = o2 < any_o;
+    any_o = select(ma, o2, any_o);
+    any_n = select(ma, n2, any_n);
+    any_x = select(ma, x2, any_x);
+    const auto m = valid & (o2 < o);
+    o = select(m, o2, o);
+    n = select(m, n2, n);
+    x = select(m, x2, x);
+  }
+};
+
+/// WitnessedBest lanes in a chunk's state, one array per field: st[0] o, st[1..3] n,
+/// st[4..6] x, st[7] any_o, st[8..10] any_n, st[11..13] any_x; lanes j .. j + width.
+template <class F, uint32_t L>
+IMPACT_INLINE void save_best(float (&st)[14][L], uint32_t j, const WitnessedBest<F>& b) {
+  auto st3 = [&](int f, const V3<F>& v) {
+    v.x.store(st[f] + j), v.y.store(st[f + 1] + j), v.z.store(st[f + 2] + j);
+  };
+  b.o.store(st[0] + j);
+  st3(1, b.n);
+  st3(4, b.x);
+  b.any_o.store(st[7] + j);
+  st3(8, b.any_n);
+  st3(11, b.any_x);
+}
+template <class F, uint32_t L>
+IMPACT_INLINE WitnessedBest<F> load_best(const float (&st)[14][L], uint32_t j) {
+  auto l1 = [&](int f) { return F::load(st[f] + j); };
+  auto l3 = [&](int f) { return V3<F>{l1(f), l1(f + 1), l1(f + 2)}; };
+  WitnessedBest<F> b;
+  b.o = l1(0), b.n = l3(1), b.x = l3(4), b.any_o = l1(7), b.any_n = l3(8), b.any_x = l3(11);
+  return b;
+}
+/// Merges one packed candidate per lane (o, n, x, valid) of cnt listed lanes (chunk lanes
+/// lane[0 .. cnt)) into the chunk's WitnessedBest state, lane by lane in list order.
+template <class F, uint32_t L>
+IMPACT_INLINE void merge_best(float (&st)[14][L], const int32_t* lane, uint32_t cnt, F o, const V3<F>& n,
+                              const V3<F>& x, typename F::Mask valid) {
+  constexpr uint32_t W = F::kWidth;
+  float ro[W], rv[W], rn[3][W], rx[3][W];
+  o.store(ro);
+  select(valid, F(1.0f), F(0.0f)).store(rv);
+  n.x.store(rn[0]), n.y.store(rn[1]), n.z.store(rn[2]);
+  x.x.store(rx[0]), x.y.store(rx[1]), x.z.store(rx[2]);
+  for (uint32_t l = 0; l < cnt; ++l) {
+    const auto ln = static_cast<uint32_t>(lane[l]);
+    if (ro[l] < st[7][ln]) {
+      st[7][ln] = ro[l];
+      for (int q = 0; q < 3; ++q) st[8 + q][ln] = rn[q][l], st[11 + q][ln] = rx[q][l];
+    }
+    if (rv[l] != 0.0f && ro[l] < st[0][ln]) {
+      st[0][ln] = ro[l];
+      for (int q = 0; q < 3; ++q) st[1 + q][ln] = rn[q][l], st[4 + q][ln] = rx[q][l];
+    }
+  }
+}
+
+/// The part t0 <= t1 of the 2-D segment a0 + a1 t, |t| <= h, inside the disk |p| <= r
+/// (a quadratic in t); false where it is empty. A segment that does not move (|a1|^2 below
+/// kTinySq) is inside or not as a whole.
+template <class F>
+IMPACT_INLINE typename F::Mask clip_segment_disk(F a0x, F a0y, F a1x, F a1y, F r, F h, F& t0, F& t1) {
+  const F zero(0.0f), one(1.0f);
+  const F qa = a1x * a1x + a1y * a1y, qb = a0x * a1x + a0y * a1y;
+  const F qc = a0x * a0x + a0y * a0y - r * r;
+  const F disc = qb * qb - qa * qc;
+  const auto moving = qa > F(kTinySq);
+  const F root = sqrt(max(disc, zero)), ia = one / select(moving, qa, one);
+  t0 = max(select(moving, (-qb - root) * ia, -h), -h);
+  t1 = min(select(moving, (root - qb) * ia, h), h);
+  return select(moving, disc >= zero, qc <= zero) & (t0 <= t1);
+}
+
+/// Rim samples of the cap manifolds against a cylinder (box-cylinder, cylinder-cylinder):
+/// cos of multiples of 45 degrees (the sin of sample i is kRimCos[(i + 6) % 8]).
+inline constexpr int kRimSamples = 8;
+inline constexpr float kRimCos[kRimSamples] = {1.0f,  0.70710678f,  0.0f, -0.70710678f,
+                                               -1.0f, -0.70710678f, 0.0f, 0.70710678f};
+
+/// The tail of a cap-contact manifold against a cylinder (box-cylinder, cylinder-cylinder):
+/// M candidate points (x, y) on the cap plane z = zc (0: the witness) with their gaps d
+/// along n and validity: candidates without a positive gap and a shadowed witness dropped,
+/// reduced to 4 in the plane, and the chosen ones written to m where `use` (count, the
+/// points moved by half their gap along n, pdepth = min(gap, o)).
+template <class F, int M>
+IMPACT_INLINE void cap_manifold_tail(const F (&x)[M], const F (&y)[M], F (&d)[M],
+                                     typename F::Mask (&valid)[M], F o, F tol, F zc, const V3<F>& n,
+                                     typename F::Mask use, Lanes<F, 4>& m) {
+  using Int = typename F::Int;
+  for (int i = 0; i < M; ++i) valid[i] = valid[i] & (d[i] > F(0.0f));
+  drop_shadowed_witness<F, M>(d, valid, o, tol);
+  F ox[4], oy[4], od[4];
+  Int cnt;
+  reduce4<F, M>(x, y, d, valid, tol, ox, oy, od, cnt);
+  const typename F::Mask on = use & (cnt > Int(0));
+  m.count = select(on, cnt, m.count);
+  for (int i = 0; i < 4; ++i) {
+    const V3<F> p = madd(V3<F>{ox[i], oy[i], zc}, F(0.5f) * od[i], n);
+    m.point[i] = select(on, p, m.point[i]);
+    m.pdepth[i] = select(on, min(od[i], o), m.pdepth[i]);
+  }
+}
+
+/// Runs a lane kernel in three phases over r, C::kLanes pairs (a chunk) at a time:
+/// phase_a(a, b, k, j, nb, ch) for each block (k: its first pair, j: its first lane in
+/// the chunk, nb: its real lanes), then phase_b(ch) (work the blocks listed in the chunk
+/// state, packed across them; it leaves the chunk's lists empty), then
+/// phase_c(a, b, out, k, j, ch) for each block. A block past the range's end runs on local
+/// full-width copies (TailSide, TailOut), as for_each_block's tail does.
+template <class F, uint32_t P, class C, class PhaseA, class PhaseB, class PhaseC>
+IMPACT_INLINE void for_each_chunk(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out, Range r, C& ch,
+                                  PhaseA&& phase_a, PhaseB&& phase_b, PhaseC&& phase_c) {
+  constexpr uint32_t W = F::kWidth;
+  for (uint32_t k0 = r.begin; k0 < r.end; k0 += C::kLanes) {
+    const uint32_t n = r.end - k0 < C::kLanes ? r.end - k0 : C::kLanes;
+    for (uint32_t j = 0; j < n; j += W) {
+      const uint32_t k = k0 + j, nb = n - j < W ? n - j : W;
+      if (nb == W) {
+        phase_a(a, b, k, j, nb, ch);
+      } else {
+        TailSide<W> ta, tb;
+        ta.fill(a, k, nb);
+        tb.fill(b, k, nb);
+        phase_a(ta.view, tb.view, 0u, j, nb, ch);
+      }
+    }
+    phase_b(ch);
+    for (uint32_t j = 0; j < n; j += W) {
+      const uint32_t k = k0 + j, nb = n - j < W ? n - j : W;
+      if (nb == W) {
+        phase_c(a, b, out, k, j, ch);
+      } else {
+        TailSide<W> ta, tb;
+        ta.fill(a, k, nb);
+        tb.fill(b, k, nb);
+        TailOut<W, P> to{};
+        phase_c(ta.view, tb.view, to.view(), 0u, j, ch);
+        to.copy_to(out, k, nb);
+      }
+    }
   }
 }
 
