@@ -336,10 +336,16 @@ IMPACT_INLINE void capsule_cylinder_block(const LeafSoA& a, const LeafSoA& b, co
   m.count = select(hit, select(two, Int(2), Int(1)), Int(0));
   m.n = rot.apply(n);
   m.depth = depth;
-  m.point[0] = cb + rot.apply(select(two, p0, pf));
-  m.pdepth[0] = select(two, min(d0, depth), depth);
-  m.point[1] = cb + rot.apply(select(two, p1, pf));  // (slot 1 of a 1-point lane: finite filler)
-  m.pdepth[1] = select(two, min(d1, depth), depth);
+  // The deepest point carries the depth: where both clipped ends miss it by more than
+  // 1e-5 of (depth + the pair's size) (the core's ends cut short of where the minimum
+  // is reached, as with coincident centres), the witness takes the shallower end's slot.
+  const F miss = F(1e-5f) * (depth + r + hs + rc + h);
+  const Mask short0 = two & (max(d0, d1) < depth - miss) & (d0 <= d1);
+  const Mask short1 = andnot(two & (max(d0, d1) < depth - miss), short0);
+  m.point[0] = cb + rot.apply(select(two & ~short0, p0, pf));
+  m.pdepth[0] = select(two & ~short0, min(d0, depth), depth);
+  m.point[1] = cb + rot.apply(select(two & ~short1, p1, pf));  // (slot 1 of a 1-point lane: finite filler)
+  m.pdepth[1] = select(two & ~short1, min(d1, depth), depth);
   store(out, k, m, pa);
 }
 
