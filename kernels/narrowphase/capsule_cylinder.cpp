@@ -183,36 +183,19 @@ IMPACT_INLINE void capsule_cylinder_block(const LeafSoA& a, const LeafSoA& b, co
   }
   // --- rims against the core's interior: n perpendicular to u (half ellipses) ---
   {
-    const V3<F> w3{wx, wy, zero};
-    V3<F> v = cross(u, w3);
-    v = select(v.z < zero, -v, v);  // the shadow of +z along u is v.z v
-    const F half_len = h * v.z;     // the rims' shadows lie at +-half_len along v
-    const F inv_rc = one / rc;
-    const F bx = -(c.x * wx + c.y * wy) * inv_rc;  // the origin seen from the core's shadow
-    const F by = -dot(c, v) * inv_rc;
-    const F lr = half_len * inv_rc;
-    const F ratio = abs(u.z);  // minor / major semi-axis of a rim's shadow
-    // (w and v are orthonormal only up to rounding, which for a core along the axis is all
-    // of u's horizontal part: normalised, so that o(n) stays an upper bound)
-    const F rb[2] = {ratio, ratio}, rx[2] = {bx, bx}, ry[2] = {by - lr, -(by + lr)};
-    F ex[2], ey[2], len;
+    rim::CoreRims<F> cr;
+    F rb[2], rx[2], ry[2], ex[2], ey[2], tw[2];
+    cr.setup(c, u, rc, h, rb, rx, ry);
     rim::half_ellipse_normals(rb, rx, ry, ex, ey);
-    const V3<F> n_top = normalize_or(madd(w3 * ex[0], ey[0], v), w3, len);
-    const V3<F> n_bot = normalize_or(madd(w3 * ex[1], -ey[1], v), w3, len);
-    // witness: the core point level (along u) with the rim point C offers along -n; a
-    // witness beyond the core's ends (by more than rounding) is no point of this piece,
+    V3<F> nr[2], pc[2];
+    Mask on_core[2];
+    cr.finish(c, u, hs, rc, h, slack, ex, ey, nr, pc, tw, on_core);
+    // a witness beyond the core's ends (by more than rounding) is no point of this piece,
     // and such a candidate is dropped: near the minimum o is flat, and an invalid
     // direction whose o ties the minimum within rounding would win half the time
-    auto rim_take = [&](const V3<F>& n) {
-      const F nxy2 = n.x * n.x + n.y * n.y;
-      const F s = rc / sqrt(select(nxy2 > tiny, nxy2, one));
-      const V3<F> pc{-s * n.x, -s * n.y, -h * simd::sign_nonneg(n.z)};
-      const F tw = dot(pc - c, u);
-      const Mask on_core = abs(tw) <= hs + slack;
-      best.take(select(on_core, overlap(n, c, u, hs, rc, h), never), n, clamp(tw, -hs, hs), kClassOther);
-    };
-    rim_take(n_top);
-    rim_take(n_bot);
+    for (int i = 0; i < 2; ++i)
+      best.take(select(on_core[i], overlap(nr[i], c, u, hs, rc, h), never), nr[i], clamp(tw[i], -hs, hs),
+                kClassOther);
   }
   // --- a core end against a rim circle: its nearest point, n with the allowed sign ---
   for (int e = 0; e < 2; ++e) {

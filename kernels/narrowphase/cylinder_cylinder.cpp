@@ -214,47 +214,6 @@ IMPACT_INLINE typename F::Mask in_a(const Geo<F>& g, const V3<F>& p) {
 template <class F>
 using Best = WitnessedBest<F>;
 
-/// A core segment c + t u, |t| <= hs, against the rims of a cylinder (axis z, radius rc,
-/// half length h): on the great circle n.u = 0 the cylinder's support is its shadow's
-/// along u (rim_solve.h), and the local minimum on each rim's half ellipse is a
-/// candidate (capsule_cylinder.cpp's rim piece). Setup writes the two slots' solve
-/// inputs (b, X, Y) and the shadow's basis; finish turns the solved half-ellipse normals
-/// into n (from the core's side to the cylinder), y (the cylinder's rim point along -n)
-/// and on (where the core point level with y lies on the segment).
-template <class F>
-struct SideRims {
-  V3<F> w, v;
-  IMPACT_INLINE void setup(const V3<F>& c, const V3<F>& u, F rc, F h, F* rb, F* rx, F* ry) {
-    const F zero(0.0f), one(1.0f), tiny(kTinySq);
-    const F uxy2 = u.x * u.x + u.y * u.y;
-    const auto tilted = uxy2 > tiny;
-    const F inv_uxy = one / sqrt(select(tilted, uxy2, one));
-    w = V3<F>{select(tilted, -u.y * inv_uxy, one), select(tilted, u.x * inv_uxy, zero), zero};
-    v = cross(u, w);
-    v = select(v.z < zero, -v, v);  // the shadow of +z along u is v.z v
-    const F inv_rc = one / rc;
-    const F bx = -(c.x * w.x + c.y * w.y) * inv_rc;  // the origin seen from the core's shadow
-    const F by = -dot(c, v) * inv_rc;
-    const F lr = h * v.z * inv_rc;
-    rb[0] = rb[1] = abs(u.z);
-    rx[0] = rx[1] = bx;
-    ry[0] = by - lr, ry[1] = -(by + lr);
-  }
-  IMPACT_INLINE void finish(const V3<F>& c, const V3<F>& u, F hs, F rc, F h, F slack, const F* ex,
-                            const F* ey, V3<F> (&n)[2], V3<F> (&y)[2], typename F::Mask (&on)[2]) const {
-    const F one(1.0f), tiny(kTinySq);
-    F len;
-    n[0] = normalize_or(madd(w * ex[0], ey[0], v), w, len);
-    n[1] = normalize_or(madd(w * ex[1], -ey[1], v), w, len);
-    for (int i = 0; i < 2; ++i) {
-      const F nxy2 = n[i].x * n[i].x + n[i].y * n[i].y;
-      const F s = rc / sqrt(select(nxy2 > tiny, nxy2, one));
-      y[i] = V3<F>{-s * n[i].x, -s * n[i].y, -h * simd::sign_nonneg(n[i].z)};
-      on[i] = abs(dot(y[i] - c, u)) <= hs + slack;
-    }
-  }
-};
-
 /// cos and sin of |d| <= 2 kArcStep (Taylor to degree 9 / 10: error below 1e-9).
 template <class F>
 IMPACT_INLINE void cos_sin_small(F d, F& cd, F& sd) {
@@ -308,6 +267,18 @@ IMPACT_INLINE F rim_pair_bound(const Geo<F>& g, F tau, F s) {
   return sqrt(max(dz * dz + dr * dr, dz2 * dz2 + dr2 * dr2));
 }
 
+/// A Geo from its 16 fields by index (the chunk's geo rows): c, ax, ay, u, ra, ha, rb, hb.
+template <class F, class Get>
+IMPACT_INLINE Geo<F> read_geo(const Get& get) {
+  Geo<F> g;
+  g.c = V3<F>{get(0), get(1), get(2)};
+  g.ax = V3<F>{get(3), get(4), get(5)};
+  g.ay = V3<F>{get(6), get(7), get(8)};
+  g.u = V3<F>{get(9), get(10), get(11)};
+  g.ra = get(12), g.ha = get(13), g.rb = get(14), g.hb = get(15);
+  return g;
+}
+
 /// One rim pair of a lane, in the frame of gs (the pair g itself, or swapped where
 /// swap: the solves sample the smaller rim): gs's A rim at tau (centre ca = c + tau ha
 /// u) against its B rim at s (centre s hb z); q0 = ca relative to B's rim centre.
@@ -323,12 +294,7 @@ struct RimPair {
 template <class F, class Chunk>
 IMPACT_INLINE RimPair<F> gather_rim_pair(const Chunk& ch, typename F::Int idx, typename F::Int pr) {
   RimPair<F> r;
-  auto get = [&](int f) { return simd::gather(ch.geo[f], idx); };
-  r.g.c = V3<F>{get(0), get(1), get(2)};
-  r.g.ax = V3<F>{get(3), get(4), get(5)};
-  r.g.ay = V3<F>{get(6), get(7), get(8)};
-  r.g.u = V3<F>{get(9), get(10), get(11)};
-  r.g.ra = get(12), r.g.ha = get(13), r.g.rb = get(14), r.g.hb = get(15);
+  r.g = read_geo<F>([&](int f) { return simd::gather(ch.geo[f], idx); });
   const F tau = simd::gather(kPairTau, pr), s = simd::gather(kPairS, pr);
   r.swap = r.g.ra > r.g.rb;
   r.gs = select_geo(r.swap, swapped(r.g), r.g);
@@ -343,10 +309,10 @@ IMPACT_INLINE RimPair<F> gather_rim_pair(const Chunk& ch, typename F::Int idx, t
 /// relative to B's rim centre), bracketed from g and g' at kArcSamples angles: a sample
 /// step where g' turns from falling to rising holds one; so may a step whose ends have
 /// g' of one sign where the cubic Hermite interpolant of g turns inside it (two critical
-/// points close together: seen where D is nearly flat along the rim), bracketed between
-/// the interpolant's turning point of g' and the step's end on the minimum's side. The
-/// first kArcSlots brackets in angle order go to slots: the step's first sample and a
-/// start in it, as an angle past the sample. D is ra-Lipschitz in the angle, so
+/// points close together: seen where D is nearly flat along the rim); and a sample whose
+/// slope is far below its neighbours' (the two steps around it). The first kArcSlots
+/// brackets in angle order go to slots: the bracket's first sample, its span (one step or
+/// two) and a start in it, as angles past that sample. D is ra-Lipschitz in the angle, so
 /// where cut (the least o of a lane certified to meet, else kNever) is below sqrt(D2) -
 /// ra step / 2 at both ends of a step, no angle in it can win: not listed.
 template <class F>
@@ -419,14 +385,15 @@ IMPACT_INLINE typename F::Int rim_brackets(const RimPair<F>& r, F cut, typename 
 }
 
 /// Rim x rim, step 2, for M groups side by side (independent chains: their divisions and
-/// square roots overlap): each bracket [0, kArcStep] past its sample refined by
-/// safeguarded Newton steps on D2 / 2 (bisection where Newton leaves the bracket), from
-/// where the derivative's end values interpolate to zero; a lane freezes once a Newton
+/// square roots overlap): each bracket [0, span] past its sample refined by safeguarded
+/// Newton steps on D2 / 2 (bisection where Newton leaves the bracket), from the start
+/// rim_brackets gave it; a lane freezes once a Newton
 /// step moves it by at most kArcFreeze (its later steps would move it by ~that squared),
 /// so its bytes do not depend on the lanes beside it. The refined point pair x = pA - pB
-/// is perpendicular to both rims' tangents: n = +-(tA x tB) / |tA x tB| (x itself where
-/// the tangents are parallel; the cross product also where the circles touch and x is
-/// rounding noise), with the sign that puts n in A's rim's normal cone and -n in B's,
+/// is perpendicular to both rims' tangents: n = +-x / |x| or +-(tA x tB) / |tA x tB|,
+/// whichever the solve's angle error turns less (the cross product where the circles
+/// touch and x is rounding noise), with the sign that puts n in A's rim's normal cone
+/// and -n in B's,
 /// within kConeSlack; none: not a point of the piece (the candidate still bounds o).
 /// Outputs: the candidate in g's terms (n from A to B, A's witness point), scored there.
 template <class F, int M>
@@ -551,17 +518,6 @@ IMPACT_INLINE void save_geo(Chunk<W>& ch, uint32_t j, const Geo<F>& g) {
       g.hb.store(ch.geo[15] + j);
 }
 
-template <class F, uint32_t W, class Get>
-IMPACT_INLINE Geo<F> read_geo(const Get& get) {
-  Geo<F> g;
-  g.c = V3<F>{get(0), get(1), get(2)};
-  g.ax = V3<F>{get(3), get(4), get(5)};
-  g.ay = V3<F>{get(6), get(7), get(8)};
-  g.u = V3<F>{get(9), get(10), get(11)};
-  g.ra = get(12), g.ha = get(13), g.rb = get(14), g.hb = get(15);
-  return g;
-}
-
 /// The pair in B's frame (relative to B's centre), B's rotation and centre relative to A's.
 template <class F>
 IMPACT_INLINE Geo<F> load_geo(const LeafSoA& a, const LeafSoA& b, uint32_t k, V3<F>& cb, M3<F>& rot) {
@@ -645,19 +601,20 @@ IMPACT_INLINE void phase_a(const LeafSoA& a, const LeafSoA& b, uint32_t k, uint3
   // four half-ellipse solves in one loop (independent chains side by side) ---
   {
     const Geo<F> gs = swapped(g);  // B's centre and axis in A's frame
-    SideRims<F> sa, sb;
+    rim::CoreRims<F> sa, sb;
     F rb[4], rx[4], ry[4], ex[4], ey[4];
     sa.setup(g.c, g.u, g.rb, g.hb, rb, rx, ry);
     sb.setup(gs.c, gs.u, g.ra, g.ha, rb + 2, rx + 2, ry + 2);
     rim::half_ellipse_normals(rb, rx, ry, ex, ey);
     V3<F> n[2], y[2];
+    F t[2];
     Mask on[2];
-    sa.finish(g.c, g.u, g.ha, g.rb, g.hb, slack, ex, ey, n, y, on);
+    sa.finish(g.c, g.u, g.ha, g.rb, g.hb, slack, ex, ey, n, y, t, on);
     for (int i = 0; i < 2; ++i) {
       const F o = score(g, n[i]);
       best.take(o, n[i], madd(y[i], o, n[i]), on[i]);
     }
-    sb.finish(gs.c, gs.u, g.hb, g.ra, g.ha, slack, ex + 2, ey + 2, n, y, on);
+    sb.finish(gs.c, gs.u, g.hb, g.ra, g.ha, slack, ex + 2, ey + 2, n, y, t, on);
     for (int i = 0; i < 2; ++i) {
       // back from A's frame: n from A to B, A's rim point
       const V3<F> nw = -(madd(madd(g.ax * n[i].x, n[i].y, g.ay), n[i].z, g.u));
@@ -803,7 +760,7 @@ IMPACT_INLINE void phase_c(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA
     store_no_contact<F>(out, k);
     return;
   }
-  const Geo<F> g = read_geo<F, W>([&](int f) { return F::load(ch.geo[f] + j); });
+  const Geo<F> g = read_geo<F>([&](int f) { return F::load(ch.geo[f] + j); });
   const V3<F> pa = load_p<F>(a, k);
   const V3<F> cb = load_p<F>(b, k) - pa;
   const M3<F> rot = load_r<F>(b, k);

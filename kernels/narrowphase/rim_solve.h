@@ -1,7 +1,8 @@
 // A cylinder's rim seen along a direction: the 2-D half-ellipse root solve shared by
 // the lane kernels whose support overlap has a piece where a rim circle meets a
 // segment's interior (capsule_cylinder.cpp: the core; cylinder_triangle.cpp: a
-// triangle's edges).
+// triangle's edges; box_cylinder.cpp: a box's edges; cylinder_cylinder.cpp: a side's
+// line), and CoreRims, the setup and finish of that piece for a core segment.
 //
 // Seen along a unit direction d (not along the axis z), a rim circle of radius rc is
 // an ellipse in the plane perpendicular to d: semi-axis rc along w = z x d / |z x d|,
@@ -37,6 +38,11 @@
 namespace impact::kernels::rim {
 
 using prim::kTinySq;
+using prim::normalize_or;
+using prim::V3;
+using simd::cross;
+using simd::dot;
+using simd::madd;
 
 /// Fixed step count of the half-ellipse root solve: float precision is reached by 9
 /// everywhere tried (points at the evolute's cusps of ellipses with axis ratio 1e-6..1,
@@ -114,5 +120,51 @@ IMPACT_INLINE void half_ellipse_normals(const F (&b)[M], const F (&X)[M], const 
     ny[s] = select(ok, py * inv, one);
   }
 }
+
+/// A core segment c + t u, |t| <= hs, against the rims of a cylinder (axis z, radius rc,
+/// half length h): on the great circle n.u = 0 the cylinder's support is its shadow's
+/// along u (rim_solve.h), and the local minimum on each rim's half ellipse is a
+/// candidate (capsule-cylinder's core, cylinder-cylinder's sides). Setup writes the two
+/// slots' solve inputs (b, X, Y: the upper and the lower half) and the shadow's basis;
+/// finish turns the solved half-ellipse normals into n (from the core's side to the
+/// cylinder), y (the cylinder's rim point along -n), t (the core parameter level with y)
+/// and on (where t lies on the segment, within slack). (w and v are orthonormal only up to
+/// rounding, which for a core along the axis is all of u's horizontal part: n is
+/// normalised, so that the support overlap along it stays an upper bound.)
+template <class F>
+struct CoreRims {
+  V3<F> w, v;
+  IMPACT_INLINE void setup(const V3<F>& c, const V3<F>& u, F rc, F h, F* b, F* rx, F* ry) {
+    const F zero(0.0f), one(1.0f), tiny(kTinySq);
+    const F uxy2 = u.x * u.x + u.y * u.y;
+    const auto tilted = uxy2 > tiny;
+    const F inv_uxy = one / sqrt(select(tilted, uxy2, one));
+    w = V3<F>{select(tilted, -u.y * inv_uxy, one), select(tilted, u.x * inv_uxy, zero), zero};
+    v = cross(u, w);
+    v = select(v.z < zero, -v, v);  // the shadow of +z along u is v.z v
+    const F inv_rc = one / rc;
+    const F bx = -(c.x * w.x + c.y * w.y) * inv_rc;  // the origin seen from the core's shadow
+    const F by = -dot(c, v) * inv_rc;
+    const F lr = h * v.z * inv_rc;
+    b[0] = b[1] = abs(u.z);  // minor / major semi-axis of a rim's shadow
+    rx[0] = rx[1] = bx;
+    ry[0] = by - lr, ry[1] = -(by + lr);
+  }
+  IMPACT_INLINE void finish(const V3<F>& c, const V3<F>& u, F hs, F rc, F h, F slack, const F* ex,
+                            const F* ey, V3<F> (&n)[2], V3<F> (&y)[2], F (&t)[2],
+                            typename F::Mask (&on)[2]) const {
+    const F one(1.0f), tiny(kTinySq);
+    F len;
+    n[0] = normalize_or(madd(w * ex[0], ey[0], v), w, len);
+    n[1] = normalize_or(madd(w * ex[1], -ey[1], v), w, len);
+    for (int i = 0; i < 2; ++i) {
+      const F nxy2 = n[i].x * n[i].x + n[i].y * n[i].y;
+      const F s = rc / sqrt(select(nxy2 > tiny, nxy2, one));
+      y[i] = V3<F>{-s * n[i].x, -s * n[i].y, -h * simd::sign_nonneg(n[i].z)};
+      t[i] = dot(y[i] - c, u);
+      on[i] = abs(t[i]) <= hs + slack;
+    }
+  }
+};
 
 }  // namespace impact::kernels::rim
