@@ -28,17 +28,17 @@
 //     nearly concentric case; power iteration on the adjugate). The kStarts = 8 least
 //     distinct ones start (the least key, then every candidate within |cos| >= 0.9999
 //     of it dropped, eight times; keys f + 16 tagged with their index, simd::tag).
-//  2. Each start runs a trust-region Newton solve on the sphere (Riemannian gradient and
-//     Hessian in a tangent basis; Levenberg-Marquardt shift mu = max(0, |g|_1 / radius -
-//     lambda_min), plus the least eigenvector at the trust radius where the Hessian is
-//     indefinite, so a start at a saddle (g = 0) leaves it; the trial mirrored to d's side;
-//     accepted when f does not rise by more than its rounding, else the radius shrinks x4;
-//     retraction by normalisation). All eight run kSpread = 3 steps (stage by stage over
-//     the starts: independent square-root / division chains side by side), then each lane
-//     keeps its two least and runs them until they freeze (accepted step below 1e-6 rad
-//     at a positive definite Hessian, or radius below 1e-7) or kMaxIterations = 24; the
-//     block stops when every kept (lane, start) is frozen (each lane's bytes depend on
-//     its own data only). The least f of the two wins (ties: the lower start).
+//  2. Each start runs sphere_newton.h's trust-region Newton solve on the sphere
+//     (Riemannian gradient and Hessian in a tangent basis; Levenberg-Marquardt shift,
+//     plus the least eigenvector at the trust radius where the Hessian is indefinite, so
+//     a start at a saddle (g = 0) leaves it; the trial mirrored to d's side; accepted
+//     when f does not rise by more than its rounding, or by a few roundings while the
+//     gradient shrinks, else the radius shrinks x4). All eight run 3 steps, then each
+//     lane keeps its two least and runs them until they freeze (accepted step below 1e-6
+//     rad at a positive definite Hessian, or radius below 1e-7) or 24 steps; the block
+//     stops when every kept (lane, start) is frozen (each lane's bytes depend on its own
+//     data only). The least f of the two wins (within f's noise: the smaller gradient;
+//     ties: the lower start).
 // Global minimum: by multi-start, without a proof. f is convex on R^3 but not on the
 // sphere: an interior d can give several local minima (long thin bodies, deep or
 // coincident centres). The kernel finds the global one when its basin holds one of the
@@ -67,6 +67,7 @@
 
 #include "kernels/narrowphase/pair_kernels.h"
 #include "kernels/narrowphase/primitives.h"
+#include "kernels/narrowphase/sphere_newton.h"
 
 namespace impact::kernels {
 namespace {
@@ -76,21 +77,21 @@ using simd::dot;
 using simd::length_sq;
 
 constexpr int kStarts = 8;
-constexpr int kSpread = 3;   // steps for every start
-constexpr int kKeep = 2;     // starts kept after them
-constexpr int kMaxIterations = 24;
-constexpr float kStepTol = 1e-6f;     // rad: an accepted step this short freezes the start
-constexpr float kRadiusTol = 1e-7f;   // rad: a trust radius this small freezes the start
-constexpr float kDistinctCos = 0.9999f;
-constexpr float kSlack = 2e-7f;       // of max(|f|, 1): f's rounding
-constexpr float kKeyShift = 16.0f;    // f + this > 0 for the selection's tags
 
-/// The pair in A's scaled frame.
+/// The pair in A's scaled frame: newton::minimise's model.
 template <class F>
 struct Pair {
   F a2[3];     // A's radii squared
   V3<F> v[3];  // B's axes scaled by its radii
   V3<F> d;     // B's centre
+
+  /// f, the tangent basis, the Riemannian gradient and Hessian at unit n.
+  IMPACT_INLINE void evaluate(const V3<F>& n, newton::Start<F>& s) const {
+    newton::tangent_basis(n, s);
+    newton::ellipsoid_pair_terms<F, 3>(a2, v, d, s);
+  }
+  IMPACT_INLINE V3<F> restrict(const V3<F>&, const V3<F>& trial) const { return trial; }
+  IMPACT_INLINE typename F::Mask settled(const newton::Start<F>&) const { return typename F::Mask(false); }
 };
 
 /// f only.
@@ -99,157 +100,6 @@ IMPACT_INLINE F overlap(const Pair<F>& p, const V3<F>& n) {
   const F qa2 = p.a2[0] * n.x * n.x + p.a2[1] * n.y * n.y + p.a2[2] * n.z * n.z;
   const F p0 = dot(p.v[0], n), p1 = dot(p.v[1], n), p2 = dot(p.v[2], n);
   return sqrt(qa2) + sqrt(p0 * p0 + p1 * p1 + p2 * p2) - dot(n, p.d);
-}
-
-/// One start's state: the point, f there, its tangent basis, gradient and Hessian
-/// (Riemannian, in that basis) and the trust radius.
-template <class F>
-struct Start {
-  V3<F> n, t1, t2;
-  F f, g1, g2, h11, h12, h22;
-  F radius;
-  typename F::Mask frozen;
-};
-
-/// f, the tangent basis, the Riemannian gradient and Hessian at unit n.
-template <class F>
-IMPACT_INLINE void evaluate(const Pair<F>& p, const V3<F>& n, Start<F>& s) {
-  const F tiny(1e-30f), one(1.0f);
-  // A tangent basis: t1 = n x (the world axis least aligned with n), t2 = n x t1.
-  s.n = n;
-  s.t1 = any_perpendicular(n);
-  s.t2 = simd::cross(n, s.t1);
-  const V3<F> wa{p.a2[0] * n.x, p.a2[1] * n.y, p.a2[2] * n.z};
-  const F qa = max(sqrt(dot(n, wa)), tiny);
-  const F pj[3] = {dot(p.v[0], n), dot(p.v[1], n), dot(p.v[2], n)};
-  const F qb = max(sqrt(pj[0] * pj[0] + pj[1] * pj[1] + pj[2] * pj[2]), tiny);
-  const V3<F> wb = p.v[0] * pj[0] + p.v[1] * pj[1] + p.v[2] * pj[2];
-  s.f = qa + qb - dot(n, p.d);
-  const F ia = one / qa, ib = one / qb;
-  const V3<F> grad = wa * ia + wb * ib - p.d;
-  s.g1 = dot(s.t1, grad);
-  s.g2 = dot(s.t2, grad);
-  // A: (diag(a^2) - wa wa^T / qa^2) / qa in the basis.
-  const F a1 = dot(s.t1, wa) * ia, a2 = dot(s.t2, wa) * ia;
-  const F m11 = p.a2[0] * s.t1.x * s.t1.x + p.a2[1] * s.t1.y * s.t1.y + p.a2[2] * s.t1.z * s.t1.z;
-  const F m12 = p.a2[0] * s.t1.x * s.t2.x + p.a2[1] * s.t1.y * s.t2.y + p.a2[2] * s.t1.z * s.t2.z;
-  const F m22 = p.a2[0] * s.t2.x * s.t2.x + p.a2[1] * s.t2.y * s.t2.y + p.a2[2] * s.t2.z * s.t2.z;
-  // B: (sum v v^T - wb wb^T / qb^2) / qb in the basis.
-  const F c1[3] = {dot(p.v[0], s.t1), dot(p.v[1], s.t1), dot(p.v[2], s.t1)};
-  const F c2[3] = {dot(p.v[0], s.t2), dot(p.v[1], s.t2), dot(p.v[2], s.t2)};
-  const F n11 = c1[0] * c1[0] + c1[1] * c1[1] + c1[2] * c1[2];
-  const F n12 = c1[0] * c2[0] + c1[1] * c2[1] + c1[2] * c2[2];
-  const F n22 = c2[0] * c2[0] + c2[1] * c2[1] + c2[2] * c2[2];
-  const F b1 = dot(s.t1, wb) * ib, b2 = dot(s.t2, wb) * ib;
-  s.h11 = (m11 - a1 * a1) * ia + (n11 - b1 * b1) * ib - s.f;
-  s.h12 = (m12 - a1 * a2) * ia + (n12 - b1 * b2) * ib;
-  s.h22 = (m22 - a2 * a2) * ia + (n22 - b2 * b2) * ib - s.f;
-}
-
-/// a where m, else b (every field).
-template <class F>
-IMPACT_INLINE Start<F> pick(typename F::Mask m, const Start<F>& a, const Start<F>& b) {
-  Start<F> r;
-  r.n = select(m, a.n, b.n);
-  r.t1 = select(m, a.t1, b.t1);
-  r.t2 = select(m, a.t2, b.t2);
-  r.f = select(m, a.f, b.f);
-  r.g1 = select(m, a.g1, b.g1);
-  r.g2 = select(m, a.g2, b.g2);
-  r.h11 = select(m, a.h11, b.h11);
-  r.h12 = select(m, a.h12, b.h12);
-  r.h22 = select(m, a.h22, b.h22);
-  r.radius = select(m, a.radius, b.radius);
-  r.frozen = select(m, a.frozen, b.frozen);
-  return r;
-}
-
-/// What a step's acceptance needs from its proposal.
-template <class F>
-struct Proposal {
-  V3<F> m;
-  F lmin, taken;
-};
-
-/// A trust-region Newton step's trial point from a start.
-template <class F>
-IMPACT_INLINE Proposal<F> propose(const Pair<F>& p, const Start<F>& s) {
-  const F zero(0.0f), one(1.0f);
-  // Levenberg-Marquardt shift: H + mu I >= (|g| / radius) I, so the step is at most the
-  // trust radius and follows the least-curvature direction where H is indefinite; mu = 0
-  // where H is positive definite and the Newton step fits.
-  const F half_tr = F(0.5f) * (s.h11 + s.h22), half_df = F(0.5f) * (s.h11 - s.h22);
-  const F lmin = half_tr - sqrt(half_df * half_df + s.h12 * s.h12);
-  const F gnorm = abs(s.g1) + abs(s.g2);  // >= |g|: the step still fits the radius
-  const F floor = F(1e-6f) * (abs(s.h11) + abs(s.h22) + abs(s.f)) + F(1e-30f);
-  const F mu = max(zero, gnorm / s.radius - lmin) + floor;
-  const F k11 = s.h11 + mu, k22 = s.h22 + mu, k12 = s.h12;
-  const F det = k11 * k22 - k12 * k12;
-  const F idet = one / max(det, F(1e-30f));
-  F x1 = -(k22 * s.g1 - k12 * s.g2) * idet;
-  F x2 = -(k11 * s.g2 - k12 * s.g1) * idet;
-  // Negative curvature: add the least eigenvector's direction at the trust radius (downhill
-  // sign, + where the gradient is orthogonal), so a start at a saddle or a maximum of f
-  // (g = 0: an axis with coincident centres) still leaves it.
-  {
-    const F va1 = s.h12, va2 = lmin - s.h11, vb1 = lmin - s.h22, vb2 = s.h12;
-    const auto use_a = va1 * va1 + va2 * va2 >= vb1 * vb1 + vb2 * vb2;
-    F v1 = select(use_a, va1, vb1), v2 = select(use_a, va2, vb2);
-    const F vl2 = v1 * v1 + v2 * v2;
-    const auto neg = (lmin < -floor) & (vl2 > F(1e-30f));
-    const F sc = select(s.g1 * v1 + s.g2 * v2 > zero, -s.radius, s.radius) / sqrt(select(neg, vl2, one));
-    x1 = x1 + select(neg, sc * v1, zero);
-    x2 = x2 + select(neg, sc * v2, zero);
-  }
-  const F len = sqrt(x1 * x1 + x2 * x2);
-  const F clip = min(one, s.radius / max(len, F(1e-30f)));
-  x1 = x1 * clip;
-  x2 = x2 * clip;
-  const F taken = len * clip;
-  V3<F> m = madd(madd(s.n, x1, s.t1), x2, s.t2);
-  m = m * (one / sqrt(length_sq(m)));
-  // The trial on d's side: f(-m) = f(m) + 2 m.d (h is even), so where m.d < 0 its mirror
-  // is lower (a start that wandered past the equator comes back).
-  m = select(dot(m, p.d) < zero, -m, m);
-  return {m, lmin, taken};
-}
-
-/// Accepts or refuses trial t of a start (frozen lanes keep their bytes).
-template <class F>
-IMPACT_INLINE void settle(Start<F>& s, const Start<F>& t, const Proposal<F>& pr) {
-  const F zero(0.0f), one(1.0f);
-  const F lmin = pr.lmin, taken = pr.taken;
-  // Accepted where f does not rise by more than its rounding (so a step that the gradient
-  // asks for near the minimum is not refused by noise in f).
-  const auto ok = t.f <= s.f + F(kSlack) * (abs(s.f) + one);
-  const auto accept = andnot(ok, s.frozen);
-  const auto reject = andnot(~ok, s.frozen);
-  s.n = select(accept, t.n, s.n);
-  s.t1 = select(accept, t.t1, s.t1);
-  s.t2 = select(accept, t.t2, s.t2);
-  s.f = select(accept, t.f, s.f);
-  s.g1 = select(accept, t.g1, s.g1);
-  s.g2 = select(accept, t.g2, s.g2);
-  s.h11 = select(accept, t.h11, s.h11);
-  s.h12 = select(accept, t.h12, s.h12);
-  s.h22 = select(accept, t.h22, s.h22);
-  const F grown = min(max(s.radius, F(2.0f) * taken), one);
-  s.radius = select(accept, grown, select(reject, F(0.25f) * taken, s.radius));
-  s.frozen = s.frozen | (accept & (taken < F(kStepTol)) & (lmin > zero)) | (s.radius < F(kRadiusTol));
-}
-
-/// One step of `count` starts, stage by stage over the starts (independent chains of
-/// square roots and divisions side by side, not one start's chain after another's).
-template <class F, int N>
-IMPACT_INLINE void step_all(const Pair<F>& p, Start<F>* st, int count) {
-  Proposal<F> pr[N];
-  Start<F> t[N];
-  for (int s = 0; s < N; ++s)
-    if (s < count) pr[s] = propose(p, st[s]);
-  for (int s = 0; s < N; ++s)
-    if (s < count) evaluate(p, pr[s].m, t[s]);
-  for (int s = 0; s < N; ++s)
-    if (s < count) settle(st[s], t[s], pr[s]);
 }
 
 /// Lanes that may touch: bounding spheres overlapping and no separating direction among
@@ -312,7 +162,7 @@ IMPACT_INLINE void solve(const V3<F>& dw, const V3<F>& ea, const V3<F>& eb, cons
     const F f = select(ok, overlap(p, c), big);
     cx[nc] = c.x, cy[nc] = c.y, cz[nc] = c.z, cf[nc] = f;
     // f > -4 for lanes that may touch (|d| < the radii sum <= 2): key > 0 for tag().
-    key[nc] = simd::tag(select(ok, f + F(kKeyShift), big), nc);
+    key[nc] = simd::tag(select(ok, f + F(newton::kKeyShift), big), nc);
     ++nc;
   };
   const F dl2 = length_sq(p.d);
@@ -330,35 +180,7 @@ IMPACT_INLINE void solve(const V3<F>& dw, const V3<F>& ea, const V3<F>& eb, cons
   // ellipsoid (1 + 1/w) M_A + (1 + w) M_B; by power iteration on the adjugate.
   const float weights[3] = {0.25f, 1.0f, 4.0f};
   for (const float w : weights) {
-    const F vx[3] = {p.v[0].x, p.v[1].x, p.v[2].x}, vy[3] = {p.v[0].y, p.v[1].y, p.v[2].y},
-            vz[3] = {p.v[0].z, p.v[1].z, p.v[2].z};
-    F b00 = zero, b01 = zero, b02 = zero, b11 = zero, b12 = zero, b22 = zero;
-    for (int j = 0; j < 3; ++j) {
-      b00 = b00 + vx[j] * vx[j];
-      b01 = b01 + vx[j] * vy[j];
-      b02 = b02 + vx[j] * vz[j];
-      b11 = b11 + vy[j] * vy[j];
-      b12 = b12 + vy[j] * vz[j];
-      b22 = b22 + vz[j] * vz[j];
-    }
-    const F ww(w);
-    const F m00 = p.a2[0] + ww * b00, m11 = p.a2[1] + ww * b11, m22 = p.a2[2] + ww * b22;
-    const F m01 = ww * b01, m02 = ww * b02, m12 = ww * b12;
-    const F c00 = m11 * m22 - m12 * m12, c11 = m00 * m22 - m02 * m02, c22 = m00 * m11 - m01 * m01;
-    const F c01 = m02 * m12 - m01 * m22, c02 = m01 * m12 - m02 * m11, c12 = m01 * m02 - m00 * m12;
-    const Mask use0 = (c00 >= c11) & (c00 >= c22), use1 = andnot(c11 >= c22, use0);
-    V3<F> x{c02, c12, c22};
-    x = select(use1, V3<F>{c01, c11, c12}, x);
-    x = select(use0, V3<F>{c00, c01, c02}, x);
-    // Each product scaled by 1 / trace (>= the dominant eigenvalue, <= 3 times it): no
-    // overflow or underflow whatever the sizes.
-    const F tr = c00 + c11 + c22;
-    const F it = one / select(tr > zero, tr, one);
-    for (int rep = 0; rep < 3; ++rep) {
-      x = V3<F>{(c00 * x.x + c01 * x.y + c02 * x.z) * it, (c01 * x.x + c11 * x.y + c12 * x.z) * it,
-                (c02 * x.x + c12 * x.y + c22 * x.z) * it};
-    }
-    x = x * it;
+    const V3<F> x = newton::least_eigenvector<F, 3>(p.a2, p.v, w);
     const F l2 = length_sq(x);
     consider(x * (one / sqrt(select(l2 > zero, l2, one))), Mask(true));
   }
@@ -366,59 +188,15 @@ IMPACT_INLINE void solve(const V3<F>& dw, const V3<F>& ea, const V3<F>& eb, cons
   // The least key, then every candidate within kDistinctCos of it out; kStarts times.
   F bf[kStarts];
   V3<F> bn[kStarts];
-  for (int s = 0; s < kStarts; ++s) {
-    F m = key[0];
-    for (int i = 1; i < kCand; ++i) m = min(m, key[i]);
-    const Mask any_left = m < F(1e30f);
-    // A knocked-out key is untagged, so a lane with none left points at candidate 0.
-    const typename F::Int idx = select(any_left, simd::tag_index(m), typename F::Int(0));
-    const V3<F> c{simd::gather_lanes(cx, idx), simd::gather_lanes(cy, idx), simd::gather_lanes(cz, idx)};
-    bf[s] = select(any_left, simd::gather_lanes(cf, idx), big);
-    bn[s] = select(any_left, c, V3<F>{zero, zero, one});
-    for (int i = 0; i < kCand; ++i) {
-      const F cs = abs(cx[i] * c.x + cy[i] * c.y + cz[i] * c.z);
-      key[i] = select(cs >= F(kDistinctCos), big, key[i]);
-    }
-  }
+  newton::select_starts<F, kCand, kStarts>(cx, cy, cz, cf, key, bn, bf);
   // bf[0] is the least candidate f: <= 0 certifies separation.
   for (int s = 1; s < kStarts; ++s) bf[0] = min(bf[0], bf[s]);
 
-  // 2. Trust-region Newton from each start; lanes already separated are done.
-  const Mask apart = bf[0] <= zero;
-  Start<F> st[kStarts];
-  for (int s = 0; s < kStarts; ++s) {
-    st[s].radius = F(0.5f);
-    evaluate(p, bn[s], st[s]);
-    st[s].frozen = apart | (bf[s] >= big) | (emax <= zero);  // (zero radii: tail padding)
-  }
-  // Every start for kSpread steps (each settles into its basin), then the kKeep least
-  // ones (per lane; ties: the lower start) until they freeze or kMaxIterations.
-  auto run = [&](int count, int from, int to) {
-    for (int it = from; it < to; ++it) {
-      Mask all = st[0].frozen;
-      for (int s = 1; s < count; ++s) all = all & st[s].frozen;
-      if (simd::all(all)) break;
-      step_all<F, kStarts>(p, st, count);
-    }
-  };
-  run(kStarts, 0, kSpread);
-  for (int i = 0; i < kKeep; ++i) {
-    for (int j = kStarts - 1; j > i; --j) {
-      const Mask lower = st[j].f < st[j - 1].f;
-      const Start<F> hi = st[j - 1], lo = st[j];
-      st[j - 1] = pick(lower, lo, hi);
-      st[j] = pick(lower, hi, lo);
-    }
-  }
-  run(kKeep, kSpread, kMaxIterations);
-  F best = st[0].f;
-  V3<F> n = st[0].n;
-  for (int s = 1; s < kKeep; ++s) {
-    const Mask take = st[s].f < best;
-    best = select(take, st[s].f, best);
-    n = select(take, st[s].n, n);
-  }
-  n = n * (one / sqrt(length_sq(n)));
+  // 2. Trust-region Newton from each start; lanes already separated (or tail padding:
+  //    zero radii) are done.
+  F best;
+  V3<F> n;
+  newton::minimise<F, kStarts>(p, bn, bf, (bf[0] <= zero) | (emax <= zero), best, n);
 
   // Support points (A's along n, B's along -n), relative to A's centre, world.
   const V3<F> wa{p.a2[0] * n.x, p.a2[1] * n.y, p.a2[2] * n.z};

@@ -66,6 +66,7 @@ struct Table {
     k[kLeafCylinder][kLeafCylinder] = &collide_cylinder_cylinder;
     k[kLeafConvex][kLeafEllipsoid] = &collide_convex_ellipsoid;
     k[kLeafCylinder][kLeafTriangle] = &collide_cylinder_triangle;
+    k[kLeafCylinder][kLeafEllipsoid] = &collide_cylinder_ellipsoid;
     k[kLeafConvex][kLeafHalfSpace] = &collide_convex_halfspace;
     k[kLeafEllipsoid][kLeafEllipsoid] = &collide_ellipsoid_ellipsoid;
   }

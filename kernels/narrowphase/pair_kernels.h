@@ -111,6 +111,13 @@ void collide_cylinder_triangle(const LeafSoA&, const LeafSoA&, const ManifoldSoA
 /// certified apart first, the rest gathered into full blocks (ellipsoid_ellipsoid.cpp);
 /// one point midway, SIMD across pairs. Global minimum by multi-start (no proof; tested).
 void collide_ellipsoid_ellipsoid(const LeafSoA&, const LeafSoA&, const ManifoldSoA&, Range, const NarrowConfig&);
+/// Cylinder (A) against ellipsoid (B): the least support overlap over the unit sphere:
+/// the caps' normals and the side's circle in closed form (the circle by the nearest
+/// point of the ellipsoid's shadow), each rim's piece by a multi-start trust-region
+/// Newton solve on the sphere (ellipsoid-ellipsoid's, with the rim as a flat ellipsoid);
+/// lanes certified apart first, the rest gathered into full blocks
+/// (cylinder_ellipsoid.cpp); one point midway, SIMD across pairs.
+void collide_cylinder_ellipsoid(const LeafSoA&, const LeafSoA&, const ManifoldSoA&, Range, const NarrowConfig&);
 /// Convex hull (A) against half-space (B): the deepest vertex and up to 3 more vertices
 /// below the plane, one pair per SIMD lane: each lane lists its own hull's vertices
 /// below, then the touching lanes, compacted into full groups, pick over those

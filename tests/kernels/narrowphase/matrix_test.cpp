@@ -24,7 +24,7 @@
 // (sphere/capsule/box/triangle/half-space pairs of pair_kernels.h, triangle-triangle,
 // sphere-hull, capsule-hull, hull-triangle, sphere-ellipsoid, capsule-ellipsoid,
 // ellipsoid-triangle, ellipsoid-ellipsoid, capsule-cylinder, box-cylinder, cylinder-cylinder,
-// cylinder-triangle, hull-half-space and box-hull, whose SAT box-hull route is exact: sat.cpp),
+// cylinder-ellipsoid, cylinder-triangle, hull-half-space and box-hull, whose SAT box-hull route is exact: sat.cpp),
 // 1e-3 for the general GJK/EPA and support kernels (100x cfg.epa_tolerance); the inputs
 // are exact floats, so poses far from the origin get no extra depth tolerance; contact
 // points, being world floats, get one ulp of the largest coordinate on top (0.008 at 1e5).
@@ -424,7 +424,7 @@ bool specialised(LeafType a, LeafType b) {
           kp == &k::collide_ellipsoid_triangle || kp == &k::collide_capsule_cylinder ||
           kp == &k::collide_box_cylinder || kp == &k::collide_cylinder_cylinder ||
           kp == &k::collide_box_ellipsoid || kp == &k::collide_convex_ellipsoid ||
-          kp == &k::collide_ellipsoid_ellipsoid ||
+          kp == &k::collide_ellipsoid_ellipsoid || kp == &k::collide_cylinder_ellipsoid ||
           kp == &k::collide_cylinder_triangle || kp == &k::collide_convex_halfspace);
 }
 
