@@ -50,7 +50,10 @@
 // IMPACT_TEST_INTENSITY=10: random poses at 4 scales, deep pairs, cap / side / rim
 // contacts built in closed form, near touching and near parallel, needles and pancakes,
 // rings, against dense sampling refined in double): no miss; without the starts beside
-// the caps, 3 lanes missed (up to 3.5e-3 L too deep: a ring's edge beside its cap).
+// the caps, 3 lanes missed (up to 3.5e-3 L too deep: a ring's edge beside its cap). At
+// IMPACT_TEST_INTENSITY=30 (~2e4 lanes) 2 misses remain, a pancake cylinder (4.2e-3 L too
+// deep) and a ring (1.4e-3 L), and one rim contact's point 1.7e-4 L off the cylinder. A
+// miss returns a valid separating direction with a depth too large.
 // Lanes the bounding spheres or G along (c, u, the ellipsoid's axes) separate are written
 // count 0 first and the rest gathered into full blocks (prim::for_each_live_group).
 // Degenerate input: coincident centres (c = 0) take the candidates' signs as given (the
@@ -63,7 +66,8 @@
 // Cost: a first pass (5 support overlaps per lane) over every lane; for the lanes that
 // may touch, the shadow's nearest-point solve, 32 candidate evaluations, the selection,
 // 8 x 3 Newton steps, then 2 x (mostly 1-3) steps. impact_narrowbench
-// BM_Kernel/cylinder-ellipsoid/simd/4096: see docs/narrowphase.md.
+// BM_Kernel/cylinder-ellipsoid/simd/4096 (8 lanes, idle 2-core Xeon): ~475 ns per pair,
+// FCL ~1820 in the same run (3.8x), GJK / EPA ~2390 before.
 // Both paths run the same template (F = FloatW, or Float1 for the scalar reference).
 #include <cstdint>
 
