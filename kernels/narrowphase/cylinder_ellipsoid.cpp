@@ -27,14 +27,15 @@
 //    ellipsoid (the rim's disk, axes r e1, r e2) centred at c + s h u, so G there is
 //    ellipsoid-ellipsoid's f with that disk as B (the same gradient and Hessian terms).
 //    Found by sphere_newton.h's multi-start trust-region Newton solve, whose model takes
-//    the hemisphere of each point it evaluates, from the kStarts = 8 least distinct of 32
-//    candidates: c; the ellipsoid's axes; u x each axis; c made perpendicular to each
+//    the hemisphere of each point it evaluates, from the kStarts = 8 least distinct of 31
+//    candidates: c; the ellipsoid's axes; u x each axis; u made perpendicular to each
+//    axis (a needle's kink circle nearest the cap normal); c made perpendicular to each
 //    axis; the least eigenvectors of diag(a^2) + w r^2 (I - u u^T), w = 1/4, 1, 4; each
-//    rim's points q at 8 angles (from the one nearest the ellipsoid's centre): at even
+//    rim's points q at 6 angles (from the one nearest the ellipsoid's centre): at even
 //    angles the ellipsoid's level normal there (q / a^2) kept to the directions that make
 //    q the rim's point nearest the ellipsoid (its normal cone), at odd ones the middle of
-//    that cone (45 degrees); the circle's candidate; and a start 0.05 rad off
-//    each cap's normal down the slope of the rest of G there (a disk's edge beside the
+//    that cone (45 degrees); the circle's candidate; and a start 0.05 rad off each cap's
+//    normal down the slope of the rest of G there (a disk's edge beside the
 //    cap). Three steps each, the two least kept until they freeze. Kink handling, so the
 //    solve neither crawls nor stops short: a trial across the circle is projected onto it;
 //    a start on the circle stops there where neither piece descends into its own
@@ -49,10 +50,12 @@
 // ellipsoid); the caps and the circle are exact. Measured (cylinder_ellipsoid_test.cpp at
 // IMPACT_TEST_INTENSITY=10: random poses at 4 scales, deep pairs, cap / side / rim
 // contacts built in closed form, near touching and near parallel, needles and pancakes,
-// rings, against dense sampling refined in double): no miss; without the starts beside
-// the caps, 3 lanes missed (up to 3.5e-3 L too deep: a ring's edge beside its cap). At
-// IMPACT_TEST_INTENSITY=30 (~2e4 lanes) 2 misses remain, a pancake cylinder (4.2e-3 L too
-// deep) and a ring (1.4e-3 L), and one rim contact's point 1.7e-4 L off the cylinder. A
+// rings, against dense sampling refined in double): no miss. Each candidate family
+// beyond ellipsoid-ellipsoid's was added for a miss found there: a ring's edge beside
+// its cap (3.5e-3 L too deep), a thick disk's rim minimum 0.7 rad from every level normal
+// (1.3e-2 L), a needle through a pancake (4.2e-3 L). At IMPACT_TEST_INTENSITY=30 (~2e4
+// lanes) one miss remains, a ring around a long ellipsoid with two rim minima (1.4e-3 L
+// too deep), and one rim contact's point 1.7e-4 L off the cylinder. A
 // miss returns a valid separating direction with a depth too large.
 // Lanes the bounding spheres or G along (c, u, the ellipsoid's axes) separate are written
 // count 0 first and the rest gathered into full blocks (prim::for_each_live_group).
@@ -64,10 +67,10 @@
 // outputs. No FMA contraction in this file (no_contract.h, included first so it covers the
 // shared solvers): both paths give the same bytes.
 // Cost: a first pass (5 support overlaps per lane) over every lane; for the lanes that
-// may touch, the shadow's nearest-point solve, 32 candidate evaluations, the selection,
+// may touch, the shadow's nearest-point solve, 31 candidate evaluations, the selection,
 // 8 x 3 Newton steps, then 2 x (mostly 1-3) steps. impact_narrowbench
-// BM_Kernel/cylinder-ellipsoid/simd/4096 (8 lanes, idle 2-core Xeon): ~475 ns per pair,
-// FCL ~1820 in the same run (3.8x), GJK / EPA ~2390 before.
+// BM_Kernel/cylinder-ellipsoid/simd/4096 (8 lanes, idle 2-core Xeon): ~485 ns per pair,
+// FCL ~1820 in the same run (3.7x), GJK / EPA ~2390 before.
 // Both paths run the same template (F = FloatW, or Float1 for the scalar reference).
 #include <cstdint>
 
@@ -88,12 +91,14 @@ using simd::length_sq;
 
 constexpr int kStarts = 8;
 constexpr int kKept = 2;
-constexpr float kKinkSin = 1e-4f;        // a start this close to the side's circle may stop
-constexpr float kConeSin = 1e-3f;        // ... this close to a cap's normal may stop,
-constexpr float kConeSlope = 0.9f;       // where the rest of G's slope is below this of r
-constexpr float kConeStep = 0.05f;       // rad: the start beside each cap's normal
-constexpr float kConeFloor = 1e-6f;      // the cone's curvature r / |m x u| capped at r / this
-constexpr int kRimAngles = kRimSamples;  // rim points per rim among the candidates
+constexpr float kKinkSin = 1e-4f;    // a start this close to the side's circle may stop
+constexpr float kConeSin = 1e-3f;    // ... this close to a cap's normal may stop,
+constexpr float kConeSlope = 0.9f;   // where the rest of G's slope is below this of r
+constexpr float kConeStep = 0.05f;   // rad: the start beside each cap's normal
+constexpr float kConeFloor = 1e-6f;  // the cone's curvature r / |m x u| capped at r / this
+constexpr int kRimAngles = 6;        // rim points per rim among the candidates, 60 degrees apart
+constexpr float kRimPointCos[kRimAngles] = {1.0f, 0.5f, -0.5f, -1.0f, -0.5f, 0.5f};
+constexpr float kRimPointSin[kRimAngles] = {0.0f, 0.8660254f, 0.8660254f, 0.0f, -0.8660254f, -0.8660254f};
 
 /// The pair in the ellipsoid's scaled frame: newton::minimise's model.
 template <class F>
@@ -228,7 +233,7 @@ IMPACT_INLINE void solve(const V3<F>& dw, const V3<F>& ua, F ra, F ha, const V3<
 
   // 2. Candidates for the rims' pieces, signed towards c, scored by G; the kStarts least
   //    distinct ones start the solve.
-  constexpr int kCand = 16 + 2 * kRimAngles;  // as many as consider() calls below
+  constexpr int kCand = 19 + 2 * kRimAngles;  // as many as consider() calls below
   F cx[kCand], cy[kCand], cz[kCand], cf[kCand], key[kCand];
   int nc = 0;
   auto consider = [&](V3<F> c, Mask valid) {
@@ -248,6 +253,7 @@ IMPACT_INLINE void solve(const V3<F>& dw, const V3<F>& ua, F ra, F ha, const V3<
   const V3<F> ax[3] = {V3<F>{one, zero, zero}, V3<F>{zero, one, zero}, V3<F>{zero, zero, one}};
   for (int i = 0; i < 3; ++i) consider(ax[i], Mask(true));
   for (int i = 0; i < 3; ++i) consider(simd::cross(ax[i], p.u), Mask(true));
+  for (int i = 0; i < 3; ++i) consider(madd(p.u, -dot(p.u, ax[i]), ax[i]), Mask(true));
   for (int i = 0; i < 3; ++i) consider(madd(p.d, -dot(p.d, ax[i]), ax[i]), has_d);
   const float weights[3] = {0.25f, 1.0f, 4.0f};
   for (const float w : weights) consider(newton::least_eigenvector<F, 2>(p.a2, p.v, w), Mask(true));
@@ -265,7 +271,7 @@ IMPACT_INLINE void solve(const V3<F>& dw, const V3<F>& ua, F ra, F ha, const V3<
       const V3<F> k = madd(p.d, side == 0 ? p.h : -p.h, p.u);
       const V3<F> su = side == 0 ? -p.u : p.u;  // towards the ellipsoid from this rim's cap
       for (int j = 0; j < kRimAngles; ++j) {
-        const V3<F> rho = madd(b1 * F(kRimCos[j]), F(kRimCos[(j + 6) % kRimSamples]), b2);
+        const V3<F> rho = madd(b1 * F(kRimPointCos[j]), F(kRimPointSin[j]), b2);
         const V3<F> q = madd(k, r, rho);
         // Even angles: the level normal there, kept to the directions along which q is
         // the rim's point nearest the ellipsoid (m in the cone of -u s and -rho); odd
