@@ -133,10 +133,8 @@ struct Pair {
   IMPACT_INLINE V3<F> restrict(const V3<F>& from, const V3<F>& trial) const {
     const F tu = dot(trial, u);
     const auto across = tu * dot(from, u) < F(0.0f);
-    const V3<F> on = madd(trial, -tu, u);
-    const F l2 = length_sq(on);
-    const auto ok = across & (l2 >= F(kTinySq));
-    return select(ok, on * (F(1.0f) / sqrt(select(ok, l2, F(1.0f)))), trial);
+    F len;
+    return select(across, normalize_or(madd(trial, -tu, u), trial, len), trial);
   }
 
   /// Starts that have reached a kink where it is a local minimum stop there (its exact
@@ -224,9 +222,8 @@ IMPACT_INLINE void solve(const V3<F>& dw, const V3<F>& ua, F ra, F ha, const V3<
     const F ae[3] = {av[0] * ie, av[1] * ie, av[2] * ie};
     const ellip::Shadow<F> sh = ellip::shadow(ae, p.u);
     ellip::PointSolve<2, F> st;
-    circle = ellip::near_normal(sh, p.d * ie, st);
-    const F l2 = length_sq(circle);
-    circle = select(l2 >= F(kTinySq), circle * (one / sqrt(select(l2 >= F(kTinySq), l2, one))), e1);
+    F len;
+    circle = normalize_or(ellip::near_normal(sh, p.d * ie, st), e1, len);
     circle = select(dot(circle, p.d) < zero, -circle, circle);
   }
   const F circle_g = p.overlap(circle);
@@ -260,10 +257,8 @@ IMPACT_INLINE void solve(const V3<F>& dw, const V3<F>& ua, F ra, F ha, const V3<
   // Rim points from the one nearest the ellipsoid's centre (-c's direction in the
   // disk's plane), along the ellipsoid's level normal p / a^2 there.
   {
-    const V3<F> toward = madd(-p.d, dot(p.d, p.u), p.u);
-    const F tl2 = length_sq(toward);
-    const V3<F> b1 =
-        select(tl2 >= F(kTinySq), toward * (one / sqrt(select(tl2 >= F(kTinySq), tl2, one))), e1);
+    F len;
+    const V3<F> b1 = normalize_or(madd(-p.d, dot(p.d, p.u), p.u), e1, len);
     const V3<F> b2 = simd::cross(p.u, b1);
     const F ia2[3] = {one / max(p.a2[0], F(1e-30f)), one / max(p.a2[1], F(1e-30f)),
                       one / max(p.a2[2], F(1e-30f))};
@@ -291,9 +286,9 @@ IMPACT_INLINE void solve(const V3<F>& dw, const V3<F>& ua, F ra, F ha, const V3<
   // minimum, a rim piece's minimum can lie just beside it (a flat disk's edge).
   for (int i = 0; i < 2; ++i) {
     const V3<F> su = i == 0 ? p.u : -p.u;
-    const F sl = length_sq(p.cone_slope[i]);
-    const V3<F> dir = p.cone_slope[i] * (F(-kConeStep) / sqrt(select(sl > F(kTinySq), sl, one)));
-    consider(su + dir, sl > F(kTinySq));
+    F len;
+    const V3<F> down = normalize_or(p.cone_slope[i], su, len);
+    consider(madd(su, F(-kConeStep), down), len > zero);
   }
 
   F bf[kStarts];
