@@ -35,7 +35,9 @@ kernels::LbvhView LbvhBroadPhase::view() const {
                            filtered_ ? layer_.data() : nullptr,
                            filtered_ ? mask_.data() : nullptr,
                            filtered_ ? static_.data() : nullptr,
-                           info_.leaves};
+                           info_.leaves,
+                           lanes_.data(),
+                           kernels::lbvh_lane_stride(info_.leaves)};
 }
 
 Status LbvhBroadPhase::rebuild(const Executor& exec, kernels::AabbSoA boxes, kernels::PairFilter filter,
@@ -102,7 +104,7 @@ Status LbvhBroadPhase::rebuild(const Executor& exec, kernels::AabbSoA boxes, ker
       {n >= 2 ? scratch(nodes_, n - 1) : nullptr, n >= 2 ? scratch(internal_parent_, n - 1) : nullptr,
        scratch(leaf_parent_, n)},
       {n >= 2 ? nodes_.data() : nullptr, scratch(leaves_, n), filtered_ ? scratch(layer_, n) : nullptr,
-       filtered_ ? scratch(mask_, n) : nullptr, filtered_ ? scratch(static_, n) : nullptr},
+       filtered_ ? scratch(mask_, n) : nullptr, filtered_ ? scratch(static_, n) : nullptr, lanes(n)},
       n >= 2 ? scratch(slot_, n) : nullptr};
   kernels::LbvhBlocked* blocked = scratch(blocked_, chunk_count(n, kNodeGrain));
   exec.for_each_chunk(n, kNodeGrain, [&](uint32_t b, uint32_t e, uint32_t c) {
@@ -111,6 +113,13 @@ Status LbvhBroadPhase::rebuild(const Executor& exec, kernels::AabbSoA boxes, ker
   for (uint32_t c = 1, b = kNodeGrain; b < n; ++c, b += kNodeGrain)
     kernels::lbvh_build_fused_seam(in, out, n, {b, std::min(n, b + kNodeGrain)}, blocked[c]);
   return Status();
+}
+
+kernels::LbvhLanes LbvhBroadPhase::lanes(uint32_t n) {
+  const size_t stride = kernels::lbvh_lane_stride(n);
+  const kernels::LbvhLanes l{scratch(lanes_, 6 * stride), stride};
+  kernels::lbvh_lane_padding(l, n);
+  return l;
 }
 
 const kernels::SortedBox* LbvhBroadPhase::pack(const Executor& exec, kernels::AabbSoA boxes, uint32_t n) {
@@ -131,7 +140,8 @@ void LbvhBroadPhase::refit_bounds(const Executor& exec, kernels::AabbSoA boxes,
                                   leaves_.data(),
                                   filtered_ ? scratch(layer_, n) : nullptr,
                                   filtered_ ? scratch(mask_, n) : nullptr,
-                                  filtered_ ? scratch(static_, n) : nullptr};
+                                  filtered_ ? scratch(static_, n) : nullptr,
+                                  lanes(n)};
   exec.for_each_chunk(n, kNodeGrain, [&](uint32_t b, uint32_t e, uint32_t) {
     kernels::lbvh_refit(boxes, filter, in, out, n, {b, e});
   });
@@ -282,7 +292,7 @@ Status LbvhBroadPhase::cache_update(const Executor& exec, kernels::AabbSoA boxes
   const uint32_t* movers = movers_.data();
   // 2. Their leaves and ancestors take the new fat boxes (serial).
   kernels::lbvh_cache_grow({nodes_.data(), leaves_.data(), internal_parent_.data(), leaf_parent_.data(),
-                            leaf_pos_.data()},
+                            leaf_pos_.data(), lanes(n)},
                            fat, movers, static_cast<uint32_t>(m));
   // 3. Their pairs, against the grown tree, sorted.
   const kernels::LbvhView v = view();
@@ -371,6 +381,7 @@ kernels::LbvhView LbvhBroadPhase::query_view(const Executor& exec) {
     exact_leaves_valid_ = true;
   }
   v.leaves = exact_leaves_.data();
+  v.lanes = nullptr;  // they mirror the fat leaves
   return v;
 }
 

@@ -137,6 +137,8 @@ class LbvhBroadPhase {
                  const kernels::BoundsSummary* summary);
   Status traverse(const Executor& exec, Buffer<kernels::Pair>* out);
   void refit_bounds(const Executor& exec, kernels::AabbSoA boxes, kernels::PairFilter filter);
+  /// The lane arrays for n leaves (padding filled), for the passes that write leaves.
+  kernels::LbvhLanes lanes(uint32_t n);
   /// The boxes as records in original order (one random read per leaf in the gathers).
   const kernels::SortedBox* pack(const Executor& exec, kernels::AabbSoA boxes, uint32_t n);
   // kPairCache (kernels/bvh/lbvh_pair_cache.h).
@@ -163,6 +165,7 @@ class LbvhBroadPhase {
   Buffer<uint32_t> leaf_index_;
   Buffer<kernels::LbvhNode> nodes_;
   Buffer<kernels::SortedBox> leaves_, packed_;
+  Buffer<float> lanes_;  // leaves_ as lane arrays (kernels::LbvhLanes), for the pair walk
   Buffer<uint32_t> internal_parent_, leaf_parent_, slot_;
   Buffer<kernels::LbvhBlocked> blocked_;
   Buffer<uint32_t> layer_, mask_;

@@ -54,6 +54,37 @@ inline constexpr uint32_t kLbvhMaxLeaves = (1u << 30) - 1;
 /// Bound on internal nodes on any root-to-leaf path (see "Depth" above).
 inline constexpr uint32_t kLbvhMaxDepth = 96;
 
+/// The sorted leaves' bounds again as six float arrays (min x, y, z, max x, y, z;
+/// array k at data + k * stride), for the pair walk's lane tests
+/// (lbvh_traverse.h). Whatever writes a leaf record writes its lanes too (build,
+/// refit, pair-cache growth), so they always mirror the leaves. Each array is
+/// padded past n (lbvh_lane_stride) so a 16-lane load at any leaf stays inside;
+/// the padding is +inf / -inf (lbvh_lane_padding) and never overlaps anything.
+struct LbvhLanes {
+  float* data;    ///< null: not kept (the leaf passes skip the writes)
+  size_t stride;  ///< floats per array
+
+  IMPACT_INLINE void store(uint32_t s, const SortedBox& b) const {
+    if (data == nullptr) return;
+    data[s] = b.min_x;
+    data[stride + s] = b.min_y;
+    data[2 * stride + s] = b.min_z;
+    data[3 * stride + s] = b.max_x;
+    data[4 * stride + s] = b.max_y;
+    data[5 * stride + s] = b.max_z;
+  }
+};
+
+/// Floats per lane array for n leaves: n + 16, rounded up to a multiple of 16.
+IMPACT_INLINE size_t lbvh_lane_stride(uint32_t n) { return (static_cast<size_t>(n) + 31) & ~size_t{15}; }
+
+/// Fills the padding [n, stride) of each array (serial, O(16)).
+IMPACT_INLINE void lbvh_lane_padding(LbvhLanes lanes, uint32_t n) {
+  constexpr float inf = __builtin_inff();
+  for (size_t s = n; s < lanes.stride; ++s)
+    for (size_t k = 0; k < 6; ++k) lanes.data[k * lanes.stride + s] = k < 3 ? inf : -inf;
+}
+
 /// Arrays the build writes (n - 1 nodes and internal parents; n leaf parents).
 struct LbvhTopology {
   LbvhNode* nodes;

@@ -88,6 +88,7 @@ void lbvh_build_fused(AabbSoA boxes, PairFilter filter, LbvhFusedIn in, LbvhFuse
     const uint32_t i = in.leaf_index[s];
     const SortedBox leaf = in.packed ? in.packed[i] : pack(boxes, i);
     out.refit.leaves[s] = leaf;
+    out.refit.lanes.store(s, leaf);
     if (filter.layer) {
       out.refit.layer[s] = filter.layer[i];
       out.refit.mask[s] = filter.mask[i];

@@ -62,6 +62,7 @@ void lbvh_cache_grow(const LbvhGrowView& t, const SortedBox* fat, const uint32_t
     const SortedBox& f = fat[i];
     const uint32_t s = t.leaf_pos[i];
     t.leaves[s] = f;
+    t.lanes.store(s, f);
     const lbvh_detail::Bounds b = bounds_of(f);
     for (uint32_t p = t.leaf_parent[s]; p != kInvalidBody; p = t.internal_parent[p]) {
       LbvhNode& node = t.nodes[p];

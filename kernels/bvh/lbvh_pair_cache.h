@@ -74,6 +74,7 @@ struct LbvhGrowView {
   const uint32_t* internal_parent;  ///< n - 1
   const uint32_t* leaf_parent;      ///< n
   const uint32_t* leaf_pos;         ///< n: sorted position of box i
+  LbvhLanes lanes;                  ///< the leaves' lane copy, kept equal
 };
 
 /// For each of the `count` movers: its leaf takes fat[i] and its ancestors grow to

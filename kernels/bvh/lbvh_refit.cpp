@@ -38,6 +38,7 @@ void lbvh_refit(AabbSoA boxes, PairFilter filter, LbvhRefitIn in, LbvhRefitOut o
     const uint32_t i = in.leaf_index[s];
     const SortedBox leaf = in.packed ? in.packed[i] : pack(boxes, i);
     out.leaves[s] = leaf;
+    out.lanes.store(s, leaf);
     if (filter.layer) {
       out.layer[s] = filter.layer[i];
       out.mask[s] = filter.mask[i];

@@ -68,6 +68,7 @@ struct LbvhRefitOut {
   uint32_t* layer;          ///< n, sorted order; null when unfiltered
   uint32_t* mask;
   uint8_t* is_static;
+  LbvhLanes lanes;          ///< the leaves' lane copy (data null: none)
 };
 
 /// out[i] = box i as a SortedBox record (index i), i in r: a sequential pass that lets

@@ -7,10 +7,15 @@
 namespace impact::kernels {
 namespace {
 
-using F = simd::FloatN<simd::kSimdWidth>;
+// The cluster's leaf tests are the walk's arithmetic: 16 lanes where AVX-512 has them.
+#if defined(__AVX512F__) && !defined(IMPACT_SIMD_SCALAR)
+constexpr uint32_t kW = 16;
+#else
 constexpr uint32_t kW = simd::kSimdWidth;
+#endif
+using F = simd::FloatN<kW>;
 constexpr uint32_t kVecs = kLbvhCluster / kW;
-static_assert(kLbvhCluster % kW == 0 && kLbvhCluster <= 64);
+static_assert(kLbvhCluster % kW == 0 && kLbvhCluster <= 64 && kLbvhTarget >= kLbvhCluster);
 using Bits = uint64_t;  // one bit per query-cluster lane
 
 template <class B>
@@ -21,9 +26,10 @@ IMPACT_INLINE double area(const B& b) {
   return 2.0 * (dx * dy + dy * dz + dz * dx);
 }
 
-// A subtree of at most kLbvhCluster leaves: a query cluster when maximal, and tested
-// leaf by leaf (not descended into) as a target.
+// A subtree of at most kLbvhCluster leaves: a query cluster when maximal.
 IMPACT_INLINE bool is_cluster(uint32_t first, uint32_t last) { return last - first < kLbvhCluster; }
+// A subtree of at most kLbvhTarget leaves: tested leaf by leaf, not descended into.
+IMPACT_INLINE bool is_target(uint32_t first, uint32_t last) { return last - first < kLbvhTarget; }
 
 // Prefetches the child records of internal node m (about to be pushed): the walk pops
 // a pushed node and then tests its children, one dependent cache miss per level at
@@ -74,46 +80,47 @@ struct PairSink {
   }
 };
 
-// The leaves of one query cluster, one per lane (lanes past its size never overlap:
-// min +inf, max -inf), with its bounds and range.
+// The leaves of one query cluster, one per lane, straight from the lane arrays (lanes
+// past its size hold the next leaves: `valid` masks their bits), with its bounds
+// (also broadcast) and range.
 struct QueryCluster {
   F min_x[kVecs], min_y[kVecs], min_z[kVecs], max_x[kVecs], max_y[kVecs], max_z[kVecs];
-  uint32_t index[kLbvhCluster];
   Rec bounds;
+  F b_min_x, b_min_y, b_min_z, b_max_x, b_max_y, b_max_z;
   uint32_t first;
+  Bits valid;  // bit i: lane i holds a leaf of the cluster
 
   IMPACT_INLINE void load(const LbvhView& t, const Sub& c) {
     bounds = c.rec;
+    b_min_x = F(c.rec.min_x);
+    b_min_y = F(c.rec.min_y);
+    b_min_z = F(c.rec.min_z);
+    b_max_x = F(c.rec.max_x);
+    b_max_y = F(c.rec.max_y);
+    b_max_z = F(c.rec.max_z);
     first = c.first;
-    alignas(64) float lane[6][kLbvhCluster];
-    const uint32_t size = c.rec.last - c.first + 1;
-    constexpr float inf = __builtin_inff();
-    for (uint32_t i = 0; i < kLbvhCluster; ++i) {
-      const bool in = i < size;
-      const SortedBox& b = t.leaves[in ? c.first + i : c.first];
-      lane[0][i] = in ? b.min_x : inf;
-      lane[1][i] = in ? b.min_y : inf;
-      lane[2][i] = in ? b.min_z : inf;
-      lane[3][i] = in ? b.max_x : -inf;
-      lane[4][i] = in ? b.max_y : -inf;
-      lane[5][i] = in ? b.max_z : -inf;
-      index[i] = b.index;
-    }
+    valid = ~Bits{0} >> (63 - (c.rec.last - c.first));
+    const float* L = t.lanes + c.first;
+    const size_t S = t.lane_stride;
     for (uint32_t v = 0; v < kVecs; ++v) {
-      min_x[v] = F::load(&lane[0][v * kW]);
-      min_y[v] = F::load(&lane[1][v * kW]);
-      min_z[v] = F::load(&lane[2][v * kW]);
-      max_x[v] = F::load(&lane[3][v * kW]);
-      max_y[v] = F::load(&lane[4][v * kW]);
-      max_z[v] = F::load(&lane[5][v * kW]);
+      min_x[v] = F::load(L + v * kW);
+      min_y[v] = F::load(L + S + v * kW);
+      min_z[v] = F::load(L + 2 * S + v * kW);
+      max_x[v] = F::load(L + 3 * S + v * kW);
+      max_y[v] = F::load(L + 4 * S + v * kW);
+      max_z[v] = F::load(L + 5 * S + v * kW);
     }
   }
 
-  // Bit i set: query leaf i overlaps b (touching counts).
-  IMPACT_INLINE Bits hits(const SortedBox& b) const {
-    const F bx0(b.min_x), by0(b.min_y), bz0(b.min_z), bx1(b.max_x), by1(b.max_y), bz1(b.max_z);
+  // Bit i set: query leaf i overlaps leaf u (touching counts), read from the lane
+  // arrays (a leaf tested here has just been read there).
+  // Only the first `vecs` vectors (the later lanes' bits stay clear).
+  IMPACT_INLINE Bits hits(const LbvhView& t, uint32_t u, uint32_t vecs = kVecs) const {
+    const float* L = t.lanes + u;
+    const size_t S = t.lane_stride;
+    const F bx0(L[0]), by0(L[S]), bz0(L[2 * S]), bx1(L[3 * S]), by1(L[4 * S]), bz1(L[5 * S]);
     Bits m = 0;
-    for (uint32_t v = 0; v < kVecs; ++v) {
+    for (uint32_t v = 0; v < vecs; ++v) {
       const auto o = (min_x[v] <= bx1) & (bx0 <= max_x[v]) & (min_y[v] <= by1) & (by0 <= max_y[v]) &
                      (min_z[v] <= bz1) & (bz0 <= max_z[v]);
       m |= static_cast<Bits>(simd::bits(o)) << (v * kW);
@@ -125,6 +132,9 @@ struct QueryCluster {
 // Emits the pairs of leaf u with the query leaves of the bits of m, ascending.
 template <bool kFiltered>
 IMPACT_INLINE void emit(const LbvhView& t, const QueryCluster& q, uint32_t u, Bits m, PairSink& sink) {
+  // Most tested leaves hit nothing: their records (a cache miss when only the lanes
+  // were read) are not touched.
+  if (__builtin_expect(m == 0, 1)) return;
   const uint32_t b = t.leaves[u].index;
   while (m != 0) {
     const uint32_t i = static_cast<uint32_t>(std::countr_zero(m));
@@ -134,29 +144,38 @@ IMPACT_INLINE void emit(const LbvhView& t, const QueryCluster& q, uint32_t u, Bi
       if (!pair_allowed(t.layer[s], t.mask[s], t.is_static[s], t.layer[u], t.mask[u], t.is_static[u]))
         continue;
     }
-    sink.put(q.index[i], b);
+    sink.put(t.leaves[q.first + i].index, b);
   }
 }
 
-// Every leaf of the subtree [first, last] (at most kLbvhCluster) against the query
-// cluster, in leaf order.
+// Every leaf of the target subtree [first, last] (at most kLbvhTarget leaves) against
+// the query cluster, in leaf order.
 template <bool kFiltered>
-IMPACT_INLINE void test_cluster(const LbvhView& t, const QueryCluster& q, uint32_t first, uint32_t last,
-                                PairSink& sink) {
-  // Leaves overlapping the query cluster's bounds first (one 4-lane test each,
-  // compacted without branches), then those against the query leaves.
-  uint32_t list[kLbvhCluster];
-  uint32_t count = 0;
-  for (uint32_t u = first; u <= last; ++u) {
-    list[count] = u;
-    count += records_overlap(q.bounds, t.leaves[u]) ? 1u : 0u;
+IMPACT_INLINE void test_target(const LbvhView& t, const QueryCluster& q, uint32_t first, uint32_t last,
+                               PairSink& sink) {
+  // kW consecutive leaves at a time against the query cluster's bounds (from the
+  // lane arrays; lanes past `last` masked off), then the survivors against the
+  // query leaves.
+  const size_t S = t.lane_stride;
+  const uint32_t size = last - first + 1;
+  for (uint32_t o = 0; o < size; o += kW) {
+    const float* L = t.lanes + first + o;
+    const auto ov = (F::load(L) <= q.b_max_x) & (q.b_min_x <= F::load(L + 3 * S)) &
+                    (F::load(L + S) <= q.b_max_y) & (q.b_min_y <= F::load(L + 4 * S)) &
+                    (F::load(L + 2 * S) <= q.b_max_z) & (q.b_min_z <= F::load(L + 5 * S));
+    uint32_t m = simd::bits(ov);
+    if (size - o < kW) m &= (1u << (size - o)) - 1u;
+    while (m != 0) {
+      const uint32_t u = first + o + static_cast<uint32_t>(std::countr_zero(m));
+      m &= m - 1;
+      emit<kFiltered>(t, q, u, q.hits(t, u) & q.valid, sink);
+    }
   }
-  for (uint32_t i = 0; i < count; ++i) emit<kFiltered>(t, q, list[i], q.hits(t.leaves[list[i]]), sink);
 }
 
 // Depth-first walk of internal node `node` (leaves [first, ..], more than
-// kLbvhCluster) with the query cluster's bounds, left child first, down to subtrees
-// of at most kLbvhCluster leaves, tested in increasing leaf order.
+// kLbvhTarget) with the query cluster's bounds, left child first, down to targets
+// (subtrees of at most kLbvhTarget leaves), tested in increasing leaf order.
 template <bool kFiltered>
 IMPACT_INLINE void explore(const LbvhView& t, const QueryCluster& q, uint32_t node, uint32_t first,
                            PairSink& sink) {
@@ -164,9 +183,9 @@ IMPACT_INLINE void explore(const LbvhView& t, const QueryCluster& q, uint32_t no
   // rather than selected so that the choice compiles without a branch.
   const float* const base[2] = {&t.nodes[0].min_x, &t.leaves[0].min_x};
   constexpr uint32_t kStride = sizeof(LbvhNode) / sizeof(float);
-  constexpr uint32_t kClusterItem = 1u << 31;
+  constexpr uint32_t kTargetItem = 1u << 31;
   struct Item {
-    uint32_t ref;  ///< internal node, or kClusterItem for a cluster
+    uint32_t ref;  ///< internal node, or kTargetItem for a target
     uint32_t first, last;
   };
   // One pending right sibling per level below the root plus two new entries:
@@ -177,8 +196,8 @@ IMPACT_INLINE void explore(const LbvhView& t, const QueryCluster& q, uint32_t no
   stack[top++] = Item{node, first, 0};
   while (top > 0) {
     const Item cur = stack[--top];
-    if (cur.ref & kClusterItem) {
-      test_cluster<kFiltered>(t, q, cur.first, cur.last, sink);
+    if (cur.ref & kTargetItem) {
+      test_target<kFiltered>(t, q, cur.first, cur.last, sink);
       continue;
     }
     const LbvhNode& m = t.nodes[cur.ref];
@@ -186,18 +205,18 @@ IMPACT_INLINE void explore(const LbvhView& t, const QueryCluster& q, uint32_t no
     const uint32_t left_leaf = m.split >> 31, right_leaf = (m.split >> 30) & 1u;
     const bool lo = records_overlap_at(q.bounds, base[left_leaf] + static_cast<size_t>(h) * kStride);
     const bool ro = records_overlap_at(q.bounds, base[right_leaf] + static_cast<size_t>(h + 1) * kStride);
-    const bool lc = is_cluster(cur.first, h), rc = is_cluster(h + 1, m.last);
-    // A cluster child is tested at once unless an internal left sibling's leaves
-    // must come first; then it waits on the stack as a cluster item.
+    const bool lc = is_target(cur.first, h), rc = is_target(h + 1, m.last);
+    // A target child is tested at once unless an internal left sibling's leaves
+    // must come first; then it waits on the stack as a target item.
     const bool left_waits = lo && !lc;
-    if (lo && lc) test_cluster<kFiltered>(t, q, cur.first, h, sink);
-    if (ro && rc && !left_waits) test_cluster<kFiltered>(t, q, h + 1, m.last, sink);
-    stack[top] = Item{(h + 1) | (rc ? kClusterItem : 0u), h + 1, m.last};
+    if (lo && lc) test_target<kFiltered>(t, q, cur.first, h, sink);
+    if (ro && rc && !left_waits) test_target<kFiltered>(t, q, h + 1, m.last, sink);
+    stack[top] = Item{(h + 1) | (rc ? kTargetItem : 0u), h + 1, m.last};
     top += static_cast<uint32_t>(ro && (!rc || left_waits));
     stack[top] = Item{h, cur.first, h};
     top += static_cast<uint32_t>(left_waits);
     IMPACT_ASSERT(top <= kLbvhMaxDepth + 1);
-    if (top > 0 && (stack[top - 1].ref & kClusterItem) == 0) prefetch_children(t, t.nodes[stack[top - 1].ref]);
+    if (top > 0 && (stack[top - 1].ref & kTargetItem) == 0) prefetch_children(t, t.nodes[stack[top - 1].ref]);
   }
 }
 
@@ -271,8 +290,11 @@ IMPACT_INLINE void run_queries(const LbvhView& t, Range r, PairSink& sink) {
   while (c.first < r.end) {
     q.load(t, c);
     // Within the cluster: each leaf u with the query leaves before it.
-    for (uint32_t u = c.first + 1; u <= c.rec.last; ++u)
-      emit<kFiltered>(t, q, u, q.hits(t.leaves[u]) & ((Bits{1} << (u - c.first)) - 1u), sink);
+    // Leaf first + k needs the lanes below k only: ceil(k / kW) vectors.
+    for (uint32_t u = c.first + 1; u <= c.rec.last; ++u) {
+      const uint32_t k = u - c.first;
+      emit<kFiltered>(t, q, u, q.hits(t, u, (k + kW - 1) / kW) & ((Bits{1} << k) - 1u), sink);
+    }
     // The subtrees after it overlapping its bounds, from the top (the lowest
     // ancestor) down, compacted without branches.
     uint32_t hit[kLbvhMaxDepth + 1];
@@ -284,7 +306,7 @@ IMPACT_INLINE void run_queries(const LbvhView& t, Range r, PairSink& sink) {
     for (uint32_t i = 0; i < hits; ++i) {
       const Rec& s = st.item[hit[i]];
       const uint32_t first = s.ref & ~kCandLeaf;
-      if (is_cluster(first, s.last)) test_cluster<kFiltered>(t, q, first, s.last, sink);
+      if (is_target(first, s.last)) test_target<kFiltered>(t, q, first, s.last, sink);
       else explore<kFiltered>(t, q, s.ref, first, sink);
     }
     if (st.size == 0) return;

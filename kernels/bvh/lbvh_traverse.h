@@ -5,21 +5,28 @@
 //   kLbvhCluster leaves (subtrees are contiguous ranges of sorted leaves, so the
 //   clusters partition [0, n) into consecutive ranges). Per cluster C with leaves
 //   [a, b] and bounds B (its subtree's node): (1) each leaf u in (a, b] against the
-//   leaves of C before it; (2) the subtrees holding only leaves after b are the right
-//   siblings of C's ancestors reached from their left child; each one whose bounds
-//   overlap B is walked depth first (a fixed stack of kLbvhMaxDepth + 2 entries),
-//   pruning by B, down to subtrees of at most kLbvhCluster leaves, whose leaves are
-//   then tested one by one: first against B (one 4-lane test, compacted without
-//   branches), the survivors against all of C's leaves at once, C's leaves held one
-//   per SIMD lane (kLbvhCluster / kSimdWidth vectors). Each overlapping pair that
-//   passes the filter gives (min, max) of the two original box indices. A pair of
-//   sorted positions s < t is met only by the cluster holding s: each pair once.
+//   leaves of C before it (only the vectors holding them); (2) the subtrees holding
+//   only leaves after b are the right siblings of C's ancestors reached from their
+//   left child; each one whose bounds overlap B is walked depth first (a fixed stack
+//   of kLbvhMaxDepth + 2 entries), pruning by B, down to target subtrees of at most
+//   kLbvhTarget leaves, whose leaves are then tested: first against B, one SIMD
+//   vector of consecutive leaves at a time from the lane arrays (LbvhLanes), the
+//   survivors against all of C's leaves at once, C's leaves held one per SIMD lane.
+//   Each overlapping pair that passes the filter gives (min, max) of the two
+//   original box indices. A pair of sorted positions s < t is met only by the
+//   cluster holding s: each pair once.
+// SIMD width: 16 lanes where AVX-512 is enabled, else kSimdWidth (the leaf tests
+//   are compares only: any width gives the same pairs, in the same order).
 // Why clusters: a per-leaf query walks ~5 nodes per leaf with a dependent load and an
-//   unpredictable branch each; a cluster of ~23 leaves walks ~10 subtrees once for
-//   all of them, and the leaf tests it adds are SIMD and branch-free. 1M uniform
-//   boxes, one thread: 171 -> 77 ms (per-leaf queries with shared groups -> clusters
-//   of 32); clusters of 16: 101 ms, of 64: 78 ms; descending into target subtrees
-//   down to 8 or 16 leaves rather than 32: 110 / 107 ms.
+//   unpredictable branch each; a cluster walks its neighbourhood once for all of its
+//   leaves, and the leaf tests it adds are SIMD and branch-free. 1M uniform boxes,
+//   one thread (2-core Intel Xeon, AVX-512): per-leaf queries with shared groups 171
+//   ms; clusters of 32 leaves, targets of 32, leaf records tested one by one against
+//   B: 77 ms (on an earlier machine) and 92 ms today; the lane arrays, 16 lanes and
+//   the triangle of in-cluster tests: 85 ms; targets of 64: 79 ms; clusters of 64
+//   with targets of 64 / 128 / 256: 76 / 70 / 70 ms (the tests that a larger target
+//   adds are cheaper than the node visits they replace; the visits are dependent
+//   cache misses).
 // Candidate stack: those right siblings are kept, with a copy of their bounds, in a
 //   stack (root side at the bottom) carried from one cluster to the next along a
 //   chunk: the top is the subtree that starts right after the cluster; the next
@@ -37,8 +44,9 @@
 //   out and returns how many there are (the host reruns with more room).
 // Preconditions: n >= 2; the tree built and refitted for these leaves; bounds finite.
 // Cost: per cluster O(depth) candidate tests plus the subtrees its bounds reach, plus
-//   kLbvhCluster-lane tests of the leaves of each reached subtree; worst case O(n) per
-//   cluster (every box overlapping every other).
+//   one vector test per kW leaves of each reached target and kLbvhCluster / kW vector
+//   tests per leaf overlapping B; worst case O(n) per cluster (every box overlapping
+//   every other).
 // Method: Karras, "Thinking Parallel, Part II/III" (NVIDIA blog, 2012): independent
 //   traversal of the LBVH per query for self-collision, pruning subtrees at or before
 //   the query; here the query is a leaf cluster (as BVHs with multi-primitive leaves
@@ -59,8 +67,11 @@
 
 namespace impact::kernels {
 
-/// Largest subtree the self-pair query treats as one cluster (see above).
-inline constexpr uint32_t kLbvhCluster = 32;
+/// Largest subtree the self-pair query treats as one query cluster (see above; at
+/// most 64: one bit per leaf in a 64-bit word).
+inline constexpr uint32_t kLbvhCluster = 64;
+/// Largest subtree the walk tests leaf by leaf instead of descending into.
+inline constexpr uint32_t kLbvhTarget = 128;
 
 /// A built and refitted LBVH with its sorted leaves and filter data.
 struct LbvhView {
@@ -72,6 +83,10 @@ struct LbvhView {
   const uint32_t* mask;
   const uint8_t* is_static;
   uint32_t n;
+  /// The leaves' bounds as lane arrays (LbvhLanes, lbvh_build.h): array k at
+  /// lanes + k * lane_stride. lbvh_find_pairs needs them; the other walks do not.
+  const float* lanes;
+  size_t lane_stride;
 };
 
 /// Writes the pairs whose query leaf lies in r (see the order above) to out[0, capacity)

@@ -217,6 +217,12 @@ IMPACT_INLINE bool none(MaskN<N> m) {
 /// Bit i set where lane i is (N <= 32).
 template <uint32_t N>
 IMPACT_INLINE uint32_t bits(MaskN<N> m) {
+#if defined(__AVX512F__)
+  if constexpr (N == 16) {
+    const __m512i v = reinterpret_cast<__m512i>(m.v);
+    return static_cast<uint32_t>(_mm512_test_epi32_mask(v, v));
+  }
+#endif
 #if defined(__AVX__)
   if constexpr (N == 8) return static_cast<uint32_t>(_mm256_movemask_ps(reinterpret_cast<__m256>(m.v)));
 #endif

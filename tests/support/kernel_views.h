@@ -3,12 +3,16 @@
 // tests that drive host/ and kernels/ directly.
 #pragma once
 
+#include <gtest/gtest.h>
+
+#include <algorithm>
 #include <cstdint>
 
 #include "host/broadphase/query.h"
 #include "host/parallel.h"
 #include "kernels/broadphase/bounds.h"
 #include "kernels/broadphase/grid.h"
+#include "kernels/bvh/lbvh_traverse.h"
 #include "support/aabb_reference.h"
 #include "support/query_reference.h"
 
@@ -41,6 +45,26 @@ inline host::QueryBatch query_batch(const Queries& q) {
 inline const host::Executor& serial() {
   static const host::Executor e(Backend::kSerial, 1);
   return e;
+}
+
+/// The view's lane arrays hold exactly its leaves' bounds, and the padding past n
+/// (+inf mins, -inf maxes) overlaps nothing (kernels::LbvhLanes).
+inline void expect_lanes_mirror_leaves(const kernels::LbvhView& v) {
+  if (v.n == 0) return;
+  ASSERT_NE(v.lanes, nullptr);
+  ASSERT_EQ(v.lane_stride, kernels::lbvh_lane_stride(v.n));
+  ASSERT_GE(v.lane_stride, static_cast<size_t>(v.n) + 16);
+  for (size_t s = 0; s < v.lane_stride; ++s) {
+    float want[6] = {__builtin_inff(), __builtin_inff(), __builtin_inff(),
+                     -__builtin_inff(), -__builtin_inff(), -__builtin_inff()};
+    if (s < v.n) {
+      const kernels::SortedBox& l = v.leaves[s];
+      const float w[6] = {l.min_x, l.min_y, l.min_z, l.max_x, l.max_y, l.max_z};
+      std::copy(w, w + 6, want);
+    }
+    for (size_t k = 0; k < 6; ++k)
+      ASSERT_EQ(v.lanes[k * v.lane_stride + s], want[k]) << "leaf " << s << " lane array " << k;
+  }
 }
 
 }  // namespace impact::test

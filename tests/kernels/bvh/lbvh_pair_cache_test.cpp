@@ -63,6 +63,10 @@ bool contains(const A& outer, const B& inner) {
 // node contains both children (bounds may be loose, never short).
 void check_tree(const LbvhBroadPhase& bp, const Boxes& b, const std::string& what) {
   const kernels::LbvhView v = bp.view();
+  {
+    SCOPED_TRACE(what);
+    test::expect_lanes_mirror_leaves(v);  // grown fat leaves included
+  }
   for (uint32_t s = 0; s < v.n; ++s) {
     const uint32_t i = v.leaves[s].index;
     const kernels::SortedBox e{b.min_x[i], b.min_y[i], b.min_z[i], i, b.max_x[i], b.max_y[i], b.max_z[i], 0};

@@ -66,6 +66,7 @@ void check_tree(const LbvhBroadPhase& bp, const Boxes& boxes, const std::string&
   const uint32_t n = v.n;
   ASSERT_EQ(n, boxes.size());
   if (n == 0) return;
+  test::expect_lanes_mirror_leaves(v);
   std::vector<int> seen_box(n, 0);
   for (uint32_t s = 0; s < n; ++s) {
     const uint32_t i = bp.leaf_index()[s];
@@ -369,7 +370,10 @@ TEST(Lbvh, RefitChunkingsAndSeamsGiveTheSameNodes) {
     std::vector<kernels::LbvhNode> nodes(bp.view().nodes, bp.view().nodes + (n - 1));
     std::vector<kernels::SortedBox> leaves(n);
     const kernels::LbvhRefitIn in{bp.leaf_index(), bp.internal_parent(), bp.leaf_parent(), nullptr};
-    const kernels::LbvhRefitOut kout{nodes.data(), leaves.data(), nullptr, nullptr, nullptr};
+    const size_t stride = kernels::lbvh_lane_stride(n);
+    std::vector<float> lanes(6 * stride);
+    const kernels::LbvhRefitOut kout{nodes.data(), leaves.data(), nullptr, nullptr, nullptr,
+                                     {lanes.data(), stride}};
     for (int frame = 0; frame < 6; ++frame) {
       move(b, rng, side);
       IMPACT_ASSERT_OK(bp.refit(serial(), soa(b), filter_of(b), n, &out));
@@ -394,6 +398,9 @@ TEST(Lbvh, RefitChunkingsAndSeamsGiveTheSameNodes) {
         }
         ASSERT_EQ(0, std::memcmp(nodes.data(), v.nodes, nodes.size() * sizeof(kernels::LbvhNode)));
         ASSERT_EQ(0, std::memcmp(leaves.data(), v.leaves, n * sizeof(kernels::SortedBox)));
+        test::expect_lanes_mirror_leaves(v);
+        for (size_t k = 0; k < 6; ++k)
+          ASSERT_EQ(0, std::memcmp(lanes.data() + k * stride, v.lanes + k * stride, n * sizeof(float)));
       }
     }
   }
@@ -425,7 +432,8 @@ TEST(Lbvh, FusedBuildEqualsKarrasBuildPlusRefit) {
       kernels::lbvh_build(codes.data(), 32, n, {ref_nodes.data(), ref_ip.data(), ref_lp.data()}, {0, n - 1});
       const kernels::LbvhRefitIn rin{leaf_index.data(), ref_ip.data(), ref_lp.data(), nullptr};
       kernels::lbvh_refit(soa(b), kernels::PairFilter{}, rin,
-                          {ref_nodes.data(), ref_leaves.data(), nullptr, nullptr, nullptr}, n, {0, n});
+                          {ref_nodes.data(), ref_leaves.data(), nullptr, nullptr, nullptr, {nullptr, 0}}, n,
+                          {0, n});
       std::vector<kernels::SortedBox> packed(n);
       kernels::lbvh_pack_boxes(soa(b), packed.data(), {0, n});
       std::vector<std::vector<uint32_t>> cuts(4);
@@ -441,9 +449,12 @@ TEST(Lbvh, FusedBuildEqualsKarrasBuildPlusRefit) {
         std::vector<uint32_t> ip(n - 1, 12345u), lp(n, 12345u), slot(n, 0xffffffffu);
         std::vector<kernels::SortedBox> leaves(n);
         std::vector<kernels::LbvhBlocked> blocked(c.size());
+        const size_t stride = kernels::lbvh_lane_stride(n);
+        std::vector<float> lanes(6 * stride, 12345.0f);
         const kernels::LbvhFusedIn in{codes.data(), 32, leaf_index.data(), ci % 2 ? packed.data() : nullptr};
         const kernels::LbvhFusedOut out{{nodes.data(), ip.data(), lp.data()},
-                                        {nodes.data(), leaves.data(), nullptr, nullptr, nullptr},
+                                        {nodes.data(), leaves.data(), nullptr, nullptr, nullptr,
+                                         {lanes.data(), stride}},
                                         slot.data()};
         for (size_t k = c.size(); k-- > 0;)  // chunks in reverse: order must not matter
           kernels::lbvh_build_fused(soa(b), kernels::PairFilter{}, in, out, n,
@@ -454,6 +465,11 @@ TEST(Lbvh, FusedBuildEqualsKarrasBuildPlusRefit) {
         ASSERT_EQ(ip, ref_ip);
         ASSERT_EQ(lp, ref_lp);
         ASSERT_EQ(0, std::memcmp(leaves.data(), ref_leaves.data(), n * sizeof(kernels::SortedBox)));
+        for (uint32_t s = 0; s < n; ++s) {
+          const kernels::SortedBox& l = ref_leaves[s];
+          const float want[6] = {l.min_x, l.min_y, l.min_z, l.max_x, l.max_y, l.max_z};
+          for (size_t k = 0; k < 6; ++k) ASSERT_EQ(lanes[k * stride + s], want[k]) << "leaf " << s << " lane " << k;
+        }
       }
     }
   }
