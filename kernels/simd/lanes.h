@@ -90,8 +90,10 @@ struct FloatN {
   Raw v;
 
   FloatN() = default;
-  /// Broadcast (implicit, so literals mix with lanes: 0.5f * x).
-  IMPACT_INLINE FloatN(float s) : v(Raw{} + s) {}
+  /// Broadcast (implicit, so literals mix with lanes: 0.5f * x). Spelled s - 0, which
+  /// is s exactly (-0 included) and compiles to a bare broadcast; 0 + s would cost an
+  /// extra add per broadcast and turn -0 into +0.
+  IMPACT_INLINE FloatN(float s) : v(s - Raw{}) {}
   IMPACT_INLINE explicit FloatN(Raw r) : v(r) {}
 
   /// N contiguous floats from p (no alignment needed).
