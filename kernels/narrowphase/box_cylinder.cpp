@@ -789,7 +789,7 @@ void collide_box_cylinder(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA&
   if (cfg.path == KernelPath::kScalar)
     box_cylinder_range<simd::Float1>(a, b, out, r);
   else
-    box_cylinder_range<simd::FloatW>(a, b, out, r);
+    box_cylinder_range<simd::FloatP>(a, b, out, r);
 }
 
 }  // namespace impact::kernels

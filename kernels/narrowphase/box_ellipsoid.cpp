@@ -399,7 +399,7 @@ void collide_box_ellipsoid(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA
   if (cfg.path == KernelPath::kScalar) {
     box_ellipsoid_range<simd::Float1>(a, b, out, r);
   } else {
-    box_ellipsoid_range<simd::FloatW>(a, b, out, r);
+    box_ellipsoid_range<simd::FloatP>(a, b, out, r);
   }
 }
 

@@ -953,7 +953,7 @@ void collide_cylinder_cylinder(const LeafSoA& a, const LeafSoA& b, const Manifol
   if (cfg.path == KernelPath::kScalar)
     cylinder_cylinder_range<simd::Float1>(a, b, out, r);
   else
-    cylinder_cylinder_range<simd::FloatW>(a, b, out, r);
+    cylinder_cylinder_range<simd::FloatP>(a, b, out, r);
 }
 
 }  // namespace impact::kernels

@@ -360,7 +360,7 @@ void collide_cylinder_ellipsoid(const LeafSoA& a, const LeafSoA& b, const Manifo
   if (cfg.path == KernelPath::kScalar) {
     cylinder_ellipsoid_range<simd::Float1>(a, b, out, r);
   } else {
-    cylinder_ellipsoid_range<simd::FloatW>(a, b, out, r);
+    cylinder_ellipsoid_range<simd::FloatP>(a, b, out, r);
   }
 }
 

@@ -245,7 +245,7 @@ void collide_ellipsoid_ellipsoid(const LeafSoA& a, const LeafSoA& b, const Manif
   if (cfg.path == KernelPath::kScalar) {
     ellipsoid_ellipsoid_range<simd::Float1>(a, b, out, r);
   } else {
-    ellipsoid_ellipsoid_range<simd::FloatW>(a, b, out, r);
+    ellipsoid_ellipsoid_range<simd::FloatP>(a, b, out, r);
   }
 }
 

@@ -290,7 +290,7 @@ IMPACT_INLINE void scatter(const ManifoldSoA& out, const int32_t* index, uint32_
 
 /// Defines the PairKernel `name` over the lane template `block<F>(a, b, out, k)`
 /// writing P point slots: the one-lane scalar path for KernelPath::kScalar, the
-/// kSimdWidth-lane path otherwise.
+/// kPairWidth-lane path otherwise.
 #define IMPACT_LANE_KERNEL(name, block, P)                                                                  \
   void name(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out, Range r, const NarrowConfig& cfg) { \
     if (cfg.path == KernelPath::kScalar) {                                                                  \
@@ -299,9 +299,9 @@ IMPACT_INLINE void scatter(const ManifoldSoA& out, const int32_t* index, uint32_
             block<simd::Float1>(aa, bb, o, k);                                                              \
           });                                                                                               \
     } else {                                                                                                \
-      for_each_block<simd::FloatW, P>(                                                                      \
+      for_each_block<simd::FloatP, P>(                                                                      \
           a, b, out, r, [](const LeafSoA& aa, const LeafSoA& bb, const ManifoldSoA& o, uint32_t k) {        \
-            block<simd::FloatW>(aa, bb, o, k);                                                              \
+            block<simd::FloatP>(aa, bb, o, k);                                                              \
           });                                                                                               \
     }                                                                                                       \
   }

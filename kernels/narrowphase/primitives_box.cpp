@@ -75,8 +75,8 @@ using L4 = Lanes<F, 4>;
 /// (the SIMD path computes the SAT for every lane, then the costly face clipping only
 /// for these, W at a time: separated and edge lanes no longer ride along).
 struct FaceQueue {
-  static constexpr uint32_t kChunk = 32 * simd::kSimdWidth;
-  static constexpr uint32_t kCap = kChunk + simd::kSimdWidth;  // room to pad the last block
+  static constexpr uint32_t kChunk = 32 * simd::kPairWidth;
+  static constexpr uint32_t kCap = kChunk + simd::kPairWidth;  // room to pad the last block
   int32_t idx[kCap];
   float axis[kCap], best[kCap], nx[kCap], ny[kCap], nz[kCap];
   uint32_t n = 0;
@@ -660,11 +660,11 @@ IMPACT_INLINE void box_halfspace_block(const LeafSoA& a, const LeafSoA& b, const
 }  // namespace
 
 void collide_box_box(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out, Range r, const NarrowConfig& cfg) {
-  if (cfg.path == KernelPath::kScalar || simd::kSimdWidth == 1) {
+  if (cfg.path == KernelPath::kScalar || simd::kPairWidth == 1) {
     for_each_block<simd::Float1, 4>(a, b, out, r, [](const LeafSoA& aa, const LeafSoA& bb, const ManifoldSoA& o,
                                                      uint32_t k) { box_box_block<simd::Float1>(aa, bb, o, k); });
   } else {
-    box_box_compact<simd::FloatW>(a, b, out, r);
+    box_box_compact<simd::FloatP>(a, b, out, r);
   }
 }
 IMPACT_LANE_KERNEL(collide_box_halfspace, box_halfspace_block, 4)

@@ -1,7 +1,8 @@
 // The one SIMD vocabulary of kernels/: lanes of float, int32 and mask, and the verbs
 // kernels use on them. A kernel is written once as a template over a lane type `F`
-// (FloatN<N>) and instantiated twice: FloatW (kSimdWidth lanes, the SIMD path) and
-// Float1 (one plain float, the scalar reference path).
+// (FloatN<N>) and instantiated twice: FloatW (kSimdWidth lanes) or FloatP (kPairWidth
+// lanes, the one-pair-per-lane kernels), the SIMD path, and Float1 (one plain float,
+// the scalar reference path).
 //
 //   FloatN<N>  N floats           arithmetic + - * /, unary -, compare -> MaskN<N>
 //   MaskN<N>   N lane predicates  & | ^ ~, andnot, any / all / none
@@ -190,6 +191,12 @@ IMPACT_INLINE IntN<N> to_int(MaskN<N> m) {
 
 template <uint32_t N>
 IMPACT_INLINE bool any(MaskN<N> m) {
+#if defined(__AVX512F__)
+  if constexpr (N == 16) {
+    const __m512i v = reinterpret_cast<__m512i>(m.v);
+    return _mm512_test_epi32_mask(v, v) != 0;
+  }
+#endif
 #if defined(__AVX__)
   if constexpr (N == 8) return _mm256_movemask_ps(reinterpret_cast<__m256>(m.v)) != 0;
 #endif
@@ -202,6 +209,12 @@ IMPACT_INLINE bool any(MaskN<N> m) {
 }
 template <uint32_t N>
 IMPACT_INLINE bool all(MaskN<N> m) {
+#if defined(__AVX512F__)
+  if constexpr (N == 16) {
+    const __m512i v = reinterpret_cast<__m512i>(m.v);
+    return _mm512_test_epi32_mask(v, v) == 0xffff;
+  }
+#endif
 #if defined(__AVX__)
   if constexpr (N == 8) return _mm256_movemask_ps(reinterpret_cast<__m256>(m.v)) == 0xff;
 #endif
@@ -258,6 +271,9 @@ IMPACT_INLINE FloatN<N> max(FloatN<N> a, FloatN<N> b) {
 }
 template <uint32_t N>
 IMPACT_INLINE FloatN<N> sqrt(FloatN<N> a) {
+#if defined(__AVX512F__)
+  if constexpr (N == 16) return FloatN<N>(reinterpret_cast<typename FloatN<N>::Raw>(_mm512_maskz_sqrt_ps(0xffff, a.v)));
+#endif
 #if defined(__AVX__)
   if constexpr (N == 8) return FloatN<N>(reinterpret_cast<typename FloatN<N>::Raw>(_mm256_sqrt_ps(a.v)));
 #endif
@@ -278,6 +294,15 @@ IMPACT_INLINE FloatN<N> abs(FloatN<N> a) {
 /// of a candidate from an array of lanes.
 template <uint32_t N>
 IMPACT_INLINE FloatN<N> gather_lanes(const FloatN<N>* arr, IntN<N> idx) {
+#if defined(__AVX512F__)
+  if constexpr (N == 16) {
+    using I = typename IntN<N>::Raw;
+    const I lane = {0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12, 13, 14, 15};
+    const __m512i vi = reinterpret_cast<__m512i>(idx.v * 16 + lane);
+    return FloatN<N>(reinterpret_cast<typename FloatN<N>::Raw>(
+        _mm512_mask_i32gather_ps(_mm512_setzero_ps(), 0xffff, vi, reinterpret_cast<const float*>(arr), 4)));
+  }
+#endif
 #if defined(__AVX2__)
   if constexpr (N == 8) {
     const __m256i lane = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
@@ -300,6 +325,14 @@ IMPACT_INLINE FloatN<N> gather_lanes(const FloatN<N>* arr, IntN<N> idx) {
 /// the source is a fresh zero, which breaks that dependency.)
 template <uint32_t N>
 IMPACT_INLINE FloatN<N> gather(const float* base, IntN<N> idx) {
+#if defined(__AVX512F__)
+  if constexpr (N == 16) {
+    __mmask16 mask = 0xffff;
+    __asm__("" : "+k"(mask));
+    return FloatN<N>(reinterpret_cast<typename FloatN<N>::Raw>(
+        _mm512_mask_i32gather_ps(_mm512_setzero_ps(), mask, reinterpret_cast<__m512i>(idx.v), base, 4)));
+  }
+#endif
 #if defined(__AVX2__)
   if constexpr (N == 8) {
     __m256 mask = _mm256_castsi256_ps(_mm256_set1_epi32(-1));
@@ -528,6 +561,18 @@ IMPACT_INLINE float max_lowest_index(F s, F idx, float none, float* out_idx) {
 }
 
 using FloatW = FloatN<kSimdWidth>;
+
+/// Lanes of the kernels that put one pair per lane (sphere, capsule, box, cylinder,
+/// ellipsoid and triangle pairs): 16 where AVX-512F is enabled (one zmm register)
+/// unless IMPACT_PAIR_LANES8 is defined, else kSimdWidth. Kernels that walk one
+/// hull's features a vector at a time keep kSimdWidth (hull arrays are padded to
+/// it). Every verb is lane-wise, so a pair's bytes do not depend on the width.
+#if !defined(IMPACT_SIMD_SCALAR) && defined(__AVX512F__) && !defined(IMPACT_PAIR_LANES8)
+inline constexpr uint32_t kPairWidth = 16;
+#else
+inline constexpr uint32_t kPairWidth = kSimdWidth;
+#endif
+using FloatP = FloatN<kPairWidth>;
 using MaskW = MaskN<kSimdWidth>;
 using IntW = IntN<kSimdWidth>;
 using Float1 = FloatN<1>;
