@@ -58,7 +58,7 @@ inline constexpr uint32_t kLbvhMaxDepth = 96;
 /// array k at data + k * stride), for the pair walk's lane tests
 /// (lbvh_traverse.h). Whatever writes a leaf record writes its lanes too (build,
 /// refit, pair-cache growth), so they always mirror the leaves. Each array is
-/// padded past n (lbvh_lane_stride) so a 16-lane load at any leaf stays inside;
+/// padded past n (lbvh_lane_stride) so a cluster's load at any leaf stays inside;
 /// the padding is +inf / -inf (lbvh_lane_padding) and never overlaps anything.
 struct LbvhLanes {
   float* data;    ///< null: not kept (the leaf passes skip the writes)
@@ -75,10 +75,15 @@ struct LbvhLanes {
   }
 };
 
-/// Floats per lane array for n leaves: n + 16, rounded up to a multiple of 16.
-IMPACT_INLINE size_t lbvh_lane_stride(uint32_t n) { return (static_cast<size_t>(n) + 31) & ~size_t{15}; }
+/// Padding past n of each lane array: a whole query cluster's load (kLbvhCluster
+/// lanes, lbvh_traverse.h, which checks the bound) from any leaf stays inside.
+inline constexpr uint32_t kLbvhLanePad = 64;
+/// Floats per lane array for n leaves: n + kLbvhLanePad, rounded up to a multiple of 16.
+constexpr size_t lbvh_lane_stride(uint32_t n) {
+  return (static_cast<size_t>(n) + kLbvhLanePad + 15) & ~size_t{15};
+}
 
-/// Fills the padding [n, stride) of each array (serial, O(16)).
+/// Fills the padding [n, stride) of each array (serial, O(kLbvhLanePad)).
 IMPACT_INLINE void lbvh_lane_padding(LbvhLanes lanes, uint32_t n) {
   constexpr float inf = __builtin_inff();
   for (size_t s = n; s < lanes.stride; ++s)

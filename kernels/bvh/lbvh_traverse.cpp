@@ -16,6 +16,9 @@ constexpr uint32_t kW = simd::kSimdWidth;
 using F = simd::FloatN<kW>;
 constexpr uint32_t kVecs = kLbvhCluster / kW;
 static_assert(kLbvhCluster % kW == 0 && kLbvhCluster <= 64 && kLbvhTarget >= kLbvhCluster);
+// QueryCluster::load reads kLbvhCluster lanes from a cluster's first leaf, test_target
+// kW from any leaf of a target: both inside the lane arrays' padding.
+static_assert(kLbvhLanePad >= kLbvhCluster && kLbvhLanePad >= kW);
 using Bits = uint64_t;  // one bit per query-cluster lane
 
 template <class B>

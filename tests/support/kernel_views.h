@@ -53,7 +53,7 @@ inline void expect_lanes_mirror_leaves(const kernels::LbvhView& v) {
   if (v.n == 0) return;
   ASSERT_NE(v.lanes, nullptr);
   ASSERT_EQ(v.lane_stride, kernels::lbvh_lane_stride(v.n));
-  ASSERT_GE(v.lane_stride, static_cast<size_t>(v.n) + 16);
+  ASSERT_GE(v.lane_stride, static_cast<size_t>(v.n) + kernels::kLbvhCluster);
   for (size_t s = 0; s < v.lane_stride; ++s) {
     float want[6] = {__builtin_inff(), __builtin_inff(), __builtin_inff(),
                      -__builtin_inff(), -__builtin_inff(), -__builtin_inff()};
