@@ -565,8 +565,9 @@ using FloatW = FloatN<kSimdWidth>;
 /// Lanes of the kernels that put one pair per lane (sphere, capsule, box, cylinder,
 /// ellipsoid and triangle pairs): 16 where AVX-512F is enabled (one zmm register)
 /// unless IMPACT_PAIR_LANES8 is defined, else kSimdWidth. Kernels that walk one
-/// hull's features a vector at a time keep kSimdWidth (hull arrays are padded to
-/// it). Every verb is lane-wise, so a pair's bytes do not depend on the width.
+/// hull's features a vector at a time keep kSimdWidth (their walks take a per-item
+/// path below one vector's worth of features, which 16 lanes would send most small
+/// hulls to). Every verb is lane-wise, so a pair's bytes do not depend on the width.
 #if !defined(IMPACT_SIMD_SCALAR) && defined(__AVX512F__) && !defined(IMPACT_PAIR_LANES8)
 inline constexpr uint32_t kPairWidth = 16;
 #else
