@@ -7,12 +7,9 @@
 namespace impact::kernels {
 namespace {
 
-// The cluster's leaf tests are the walk's arithmetic: 16 lanes where AVX-512 has them.
-#if defined(__AVX512F__) && !defined(IMPACT_SIMD_SCALAR)
-constexpr uint32_t kW = 16;
-#else
-constexpr uint32_t kW = simd::kSimdWidth;
-#endif
+// The cluster's leaf tests are the walk's arithmetic: the widest lanes (16 with
+// AVX-512).
+constexpr uint32_t kW = simd::kWideWidth;
 using F = simd::FloatN<kW>;
 constexpr uint32_t kVecs = kLbvhCluster / kW;
 static_assert(kLbvhCluster % kW == 0 && kLbvhCluster <= 64 && kLbvhTarget >= kLbvhCluster);

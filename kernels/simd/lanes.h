@@ -562,16 +562,24 @@ IMPACT_INLINE float max_lowest_index(F s, F idx, float none, float* out_idx) {
 
 using FloatW = FloatN<kSimdWidth>;
 
-/// Lanes of the kernels that put one pair per lane (sphere, capsule, box, cylinder,
-/// ellipsoid and triangle pairs): 16 where AVX-512F is enabled (one zmm register)
-/// unless IMPACT_PAIR_LANES8 is defined, else kSimdWidth. Kernels that walk one
-/// hull's features a vector at a time keep kSimdWidth (their walks take a per-item
-/// path below one vector's worth of features, which 16 lanes would send most small
-/// hulls to). Every verb is lane-wise, so a pair's bytes do not depend on the width.
-#if !defined(IMPACT_SIMD_SCALAR) && defined(__AVX512F__) && !defined(IMPACT_PAIR_LANES8)
-inline constexpr uint32_t kPairWidth = 16;
+/// The widest lanes the target has: 16 where AVX-512F is enabled (one zmm register),
+/// else kSimdWidth. For passes whose wide vectors pay (the LBVH pair walk's box tests).
+#if !defined(IMPACT_SIMD_SCALAR) && defined(__AVX512F__)
+inline constexpr uint32_t kWideWidth = 16;
 #else
+inline constexpr uint32_t kWideWidth = kSimdWidth;
+#endif
+
+/// Lanes of the kernels that put one pair per lane (sphere, capsule, box, cylinder,
+/// ellipsoid and triangle pairs): kWideWidth unless IMPACT_PAIR_LANES8 is defined,
+/// else kSimdWidth. Kernels that walk one hull's features a vector at a time keep
+/// kSimdWidth (their walks take a per-item path below one vector's worth of features,
+/// which 16 lanes would send most small hulls to). Every verb is lane-wise, so a
+/// pair's bytes do not depend on the width.
+#if defined(IMPACT_PAIR_LANES8)
 inline constexpr uint32_t kPairWidth = kSimdWidth;
+#else
+inline constexpr uint32_t kPairWidth = kWideWidth;
 #endif
 using FloatP = FloatN<kPairWidth>;
 using MaskW = MaskN<kSimdWidth>;
