@@ -571,7 +571,8 @@ inline constexpr uint32_t kWideWidth = kSimdWidth;
 #endif
 
 /// Lanes of the kernels that put one pair per lane (sphere, capsule, box, cylinder,
-/// ellipsoid and triangle pairs): kWideWidth unless IMPACT_PAIR_LANES8 is defined,
+/// ellipsoid and triangle pairs, and hull-half-space, whose lanes each walk their own
+/// hull's vertices a vector at a time): kWideWidth unless IMPACT_PAIR_LANES8 is defined,
 /// else kSimdWidth. Kernels that walk one hull's features a vector at a time keep
 /// kSimdWidth (their walks take a per-item path below one vector's worth of features,
 /// which 16 lanes would send most small hulls to). Every verb is lane-wise, so a
