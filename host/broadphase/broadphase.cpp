@@ -202,9 +202,15 @@ void GridBroadPhase::build(const Executor& exec, kernels::AabbSoA boxes, kernels
 }
 
 Status GridBroadPhase::pairs(const Executor& exec, Buffer<kernels::Pair>* out) {
+  if (last_n_ < 2) {
+    out->clear();
+    return Status();
+  }
+  // self_pairs sizes *out itself (chunked_output): no clear first, so a frame with as
+  // many pairs as the last one zero-fills nothing before the copy overwrites it.
+  if (!hierarchical_) return self_pairs(exec, out);
   out->clear();
-  if (last_n_ < 2) return Status();
-  return hierarchical_ ? levels_pairs(exec, out) : self_pairs(exec, out);
+  return levels_pairs(exec, out);
 }
 
 Status GridBroadPhase::find_pairs(const Executor& exec, kernels::AabbSoA boxes,

@@ -234,9 +234,16 @@ Status BroadPhase::update(const AabbInput& boxes, const ExecConfig& exec) {
 Status BroadPhase::pairs(std::vector<BodyPair>* out, const ExecConfig& exec) {
   if (out == nullptr) return Status(StatusCode::kInvalidArgument, "pairs: out must not be null");
   BroadPhaseImpl& b = *impl_;
-  out->clear();
-  if (Status s = b.ready(exec); !s.ok()) return s;
-  if (Status s = b.stage.pairs(b.exec, &b.pairs); !s.ok()) return s;
+  // *out is cleared on failure and resized (not cleared first) on success: resizing
+  // to the last frame's size zero-fills nothing before the copy overwrites it.
+  if (Status s = b.ready(exec); !s.ok()) {
+    out->clear();
+    return s;
+  }
+  if (Status s = b.stage.pairs(b.exec, &b.pairs); !s.ok()) {
+    out->clear();
+    return s;
+  }
   // Same two uint32 fields (asserted below): copy the bytes, in parallel chunks.
   static_assert(sizeof(BodyPair) == sizeof(kernels::Pair) &&
                 offsetof(BodyPair, a) == offsetof(kernels::Pair, a) &&

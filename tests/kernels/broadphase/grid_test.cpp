@@ -379,6 +379,19 @@ TEST(GridBroadPhase, DensePairOrderIsTheDocumentedOrder) {
     const test::PairVec want = documented_order(*v, n);
     EXPECT_EQ(test::to_vec(pairs), want);
     test::expect_same_set(pairs, test::reference_pairs(b), b.size(), "grid");
+    // The kernel over ranges of any length, starting anywhere in a row (the dense
+    // pass walks its range row by row), concatenates to the same pairs.
+    for (uint32_t grain : {1u, 3u, 37u, 1000u}) {
+      std::vector<kernels::Pair> part(pairs.size() + 64);
+      uint64_t at = 0;
+      for (uint32_t lo = 0; lo < n; lo += grain) {
+        const uint32_t hi = std::min(n, lo + grain);
+        ASSERT_LE(at, pairs.size());
+        at += kernels::grid_find_pairs(*v, part.data() + at, part.size() - at, {lo, hi});
+      }
+      part.resize(at);
+      EXPECT_EQ(test::to_vec(part), want) << "ranges of " << grain << " slots";
+    }
     // A row range longer than the candidate list's run occurred.
     uint32_t longest = 0;
     for (uint32_t k = 0; k < v->params.bucket_count; ++k)
