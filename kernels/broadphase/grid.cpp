@@ -54,6 +54,26 @@ struct CandidateList {
   uint32_t count = 0;
 };
 
+// The pair pass's output: every candidate is stored, at out[k] while k < capacity and
+// into `sink` after; only a result advances k. A store that is not a result is
+// overwritten by the next one, so out[0, min(k, capacity)) holds exactly the results
+// (no data-dependent branch in the hot loop). put<true> skips the capacity select
+// where room(m) said the next m stores fit.
+struct PairSink {
+  Pair* out;
+  uint64_t capacity;
+  uint64_t k = 0;
+  Pair sink{};
+  IMPACT_INLINE bool room(uint32_t m) const { return k <= capacity && capacity - k >= m; }
+  template <bool kRoom>
+  IMPACT_INLINE void put(uint32_t a, uint32_t b, bool ok) {
+    Pair* dst = kRoom ? out + k : (k < capacity ? out + k : &sink);
+    *dst = Pair{a, b};
+    k += ok ? 1u : 0u;
+  }
+  IMPACT_INLINE void operator()(uint32_t a, uint32_t b, bool ok) { put<false>(a, b, ok); }
+};
+
 // Hashed grids: calls emit(lo, hi, ok) for every candidate of query slot s, in the
 // documented order; ok says whether the pair is a result (emit stores it either way,
 // so the hot loop has no data-dependent branch; see grid_find_pairs). The half
@@ -101,8 +121,8 @@ IMPACT_INLINE void visit_slot(const GridView& g, uint32_t s, Emit&& emit) {
 // are computed once per row, and a slot needs only its x cell (one conversion instead
 // of three; 2026-11-28: the 1M uniform frame ~79.3 -> ~74.5 ms, one thread). The
 // row ranges go through one CandidateList per slot.
-template <bool kFiltered, class Emit>
-IMPACT_INLINE void visit_dense_range(const GridView& g, Range r, Emit&& emit) {
+template <bool kFiltered>
+IMPACT_INLINE void visit_dense_range(const GridView& g, Range r, PairSink& emit) {
   if (r.begin >= r.end) return;
   const uint32_t* start = g.bucket_start;
   const int64_t dimx = g.params.dims[0], dimy = g.params.dims[1], dimz = g.params.dims[2];
@@ -135,15 +155,19 @@ IMPACT_INLINE void visit_dense_range(const GridView& g, Range r, Emit&& emit) {
       ma = g.mask[s];
       sa = g.is_static[s];
     }
-    auto test = [&](uint32_t t) {
+    auto test = [&]<bool kRoom>(uint32_t t) {
       const SortedBox& B = g.box[t];
       bool ok = sorted_boxes_overlap(A, B);
       if constexpr (kFiltered) ok = ok && pair_allowed(la, ma, sa, g.layer[t], g.mask[t], g.is_static[t]);
       const uint32_t ib = B.index;
-      emit(ia < ib ? ia : ib, ia < ib ? ib : ia, ok);
+      emit.put<kRoom>(ia < ib ? ia : ib, ia < ib ? ib : ia, ok);
     };
     auto flush = [&] {
-      for (uint32_t i = 0; i < list.count; ++i) test(list.slot[i]);
+      if (emit.room(list.count)) {
+        for (uint32_t i = 0; i < list.count; ++i) test.template operator()<true>(list.slot[i]);
+      } else {
+        for (uint32_t i = 0; i < list.count; ++i) test.template operator()<false>(list.slot[i]);
+      }
       list.count = 0;
     };
     auto add = [&](uint32_t t0, uint32_t t1) {
@@ -154,7 +178,7 @@ IMPACT_INLINE void visit_dense_range(const GridView& g, Range r, Emit&& emit) {
         list.count += m;
       } else {
         flush();
-        for (uint32_t t = t0; t < t1; ++t) test(t);
+        for (uint32_t t = t0; t < t1; ++t) test.template operator()<false>(t);
       }
     };
     const int64_t cx = axis_cell(A.min_x, g.params.origin[0], g.params.inv_cell, g.params.dims[0]);
@@ -270,16 +294,7 @@ void grid_sort_blocks(const GridParams& g, GridBlocks blocks, const uint32_t* IM
 }
 
 uint64_t grid_find_pairs(const GridView& g, Pair* IMPACT_RESTRICT out, uint64_t capacity, Range r) {
-  uint64_t k = 0;
-  // Every candidate is stored, at out[k] while k < capacity and into `sink` after;
-  // only a result advances k. A store that is not a result is overwritten by the
-  // next one, so out[0, min(k, capacity)) holds exactly the results.
-  Pair sink;
-  auto emit = [&](uint32_t a, uint32_t b, bool ok) {
-    Pair* dst = k < capacity ? out + k : &sink;
-    *dst = Pair{a, b};
-    k += ok ? 1u : 0u;
-  };
+  PairSink emit{out, capacity};
   dispatch(g, [&]<bool kF, bool kD>() {
     if constexpr (kD) {
       visit_dense_range<kF>(g, r, emit);
@@ -287,7 +302,7 @@ uint64_t grid_find_pairs(const GridView& g, Pair* IMPACT_RESTRICT out, uint64_t 
       for (uint32_t s = r.begin; s < r.end; ++s) visit_slot<kF>(g, s, emit);
     }
   });
-  return k;
+  return emit.k;
 }
 
 uint64_t grid_query_pairs(const GridView& g, const SortedBox* IMPACT_RESTRICT queries, PairFilter query_filter,

@@ -392,6 +392,15 @@ TEST(GridBroadPhase, DensePairOrderIsTheDocumentedOrder) {
       part.resize(at);
       EXPECT_EQ(test::to_vec(part), want) << "ranges of " << grain << " slots";
     }
+    // A short output: the full count comes back and the stored prefix is exact.
+    for (uint64_t cap : {uint64_t{0}, uint64_t{1}, uint64_t{5}, uint64_t{want.size() / 2}}) {
+      std::vector<kernels::Pair> part(cap + 1, kernels::Pair{0xdeadu, 0xbeefu});
+      EXPECT_EQ(kernels::grid_find_pairs(*v, part.data(), cap, {0, n}), want.size()) << "capacity " << cap;
+      EXPECT_TRUE(part[cap].a == 0xdeadu && part[cap].b == 0xbeefu) << "wrote past capacity " << cap;
+      part.resize(cap);
+      EXPECT_EQ(test::to_vec(part), test::PairVec(want.begin(), want.begin() + static_cast<ptrdiff_t>(cap)))
+          << "capacity " << cap;
+    }
     // A row range longer than the candidate list's run occurred.
     uint32_t longest = 0;
     for (uint32_t k = 0; k < v->params.bucket_count; ++k)
