@@ -71,33 +71,41 @@ struct PairSink {
     *dst = Pair{a, b};
     k += ok ? 1u : 0u;
   }
-  IMPACT_INLINE void operator()(uint32_t a, uint32_t b, bool ok) { put<false>(a, b, ok); }
 };
 
-// Hashed grids: calls emit(lo, hi, ok) for every candidate of query slot s, in the
-// documented order; ok says whether the pair is a result (emit stores it either way,
-// so the hot loop has no data-dependent branch; see grid_find_pairs). The half
-// neighbourhood as 5 row ranges: the own row from slot s + 1 to the end of cell
-// x + 1 (slots before s in the own cell met s already), then rows (dy, dz) = (1, 0),
-// (-1, 1), (0, 1), (1, 1) over x - 1 .. x + 1.
-template <bool kFiltered, class Emit>
-IMPACT_INLINE void visit_slot(const GridView& g, uint32_t s, Emit&& emit) {
-  const SortedBox A = g.box[s];
-  const uint32_t ia = A.index;
-  uint32_t la = 0, ma = 0;
-  uint8_t sa = 0;
-  if constexpr (kFiltered) {
-    la = g.layer[s];
-    ma = g.mask[s];
-    sa = g.is_static[s];
+// One query slot of the pair pass: its box and filter fields, and the test of a
+// candidate slot t, storing (lo, hi) with whether it is a result.
+template <bool kFiltered>
+struct SlotQuery {
+  SortedBox a;
+  uint32_t layer = 0, mask = 0;
+  uint8_t is_static = 0;
+  IMPACT_INLINE SlotQuery(const GridView& g, uint32_t s) : a(g.box[s]) {
+    if constexpr (kFiltered) {
+      layer = g.layer[s];
+      mask = g.mask[s];
+      is_static = g.is_static[s];
+    }
   }
-  auto test = [&](uint32_t t) {
-    const SortedBox& B = g.box[t];
-    bool ok = sorted_boxes_overlap(A, B);
-    if constexpr (kFiltered) ok = ok && pair_allowed(la, ma, sa, g.layer[t], g.mask[t], g.is_static[t]);
-    const uint32_t ib = B.index;
-    emit(ia < ib ? ia : ib, ia < ib ? ib : ia, ok);
-  };
+  template <bool kRoom>
+  IMPACT_INLINE void test(const GridView& g, uint32_t t, PairSink& out) const {
+    const SortedBox& b = g.box[t];
+    bool ok = sorted_boxes_overlap(a, b);
+    if constexpr (kFiltered) ok = ok && pair_allowed(layer, mask, is_static, g.layer[t], g.mask[t], g.is_static[t]);
+    const uint32_t ia = a.index, ib = b.index;
+    out.put<kRoom>(ia < ib ? ia : ib, ia < ib ? ib : ia, ok);
+  }
+};
+
+// Hashed grids: every candidate of query slot s into out (PairSink: stored either
+// way, counted if a result, so the hot loop has no data-dependent branch), in the
+// documented order. The half neighbourhood as 5 row ranges: the own row from slot
+// s + 1 to the end of cell x + 1 (slots before s in the own cell met s already), then
+// rows (dy, dz) = (1, 0), (-1, 1), (0, 1), (1, 1) over x - 1 .. x + 1.
+template <bool kFiltered>
+IMPACT_INLINE void visit_slot(const GridView& g, uint32_t s, PairSink& out) {
+  const SlotQuery<kFiltered> q(g, s);
+  auto test = [&](uint32_t t) { q.template test<false>(g, t, out); };
   const uint64_t cell = g.cell[s];
   const int64_t cx = static_cast<int64_t>(cell & kAxisMask);
   const int64_t cy = static_cast<int64_t>((cell >> kGridAxisBits) & kAxisMask);
@@ -122,7 +130,7 @@ IMPACT_INLINE void visit_slot(const GridView& g, uint32_t s, Emit&& emit) {
 // of three; 2026-11-28: the 1M uniform frame ~79.3 -> ~74.5 ms, one thread). The
 // row ranges go through one CandidateList per slot.
 template <bool kFiltered>
-IMPACT_INLINE void visit_dense_range(const GridView& g, Range r, PairSink& emit) {
+IMPACT_INLINE void visit_dense_range(const GridView& g, Range r, PairSink& out) {
   if (r.begin >= r.end) return;
   const uint32_t* start = g.bucket_start;
   const int64_t dimx = g.params.dims[0], dimy = g.params.dims[1], dimz = g.params.dims[2];
@@ -133,7 +141,8 @@ IMPACT_INLINE void visit_dense_range(const GridView& g, Range r, PairSink& emit)
   uint32_t row_end = 0;    // first slot past the current row
   CandidateList list;
   for (uint32_t s = r.begin; s < r.end; ++s) {
-    const SortedBox A = g.box[s];
+    const SlotQuery<kFiltered> q(g, s);
+    const SortedBox& A = q.a;
     if (s >= row_end) {  // the first slot of r, or the first of a later row
       const int64_t cy = axis_cell(A.min_y, g.params.origin[1], g.params.inv_cell, g.params.dims[1]);
       const int64_t cz = axis_cell(A.min_z, g.params.origin[2], g.params.inv_cell, g.params.dims[2]);
@@ -147,26 +156,11 @@ IMPACT_INLINE void visit_dense_range(const GridView& g, Range r, PairSink& emit)
         base[i] = static_cast<uint64_t>(dimx) * (static_cast<uint64_t>(ny) + static_cast<uint64_t>(dimy) * nz);
       }
     }
-    const uint32_t ia = A.index;
-    uint32_t la = 0, ma = 0;
-    uint8_t sa = 0;
-    if constexpr (kFiltered) {
-      la = g.layer[s];
-      ma = g.mask[s];
-      sa = g.is_static[s];
-    }
-    auto test = [&]<bool kRoom>(uint32_t t) {
-      const SortedBox& B = g.box[t];
-      bool ok = sorted_boxes_overlap(A, B);
-      if constexpr (kFiltered) ok = ok && pair_allowed(la, ma, sa, g.layer[t], g.mask[t], g.is_static[t]);
-      const uint32_t ib = B.index;
-      emit.put<kRoom>(ia < ib ? ia : ib, ia < ib ? ib : ia, ok);
-    };
     auto flush = [&] {
-      if (emit.room(list.count)) {
-        for (uint32_t i = 0; i < list.count; ++i) test.template operator()<true>(list.slot[i]);
+      if (out.room(list.count)) {
+        for (uint32_t i = 0; i < list.count; ++i) q.template test<true>(g, list.slot[i], out);
       } else {
-        for (uint32_t i = 0; i < list.count; ++i) test.template operator()<false>(list.slot[i]);
+        for (uint32_t i = 0; i < list.count; ++i) q.template test<false>(g, list.slot[i], out);
       }
       list.count = 0;
     };
@@ -178,7 +172,7 @@ IMPACT_INLINE void visit_dense_range(const GridView& g, Range r, PairSink& emit)
         list.count += m;
       } else {
         flush();
-        for (uint32_t t = t0; t < t1; ++t) test.template operator()<false>(t);
+        for (uint32_t t = t0; t < t1; ++t) q.template test<false>(g, t, out);
       }
     };
     const int64_t cx = axis_cell(A.min_x, g.params.origin[0], g.params.inv_cell, g.params.dims[0]);
@@ -294,15 +288,15 @@ void grid_sort_blocks(const GridParams& g, GridBlocks blocks, const uint32_t* IM
 }
 
 uint64_t grid_find_pairs(const GridView& g, Pair* IMPACT_RESTRICT out, uint64_t capacity, Range r) {
-  PairSink emit{out, capacity};
+  PairSink sink{out, capacity};
   dispatch(g, [&]<bool kF, bool kD>() {
     if constexpr (kD) {
-      visit_dense_range<kF>(g, r, emit);
+      visit_dense_range<kF>(g, r, sink);
     } else {
-      for (uint32_t s = r.begin; s < r.end; ++s) visit_slot<kF>(g, s, emit);
+      for (uint32_t s = r.begin; s < r.end; ++s) visit_slot<kF>(g, s, sink);
     }
   });
-  return emit.k;
+  return sink.k;
 }
 
 uint64_t grid_query_pairs(const GridView& g, const SortedBox* IMPACT_RESTRICT queries, PairFilter query_filter,
