@@ -59,7 +59,7 @@
 //  GJK / EPA lane (collide_convex_lane).
 // Inputs: lanes per leaf.h (finite, radius > 0, half length >= 0, unit axes, R
 // orthonormal), hulls as HullStore builds them (unit outward face normals,
-// counter-clockwise polygons, edge adjacency padded to a multiple of 8).
+// counter-clockwise polygons, edge adjacency padded to a multiple of kHullEdgePad).
 // Precision: plane distances and the SAT axes are float (~1e-7 of the local
 // coordinates), the chosen edge distance is exact in double for the float inputs; depth
 // and normal are within ~1e-6 of the coordinates (tested against a double reference at
@@ -103,6 +103,8 @@ namespace {
 using cvx::V3;
 using simd::FloatW;
 using simd::kSimdWidth;
+// The edge walks (nearest_edge, sat_edges) load whole blocks of the padded edge list.
+static_assert(kHullEdgePad % kSimdWidth == 0, "the edge walks need whole padded blocks");
 using namespace hull_scan;  // NOLINT: the hull kernels' shared passes
 
 /// SAT tie rule (as capsule-box): an edge axis wins over the best face only when it
@@ -413,7 +415,7 @@ IMPACT_INLINE SegEdge nearest_edge(const HullView& h, uint32_t ab, uint32_t ae, 
   float kept[kKeep], kept_tau[kKeep];
   const bool keep = ae - ab <= kKeep;
   F m(INFINITY);
-  // The edge list is padded to a multiple of 8 (HullView): whole blocks.
+  // The edge list is padded to a multiple of kHullEdgePad (HullView): whole blocks.
   for (uint32_t i = ab; i < ae; i += kSimdWidth) {
     F tau;
     const F d2 = edge_seg_dist2(h, i, cw, uw, H, &tau);

@@ -363,7 +363,8 @@ bool convex_ellipsoid_pair(const LeafSoA& A, const LeafSoA& B, const ManifoldSoA
     const F vfloor = ellip::level_floor(bestv, am);
     uint32_t ne = 0;
     for (uint32_t i = 0; i < p.na; i += W) {
-      // The adjacency list is padded to a multiple of 8 (W divides 8).
+      // The adjacency list is padded to a multiple of kHullEdgePad (W divides it).
+      static_assert(kHullEdgePad % W == 0, "the edge walk needs whole padded blocks");
       const Int i0 = Int::load(reinterpret_cast<const int32_t*>(h.ev0 + p.a0 + i));
       const Int i1 = Int::load(reinterpret_cast<const int32_t*>(h.ev1 + p.a0 + i));
       const V3<F> P{simd::gather(scratch.yx, i0), simd::gather(scratch.yy, i0), simd::gather(scratch.yz, i0)};

@@ -60,7 +60,8 @@
 //     hull face) the middle of the part of that feature, moved by depth along n, that
 //     lies within rounding of every face plane (where it touches the hull).
 // Inputs: lanes per leaf.h (finite, R orthonormal), hulls as HullStore builds them
-// (unit outward face normals, counter-clockwise polygons, edge adjacency padded to 8).
+// (unit outward face normals, counter-clockwise polygons, edge adjacency padded to
+// kHullEdgePad).
 // Hulls without faces or edge adjacency in HullView go through GJK / EPA (this lane).
 // Degenerate triangles: the set of points is what counts, as for GJK / EPA. A collinear
 // triangle (or two coincident vertices) is a segment: the hull faces and hull edge x
@@ -278,7 +279,7 @@ struct EdgeBest {
   uint32_t sep_edge = 0, sep_tri_edge = 0;
 };
 
-/// The edge axes: every hull edge (adjacency list [0, ne), padded to a multiple of 8)
+/// The edge axes: every hull edge (adjacency list [0, ne), padded to kHullEdgePad)
 /// against the triangle's three edges, W hull edges per step. A pair (a, j) is a
 /// candidate when the great circle perpendicular to triangle edge f_j crosses hull edge
 /// a's normal arc (the arc from bisector m within angle theta: the arc's two ends lie
@@ -303,6 +304,7 @@ IMPACT_INLINE EdgeBest edge_pass(const HullView& h, uint32_t eb, uint32_t ne, ui
                                  float rs, float thr, bool stop, bool* stopped) {
   using I = typename F::Int;
   constexpr uint32_t W = F::kWidth;
+  static_assert(kHullEdgePad % W == 0, "the edge walk loads whole blocks of the padded edge list");
   const F zero(0.0f), one(1.0f), skip(kEdgeSkipSq), RS(rs), TH(thr), step(static_cast<float>(4 * W));
   const F nx(T.nraw.x), ny(T.nraw.y), nz(T.nraw.z);
   const F f0x(T.f[0].x), f0y(T.f[0].y), f0z(T.f[0].z), f1x(T.f[1].x), f1y(T.f[1].y), f1z(T.f[1].z);

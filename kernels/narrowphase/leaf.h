@@ -77,6 +77,13 @@ struct ManifoldSoA {
 /// outside; its plane is { x : fn.x <= fd } with fn unit and outward. Edge
 /// directions (unit, one per parallel class; e*) are hints for the tests' reference;
 /// SAT (sat.cpp) reads the per-edge adjacency (adj_*, below).
+/// A hull's edge adjacency list (HullView adj_*) is padded to a multiple of this with
+/// copies of its last edge, so the kernels that walk the edges a vector at a time need
+/// no tail. It is a contract between the host's HullStore and those kernels: each one
+/// static_asserts that its vector width divides it (a wider walk would read past the
+/// hull's list into the next hull's, or past the arrays).
+inline constexpr uint32_t kHullEdgePad = 8;
+
 struct HullView {
   const uint32_t* vert_begin;       // [h], [h + 1]
   const float* vx;
@@ -101,7 +108,7 @@ struct HullView {
   // the angle between them: the edge's normal cone lies within that angle of em.
   // ep = vertex ev0 (local), ed = vertex ev1 - vertex ev0 (the float difference), next
   // to the rest for contiguous SIMD loads (no gather of the far end). A hull's edge list
-  // is padded to a multiple of 8 with copies of its last edge.
+  // is padded to a multiple of kHullEdgePad with copies of its last edge.
   const uint32_t* adj_begin;        // [h], [h + 1]
   const uint32_t* ev0;
   const uint32_t* ev1;
