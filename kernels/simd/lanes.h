@@ -575,8 +575,9 @@ inline constexpr uint32_t kWideWidth = kSimdWidth;
 /// hull's vertices a vector at a time): kWideWidth unless IMPACT_PAIR_LANES8 is defined,
 /// else kSimdWidth. Kernels that walk one hull's features a vector at a time keep
 /// kSimdWidth (their walks take a per-item path below one vector's worth of features,
-/// which 16 lanes would send most small hulls to). Every verb is lane-wise, so a
-/// pair's bytes do not depend on the width.
+/// which 16 lanes would send most small hulls to; and on 24-vertex hulls with the edges
+/// padded to 16 they measured 0.79-1.02x: docs/narrowphase.md). Every verb is
+/// lane-wise, so a pair's bytes do not depend on the width.
 #if defined(IMPACT_PAIR_LANES8)
 inline constexpr uint32_t kPairWidth = kSimdWidth;
 #else
