@@ -66,12 +66,16 @@ Status LbvhBroadPhase::rebuild(const Executor& exec, kernels::AabbSoA boxes, ker
   // 2. Keys, sorted. 30-bit: code << 32 | index, sorted on [32, 62). 63-bit: code with
   //    the index as value, sorted on [0, 63). Either way the sorted codes are in keys_
   //    and the build reads them as keys_ >> shift.
+  //    Outside the pair cache's mode the same pass packs the boxes' records for the
+  //    build's gather (one read of the bounds).
   uint64_t* keys = scratch(keys_, n);
   uint32_t* index = scratch(leaf_index_, n);
+  kernels::SortedBox* packed_boxes = cache_mode() ? nullptr : scratch(packed_, n);
   uint32_t shift = 0;
   if (bits == 30) {
     exec.for_each_chunk(n, kKeyGrain, [&](uint32_t b, uint32_t e, uint32_t) {
-      kernels::morton_keys30(mp, boxes, keys, {b, e});
+      if (packed_boxes) kernels::morton_keys30_packed(mp, boxes, keys, packed_boxes, {b, e});
+      else kernels::morton_keys30(mp, boxes, keys, {b, e});
     });
     sorter_.sort(exec, keys, n, 32, 62);
     exec.for_each_chunk(n, kKeyGrain, [&](uint32_t b, uint32_t e, uint32_t) {
@@ -80,7 +84,8 @@ Status LbvhBroadPhase::rebuild(const Executor& exec, kernels::AabbSoA boxes, ker
     shift = 32;
   } else {
     exec.for_each_chunk(n, kKeyGrain, [&](uint32_t b, uint32_t e, uint32_t) {
-      kernels::morton_keys63(mp, boxes, keys, index, {b, e});
+      if (packed_boxes) kernels::morton_keys63_packed(mp, boxes, keys, index, packed_boxes, {b, e});
+      else kernels::morton_keys63(mp, boxes, keys, index, {b, e});
     });
     sorter_.sort_kv(exec, keys, index, n, 0, 63);
   }
@@ -97,7 +102,7 @@ Status LbvhBroadPhase::rebuild(const Executor& exec, kernels::AabbSoA boxes, ker
     });
     packed = fat;
   } else {
-    packed = pack(exec, boxes, n);
+    packed = packed_boxes;
   }
   const kernels::LbvhFusedIn in{keys, shift, index, packed};
   const kernels::LbvhFusedOut out{

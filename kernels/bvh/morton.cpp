@@ -1,5 +1,7 @@
 #include "kernels/bvh/morton.h"
 
+#include "kernels/bvh/lbvh_refit.h"
+
 namespace impact::kernels {
 namespace {
 
@@ -63,7 +65,12 @@ uint32_t morton30(uint32_t x, uint32_t y, uint32_t z) { return interleave30(x, y
 
 uint64_t morton63(uint64_t x, uint64_t y, uint64_t z) { return interleave63(x, y, z); }
 
-void morton_keys30(const MortonParams& p, AabbSoA b, uint64_t* IMPACT_RESTRICT out_keys, Range r) {
+namespace {
+
+// The key loops, optionally writing each box's packed record as well.
+template <bool kPack>
+IMPACT_INLINE void keys30(const MortonParams& p, AabbSoA b, uint64_t* IMPACT_RESTRICT out_keys,
+                          SortedBox* IMPACT_RESTRICT out_packed, Range r) {
   IMPACT_ASSERT(p.bits_per_axis == 10);
   constexpr uint32_t kMax = (1u << 10) - 1;
   for (uint32_t i = r.begin; i < r.end; ++i) {
@@ -71,11 +78,13 @@ void morton_keys30(const MortonParams& p, AabbSoA b, uint64_t* IMPACT_RESTRICT o
     const uint32_t y = axis_cell(b.min_y[i], b.max_y[i], p.origin[1], p.scale[1], kMax);
     const uint32_t z = axis_cell(b.min_z[i], b.max_z[i], p.origin[2], p.scale[2], kMax);
     out_keys[i] = (static_cast<uint64_t>(interleave30(x, y, z)) << 32) | i;
+    if constexpr (kPack) out_packed[i] = pack(b, i);
   }
 }
 
-void morton_keys63(const MortonParams& p, AabbSoA b, uint64_t* IMPACT_RESTRICT out_codes,
-                   uint32_t* IMPACT_RESTRICT out_values, Range r) {
+template <bool kPack>
+IMPACT_INLINE void keys63(const MortonParams& p, AabbSoA b, uint64_t* IMPACT_RESTRICT out_codes,
+                          uint32_t* IMPACT_RESTRICT out_values, SortedBox* IMPACT_RESTRICT out_packed, Range r) {
   IMPACT_ASSERT(p.bits_per_axis == 21);
   constexpr uint32_t kMax = (1u << 21) - 1;
   for (uint32_t i = r.begin; i < r.end; ++i) {
@@ -84,7 +93,29 @@ void morton_keys63(const MortonParams& p, AabbSoA b, uint64_t* IMPACT_RESTRICT o
     const uint32_t z = axis_cell(b.min_z[i], b.max_z[i], p.origin[2], p.scale[2], kMax);
     out_codes[i] = interleave63(x, y, z);
     out_values[i] = i;
+    if constexpr (kPack) out_packed[i] = pack(b, i);
   }
+}
+
+}  // namespace
+
+void morton_keys30(const MortonParams& p, AabbSoA b, uint64_t* IMPACT_RESTRICT out_keys, Range r) {
+  keys30<false>(p, b, out_keys, nullptr, r);
+}
+
+void morton_keys63(const MortonParams& p, AabbSoA b, uint64_t* IMPACT_RESTRICT out_codes,
+                   uint32_t* IMPACT_RESTRICT out_values, Range r) {
+  keys63<false>(p, b, out_codes, out_values, nullptr, r);
+}
+
+void morton_keys30_packed(const MortonParams& p, AabbSoA b, uint64_t* IMPACT_RESTRICT out_keys,
+                          SortedBox* IMPACT_RESTRICT out_packed, Range r) {
+  keys30<true>(p, b, out_keys, out_packed, r);
+}
+
+void morton_keys63_packed(const MortonParams& p, AabbSoA b, uint64_t* IMPACT_RESTRICT out_codes,
+                          uint32_t* IMPACT_RESTRICT out_values, SortedBox* IMPACT_RESTRICT out_packed, Range r) {
+  keys63<true>(p, b, out_codes, out_values, out_packed, r);
 }
 
 void morton_split_keys(const uint64_t* IMPACT_RESTRICT sorted_keys, uint32_t* IMPACT_RESTRICT out_index,

@@ -27,6 +27,7 @@
 #pragma once
 
 #include "kernels/broadphase/bounds.h"
+#include "kernels/broadphase/grid.h"
 #include "kernels/common/kernel.h"
 
 namespace impact::kernels {
@@ -52,6 +53,14 @@ void morton_keys30(const MortonParams& p, AabbSoA boxes, uint64_t* IMPACT_RESTRI
 /// out_codes[i] = morton63(centroid cell of box i), out_values[i] = i.  (bits_per_axis == 21)
 void morton_keys63(const MortonParams& p, AabbSoA boxes, uint64_t* IMPACT_RESTRICT out_codes,
                    uint32_t* IMPACT_RESTRICT out_values, Range r);
+
+/// morton_keys30 / morton_keys63 that also write out_packed[i] = box i as the LBVH's
+/// 32-byte leaf record (lbvh_refit.h pack: index i, spare word 0): the LBVH build's
+/// keys and its gather source from one read of the six bound arrays.
+void morton_keys30_packed(const MortonParams& p, AabbSoA boxes, uint64_t* IMPACT_RESTRICT out_keys,
+                          SortedBox* IMPACT_RESTRICT out_packed, Range r);
+void morton_keys63_packed(const MortonParams& p, AabbSoA boxes, uint64_t* IMPACT_RESTRICT out_codes,
+                          uint32_t* IMPACT_RESTRICT out_values, SortedBox* IMPACT_RESTRICT out_packed, Range r);
 
 /// out_index[s] = low 32 bits of sorted_keys[s] (the original box index).
 void morton_split_keys(const uint64_t* IMPACT_RESTRICT sorted_keys, uint32_t* IMPACT_RESTRICT out_index,

@@ -209,6 +209,39 @@ TEST(LbvhMorton, KeysQuantiseInDoubleFarFromOrigin) {
   EXPECT_EQ(values[1], 1u);
 }
 
+TEST(LbvhMorton, PackedKeysEqualKeysAndRecords) {
+  // The build's fused pass: the same keys as the plain loops, and each box's record.
+  std::mt19937 rng(77);
+  std::uniform_real_distribution<float> pos(-50.0f, 50.0f), half(0.0f, 2.0f);
+  Boxes b;
+  for (int i = 0; i < 1000; ++i) b.add(pos(rng), pos(rng), pos(rng), half(rng), half(rng), half(rng));
+  const float lo[3] = {-52, -52, -52}, hi[3] = {52, 52, 52};
+  const uint32_t n = static_cast<uint32_t>(b.size());
+  for (uint32_t bits : {10u, 21u}) {
+    const kernels::MortonParams p = kernels::morton_params(lo, hi, bits);
+    std::vector<uint64_t> want(n), got(n, 1);
+    std::vector<uint32_t> want_v(n), got_v(n, 7);
+    std::vector<kernels::SortedBox> packed(n);
+    for (const kernels::Range r : {kernels::Range{0, 333}, kernels::Range{333, n}}) {
+      if (bits == 10) {
+        kernels::morton_keys30(p, soa(b), want.data(), r);
+        kernels::morton_keys30_packed(p, soa(b), got.data(), packed.data(), r);
+      } else {
+        kernels::morton_keys63(p, soa(b), want.data(), want_v.data(), r);
+        kernels::morton_keys63_packed(p, soa(b), got.data(), got_v.data(), packed.data(), r);
+      }
+    }
+    EXPECT_EQ(got, want) << bits << " bits per axis";
+    if (bits == 21) {
+      EXPECT_EQ(got_v, want_v);
+    }
+    for (uint32_t i = 0; i < n; ++i) {
+      const kernels::SortedBox w = kernels::pack(soa(b), i);
+      ASSERT_EQ(std::memcmp(&packed[i], &w, sizeof(w)), 0) << "record " << i;
+    }
+  }
+}
+
 TEST(LbvhMorton, BitsRule) {
   kernels::BoundsSummary s{{0, 0, 0}, {100, 100, 100}, 1.0f};
   EXPECT_EQ(host::choose_morton_bits(s, 1000), 30u);
