@@ -255,7 +255,7 @@ void grid_scatter_blocks(GridBlocks blocks, AabbSoA boxes, PairFilter filter, co
       const float* rows[8] = {boxes.min_x + i, boxes.min_y + i, boxes.min_z + i,
                               reinterpret_cast<const float*>(id), boxes.max_x + i, boxes.max_y + i,
                               boxes.max_z + i, reinterpret_cast<const float*>(bucket + i)};
-      simd::FloatW rec[8];
+      simd::FloatN<8> rec[8];
       simd::load_transposed<8>(rows, rec);
       for (uint32_t k = 0; k < 8; ++k) {
         const uint32_t slot = io_offsets[bucket[i + k] >> blocks.low_bits]++;
