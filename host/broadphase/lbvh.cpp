@@ -93,7 +93,7 @@ Status LbvhBroadPhase::rebuild(const Executor& exec, kernels::AabbSoA boxes, ker
   // 3. Hierarchy and bounds in one pass (lbvh_build_fused.h): chunks in parallel, then
   //    the chunk seams in order.
   filtered_ = filter.layer != nullptr;
-  const kernels::SortedBox* packed = nullptr;
+  const kernels::SortedBox* packed = packed_boxes;  // null in the pair cache's mode
   if (cache_mode()) {  // the tree over the fat boxes (lbvh_pair_cache.h)
     margin_ = fat_margin(sum);
     kernels::SortedBox* fat = scratch(fat_, n);
@@ -101,8 +101,6 @@ Status LbvhBroadPhase::rebuild(const Executor& exec, kernels::AabbSoA boxes, ker
       kernels::lbvh_pack_fat(boxes, margin_, fat, {b, e});
     });
     packed = fat;
-  } else {
-    packed = packed_boxes;
   }
   const kernels::LbvhFusedIn in{keys, shift, index, packed};
   const kernels::LbvhFusedOut out{

@@ -45,8 +45,8 @@ IMPACT_INLINE void scan_row(const GridView& g, int64_t ny, int64_t nz, int64_t l
 
 // Candidate slots of one query slot, in visiting order. Dense grids
 // (visit_dense_range) collect the short slot ranges of the 5 rows into one list with
-// fixed-width stores and test them in one loop: one hard-to-predict loop exit per query instead of one per row
-// (uniform scenes hold about 1.4 candidates per row range). A range longer than
+// fixed-width stores and test them in one loop: one hard-to-predict loop exit per
+// query instead of one per row (uniform scenes hold about 1.4 candidates per row range). A range longer than
 // kRun is tested in place after the list so far, which keeps the order.
 struct CandidateList {
   static constexpr uint32_t kRun = 8;
@@ -92,7 +92,8 @@ struct SlotQuery {
   IMPACT_INLINE void test(const GridView& g, uint32_t t, PairSink& out) const {
     const SortedBox& b = g.box[t];
     bool ok = sorted_boxes_overlap(a, b);
-    if constexpr (kFiltered) ok = ok && pair_allowed(layer, mask, is_static, g.layer[t], g.mask[t], g.is_static[t]);
+    if constexpr (kFiltered)
+      ok = ok && pair_allowed(layer, mask, is_static, g.layer[t], g.mask[t], g.is_static[t]);
     const uint32_t ia = a.index, ib = b.index;
     out.put<kRoom>(ia < ib ? ia : ib, ia < ib ? ib : ia, ok);
   }
@@ -154,7 +155,8 @@ IMPACT_INLINE void visit_dense_range(const GridView& g, Range r, PairSink& out) 
         const int64_t ny = cy + kRows[i][0], nz = cz + kRows[i][1];
         if (ny < 0 || ny >= dimy || nz >= dimz) continue;
         rows |= 1u << i;
-        base[i] = static_cast<uint64_t>(dimx) * (static_cast<uint64_t>(ny) + static_cast<uint64_t>(dimy) * nz);
+        base[i] =
+            static_cast<uint64_t>(dimx) * (static_cast<uint64_t>(ny) + static_cast<uint64_t>(dimy) * nz);
       }
     }
     auto flush = [&] {
@@ -242,6 +244,9 @@ void grid_scatter_blocks(GridBlocks blocks, AabbSoA boxes, PairFilter filter, co
                          const uint32_t* IMPACT_RESTRICT bucket, uint32_t* IMPACT_RESTRICT io_offsets,
                          SortedBox* IMPACT_RESTRICT out_box, FilterRecord* IMPACT_RESTRICT out_filter,
                          Range r) {
+  auto put_filter = [&](uint32_t slot, uint32_t k) {
+    if (out_filter) out_filter[slot] = FilterRecord{filter.layer[k], filter.mask[k], filter.is_static[k], 0u};
+  };
   uint32_t i = r.begin;
   if constexpr (simd::kSimdWidth == 8) {
     // Eight boxes at a time: their records by one 8 x 8 transpose of the eight source
@@ -260,8 +265,7 @@ void grid_scatter_blocks(GridBlocks blocks, AabbSoA boxes, PairFilter filter, co
       for (uint32_t k = 0; k < 8; ++k) {
         const uint32_t slot = io_offsets[bucket[i + k] >> blocks.low_bits]++;
         rec[k].store(reinterpret_cast<float*>(out_box + slot));
-        if (out_filter)
-          out_filter[slot] = FilterRecord{filter.layer[i + k], filter.mask[i + k], filter.is_static[i + k], 0u};
+        put_filter(slot, i + k);
       }
     }
   }
@@ -271,7 +275,7 @@ void grid_scatter_blocks(GridBlocks blocks, AabbSoA boxes, PairFilter filter, co
     const uint32_t id = original_index ? original_index[i] : i;
     out_box[slot] = SortedBox{boxes.min_x[i], boxes.min_y[i], boxes.min_z[i], id,
                               boxes.max_x[i], boxes.max_y[i], boxes.max_z[i], b};
-    if (out_filter) out_filter[slot] = FilterRecord{filter.layer[i], filter.mask[i], filter.is_static[i], 0u};
+    put_filter(slot, i);
   }
 }
 

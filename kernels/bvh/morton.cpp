@@ -84,7 +84,8 @@ IMPACT_INLINE void keys30(const MortonParams& p, AabbSoA b, uint64_t* IMPACT_RES
 
 template <bool kPack>
 IMPACT_INLINE void keys63(const MortonParams& p, AabbSoA b, uint64_t* IMPACT_RESTRICT out_codes,
-                          uint32_t* IMPACT_RESTRICT out_values, SortedBox* IMPACT_RESTRICT out_packed, Range r) {
+                          uint32_t* IMPACT_RESTRICT out_values, SortedBox* IMPACT_RESTRICT out_packed,
+                          Range r) {
   IMPACT_ASSERT(p.bits_per_axis == 21);
   constexpr uint32_t kMax = (1u << 21) - 1;
   for (uint32_t i = r.begin; i < r.end; ++i) {
@@ -114,7 +115,8 @@ void morton_keys30_packed(const MortonParams& p, AabbSoA b, uint64_t* IMPACT_RES
 }
 
 void morton_keys63_packed(const MortonParams& p, AabbSoA b, uint64_t* IMPACT_RESTRICT out_codes,
-                          uint32_t* IMPACT_RESTRICT out_values, SortedBox* IMPACT_RESTRICT out_packed, Range r) {
+                          uint32_t* IMPACT_RESTRICT out_values, SortedBox* IMPACT_RESTRICT out_packed,
+                          Range r) {
   keys63<true>(p, b, out_codes, out_values, out_packed, r);
 }
 

@@ -60,7 +60,8 @@ void morton_keys63(const MortonParams& p, AabbSoA boxes, uint64_t* IMPACT_RESTRI
 void morton_keys30_packed(const MortonParams& p, AabbSoA boxes, uint64_t* IMPACT_RESTRICT out_keys,
                           SortedBox* IMPACT_RESTRICT out_packed, Range r);
 void morton_keys63_packed(const MortonParams& p, AabbSoA boxes, uint64_t* IMPACT_RESTRICT out_codes,
-                          uint32_t* IMPACT_RESTRICT out_values, SortedBox* IMPACT_RESTRICT out_packed, Range r);
+                          uint32_t* IMPACT_RESTRICT out_values, SortedBox* IMPACT_RESTRICT out_packed,
+                          Range r);
 
 /// out_index[s] = low 32 bits of sorted_keys[s] (the original box index).
 void morton_split_keys(const uint64_t* IMPACT_RESTRICT sorted_keys, uint32_t* IMPACT_RESTRICT out_index,
