@@ -1380,7 +1380,9 @@ void contact_manifold(const Leaf& A, const Leaf& B, V3 n, float depth, V3 pa, V3
   // vertices, and must be within ~26 degrees of n (else edge-edge: one point).
   if (has_faces(A.type) && has_faces(B.type)) {
     Face fa, fb;
-    if (supporting_face(A, n, &fa) && supporting_face(B, -n, &fb)) {
+    // B's first: where one side offers no face the other's is not needed, and B is the
+    // cheaper one in the hull-cylinder bucket (a cap or side line against a face search)
+    if (supporting_face(B, -n, &fb) && supporting_face(A, n, &fa)) {
       constexpr float kMinAlign = 0.9f;
       const bool ca = fa.n >= 3 && fa.align >= kMinAlign, cb = fb.n >= 3 && fb.align >= kMinAlign;
       if (ca || cb) {

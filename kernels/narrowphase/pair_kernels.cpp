@@ -65,6 +65,7 @@ struct Table {
     k[kLeafBox][kLeafCylinder] = &collide_box_cylinder;
     k[kLeafCylinder][kLeafCylinder] = &collide_cylinder_cylinder;
     k[kLeafConvex][kLeafEllipsoid] = &collide_convex_ellipsoid;
+    k[kLeafConvex][kLeafCylinder] = &collide_convex_cylinder;
     k[kLeafCylinder][kLeafTriangle] = &collide_cylinder_triangle;
     k[kLeafCylinder][kLeafEllipsoid] = &collide_cylinder_ellipsoid;
     k[kLeafConvex][kLeafHalfSpace] = &collide_convex_halfspace;

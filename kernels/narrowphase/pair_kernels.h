@@ -99,6 +99,12 @@ void collide_box_ellipsoid(const LeafSoA&, const LeafSoA&, const ManifoldSoA&, R
 /// survivors solved packed; convex_ellipsoid.cpp); one pair at a time, kSimdWidth
 /// features per step, not GJK / EPA.
 void collide_convex_ellipsoid(const LeafSoA&, const LeafSoA&, const ManifoldSoA&, Range, const NarrowConfig&);
+/// Convex hull vs cylinder: the least support overlap over the candidate directions of
+/// the Minkowski difference's pieces (faces, caps, edge-side, vertex-side and vertex-rim
+/// in closed form, edge-rim by rim_solve.h's root solve after lower bounds), then the
+/// general route's manifold (cvx::contact_manifold); one pair at a time, kSimdWidth
+/// hull features per step (convex_cylinder.cpp), not GJK / EPA.
+void collide_convex_cylinder(const LeafSoA&, const LeafSoA&, const ManifoldSoA&, Range, const NarrowConfig&);
 /// Cylinder against triangle: the least support overlap over the candidate normals of
 /// their Minkowski difference's pieces (caps, faces, side against edges and vertices,
 /// vertices against rims, edges against rims by the 2D root solve of rim_solve.h), the

@@ -326,9 +326,9 @@ TEST(WorldShapes, NarrowPhaseKnobsReachTheStep) {
     d.narrow_phase.gjk_max_iterations = 0;
     EXPECT_TRUE(IsError(World::create(d, &w), StatusCode::kInvalidArgument, {"narrow_phase", "gjk_max_iterations"}));
   }
-  // An ellipsoid-like hull on a cylinder (general path: hull-cylinder has no lane kernel
-  // of its own), a box on a box (SIMD kernel) and a capsule on the floor, all slightly
-  // overlapping.
+  // An ellipsoid-like hull on a cylinder (the hull-cylinder kernel), a box on a box (SIMD
+  // kernel), a capsule on the floor and a 120-point hull on a box (more vertices than
+  // sat_max_vertices: the general path, GJK / EPA), all slightly overlapping.
   auto run = [](const NarrowPhaseOptions& o) {
     WorldDesc d;
     d.narrow_phase = o;
@@ -365,6 +365,22 @@ TEST(WorldShapes, NarrowPhaseKnobsReachTheStep) {
     b[3].position = Eigen::Vector3f(3.1f, 1.45f, 0);
     b[4].shape = cap;
     b[4].position = Eigen::Vector3f(-3, 0.2f, 0);
+    // 120 points of the sphere of radius 0.5 (a golden-angle spiral) on a static box
+    std::vector<Eigen::Vector3f> ball;
+    for (int i = 0; i < 120; ++i) {
+      const float z = 1.0f - (2.0f * static_cast<float>(i) + 1.0f) / 120.0f;
+      const float r = std::sqrt(1.0f - z * z), t = 2.39996323f * static_cast<float>(i);
+      ball.push_back(0.5f * Eigen::Vector3f(r * std::cos(t), r * std::sin(t), z));
+    }
+    ShapeId big;
+    EXPECT_TRUE(IsOk(w->shapes().add_convex_hull(ball, &big)));
+    b.resize(7);
+    b[5].shape = box;
+    b[5].position = Eigen::Vector3f(6, 0.5f, 0);
+    b[5].inv_mass = 0.0f;
+    b[6].shape = big;
+    b[6].orientation = Eigen::Quaternionf(Eigen::AngleAxisf(0.4f, Eigen::Vector3f(0, 1, 1).normalized()));
+    b[6].position = Eigen::Vector3f(6.02f, 1.48f, 0.01f);
     std::vector<BodyHandle> h(b.size());
     EXPECT_TRUE(IsOk(w->create_bodies(b, h)));
     EXPECT_TRUE(IsOk(w->step()));
