@@ -116,13 +116,17 @@ struct Scratch {
 /// index) so far.
 struct Live {
   uint32_t k;
-  float o, id, n[3];
-  float rr[9], c[3];   // hull local -> cylinder frame (row-major), the hull's origin there
-  float rb[9], pc[3];  // the cylinder's rotation, its centre relative to A's position
-  float rc, hh;
+  float o, id, n[3];     // the least (o, index) on its piece
+  float ao, aid, an[3];  // the least (o, index) of every candidate
+  float rr[9], c[3];     // hull local -> cylinder frame (row-major), the hull's origin there
+  float rb[9], pc[3];    // the cylinder's rotation, its centre relative to A's position
+  float rc, hh, slack;
   uint32_t v0, nv, a0, f0, nf, na;
   IMPACT_INLINE void take(float o2, float id2, float nx, float ny, float nz) {
     if (o2 < o || (o2 == o && id2 < id)) o = o2, id = id2, n[0] = nx, n[1] = ny, n[2] = nz;
+  }
+  IMPACT_INLINE void take_any(float o2, float id2, float nx, float ny, float nz) {
+    if (o2 < ao || (o2 == ao && id2 < aid)) ao = o2, aid = id2, an[0] = nx, an[1] = ny, an[2] = nz;
   }
 };
 
@@ -165,7 +169,8 @@ struct Pair {
   float rr[9];  // hull local -> cylinder frame, row-major
   float c[3];   // the hull's origin in the cylinder frame
   float rc, hh, slack;
-  F bo, bid, bx, by, bz;
+  F bo, bid, bx, by, bz;  // the least (o, index) on its piece
+  F ao, aid, ax, ay, az;  // the least (o, index) of every candidate
 
   IMPACT_INLINE V3<F> rotate(const V3<F>& l) const {
     return {F(rr[0]) * l.x + F(rr[1]) * l.y + F(rr[2]) * l.z,
@@ -181,16 +186,23 @@ struct Pair {
       top = max(top, n.x * F(s->yx[v]) + n.y * F(s->yy[v]) + n.z * F(s->yz[v]));
     return top + cyl(n);
   }
-  IMPACT_INLINE void offer(F o, const V3<F>& n, F id, typename F::Mask ok) {
-    const auto take = ok & (o < bo);
+  /// Lanes ok offer o at n (an upper bound of the minimum); those also `on` their
+  /// piece compete for the answer, the others only for the bounds.
+  IMPACT_INLINE void offer(F o, const V3<F>& n, F id, typename F::Mask ok, typename F::Mask on) {
+    const auto any = ok & (o < ao);
+    ao = select(any, o, ao);
+    aid = select(any, id, aid);
+    ax = select(any, n.x, ax), ay = select(any, n.y, ay), az = select(any, n.z, az);
+    const auto take = ok & on & (o < bo);
     bo = select(take, o, bo);
     bid = select(take, id, bid);
     bx = select(take, n.x, bx), by = select(take, n.y, by), bz = select(take, n.z, bz);
   }
-  /// The least o so far (exact: a minimum over lanes).
+  IMPACT_INLINE void offer(F o, const V3<F>& n, F id, typename F::Mask ok) { offer(o, n, id, ok, ok); }
+  /// The least o so far of every candidate (exact: a minimum over lanes).
   IMPACT_INLINE float least() const {
-    float m = bo.lane(0);
-    for (uint32_t l = 1; l < W; ++l) m = simd::fmin_nn(m, bo.lane(l));
+    float m = ao.lane(0);
+    for (uint32_t l = 1; l < W; ++l) m = simd::fmin_nn(m, ao.lane(l));
     return m;
   }
 };
@@ -264,15 +276,20 @@ void flush(Queue<F::kWidth>& q, Live* live) {
       const V3<F> y{-sc * nn.x, -sc * nn.y, -hh[j] * simd::sign_nonneg(nn.z)};
       const F t = dot(y - c[j], u[j]);
       const V3<F> m{block<F>(q.m[0], at, n), block<F>(q.m[1], at, n), block<F>(q.m[2], at, n)};
-      const uint32_t on = simd::bits((abs(t) <= hs[j] + block<F>(q.slack, at, n)) &
-                                     (dot(nn, m) >= block<F>(q.cosh, at, n)) & valid<F>(at, n));
-      if (on == 0) continue;
+      // inside the arc the score below is exact (an upper bound); on the piece where the
+      // rim point also lies on the edge
+      const uint32_t arc = simd::bits((dot(nn, m) >= block<F>(q.cosh, at, n)) & valid<F>(at, n));
+      const uint32_t on = arc & simd::bits(abs(t) <= hs[j] + block<F>(q.slack, at, n));
+      if (arc == 0) continue;
       // inside the arc the edge is the hull's support along nn: o from its ends
       const F o = dot(nn, c[j]) + hs[j] * abs(dot(nn, u[j])) + rc[j] * sqrt(nxy2) + hh[j] * abs(nn.z);
       float ov[W], nx[W], ny[W], nz[W];
       o.store(ov), nn.x.store(nx), nn.y.store(ny), nn.z.store(nz);
       for (uint32_t l = 0; l < W; ++l) {
-        if (((on >> l) & 1u) != 0) live[q.pair[at + l]].take(ov[l], q.id[at + l], nx[l], ny[l], nz[l]);
+        if (((arc >> l) & 1u) == 0) continue;
+        Live& lv = live[q.pair[at + l]];
+        lv.take_any(ov[l], q.id[at + l], nx[l], ny[l], nz[l]);
+        if (((on >> l) & 1u) != 0) lv.take(ov[l], q.id[at + l], nx[l], ny[l], nz[l]);
       }
     }
   }
@@ -332,6 +349,7 @@ State convex_cylinder_pair(const LeafSoA& A, const LeafSoA& B, const ManifoldSoA
   const F zero(0.0f), one(1.0f), lane = simd::lane_index<F>();
   const V3<F> c{F(p.c[0]), F(p.c[1]), F(p.c[2])};
   p.bo = F(kBig), p.bid = F(0.0f), p.bx = p.by = zero, p.bz = one;
+  p.ao = F(kBig), p.aid = F(0.0f), p.ax = p.ay = zero, p.az = one;
 
   // 1. Faces: o from the plane offsets.
   F dmin(kBig);
@@ -400,8 +418,8 @@ State convex_cylinder_pair(const LeafSoA& A, const LeafSoA& B, const ManifoldSoA
     const F sv = -((e.y0.x + rc * n.x) * e.d.x + (e.y0.y + rc * n.y) * e.d.y) / select(tilted, dxy2, one);
     const F zc = e.y0.z + sv * e.d.z, ss = F(p.slack);
     const Mask crosses = (sv * sqrt(l2) >= -ss) & ((sv - one) * sqrt(l2) <= ss) & (abs(zc) <= hh + ss);
-    const Mask ok = tilted & crosses & (dot(n, e.m) >= e.cosh) & valid<F>(i, p.na);
-    p.offer(o, n, lane + F(static_cast<float>(ids.edge_side + i)), ok);
+    const Mask ok = tilted & (dot(n, e.m) >= e.cosh) & valid<F>(i, p.na);
+    p.offer(o, n, lane + F(static_cast<float>(ids.edge_side + i)), ok, crosses);
     // edge-rim: the least of n.y0 over the arc (n = cos t m + sin t (u x m), |t| <= the
     // half angle) plus min(rc, h), the least of the cylinder's part
     const Mask long_enough = l2 > tiny;
@@ -444,7 +462,7 @@ State convex_cylinder_pair(const LeafSoA& A, const LeafSoA& B, const ManifoldSoA
     // rounding): near the minimum o is flat, and another vertex's direction, 1e-4 rad
     // off, could tie the true minimum within rounding
     const F o = p.score(n);
-    p.offer(o, n, lane + F(static_cast<float>(ids.vert_side + i)), ok & (F(p.rc) - rho >= o - F(p.slack)));
+    p.offer(o, n, lane + F(static_cast<float>(ids.vert_side + i)), ok, F(p.rc) - rho >= o - F(p.slack));
   }
   // 5. Vertices against the rims, where the pair is not certified to meet.
   if (!meets) {
@@ -463,9 +481,9 @@ State convex_cylinder_pair(const LeafSoA& A, const LeafSoA& B, const ManifoldSoA
         F len;
         const V3<F> n = normalize_or(rim - y, V3<F>{zero, zero, F(sgn == 0 ? 1.0f : -1.0f)}, len);
         const F o = p.score(n);
-        const Mask ok = (len > zero) & (dot(n, y) + p.cyl(n) >= o - F(p.slack)) & valid<F>(i, p.nv);
+        const Mask ok = (len > zero) & valid<F>(i, p.nv);
         const F id = F(2.0f) * (lane + F(static_cast<float>(i))) + F(static_cast<float>(ids.vert_rim + sgn));
-        p.offer(o, n, id, ok);
+        p.offer(o, n, id, ok, dot(n, y) + p.cyl(n) >= o - F(p.slack));
       }
     }
   }
@@ -479,9 +497,13 @@ State convex_cylinder_pair(const LeafSoA& A, const LeafSoA& B, const ManifoldSoA
   lv.n[2] = p.bz.lane(0);
   for (uint32_t l = 1; l < W; ++l)
     lv.take(p.bo.lane(l), p.bid.lane(l), p.bx.lane(l), p.by.lane(l), p.bz.lane(l));
+  lv.ao = p.ao.lane(0), lv.aid = p.aid.lane(0), lv.an[0] = p.ax.lane(0), lv.an[1] = p.ay.lane(0),
+  lv.an[2] = p.az.lane(0);
+  for (uint32_t l = 1; l < W; ++l)
+    lv.take_any(p.ao.lane(l), p.aid.lane(l), p.ax.lane(l), p.ay.lane(l), p.az.lane(l));
   for (int i = 0; i < 9; ++i) lv.rr[i] = p.rr[i], lv.rb[i] = rb[i];
   for (int i = 0; i < 3; ++i) lv.c[i] = p.c[i], lv.pc[i] = -dw[i];
-  lv.rc = p.rc, lv.hh = p.hh;
+  lv.rc = p.rc, lv.hh = p.hh, lv.slack = p.slack;
   lv.v0 = p.v0, lv.nv = p.nv, lv.a0 = p.a0, lv.f0 = p.f0, lv.nf = p.nf, lv.na = p.na;
   // 6. Edge interiors against the rims: the slots that can win, queued for the solve
   // (the arc's lower bound below the least o so far; on a pair certified to meet, the
@@ -536,22 +558,37 @@ template <class F>
 void finish_pair(const LeafSoA& A, const LeafSoA& B, const ManifoldSoA& out, const HullView& h,
                  const Live& lv) {
   const uint32_t k = lv.k;
-  float o = lv.o, n[3] = {lv.n[0], lv.n[1], lv.n[2]};
+  // The least candidate on its piece; the least of all where that is lower by more than
+  // rounding (then no candidate of the minimiser's piece passed its test).
+  const bool any = lv.ao < lv.o - lv.slack;
+  float o = any ? lv.ao : lv.o;
+  float n[3] = {any ? lv.an[0] : lv.n[0], any ? lv.an[1] : lv.n[1], any ? lv.an[2] : lv.n[2]};
+  const float won = any ? lv.aid : lv.id;
   if (!(o > 0.0f)) {
     out.count[k] = 0;
     return;
   }
   const float hh = lv.hh, rc = lv.rc;
-  auto vertex = [&](uint32_t v, float* y) {
-    const float l[3] = {h.vx[lv.v0 + v], h.vy[lv.v0 + v], h.vz[lv.v0 + v]};
-    for (int j = 0; j < 3; ++j)
-      y[j] = lv.rr[3 * j] * l[0] + lv.rr[3 * j + 1] * l[1] + lv.rr[3 * j + 2] * l[2] + lv.c[j];
-  };
+
+  // the vertices in the frame, F::kWidth at a time
+  constexpr uint32_t W = F::kWidth;
   float yv[kMaxVerts][3];
   float size = rc + hh;
-  for (uint32_t v = 0; v < lv.nv; ++v) {
-    vertex(v, yv[v]);
-    size = simd::fmax_nn(size, std::fabs(yv[v][0]) + std::fabs(yv[v][1]) + std::fabs(yv[v][2]));
+  {
+    float tx[kMaxVerts + W], ty[kMaxVerts + W], tz[kMaxVerts + W];
+    for (uint32_t i = 0; i < lv.nv; i += W) {
+      const V3<F> l{block<F>(h.vx + lv.v0, i, lv.nv), block<F>(h.vy + lv.v0, i, lv.nv),
+                    block<F>(h.vz + lv.v0, i, lv.nv)};
+      for (int j = 0; j < 3; ++j) {
+        const F y =
+            F(lv.rr[3 * j]) * l.x + F(lv.rr[3 * j + 1]) * l.y + F(lv.rr[3 * j + 2]) * l.z + F(lv.c[j]);
+        y.store((j == 0 ? tx : j == 1 ? ty : tz) + i);
+      }
+    }
+    for (uint32_t v = 0; v < lv.nv; ++v) {
+      yv[v][0] = tx[v], yv[v][1] = ty[v], yv[v][2] = tz[v];
+      size = simd::fmax_nn(size, std::fabs(tx[v]) + std::fabs(ty[v]) + std::fabs(tz[v]));
+    }
   }
   const float tol = kSlackRel * size;
   auto score = [&](const float* m) {
@@ -566,11 +603,11 @@ void finish_pair(const LeafSoA& A, const LeafSoA& B, const ManifoldSoA& out, con
   // o flat there: a direction ~1e-4 rad off ties within rounding, and its witnesses
   // would miss the shapes by ~sqrt(rounding x depth)); that edge's candidate instead.
   const Ids ids(lv.nf, lv.na, lv.nv);
-  if (lv.id < static_cast<float>(ids.cap) && std::fabs(n[2]) > kFree &&
+  if (won < static_cast<float>(ids.cap) && std::fabs(n[2]) > kFree &&
       n[0] * n[0] + n[1] * n[1] > kFree * kFree) {
     const float sc = rc / std::sqrt(n[0] * n[0] + n[1] * n[1]);
     const float x[3] = {-sc * n[0] + o * n[0], -sc * n[1] + o * n[1], (n[2] >= 0.0f ? -hh : hh) + o * n[2]};
-    const uint32_t f = lv.f0 + static_cast<uint32_t>(lv.id);
+    const uint32_t f = lv.f0 + static_cast<uint32_t>(won);
     const uint32_t fb = h.face_vert_begin[f], fe = h.face_vert_begin[f + 1];
     float worst = tol;
     const float* ea = nullptr;
