@@ -35,29 +35,45 @@
 //     min(rc, h)) is below the least o so far, and (c) on a pair certified to meet, a
 //     lower bound of the edge segment's distance to the rim circle (radial and height
 //     gaps bounded along the segment: |o| of the piece's candidate is that distance)
-//     is below the least o so far. The survivors are queued and solved kSimdWidth at a
-//     time; a solution whose rim point is off the edge (beyond rounding) or whose normal
-//     is outside the edge's arc is no point of the piece and is dropped.
-// Every candidate except the faces' and the caps' is scored by o itself (the hull's
-// highest vertex along n, not only its own feature), so a candidate off its piece only
-// scores an upper bound and can win only by tying the true minimum within rounding.
-// The least o wins; ties: the first in the order faces, caps, edge-sides, vertex-sides,
-// vertex-rims, edge-rims (each in index order).
-// Witnesses for the manifold: a vertex piece's vertex, an edge-side's nearest point of
-// the edge to the side line, else the cylinder's support point along -n (its flat
-// features: the point nearest the hull's highest vertex along n); the other witness is
-// that one moved by the depth along n. cvx::contact_manifold then clips the hull face
-// against the cap's octagon or the side line where both offer a flat feature along n,
-// else gives one point midway.
+//     is below the least o so far. The survivors of a chunk of kChunk pairs are queued
+//     and solved together, two kSimdWidth blocks per loop (independent chains).
+// Scores: a face's from its plane, a cap's from the hull's highest and lowest vertex, an
+// edge candidate's from the edge's own ends (exact where n lies inside the edge's normal
+// arc: the edge is then the hull's support along n; outside it the candidate is not
+// offered), a vertex candidate's from all vertices. Every offered score is thus o(n)
+// itself, an upper bound of the minimum, and all of them bound the prunings and the
+// early exits. Only a candidate on its own piece competes for the answer: a vertex that
+// is the support along its direction (within rounding), an edge-side crossing on the
+// edge and within the side's height, an edge-rim point on the edge; near the minimum o
+// is flat, and a direction of another piece ~1e-4 rad off could otherwise tie the true
+// minimum within rounding and bring witnesses that miss the shapes. The least o on its
+// piece wins (ties: the first in the order faces, caps, edge-sides, vertex-sides,
+// vertex-rims, edge-rims, each in index order); the least of all where it is lower by
+// more than rounding. A face that won against a rim point whose image (moved by o along
+// n) lies beyond one of the face's edges won a rounding tie against that edge's rim
+// piece: that edge's candidate is solved and taken instead (within rounding of o).
+// Witnesses for the manifold, from the two support features along n (the hull's
+// vertices within rounding of its highest): a single vertex; else a unique rim point;
+// else the side line against the feature's crossing of the line's plane (the middle of
+// the crossing's height range clamped to the side; where the feature misses the line,
+// its vertices nearest it: the side is round across, so the cylinder's point is off it
+// only to second order); else the cap against the feature's centroid (or the rim point
+// towards it). The other witness is that one moved by the depth along n.
+// cvx::contact_manifold then clips the hull face against the cap's octagon or the side
+// line where both offer a flat feature along n, else gives one point midway.
 // Big or open hulls (no edge adjacency, more than kMaxVerts / kMaxFaces / kMaxEdges)
 // take the general GJK / EPA lane for that pair.
 // Preconditions: finite inputs, positive sizes, orthonormal R, unit axes, hulls as
 // HullStore builds them (host-validated). Degenerate input: an edge along the axis has
 // no edge-side candidate (its pieces are covered by the faces and the vertices); a
 // vertex on the axis takes x as its radial direction; zero-length edges are skipped.
-// Deterministic: the same template runs kSimdWidth lanes (kSimd) or one (kScalar); each
-// candidate's arithmetic is lane-wise and the winner is the least (o, index), so both
-// paths give the same bytes, and a pair's bytes do not depend on its neighbours.
+// Deterministic: each candidate's arithmetic is lane-wise and the winner is the least
+// (o, index), so a pair's bytes do not depend on its neighbours or on the range's
+// partition (the chunk's solve is lane-wise too). The same template runs kSimdWidth
+// lanes (kSimd) or one (kScalar); the two agree to rounding, not to the byte: the
+// shared helpers (prim::, rim_solve.h), defined before this file's no-contraction
+// pragma, fuse multiply-adds differently at the two widths (a few lanes in a hundred of
+// the tests' random ones differ in the last bits of the depth).
 // Cost: impact_narrowbench BM_Kernel/convex-cylinder (24-point hulls, half the pairs
 // overlapping); see docs/narrowphase.md.
 // References: Minkowski-difference support functions for penetration depth (van den

@@ -26,7 +26,8 @@
 //      within tol of depth, plus the margin by which contact_manifold lets clipped points
 //      stand for it (cvx::kWitnessJoin of depth + both leaf sizes, gjk_epa.h);
 //  (e) the scalar and SIMD paths agree: the count away from touching, depth within tol,
-//      the normal within kAngleTol (or both as good as the reference's);
+//      the normal within kAngleTol (or both as good as the reference's) (not their
+//      bytes: the shared helpers' multiply-adds fuse differently at the two widths);
 //  (f) collide_gjk_epa on the same lanes: the count away from touching, depth within EPA's
 //      own tolerance (cfg.epa_tolerance of both leaf sizes) plus tol and never more than
 //      EPA's plus tol (EPA's is an upper bound), the normal within 0.02 rad where unique;
