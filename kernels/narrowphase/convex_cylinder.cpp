@@ -103,11 +103,11 @@ using simd::length_sq;
 constexpr uint32_t kMaxVerts = 256;
 constexpr uint32_t kMaxFaces = 512;
 constexpr uint32_t kMaxEdges = 800;
-/// Queued edge-rim slots before a flush.
-constexpr uint32_t kQueue = 64;
 constexpr float kBig = 3.0e38f;
-/// Rim points beyond an edge's ends by more than this times the pair's size are off
-/// the piece.
+/// Rounding allowance, times the pair's size: how far a candidate's witness may miss its
+/// piece (an edge-rim point beyond the edge's ends, an edge-side crossing, a vertex below
+/// the highest along its direction) and still count on it; the support features gather
+/// the vertices this close to the highest.
 constexpr float kSlackRel = 4e-6f;
 /// |n_xy| (|n_z|) at or below this: the cylinder's support feature is its cap (side
 /// line).
@@ -310,20 +310,6 @@ void flush(Queue<F::kWidth>& q, Live* live) {
     }
   }
   q.n = 0;
-}
-
-/// Lane k of out from one pair's collision data (points relative to origin).
-IMPACT_INLINE void write_lane(const ManifoldSoA& out, uint32_t k, const cvx::LaneContact& c, cvx::V3 origin) {
-  out.count[k] = static_cast<uint8_t>(c.count);
-  if (c.count == 0) return;
-  out.n[0][k] = c.n.x, out.n[1][k] = c.n.y, out.n[2][k] = c.n.z;
-  out.depth[k] = c.depth;
-  for (uint32_t i = 0; i < c.count; ++i) {
-    out.point[i][0][k] = c.point[i].x + origin.x;
-    out.point[i][1][k] = c.point[i].y + origin.y;
-    out.point[i][2][k] = c.point[i].z + origin.z;
-    out.pdepth[i][k] = c.pdepth[i];
-  }
 }
 
 /// What phase A left of a pair.
@@ -767,7 +753,7 @@ void finish_pair(const LeafSoA& A, const LeafSoA& B, const ManifoldSoA& out, con
   cvx::LaneContact lc;
   cvx::contact_manifold(la, lb, cvx::V3{nw[0], nw[1], nw[2]}, o, cvx::V3{pa[0], pa[1], pa[2]},
                         cvx::V3{pb[0], pb[1], pb[2]}, &lc);
-  write_lane(out, k, lc, origin);
+  cvx::write_lane(out, k, lc, origin);
 }
 
 template <class F>

@@ -1371,6 +1371,21 @@ void collide_convex_lane(const Leaf& A, const Leaf& B, const NarrowConfig& cfg, 
   contact_manifold(A, B, n, depth, pa, pb, out);
 }
 
+void write_lane(const ManifoldSoA& out, uint32_t k, const LaneContact& c, V3 origin) {
+  out.count[k] = static_cast<uint8_t>(c.count);
+  if (c.count == 0) return;
+  out.n[0][k] = c.n.x;
+  out.n[1][k] = c.n.y;
+  out.n[2][k] = c.n.z;
+  out.depth[k] = c.depth;
+  for (uint32_t i = 0; i < c.count; ++i) {
+    out.point[i][0][k] = c.point[i].x + origin.x;
+    out.point[i][1][k] = c.point[i].y + origin.y;
+    out.point[i][2][k] = c.point[i].z + origin.z;
+    out.pdepth[i][k] = c.pdepth[i];
+  }
+}
+
 void contact_manifold(const Leaf& A, const Leaf& B, V3 n, float depth, V3 pa, V3 pb, LaneContact* out) {
   const float ra = core_radius(A), rb = core_radius(B);
   out->n = n;
@@ -1446,18 +1461,7 @@ void collide_gjk_epa(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out,
       cvx::collide_sat_lane(A, B, &c);
     else
       cvx::collide_convex_lane(A, B, cfg, &c);
-    out.count[k] = static_cast<uint8_t>(c.count);
-    if (c.count == 0) continue;
-    out.n[0][k] = c.n.x;
-    out.n[1][k] = c.n.y;
-    out.n[2][k] = c.n.z;
-    out.depth[k] = c.depth;
-    for (uint32_t i = 0; i < c.count; ++i) {
-      out.point[i][0][k] = c.point[i].x + origin.x;
-      out.point[i][1][k] = c.point[i].y + origin.y;
-      out.point[i][2][k] = c.point[i].z + origin.z;
-      out.pdepth[i][k] = c.pdepth[i];
-    }
+    cvx::write_lane(out, k, c, origin);
   }
 }
 

@@ -85,6 +85,9 @@ void collide_convex_lane(const Leaf& A, const Leaf& B, const NarrowConfig& cfg, 
 /// between the surfaces. Sets out's count, n, depth, points and point depths.
 void contact_manifold(const Leaf& A, const Leaf& B, V3 n, float depth, V3 pa, V3 pb, LaneContact* out);
 
+/// Lane k of out from one lane's collision data (points relative to origin, moved back).
+void write_lane(const ManifoldSoA& out, uint32_t k, const LaneContact& c, V3 origin);
+
 /// Keeps at most 4 of n (point, depth) entries in place: the deepest, the farthest from
 /// it, then the two that add most area (normal n). Returns the new count.
 uint32_t reduce_manifold(V3* pts, float* depth, uint32_t n, V3 normal);
