@@ -32,10 +32,12 @@
 //     pieces. A slot (edge, rim) is kept where (a) the edge's arc reaches the rim's half
 //     sphere (an end normal on that side), (b) a lower bound of o on the arc (the least
 //     of n.y_0 over the arc, in closed form from em and the half angle, plus
-//     min(rc, h)) is below the least o so far, and (c) on a pair certified to meet, a
-//     lower bound of the edge segment's distance to the rim circle (radial and height
-//     gaps bounded along the segment: |o| of the piece's candidate is that distance)
-//     is below the least o so far. The survivors of a chunk of kChunk pairs are queued
+//     min(rc, h)) is below the least o so far, and (c) a lower bound of the edge
+//     segment's distance to the rim circle (radial and height gaps bounded along the
+//     segment: |o| of the piece's candidate is that distance) is at most the least o so
+//     far on a pair certified to meet, elsewhere at most the larger of that and the
+//     nearest vertex's distance to the cylinder (if the shapes are apart, their distance
+//     is no more than that point pair's). The survivors of a chunk of kChunk pairs are queued
 //     and solved together, two kSimdWidth blocks per loop (independent chains).
 // Scores: a face's from its plane, a cap's from the hull's highest and lowest vertex, an
 // edge candidate's from the edge's own ends (exact where n lies inside the edge's normal
@@ -368,7 +370,7 @@ State convex_cylinder_pair(const LeafSoA& A, const LeafSoA& B, const ManifoldSoA
   }
 
   // 2. Vertices into the frame; the caps.
-  F zmax(-kBig), zmin(kBig), rmax(0.0f);
+  F zmax(-kBig), zmin(kBig), rmax(0.0f), gap(kBig);
   Mask inside(false);
   const float r2 = p.rc * p.rc;
   for (uint32_t i = 0; i < p.nv; i += W) {
@@ -379,11 +381,16 @@ State convex_cylinder_pair(const LeafSoA& A, const LeafSoA& B, const ManifoldSoA
     zmax = max(zmax, y.z), zmin = min(zmin, y.z);
     rmax = max(rmax, abs(y.x) + abs(y.y) + abs(y.z));
     inside = inside | ((y.x * y.x + y.y * y.y <= F(r2)) & (abs(y.z) <= F(p.hh)));
+    // the squared distance from the vertex to the cylinder
+    const F dr = max(sqrt(y.x * y.x + y.y * y.y) - F(p.rc), zero), dz = max(abs(y.z) - F(p.hh), zero);
+    gap = min(gap, select(valid<F>(i, p.nv), dr * dr + dz * dz, F(kBig)));
   }
   float ztop = zmax.lane(0), zbot = zmin.lane(0), reach = rmax.lane(0), dlow = dmin.lane(0);
+  float near2 = gap.lane(0);
   for (uint32_t l = 1; l < W; ++l) {
     ztop = simd::fmax_nn(ztop, zmax.lane(l)), zbot = simd::fmin_nn(zbot, zmin.lane(l));
     reach = simd::fmax_nn(reach, rmax.lane(l)), dlow = simd::fmin_nn(dlow, dmin.lane(l));
+    near2 = simd::fmin_nn(near2, gap.lane(l));
   }
   p.slack = kSlackRel * (p.rc + p.hh + reach);
   // Certified to meet: a vertex in the cylinder or the cylinder's centre in the hull.
@@ -507,17 +514,20 @@ State convex_cylinder_pair(const LeafSoA& A, const LeafSoA& B, const ManifoldSoA
   for (int i = 0; i < 3; ++i) lv.c[i] = p.c[i], lv.pc[i] = -dw[i];
   lv.rc = p.rc, lv.hh = p.hh, lv.slack = p.slack;
   lv.v0 = p.v0, lv.nv = p.nv, lv.a0 = p.a0, lv.f0 = p.f0, lv.nf = p.nf, lv.na = p.na;
-  // 6. Edge interiors against the rims: the slots that can win, queued for the solve
-  // (the arc's lower bound below the least o so far; on a pair certified to meet, the
-  // segment's distance to the rim too).
+  // 6. Edge interiors against the rims: the slots that can win, queued for the solve:
+  // the arc's lower bound below the least o so far, and a lower bound of the segment's
+  // distance to the rim circle (|o| of the piece's candidate) at most the least o so far
+  // on a pair certified to meet; elsewhere at most the larger of that and the nearest
+  // vertex's distance to the cylinder (a point pair's: the distance if they are apart
+  // is no more).
   {
     const float best = p.least();
-    const F fb(best), fb2(best * best);
+    const F fb(best), fb2(meets ? best * best : simd::fmax_nn(best * best, near2));
     for (uint32_t i = 0; i < p.na; i += W) {
       const Mask keep = (F::load(scratch.low + i) < fb) & valid<F>(i, p.na);
       Mask slot[2] = {keep & (F::load(scratch.up + i) > zero), keep & (F::load(scratch.down + i) > zero)};
       if (simd::none(slot[0] | slot[1])) continue;
-      if (meets) {
+      {
         // the segment's distance to each rim circle, bounded below by its radial and
         // height gaps (the least distance to the axis: a 2-D point-segment distance)
         const V3<F> y0{F::load(scratch.y0x + i), F::load(scratch.y0y + i), F::load(scratch.y0z + i)};
