@@ -87,6 +87,7 @@
 #include <cstdint>
 
 #include "kernels/narrowphase/gjk_epa.h"
+#include "kernels/narrowphase/hull_scan.h"
 #include "kernels/narrowphase/pair_kernels.h"
 #include "kernels/narrowphase/primitives.h"
 #include "kernels/narrowphase/rim_solve.h"
@@ -98,6 +99,7 @@ namespace impact::kernels {
 namespace {
 
 using namespace prim;  // NOLINT: lane helpers of this kernel family
+using hull_scan::block;
 using simd::dot;
 using simd::length_sq;
 
@@ -160,16 +162,6 @@ struct Queue {
   uint32_t pair[kPad];
   uint32_t n = 0;
 };
-
-/// Items i .. i + W of p[0 .. n) (the last repeated past n).
-template <class F>
-IMPACT_INLINE F block(const float* p, uint32_t i, uint32_t n) {
-  constexpr uint32_t W = F::kWidth;
-  if (i + W <= n) return F::load(p + i);
-  float t[W];
-  for (uint32_t k = 0; k < W; ++k) t[k] = p[i + k < n ? i + k : n - 1];
-  return F::load(t);
-}
 
 /// Lanes i + k < n.
 template <class F>

@@ -63,6 +63,7 @@
 #include <cstdint>
 
 #include "kernels/narrowphase/ellipsoid_pieces.h"
+#include "kernels/narrowphase/hull_scan.h"
 #include "kernels/narrowphase/pair_kernels.h"
 #include "kernels/narrowphase/primitives.h"
 
@@ -70,6 +71,7 @@ namespace impact::kernels {
 namespace {
 
 using namespace prim;  // NOLINT: lane helpers of this kernel family
+using hull_scan::block;
 using simd::dot;
 using simd::length_sq;
 
@@ -101,16 +103,6 @@ struct Best {
   float m[3];
   float len;
 };
-
-/// Items i .. i + W of p[0 .. n) (the last repeated past n).
-template <class F>
-IMPACT_INLINE F block(const float* p, uint32_t i, uint32_t n) {
-  constexpr uint32_t W = F::kWidth;
-  if (i + W <= n) return F::load(p + i);
-  float t[W];
-  for (uint32_t k = 0; k < W; ++k) t[k] = p[i + k < n ? i + k : n - 1];
-  return F::load(t);
-}
 
 /// The lanes i + k < n.
 template <class F>

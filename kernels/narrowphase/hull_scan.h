@@ -1,7 +1,9 @@
 // Per-lane passes over one convex hull's faces and vertices (HullView), shared by the
-// exact hull kernels (sphere_convex.cpp, capsule_convex.cpp, convex_triangle.cpp);
+// exact hull kernels (sphere_convex.cpp, capsule_convex.cpp, convex_triangle.cpp,
+// convex_ellipsoid.cpp, convex_cylinder.cpp);
 // internal to kernels/narrowphase.
 //   next_block          block starts of a kSimdWidth-wide pass (last block overlaps)
+//   block               items i .. i + W of an array of n, the last repeated past n
 //   kKeep               hulls up to this many faces / edges keep pass values on the stack
 //   lanes_min/max       horizontal min / max of the lanes
 //   vertex, face_normal one hull vertex / face normal as a V3
@@ -25,6 +27,18 @@ using simd::kSimdWidth;
 /// which revisits some items: harmless for a max / min with the lowest index among ties.
 IMPACT_INLINE uint32_t next_block(uint32_t i, uint32_t e) {
   return i + 2 * kSimdWidth <= e ? i + kSimdWidth : e - kSimdWidth;
+}
+
+/// Items i .. i + F::kWidth of p[0 .. n) (i < n), the last item repeated past n: a
+/// pass over a hull's faces, vertices or queued slots in whole blocks (a repeated item
+/// changes no minimum or maximum; lanes past n are masked where a count matters).
+template <class F>
+IMPACT_INLINE F block(const float* p, uint32_t i, uint32_t n) {
+  constexpr uint32_t W = F::kWidth;
+  if (i + W <= n) return F::load(p + i);
+  float t[W];
+  for (uint32_t k = 0; k < W; ++k) t[k] = p[i + k < n ? i + k : n - 1];
+  return F::load(t);
 }
 
 /// Hulls of up to this many faces (edges) keep their pass values on the stack for the
