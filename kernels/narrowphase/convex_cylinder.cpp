@@ -124,12 +124,11 @@ template <uint32_t W>
 struct Scratch {
   static constexpr uint32_t kE = kMaxEdges + W;
   float yx[kMaxVerts + W], yy[kMaxVerts + W], yz[kMaxVerts + W];
-  // per edge, from the edge-side pass for the edge-rim slots: midpoint, unit direction,
-  // half length, arc bisector and half-angle cosine; a lower bound of o on the arc; the
-  // rims' half spheres it reaches (1 / 0: n_z > 0, n_z < 0); first vertex and direction
-  float mx[kE], my[kE], mz[kE], ux[kE], uy[kE], uz[kE], hs[kE], bx[kE], by[kE], bz[kE], cs[kE];
+  // per edge, from the edge-side pass for the edge-rim slots: first vertex and direction,
+  // arc bisector and half-angle cosine; a lower bound of o on the arc; the rims' half
+  // spheres it reaches (1 / 0: n_z > 0, n_z < 0)
+  float y0x[kE], y0y[kE], y0z[kE], dx[kE], dy[kE], dz[kE], bx[kE], by[kE], bz[kE], cs[kE];
   float low[kE], up[kE], down[kE];
-  float y0x[kE], y0y[kE], y0z[kE], dx[kE], dy[kE], dz[kE];
 };
 
 /// A pair still live after the closed-form candidates: its frame and its least (o,
@@ -219,14 +218,13 @@ struct Pair {
 
 /// Candidate indices (the tie order).
 struct Ids {
-  uint32_t cap, edge_side, vert_side, vert_rim, edge_rim, end;
+  uint32_t cap, edge_side, vert_side, vert_rim, edge_rim;
   Ids(uint32_t nf, uint32_t na, uint32_t nv)
       : cap(nf),
         edge_side(nf + 2),
         vert_side(nf + 2 + na),
         vert_rim(nf + 2 + na + nv),
-        edge_rim(nf + 2 + na + 3 * nv),
-        end(nf + 2 + 3 * na + 3 * nv) {}
+        edge_rim(nf + 2 + na + 3 * nv) {}
 };
 
 /// An edge block: its first vertex, direction, bisector and half angle in the frame.
@@ -252,39 +250,57 @@ IMPACT_INLINE EdgeBlock<F> load_edges(const Pair<F>& p, uint32_t i) {
   return e;
 }
 
+/// One edge-rim slot of rim_solve.h's half-ellipse solve, split around the solve so that
+/// several slots run it as independent chains: setup gives the solve's inputs for the
+/// edge c + t u (u unit) against the rim its normals reach (upper: n_z > 0, the bottom
+/// rim); finish turns the solved normal into n (hull to cylinder), the parameter t along
+/// the edge level with the rim point, and n's squared horizontal length.
+template <class F>
+struct RimSlot {
+  rim::CoreRims<F> cr;
+  typename F::Mask upper;
+  IMPACT_INLINE void setup(const V3<F>& c, const V3<F>& u, F rc, F hh, typename F::Mask up, F& b, F& X,
+                           F& Y) {
+    F rb[2], rx[2], ry[2];
+    cr.setup(c, u, rc, hh, rb, rx, ry);
+    upper = up;
+    b = rb[0], X = rx[0], Y = select(up, ry[0], ry[1]);
+  }
+  IMPACT_INLINE V3<F> finish(F ex, F ey, const V3<F>& c, const V3<F>& u, F rc, F hh, F& t, F& nxy2) const {
+    F len;
+    const V3<F> n = normalize_or(madd(cr.w * ex, select(upper, ey, -ey), cr.v), cr.w, len);
+    nxy2 = n.x * n.x + n.y * n.y;
+    const F sc = rc / sqrt(select(nxy2 > F(kTinySq), nxy2, F(1.0f)));
+    const V3<F> y{-sc * n.x, -sc * n.y, -hh * simd::sign_nonneg(n.z)};
+    t = dot(y - c, u);
+    return n;
+  }
+};
+
 /// Solves the queued slots two blocks at a time (independent chains in one loop),
 /// scores the solutions that lie on their pieces and offers them to their pairs.
 template <class F>
 void flush(Queue<F::kWidth>& q, Live* live) {
   constexpr uint32_t W = F::kWidth;
-  const F zero(0.0f), one(1.0f);
+  const F zero(0.0f);
   const uint32_t n = q.n;
   for (uint32_t i = 0; i < n; i += 2 * W) {
-    rim::CoreRims<F> cr[2];
+    RimSlot<F> rs[2];
     V3<F> c[2], u[2];
     F hs[2], rc[2], hh[2], b[2], X[2], Y[2], ex[2], ey[2];
-    typename F::Mask upper[2];
     for (uint32_t j = 0; j < 2; ++j) {
       const uint32_t at = i + j * W;
       c[j] = V3<F>{block<F>(q.c[0], at, n), block<F>(q.c[1], at, n), block<F>(q.c[2], at, n)};
       u[j] = V3<F>{block<F>(q.u[0], at, n), block<F>(q.u[1], at, n), block<F>(q.u[2], at, n)};
       hs[j] = block<F>(q.hs, at, n), rc[j] = block<F>(q.rc, at, n), hh[j] = block<F>(q.hh, at, n);
-      upper[j] = block<F>(q.slot, at, n) == zero;
-      F rb[2], rx[2], ry[2];
-      cr[j].setup(c[j], u[j], rc[j], hh[j], rb, rx, ry);
-      b[j] = rb[0], X[j] = rx[0], Y[j] = select(upper[j], ry[0], ry[1]);
+      rs[j].setup(c[j], u[j], rc[j], hh[j], block<F>(q.slot, at, n) == zero, b[j], X[j], Y[j]);
     }
     rim::half_ellipse_normals<F, 2>(b, X, Y, ex, ey);
     for (uint32_t j = 0; j < 2; ++j) {
       const uint32_t at = i + j * W;
       if (at >= n) break;
-      F len;
-      const V3<F> nn =
-          normalize_or(madd(cr[j].w * ex[j], select(upper[j], ey[j], -ey[j]), cr[j].v), cr[j].w, len);
-      const F nxy2 = nn.x * nn.x + nn.y * nn.y;
-      const F sc = rc[j] / sqrt(select(nxy2 > F(kTinySq), nxy2, one));
-      const V3<F> y{-sc * nn.x, -sc * nn.y, -hh[j] * simd::sign_nonneg(nn.z)};
-      const F t = dot(y - c[j], u[j]);
+      F t, nxy2;
+      const V3<F> nn = rs[j].finish(ex[j], ey[j], c[j], u[j], rc[j], hh[j], t, nxy2);
       const V3<F> m{block<F>(q.m[0], at, n), block<F>(q.m[1], at, n), block<F>(q.m[2], at, n)};
       // inside the arc the score below is exact (an upper bound); on the piece where the
       // rim point also lies on the edge
@@ -418,13 +434,13 @@ State convex_cylinder_pair(const LeafSoA& A, const LeafSoA& B, const ManifoldSoA
     // the crossing's parameter on the edge and its height on the side
     const F sv = -((e.y0.x + rc * n.x) * e.d.x + (e.y0.y + rc * n.y) * e.d.y) / select(tilted, dxy2, one);
     const F zc = e.y0.z + sv * e.d.z, ss = F(p.slack);
-    const Mask crosses = (sv * sqrt(l2) >= -ss) & ((sv - one) * sqrt(l2) <= ss) & (abs(zc) <= hh + ss);
+    const Mask long_enough = l2 > tiny;
+    const F len = sqrt(select(long_enough, l2, one));
+    const Mask crosses = (sv * len >= -ss) & ((sv - one) * len <= ss) & (abs(zc) <= hh + ss);
     const Mask ok = tilted & (dot(n, e.m) >= e.cosh) & valid<F>(i, p.na);
     p.offer(o, n, lane + F(static_cast<float>(ids.edge_side + i)), ok, crosses);
     // edge-rim: the least of n.y0 over the arc (n = cos t m + sin t (u x m), |t| <= the
     // half angle) plus min(rc, h), the least of the cylinder's part
-    const Mask long_enough = l2 > tiny;
-    const F len = sqrt(select(long_enough, l2, one));
     const V3<F> u = e.d * (one / len);
     const V3<F> tm = simd::cross(u, e.m);
     const F a = dot(e.m, e.y0), b = dot(tm, e.y0);
@@ -437,10 +453,6 @@ State convex_cylinder_pair(const LeafSoA& A, const LeafSoA& B, const ManifoldSoA
     select(min(z0, z1) < zero, one, zero).store(scratch.down + i);
     e.y0.x.store(scratch.y0x + i), e.y0.y.store(scratch.y0y + i), e.y0.z.store(scratch.y0z + i);
     e.d.x.store(scratch.dx + i), e.d.y.store(scratch.dy + i), e.d.z.store(scratch.dz + i);
-    const V3<F> mid = madd(e.y0, F(0.5f), e.d);
-    mid.x.store(scratch.mx + i), mid.y.store(scratch.my + i), mid.z.store(scratch.mz + i);
-    u.x.store(scratch.ux + i), u.y.store(scratch.uy + i), u.z.store(scratch.uz + i);
-    (F(0.5f) * len).store(scratch.hs + i);
     e.m.x.store(scratch.bx + i), e.m.y.store(scratch.by + i), e.m.z.store(scratch.bz + i);
     e.cosh.store(scratch.cs + i);
   }
@@ -519,32 +531,33 @@ State convex_cylinder_pair(const LeafSoA& A, const LeafSoA& B, const ManifoldSoA
       const Mask keep = (F::load(scratch.low + i) < fb) & valid<F>(i, p.na);
       Mask slot[2] = {keep & (F::load(scratch.up + i) > zero), keep & (F::load(scratch.down + i) > zero)};
       if (simd::none(slot[0] | slot[1])) continue;
-      {
-        // the segment's distance to each rim circle, bounded below by its radial and
-        // height gaps (the least distance to the axis: a 2-D point-segment distance)
-        const V3<F> y0{F::load(scratch.y0x + i), F::load(scratch.y0y + i), F::load(scratch.y0z + i)};
-        const V3<F> d{F::load(scratch.dx + i), F::load(scratch.dy + i), F::load(scratch.dz + i)};
-        const V3<F> y1 = y0 + d;
-        const F dxy2 = d.x * d.x + d.y * d.y;
-        const F rhi = sqrt(max(y0.x * y0.x + y0.y * y0.y, y1.x * y1.x + y1.y * y1.y));
-        const F tt = clamp(-(y0.x * d.x + y0.y * d.y) / select(dxy2 > tiny, dxy2, one), zero, one);
-        const F px = y0.x + tt * d.x, py = y0.y + tt * d.y;
-        const F rg = max(max(sqrt(px * px + py * py) - rc, rc - rhi), zero);
-        const F zlo = min(y0.z, y1.z), zhi = max(y0.z, y1.z);
-        const F hg0 = max(max(zlo + hh, -hh - zhi), zero), hg1 = max(max(zlo - hh, hh - zhi), zero);
-        slot[0] = slot[0] & (rg * rg + hg0 * hg0 <= fb2);
-        slot[1] = slot[1] & (rg * rg + hg1 * hg1 <= fb2);
-      }
+      // the segment's distance to each rim circle, bounded below by its radial and height
+      // gaps (the least distance to the axis: a 2-D point-segment distance)
+      const V3<F> y0{F::load(scratch.y0x + i), F::load(scratch.y0y + i), F::load(scratch.y0z + i)};
+      const V3<F> d{F::load(scratch.dx + i), F::load(scratch.dy + i), F::load(scratch.dz + i)};
+      const V3<F> y1 = y0 + d;
+      const F dxy2 = d.x * d.x + d.y * d.y;
+      const F rhi = sqrt(max(y0.x * y0.x + y0.y * y0.y, y1.x * y1.x + y1.y * y1.y));
+      const F tt = clamp(-(y0.x * d.x + y0.y * d.y) / select(dxy2 > tiny, dxy2, one), zero, one);
+      const F px = y0.x + tt * d.x, py = y0.y + tt * d.y;
+      const F rg = max(max(sqrt(px * px + py * py) - rc, rc - rhi), zero);
+      const F zlo = min(y0.z, y1.z), zhi = max(y0.z, y1.z);
+      const F hg0 = max(max(zlo + hh, -hh - zhi), zero), hg1 = max(max(zlo - hh, hh - zhi), zero);
+      slot[0] = slot[0] & (rg * rg + hg0 * hg0 <= fb2);
+      slot[1] = slot[1] & (rg * rg + hg1 * hg1 <= fb2);
       const uint32_t bits[2] = {simd::bits(slot[0]), simd::bits(slot[1])};
       if ((bits[0] | bits[1]) == 0) continue;
       for (uint32_t sl = 0; sl < 2; ++sl) {
         for (uint32_t mb = bits[sl]; mb != 0; mb &= mb - 1u) {
           if (q.n == Queue<W>::kCap) flush<F>(q, live);
           const uint32_t j = q.n++, x = i + static_cast<uint32_t>(std::countr_zero(mb));
-          q.c[0][j] = scratch.mx[x], q.c[1][j] = scratch.my[x], q.c[2][j] = scratch.mz[x];
-          q.u[0][j] = scratch.ux[x], q.u[1][j] = scratch.uy[x], q.u[2][j] = scratch.uz[x];
+          const float e[3] = {scratch.dx[x], scratch.dy[x], scratch.dz[x]};
+          const float len = std::sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2]), il = 1.0f / len;
+          q.c[0][j] = scratch.y0x[x] + 0.5f * e[0], q.c[1][j] = scratch.y0y[x] + 0.5f * e[1],
+          q.c[2][j] = scratch.y0z[x] + 0.5f * e[2];
+          q.u[0][j] = e[0] * il, q.u[1][j] = e[1] * il, q.u[2][j] = e[2] * il;
           q.m[0][j] = scratch.bx[x], q.m[1][j] = scratch.by[x], q.m[2][j] = scratch.bz[x];
-          q.hs[j] = scratch.hs[x], q.cosh[j] = scratch.cs[x];
+          q.hs[j] = 0.5f * len, q.cosh[j] = scratch.cs[x];
           q.slot[j] = static_cast<float>(sl);
           q.rc[j] = p.rc, q.hh[j] = p.hh, q.slack[j] = p.slack;
           q.id[j] = static_cast<float>(ids.edge_rim + 2 * x + sl);
@@ -634,22 +647,15 @@ void finish_pair(const LeafSoA& A, const LeafSoA& B, const ManifoldSoA& out, con
       const F1 len = sqrt(length_sq(d1));
       const V3<F1> u = d1 * (F1(1.0f) / len), c = madd(a1, F1(0.5f), d1);
       const F1 hs = F1(0.5f) * len;
-      rim::CoreRims<F1> cr;
-      F1 rb[2], rx[2], ry[2];
-      cr.setup(c, u, F1(rc), F1(hh), rb, rx, ry);
-      const bool upper = n[2] > 0.0f;  // the solve's slot 0: n_z > 0
-      F1 b1[1] = {rb[0]}, X1[1] = {rx[0]}, Y1[1] = {upper ? ry[0] : ry[1]}, ex[1], ey[1];
+      RimSlot<F1> rs;
+      F1 b1[1], X1[1], Y1[1], ex[1], ey[1];
+      rs.setup(c, u, F1(rc), F1(hh), typename F1::Mask(n[2] > 0.0f), b1[0], X1[0], Y1[0]);
       rim::half_ellipse_normals<F1, 1>(b1, X1, Y1, ex, ey);
-      F1 l;
-      const V3<F1> nn = normalize_or(madd(cr.w * ex[0], upper ? ey[0] : -ey[0], cr.v), cr.w, l);
+      F1 t, nxy2;
+      const V3<F1> nn = rs.finish(ex[0], ey[0], c, u, F1(rc), F1(hh), t, nxy2);
       const float m[3] = {nn.x.lane(0), nn.y.lane(0), nn.z.lane(0)};
-      const float mxy = std::sqrt(m[0] * m[0] + m[1] * m[1]);
-      const float s2 = mxy > 0.0f ? rc / mxy : 0.0f;
-      const float y[3] = {-s2 * m[0], -s2 * m[1], m[2] >= 0.0f ? -hh : hh};
-      const float t = (y[0] - c.x.lane(0)) * u.x.lane(0) + (y[1] - c.y.lane(0)) * u.y.lane(0) +
-                      (y[2] - c.z.lane(0)) * u.z.lane(0);
       const float om = score(m);
-      if (std::fabs(t) <= hs.lane(0) + tol && om <= o + tol) {
+      if (std::fabs(t.lane(0)) <= hs.lane(0) + tol && om <= o + tol) {
         o = om;
         for (int j = 0; j < 3; ++j) n[j] = m[j];
       }
