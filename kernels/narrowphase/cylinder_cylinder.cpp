@@ -742,7 +742,9 @@ IMPACT_INLINE void phase_b(Chunk<W>& ch) {
       }
     }
     ch.nunits = nu;
-    if (nu >= 4 * W) flush_units<F, W>(ch, 4 * W);
+    // A group adds up to kArcSlots W units: flush until fewer than 4 W are left, so the
+    // next group always fits (at most 4 W - 1 + kArcSlots W units, below kUnits).
+    while (ch.nunits >= 4 * W) flush_units<F, W>(ch, 4 * W);
   }
   if (ch.nunits > 0) flush_units<F, W>(ch, ch.nunits);
   ch.nitems = 0;

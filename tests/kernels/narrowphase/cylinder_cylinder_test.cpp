@@ -1153,6 +1153,35 @@ TEST(CylinderCylinder, NeedlesAndPancakes) {
   EXPECT_GT(st.hits, n / 5);
 }
 
+/// Two coins (half length 1e-4 of the radius) whose four rim pairs each give the most
+/// brackets (kArcSlots = 6; found by the needle / pancake test at
+/// IMPACT_TEST_INTENSITY=10), repeated over a whole bucket: phase B's unit queue then
+/// takes 24 units per lane. It once flushed 4 W units per group of W items whatever
+/// was left, so a run of such lanes overflowed the queue (a stack overwrite in either
+/// path: the scalar one after 3 lanes, the 16-lane one after 4 groups). Every lane is
+/// checked against the reference, and all give the same bytes.
+TEST(CylinderCylinder, CoinsWithTheMostRimBracketsFillABucket) {
+  Query q;
+  q.b.p = Vec3d::Zero();
+  q.b.R = Mat3d::Identity();
+  q.b.r = 0.783263862, q.b.h = 7.83263895e-05;
+  q.a.p = Vec3d(0.354156226, -0.193492845, 0.072137773);
+  q.a.R = columns(Vec3d(0.324249327, -0.587805152, 0.741179705), Vec3d(0.940862298, 0.281716436, -0.18818593),
+                  Vec3d(-0.0981858373, 0.7583673, 0.644390106));
+  q.a.r = 0.583280742, q.a.h = 5.83280744e-05;
+  // Orthonormalise the printed (9-digit) axes (the kernel's precondition): keep the axis.
+  const Vec3d u = q.a.R.col(2).normalized();
+  const Vec3d x = (q.a.R.col(0) - q.a.R.col(0).dot(u) * u).normalized();
+  q.a.R = columns(x, u.cross(x), u);
+  const std::vector<Query> qs(200, rounded(q));
+  check_all(qs, "coins, 6 brackets per rim pair");
+  const auto simd = run(qs, KernelPath::kSimd), scal = run(qs, KernelPath::kScalar);
+  for (size_t k = 1; k < qs.size(); ++k) {
+    EXPECT_TRUE(same_bytes(simd[k], simd[0])) << "lane " << k;
+    EXPECT_TRUE(same_bytes(scal[k], scal[0])) << "lane " << k;
+  }
+}
+
 /// Symmetries: turning and moving the whole pair turns the normal and keeps the depth;
 /// A and B swapped reverse the normal; either axis reversed (R's columns 0 and 2
 /// negated) is the same solid: the same answer within tol.
