@@ -179,21 +179,30 @@ bool check(const Case& c, const test::PairResult& res, const char* what, int k) 
   // The picks below are checked on those vertices (exact, in double).
   Vec3d x[4];
   size_t at[4] = {0, 0, 0, 0};
+  bool ambiguous = false;  // a point that two vertices match within rounding
   for (uint32_t j = 0; j < res.count; ++j) {
     EXPECT_GT(res.pd[j], 0.0);
     EXPECT_LE(res.pd[j], res.depth);
     const Vec3d xj = res.pt[j] - c.nh * (0.5 * res.pd[j]) - c.p;
     double best = INFINITY;
+    int matches = 0;
     for (size_t i = 0; i < ref.w.size(); ++i) {
       if ((ref.w[i] - xj).norm() > 2 * ptol || std::find(at, at + j, i) != at + j) continue;
+      matches += std::fabs(ref.d[i] - res.pd[j]) <= tol ? 1 : 0;
       if (std::fabs(ref.d[i] - res.pd[j]) < best) {
         best = std::fabs(ref.d[i] - res.pd[j]);
         at[j] = i;
       }
     }
     EXPECT_LE(best, tol) << "point " << j << " is no vertex below with its depth (or one taken before)";
+    ambiguous = ambiguous || matches > 1;
     x[j] = ref.w[at[j]];
   }
+  // Far from the origin a needle's end (2e-4 across) lies within one float spacing of
+  // the world points (~0.008 at 1e5): where two of its corners also share a depth within
+  // rounding, which vertex a point is cannot be told, nor checked against the picks
+  // (found at IMPACT_TEST_INTENSITY=25: the farthest pick measured from the twin).
+  if (ambiguous) return test::hull_input::failure_parts() == fails;
   // The picks: each the best of the vertices surely below, and no better than the best
   // of those maybe below (within tol of the plane), up to rounding.
   const double span = 2 * ref.size;
