@@ -386,7 +386,12 @@ void check(const std::vector<Query>& qs, const char* what, Checked* out = nullpt
       ASSERT_TRUE(h.n.allFinite());
       EXPECT_NEAR(h.n.norm(), 1.0, 1e-5);
       EXPECT_LE(fk, ref.depth + tol) << what << " lane " << k << " " << path;
-      if (fk >= ref.depth - tol && ref.second > ref.depth + 10 * tol && ref.hmin > 1e-2 * L) {
+      // The reference's `second` (its least other minimum, > 0.03 rad away) comes from
+      // sampling; f at the kernel's normal, in double, bounds the values there too where
+      // that normal is as far (at IMPACT_TEST_INTENSITY=30 a thin pair's kernel normal
+      // 1.27 rad from the reference's had f within tol of the minimum: not unique).
+      const double second = angle(h.n, ref.n) > 0.03 ? std::min(ref.second, fk) : ref.second;
+      if (fk >= ref.depth - tol && second > ref.depth + 10 * tol && ref.hmin > 1e-2 * L) {
         EXPECT_LT(angle(h.n, ref.n), kAngleTol) << what << " lane " << k << " " << path;
       }
       EXPECT_EQ(h.pd, h.depth);
