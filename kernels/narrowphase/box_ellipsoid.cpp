@@ -347,10 +347,9 @@ IMPACT_INLINE void pieces(const Frame<F>& fr, Best<F>& best) {
   }
 }
 
-/// Writes the collision data of lanes 0 .. n of the block to out at the pair indices idx.
+/// Hands the group's collision data to o (the live driver writes it out).
 template <class F>
-IMPACT_INLINE void finish(const Frame<F>& fr, const Best<F>& best, const ManifoldSoA& out, const int32_t* idx,
-                          uint32_t n) {
+IMPACT_INLINE void finish(const Frame<F>& fr, const Best<F>& best, LiveOut<F, 1>& o) {
   const F zero(0.0f), one(1.0f);
   // n from A to B: minus m; B's surface point: its support along m (towards the box).
   const V3<F> ml = best.m * (one / best.len);
@@ -366,7 +365,7 @@ IMPACT_INLINE void finish(const Frame<F>& fr, const Best<F>& best, const Manifol
   m.depth = depth;
   m.point[0] = madd(fr.re.apply(xb), F(0.5f) * depth, nw);  // relative to fr.pe
   m.pdepth[0] = depth;
-  scatter(out, idx, n, m, fr.pe);
+  o.put(m, fr.pe);
 }
 
 /// The range through prim::for_each_live_group: the screen writes count 0 for every lane
@@ -375,20 +374,20 @@ IMPACT_INLINE void finish(const Frame<F>& fr, const Best<F>& best, const Manifol
 template <class F>
 IMPACT_INLINE void box_ellipsoid_range(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out, Range r) {
   using Int = typename F::Int;
-  for_each_live_group<F>(
+  for_each_live_group<F, 1>(
       a, b, out, r,
       [&](const LeafSoA& va, const LeafSoA& vb, uint32_t at, uint32_t, uint32_t, NoExtra*) {
         const Frame<F> fr = make_frame(load_p<F>(va, at), load_r<F>(va, at), load_e<F>(va, at),
                                        load_p<F>(vb, at), load_r<F>(vb, at), load_e<F>(vb, at));
         return simd::bits(may_touch(fr, face_best(fr)));
       },
-      [&](const int32_t* index, const NoExtra*, uint32_t cnt) {
+      [&](const int32_t* index, const NoExtra*, uint32_t, LiveOut<F, 1>& o) {
         const Int idx = Int::load(index);
         const Frame<F> fr = make_frame(gather3<F>(a.p, idx), gather_r<F>(a, idx), gather3<F>(a.e, idx),
                                        gather3<F>(b.p, idx), gather_r<F>(b, idx), gather3<F>(b.e, idx));
         Best<F> best = face_best(fr);
         pieces(fr, best);
-        finish(fr, best, out, index, cnt);
+        finish(fr, best, o);
       });
 }
 

@@ -32,7 +32,8 @@
 //    lowest slot): the first vertex wins ties, as in collide_support_halfspace); depths
 //    recomputed from the chosen vertices (the same expression, the same bits). Only
 //    the chosen vertices go back to the world frame, relative to A's position
-//    (precision far from the origin), and are scattered to their lanes.
+//    (precision far from the origin); the driver expands the chunk's results into the
+//    output blocks (prim::LiveOut).
 // Big hulls: a lane whose hull has more than kLaneVerts vertices is not listed and gets
 // collide_support_halfspace (one pair at a time, SIMD across its vertices) instead,
 // decided by its own hull.
@@ -172,11 +173,10 @@ struct Below {
 /// group padded with repeats), below[l] its hull's vertices below the plane (non-zero).
 /// Slot j of lane l holds its j-th vertex below (in vertex order; past its count, its
 /// first again: a vertex seen again changes no first strict maximum), so every slot of
-/// every lane is below and the picks run over full vectors. Writes lanes live[0 .. cnt)
-/// of out.
+/// every lane is below and the picks run over full vectors. Hands the group's result to o.
 template <class F>
-IMPACT_INLINE void touching_group(const LeafSoA& a, const LeafSoA& b, const HullView& h, const ManifoldSoA& out,
-                                  const int32_t* live, const Below* below, uint32_t cnt) {
+IMPACT_INLINE void touching_group(const LeafSoA& a, const LeafSoA& b, const HullView& h, LiveOut<F, 4>& o,
+                                  const int32_t* live, const Below* below) {
   using I = typename F::Int;
   constexpr uint32_t kW = F::kWidth;
   const I idx = I::load(live);
@@ -284,7 +284,7 @@ IMPACT_INLINE void touching_group(const LeafSoA& a, const LeafSoA& b, const Hull
     m.point[j] = madd(x, half * dep[j], nh);
     m.pdepth[j] = dep[j];
   }
-  scatter(out, live, cnt, m, pa);
+  o.put(m, pa);
 }
 
 /// The range through prim::for_each_live_group: the screen moves each block's planes
@@ -299,7 +299,7 @@ void convex_halfspace_range(const LeafSoA& a, const LeafSoA& b, const ManifoldSo
                             const NarrowConfig& cfg) {
   const HullView& h = cfg.hulls;
   constexpr uint32_t W = F::kWidth;
-  for_each_live_group<F, Below>(
+  for_each_live_group<F, 4, Below>(
       a, b, out, r,
       [&](const LeafSoA& va, const LeafSoA& vb, uint32_t at, uint32_t k, uint32_t nb, Below* below) {
         V3<F> nl;
@@ -316,8 +316,8 @@ void convex_halfspace_range(const LeafSoA& a, const LeafSoA& b, const ManifoldSo
         }
         return go;
       },
-      [&](const int32_t* index, const Below* below, uint32_t cnt) {
-        touching_group<F>(a, b, h, out, index, below, cnt);
+      [&](const int32_t* index, const Below* below, uint32_t, LiveOut<F, 4>& o) {
+        touching_group<F>(a, b, h, o, index, below);
       });
   for (uint32_t l = r.begin; l < r.end; ++l) {
     if (h.vert_begin[a.ref[l] + 1] - h.vert_begin[a.ref[l]] > kLaneVerts) {

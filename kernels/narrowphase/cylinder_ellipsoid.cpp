@@ -332,14 +332,14 @@ template <class F>
 IMPACT_INLINE void cylinder_ellipsoid_range(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out,
                                             Range r) {
   using Int = typename F::Int;
-  for_each_live_group<F>(
+  for_each_live_group<F, 1>(
       a, b, out, r,
       [&](const LeafSoA& va, const LeafSoA& vb, uint32_t at, uint32_t, uint32_t, NoExtra*) {
         const V3<F> dw = load_p<F>(vb, at) - load_p<F>(va, at);
         return simd::bits(may_touch(dw, load_axis_z<F>(va, at), ld<F>(va.e[0], at), ld<F>(va.e[1], at),
                                     load_e<F>(vb, at), load_r<F>(vb, at)));
       },
-      [&](const int32_t* index, const NoExtra*, uint32_t cnt) {
+      [&](const int32_t* index, const NoExtra*, uint32_t, LiveOut<F, 1>& o) {
         const Int idx = Int::load(index);
         const V3<F> pa = gather3<F>(a.p, idx);
         const V3<F> dw = gather3<F>(b.p, idx) - pa;
@@ -349,7 +349,7 @@ IMPACT_INLINE void cylinder_ellipsoid_range(const LeafSoA& a, const LeafSoA& b, 
               gather_r<F>(b, idx), m.n, m.depth, m.point[0]);
         m.count = simd::to_int(m.depth > F(0.0f));
         m.pdepth[0] = m.depth;
-        scatter(out, index, cnt, m, pa);
+        o.put(m, pa);
       });
 }
 

@@ -19,6 +19,7 @@
 // where a range boundary falls, and no array is read or written past the Range.
 #pragma once
 
+#include <bit>
 #include <cfloat>
 #include <cstdint>
 #include <cstring>
@@ -207,28 +208,72 @@ IMPACT_INLINE M3<F> gather_r(const LeafSoA& s, typename F::Int idx) {
 /// No per-lane payload.
 struct NoExtra {};
 
+/// A chunk's group results in live-list order (row i: the chunk's i-th listed lane), kept
+/// until the chunk's groups are done, then expanded into the output blocks (contiguous,
+/// masked stores per block instead of one scalar store per field and lane): count, n,
+/// depth, and S point slots (absolute) with their depths.
+template <class F, uint32_t S>
+struct LiveOut {
+  static constexpr uint32_t kW = F::kWidth;
+  static constexpr uint32_t kRows = 17 * kW;  // kChunk + W: the last group's padding
+  static constexpr uint32_t kFields = 4 + 4 * S;
+  float f[kFields][kRows];
+  int32_t count[kRows];
+  uint32_t row = 0;  // the current group's first row
+
+  /// The current group's lanes 0 .. W (padding lanes too: the next group's rows overwrite
+  /// them, and the last group's lie past the list): points made absolute by adding origin.
+  template <uint32_t P>
+  IMPACT_INLINE void put(const Lanes<F, P>& m, const V3<F>& origin) {
+    static_assert(S <= P);
+    m.count.store(count + row);
+    m.n.x.store(f[0] + row), m.n.y.store(f[1] + row), m.n.z.store(f[2] + row);
+    m.depth.store(f[3] + row);
+    for (uint32_t j = 0; j < S; ++j) {
+      (origin.x + m.point[j].x).store(f[4 + 4 * j] + row);
+      (origin.y + m.point[j].y).store(f[5 + 4 * j] + row);
+      (origin.z + m.point[j].z).store(f[6 + 4 * j] + row);
+      m.pdepth[j].store(f[7 + 4 * j] + row);
+    }
+  }
+  /// Rows at .. at + popcount(bits) to the set lanes of block k .. k + W of out.
+  IMPACT_INLINE void expand(const ManifoldSoA& out, uint32_t k, uint32_t bits, uint32_t at) const {
+    simd::expand_store<kW>(out.count + k, count + at, bits);
+    for (uint32_t q = 0; q < 3; ++q) simd::expand_store<kW>(out.n[q] + k, f[q] + at, bits);
+    simd::expand_store<kW>(out.depth + k, f[3] + at, bits);
+    for (uint32_t j = 0; j < S; ++j) {
+      for (uint32_t q = 0; q < 3; ++q) simd::expand_store<kW>(out.point[j][q] + k, f[4 + 4 * j + q] + at, bits);
+      simd::expand_store<kW>(out.pdepth[j] + k, f[7 + 4 * j] + at, bits);
+    }
+  }
+};
+
 /// The range kChunk = 16 W pairs at a time (16 blocks: a chunk's last, partly filled
 /// group pads about W / 2 lanes; with 4 blocks that was ~20% of box-ellipsoid's live work):
 ///   bits = screen(va, vb, at, k, nb, extra): block k .. k + nb of the range (nb < W only
 ///     at the range's end), its lanes at `at` of the views va / vb (full-width copies in
 ///     a tail); bit l set: lane k + l goes on, with payload extra[l]. The driver writes
-///     count 0 for every lane of the block first (the groups overwrite their lanes').
-///   group(index, extra, cnt): W listed lanes (cnt real ones, the rest repeating the last),
-///     writes lanes index[0 .. cnt) of the output.
+///     count 0 for every lane of the block first (the groups' lanes are overwritten).
+///   group(index, extra, cnt, o): W listed lanes (cnt real ones, the rest repeating the
+///     last); it hands its result, S point slots, to o.put (a LiveOut<F, S>), and the
+///     driver writes them to lanes index[0 .. cnt) of the output once the chunk's groups
+///     are done (LiveOut::expand, block by block).
 /// The list and its length stay local here: appending through a struct member after the
 /// byte stores of out.count made GCC reload and store the length around every lane (a
 /// uint8_t store may alias anything; convex-halfspace measured ~30% slower that way).
 /// Every computation is lane-wise, so a pair's bytes do not depend on which lanes share
 /// its block or group.
-template <class F, class Extra = NoExtra, class Screen, class Group>
+template <class F, uint32_t S, class Extra = NoExtra, class Screen, class Group>
 IMPACT_INLINE void for_each_live_group(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out, Range r,
                                        Screen&& screen, Group&& group) {
   constexpr uint32_t W = F::kWidth;
   constexpr uint32_t kChunk = 16 * W;
+  LiveOut<F, S> lo;
   for (uint32_t k0 = r.begin; k0 < r.end; k0 += kChunk) {
     const uint32_t n = r.end - k0 < kChunk ? r.end - k0 : kChunk;
     int32_t index[kChunk + W];
     Extra extra[kChunk + W];
+    uint32_t block_bits[16];
     uint32_t nlive = 0;
     for (uint32_t j = 0; j < n; j += W) {
       const uint32_t k = k0 + j, nb = n - j < W ? n - j : W;
@@ -242,6 +287,8 @@ IMPACT_INLINE void for_each_live_group(const LeafSoA& a, const LeafSoA& b, const
         tb.fill(b, k, nb);
         bits = screen(ta.view, tb.view, 0u, k, nb, ex);
       }
+      bits &= nb == W ? ~0u : (1u << nb) - 1u;
+      block_bits[j / W] = bits;
       std::memset(out.count + k, 0, nb);
       for (uint32_t l = 0; l < nb; ++l) {  // branch-free: written, then counted
         index[nlive] = static_cast<int32_t>(k + l);
@@ -255,35 +302,13 @@ IMPACT_INLINE void for_each_live_group(const LeafSoA& a, const LeafSoA& b, const
         index[g + l] = index[g + cnt - 1];
         extra[g + l] = extra[g + cnt - 1];
       }
-      group(index + g, extra + g, cnt);
+      lo.row = g;
+      group(index + g, extra + g, cnt, lo);
     }
-  }
-}
-
-/// Writes one group's lanes 0 .. cnt to out at pair indices index[l]: count, n, depth and
-/// point slots 0 .. S-1 (points made absolute by adding origin), as store() does for a block.
-template <class F, uint32_t P, uint32_t S = P>
-IMPACT_INLINE void scatter(const ManifoldSoA& out, const int32_t* index, uint32_t cnt, const Lanes<F, P>& m,
-                           const V3<F>& origin) {
-  static_assert(S <= P);
-  constexpr uint32_t W = F::kWidth;
-  float v[4 + 4 * S][W];
-  m.n.x.store(v[0]), m.n.y.store(v[1]), m.n.z.store(v[2]);
-  m.depth.store(v[3]);
-  for (uint32_t j = 0; j < S; ++j) {
-    (origin.x + m.point[j].x).store(v[4 + 4 * j]);
-    (origin.y + m.point[j].y).store(v[5 + 4 * j]);
-    (origin.z + m.point[j].z).store(v[6 + 4 * j]);
-    m.pdepth[j].store(v[7 + 4 * j]);
-  }
-  for (uint32_t l = 0; l < cnt; ++l) {
-    const auto i = static_cast<uint32_t>(index[l]);
-    out.count[i] = static_cast<uint8_t>(m.count.lane(l));
-    for (uint32_t q = 0; q < 3; ++q) out.n[q][i] = v[q][l];
-    out.depth[i] = v[3][l];
-    for (uint32_t j = 0; j < S; ++j) {
-      for (uint32_t q = 0; q < 3; ++q) out.point[j][q][i] = v[4 + 4 * j + q][l];
-      out.pdepth[j][i] = v[7 + 4 * j][l];
+    for (uint32_t j = 0, at = 0; j < n; j += W) {
+      const uint32_t bits = block_bits[j / W];
+      lo.expand(out, k0 + j, bits, at);
+      at += static_cast<uint32_t>(std::popcount(bits));
     }
   }
 }

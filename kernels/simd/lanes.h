@@ -6,12 +6,14 @@
 //
 //   FloatN<N>  N floats           arithmetic + - * /, unary -, compare -> MaskN<N>
 //   MaskN<N>   N lane predicates  & | ^ ~, andnot, any / all / none
-//   IntN<N>    N int32            + -, select, lane access (manifold point counts)
+//   IntN<N>    N int32            + -, select, load / store, lane access (manifold point counts)
 //   verbs      load / store (contiguous, unaligned), broadcast (implicit from float),
 //              mul_add, min, max, abs, sqrt, select(mask, if_true, if_false),
 //              copysign-free sign helpers are built from select;
 //              gather(float array, index lanes): lane i of array[index_i];
 //              gather_lanes(array of lanes, index lanes): lane i of array[index_i];
+//              expand_store<N>(dst, src, bits): the set lanes of dst from src[0, 1, ..]
+//              (the inverse of compacting a block's live lanes; float, or int32 to uint8);
 //              load_transposed(N row pointers): N rows of N floats, one per lane;
 //              tag / tag_index: a small index kept in a float's 5 low mantissa bits,
 //              so one max/min tree gives both the extreme and where it came from.
@@ -158,6 +160,7 @@ struct IntN {
     std::memcpy(&r.v, p, sizeof(Raw));
     return r;
   }
+  IMPACT_INLINE void store(int32_t* p) const { std::memcpy(p, &v, sizeof(Raw)); }
   IMPACT_INLINE int32_t lane(uint32_t i) const { return v[i]; }
 
   friend IMPACT_INLINE IntN operator+(IntN a, IntN b) { return IntN(a.v + b.v); }
@@ -247,6 +250,33 @@ IMPACT_INLINE uint32_t bits(MaskN<N> m) {
   uint32_t r = 0;
   for (uint32_t i = 0; i < N; ++i) r |= (m.v[i] != 0 ? 1u : 0u) << i;
   return r;
+}
+
+/// Expand: for each set bit l of `bits` (l < N), in order, dst[l] = the next of src[0],
+/// src[1], ...; dst[l] for clear bits is not written (the inverse of compacting the set
+/// lanes). AVX-512 at N = 16: one expanding load and one masked store.
+template <uint32_t N>
+IMPACT_INLINE void expand_store(float* dst, const float* src, uint32_t bits) {
+#if defined(__AVX512F__)
+  if constexpr (N == 16) {
+    const auto k = static_cast<__mmask16>(bits);
+    _mm512_mask_storeu_ps(dst, k, _mm512_maskz_expandloadu_ps(k, src));
+    return;
+  }
+#endif
+  for (uint32_t i = 0; bits != 0; ++i, bits &= bits - 1u) dst[__builtin_ctz(bits)] = src[i];
+}
+/// expand_store for small counts: int32 src narrowed to uint8 dst (values 0 .. 255).
+template <uint32_t N>
+IMPACT_INLINE void expand_store(uint8_t* dst, const int32_t* src, uint32_t bits) {
+#if defined(__AVX512F__)
+  if constexpr (N == 16) {
+    const auto k = static_cast<__mmask16>(bits);
+    _mm512_mask_cvtepi32_storeu_epi8(dst, k, _mm512_maskz_expandloadu_epi32(k, src));
+    return;
+  }
+#endif
+  for (uint32_t i = 0; bits != 0; ++i, bits &= bits - 1u) dst[__builtin_ctz(bits)] = static_cast<uint8_t>(src[i]);
 }
 
 template <uint32_t N>
@@ -415,6 +445,7 @@ struct IntN<1> {
   IntN() = default;
   IMPACT_INLINE IntN(int32_t s) : v(s) {}
   static IMPACT_INLINE IntN load(const int32_t* p) { return IntN(*p); }
+  IMPACT_INLINE void store(int32_t* p) const { *p = v; }
   IMPACT_INLINE int32_t lane(uint32_t) const { return v; }
   friend IMPACT_INLINE IntN operator+(IntN a, IntN b) { return IntN(a.v + b.v); }
   friend IMPACT_INLINE IntN operator-(IntN a, IntN b) { return IntN(a.v - b.v); }
