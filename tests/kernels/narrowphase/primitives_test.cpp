@@ -506,7 +506,7 @@ std::string check_contact(const PairType& t, const Shape& a, const Shape& b, con
 
 std::string describe(const Shape& s) {
   char buf[400];
-  std::snprintf(buf, sizeof buf, "p(%.9g %.9g %.9g) e(%.9g %.9g %.9g) R[%.6g %.6g %.6g; %.6g %.6g %.6g; %.6g %.6g %.6g]",
+  std::snprintf(buf, sizeof buf, "p(%.9g %.9g %.9g) e(%.9g %.9g %.9g) R[%.9g %.9g %.9g; %.9g %.9g %.9g; %.9g %.9g %.9g]",
                 s.p[0], s.p[1], s.p[2], s.e[0], s.e[1], s.e[2], s.R[0][0], s.R[0][1], s.R[0][2], s.R[1][0],
                 s.R[1][1], s.R[1][2], s.R[2][0], s.R[2][1], s.R[2][2]);
   return buf;
@@ -1393,6 +1393,27 @@ TEST(PrimitivesMinimumAxis, DeepEdgeAxesAgainstReference) {
       literal(Kind::kTriangle, {-1.47319317f, -0.833539069f, -0.622549891f}, {1, 0, 0, 0, 1, 0, 0, 0, 1},
               {0, 0, 0},
               {-0.243811056f, -1.00577545f, -0.438361138f, -1.18273866f, -1.01132023f, -0.282669425f}));
+}
+
+TEST(PrimitivesExtremes, NearParallelNeedlesCrossInsideBothEdges) {
+  // 100 m needles 1.7e-4 rad apart, 58 m along each other (IMPACT_TEST_INTENSITY 30's
+  // lane of NearParallelNeedlesTakeTheEdgeAxis): the edge axis wins, settled in double,
+  // and the long edges' crossing moves by |t| * 1e-7 / |a x b|^2 (~160 m) unless the
+  // closest-point step keeps the float columns' own lengths; the point then lay 0.0097
+  // off both boxes (tolerance 0.002).
+  const Shape a = literal(Kind::kBox, {0.20999366f, -0.358985394f, -0.34091121f},
+                          {-0.133778051f, 0.241670951f, -0.961092412f, -0.661389291f, 0.700454414f,
+                           0.268193632f, 0.738016009f, 0.671534657f, 0.066133149f},
+                          {100.0f, 0.00999999978f, 0.00999999978f});
+  const Shape b = literal(Kind::kBox, {7.96573591f, 38.0897179f, -43.2073898f},
+                          {-0.133939311f, 0.24157232f, -0.961094737f, -0.661348403f, 0.700478196f,
+                           0.268232346f, 0.73802346f, 0.671545327f, 0.0659418851f},
+                          {100.0f, 0.00999999978f, 0.00999999978f});
+  const PairType& t = pair_type("box-box");
+  for (KernelPath path : {KernelPath::kSimd, KernelPath::kScalar}) {
+    const Out o = run(t, {a}, {b}, path);
+    EXPECT_EQ(check_bucket(t, {a}, {b}, o), 1u);
+  }
 }
 
 TEST(PrimitivesMinimumAxis, TiltedRestingBoxesKeepFaceManifold) {
