@@ -340,32 +340,42 @@ std::string check_face_manifold(const Case& c, const PairResult& r, double L, bo
     const Vec3d x0 = o + q.x() * t1 + q.y() * t2;
     return tn.dot(t.p - x0) / tn.dot(n);
   };
-  std::vector<Eigen::Vector2d> poly;
-  for (int i = 0; i < 3; ++i) poly.push_back(proj(c.a.v(i)));
+  // Each vertex carries its conditioning: 1 for a corner, 1 / sin(crossing angle) for a
+  // crossing of two edges (float moves it along the shallower edge by that much more).
+  struct PV {
+    Eigen::Vector2d q;
+    double cond;
+  };
+  std::vector<PV> poly;
+  for (int i = 0; i < 3; ++i) poly.push_back({proj(c.a.v(i)), 1.0});
   Eigen::Vector2d b2[3];
   for (int i = 0; i < 3; ++i) b2[i] = proj(c.b.v(i));
   const double orient = (b2[1] - b2[0]).x() * (b2[2] - b2[0]).y() - (b2[1] - b2[0]).y() * (b2[2] - b2[0]).x();
   for (int e = 0; e < 3 && !poly.empty(); ++e) {
     const Eigen::Vector2d p0 = b2[e], d = b2[(e + 1) % 3] - b2[e];
     auto side = [&](const Eigen::Vector2d& q) { return (d.x() * (q - p0).y() - d.y() * (q - p0).x()) * orient; };
-    std::vector<Eigen::Vector2d> next;
+    std::vector<PV> next;
     for (size_t k = 0; k < poly.size(); ++k) {
-      const Eigen::Vector2d& p = poly[k];
-      const Eigen::Vector2d& q = poly[(k + 1) % poly.size()];
+      const Eigen::Vector2d& p = poly[k].q;
+      const Eigen::Vector2d& q = poly[(k + 1) % poly.size()].q;
       const double sp = side(p), sq = side(q);
-      if (sp >= 0) next.push_back(p);
-      if ((sp >= 0) != (sq >= 0)) next.push_back(p + (sp / (sp - sq)) * (q - p));
+      if (sp >= 0) next.push_back(poly[k]);
+      if ((sp >= 0) != (sq >= 0)) {
+        const Eigen::Vector2d pq = q - p;
+        const double sine = std::fabs(d.x() * pq.y() - d.y() * pq.x()) / (d.norm() * pq.norm());
+        next.push_back({p + (sp / (sp - sq)) * pq, 1.0 / std::max(sine, 1e-3)});
+      }
     }
     poly = next;
   }
   struct V {
     Eigen::Vector2d q;
-    double depth;
+    double depth, cond;
   };
   std::vector<V> verts;
   double deepest = -1e300;
-  for (const auto& q : poly) {
-    verts.push_back({q, height(c.a, q) - height(c.b, q)});
+  for (const PV& p : poly) {
+    verts.push_back({p.q, height(c.a, p.q) - height(c.b, p.q), p.cond});
     deepest = std::max(deepest, verts.back().depth);
   }
   std::ostringstream why;
@@ -382,8 +392,8 @@ std::string check_face_manifold(const Case& c, const PairResult& r, double L, bo
     const Eigen::Vector2d q = proj(r.pt[k]);
     bool found = false;
     for (const V& v : verts) {
-      if ((v.q - q).norm() > tol || v.depth < -tol) continue;
-      found = found || std::fabs(v.depth - r.pd[k]) <= tol;
+      if ((v.q - q).norm() > tol * v.cond || v.depth < -tol) continue;
+      found = found || std::fabs(v.depth - r.pd[k]) <= tol * v.cond;
       has_deepest = has_deepest || v.depth >= deepest - tol;
     }
     if (!found) why << " point " << k << " is no penetrating vertex of the overlap polygon;";
