@@ -52,8 +52,10 @@
 //     the reference face's side planes (the clip misses it when the depth comes from a
 //     vertex beyond the clipped face: deep pairs);
 //     reduced to 4 (deepest, farthest, largest area: cvx::reduce_manifold); nothing left
-//     after rounding (grazing), or a face of more than 64 vertices: one point at the
-//     deepest vertex. An edge axis wins: one point midway between the closest points of
+//     after rounding (grazing): one point, at the incident side's deepest vertex or at
+//     the clipped polygon's deepest point, whichever lies nearer the reference side
+//     (that vertex can lie outside the reference face: touching pairs at a face's
+//     rim); a face of more than 64 vertices: at that vertex. An edge axis wins: one point midway between the closest points of
 //     hull edge a and the triangle's support feature along -n (edge j, or a vertex, or
 //     the longest edge of a collinear triangle), where those are depth apart along n;
 //     else (a winner among nearly tied axes, e.g. a triangle edge nearly parallel to a
@@ -479,8 +481,12 @@ struct Manifold {
 /// Reference face f of the hull (n = its normal): the triangle clipped by the face's
 /// side planes; points below the face plane, midway between the triangle and the plane.
 /// Then (cvx::kWitnessJoin) the triangle's deepest vertex wit, where it is inside the
-/// side planes.
-void hull_face_manifold(const HullView& h, uint32_t f, const Tri& T, float depth, V3 wit, Manifold* mf) {
+/// side planes. *graze (where no point is below the plane): the one point of a grazing
+/// contact, left as wit (the caller's) or set to the clipped triangle's deepest point,
+/// whichever lies nearer the hull: wit's distance outside the side planes against that
+/// point's height above the plane.
+void hull_face_manifold(const HullView& h, uint32_t f, const Tri& T, float depth, V3 wit, Manifold* mf,
+                        V3* graze) {
   const uint32_t b = h.face_vert_begin[f], e = h.face_vert_begin[f + 1];
   if (e - b < 3 || e - b > kMaxFaceVerts) return;
   const V3 n = face_normal(h, f);
@@ -505,7 +511,24 @@ void hull_face_manifold(const HullView& h, uint32_t f, const Tri& T, float depth
     mf->d[mf->count] = pd;
     ++mf->count;
   };
-  for (uint32_t i = 0; i < cnt; ++i) keep(buf[cur][i]);
+  float smax = -INFINITY;
+  V3 top = wit;
+  for (uint32_t i = 0; i < cnt; ++i) {
+    keep(buf[cur][i]);
+    const float s = fd - dot(n, buf[cur][i]);
+    if (s > smax) smax = s, top = buf[cur][i];
+  }
+  if (mf->count == 0 && cnt > 0) {
+    float out = 0.0f;
+    a = vertex(h, h.face_verts[e - 1]);
+    for (uint32_t i = b; i < e; ++i) {
+      const V3 q = vertex(h, h.face_verts[i]);
+      const V3 o = cross(q - a, n);
+      out = simd::fmax_nn(out, dot(o, wit - a) / std::sqrt(dot(o, o)));
+      a = q;
+    }
+    if (-smax < out) *graze = top;
+  }
   if (!(mf->deepest() < depth * (1.0f - cvx::kWitnessJoin))) return;
   bool inside = true;
   a = vertex(h, h.face_verts[e - 1]);
@@ -521,9 +544,9 @@ void hull_face_manifold(const HullView& h, uint32_t f, const Tri& T, float depth
 /// Reference face: the triangle (n = +-its normal, hull to triangle); incident: hull face
 /// g, clipped by the triangle's side planes; points beyond the triangle's plane, midway.
 /// Then (cvx::kWitnessJoin) the hull's deepest vertex wit, where it is inside the side
-/// planes.
+/// planes. *graze: as hull_face_manifold's (wit or the clipped face's deepest point).
 void triangle_face_manifold(const HullView& h, uint32_t g, const Tri& T, V3 n, float depth, V3 wit,
-                            Manifold* mf) {
+                            Manifold* mf, V3* graze) {
   const uint32_t b = h.face_vert_begin[g], e = h.face_vert_begin[g + 1];
   if (e - b < 3 || e - b > kMaxFaceVerts) return;
   V3 buf[2][kMaxClip];
@@ -531,11 +554,14 @@ void triangle_face_manifold(const HullView& h, uint32_t g, const Tri& T, V3 n, f
   for (uint32_t i = b; i < e; ++i) buf[0][i - b] = vertex(h, h.face_verts[i]);
   uint32_t cur = 0;
   bool inside = true;  // wit
+  float out = 0.0f;    // wit's distance outside the side planes
   for (uint32_t j = 0; j < 3; ++j) {
     const V3 a = T.v[j], q = T.v[j == 2 ? 0 : j + 1], opp = T.v[j == 0 ? 2 : j - 1];
     V3 o = cross(q - a, T.nraw);  // out of the triangle for counter-clockwise about nraw
     if (dot(o, opp - a) > 0.0f) o = -o;
     inside = inside && dot(o, wit) <= dot(o, a);
+    const float oo = dot(o, o);
+    if (oo > 0.0f) out = simd::fmax_nn(out, dot(o, wit - a) / std::sqrt(oo));
     if (cnt == 0) continue;
     cnt = clip_plane(buf[cur], cnt, o, dot(o, a), buf[1 - cur]);
     cur = 1 - cur;
@@ -549,7 +575,14 @@ void triangle_face_manifold(const HullView& h, uint32_t g, const Tri& T, V3 n, f
     mf->d[mf->count] = pd;
     ++mf->count;
   };
-  for (uint32_t i = 0; i < cnt; ++i) keep(buf[cur][i]);
+  float smax = -INFINITY;
+  V3 top = wit;
+  for (uint32_t i = 0; i < cnt; ++i) {
+    keep(buf[cur][i]);
+    const float s = dot(n, buf[cur][i]) - nd;
+    if (s > smax) smax = s, top = buf[cur][i];
+  }
+  if (mf->count == 0 && cnt > 0 && -smax < out) *graze = top;
   if (inside && mf->deepest() < depth * (1.0f - cvx::kWitnessJoin)) keep(wit);
 }
 
@@ -690,10 +723,11 @@ void convex_triangle_lane(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA&
     uint32_t i = 0;  // the triangle's deepest vertex
     for (uint32_t q = 1; q < 3; ++q)
       if (dot(nl, T.v[q]) < dot(nl, T.v[i])) i = q;
-    hull_face_manifold(h, fb + fp.face, T, depth, T.v[i], &mf);
-    if (mf.count == 0) {  // nothing below the face after rounding: that vertex
+    V3 graze = T.v[i];
+    hull_face_manifold(h, fb + fp.face, T, depth, T.v[i], &mf, &graze);
+    if (mf.count == 0) {  // nothing below the face after rounding: the clip's deepest point
       mf.count = 1;
-      mf.p[0] = T.v[i] + nl * (0.5f * depth);
+      mf.p[0] = graze + nl * (0.5f * depth);
       mf.d[0] = depth;
     }
   } else if (feature == 1) {
@@ -703,10 +737,11 @@ void convex_triangle_lane(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA&
     // the hull's deepest vertex
     const uint32_t i = nv >= W ? vertex_argmax<F>(h.vx + vb, h.vy + vb, h.vz + vb, nv, nl)
                                : vertex_argmax<F1>(h.vx + vb, h.vy + vb, h.vz + vb, nv, nl);
-    triangle_face_manifold(h, fb + g, T, nl, depth, vertex(h, vb + i), &mf);
-    if (mf.count == 0) {  // nothing beyond the triangle after rounding: that vertex
+    V3 graze = vertex(h, vb + i);
+    triangle_face_manifold(h, fb + g, T, nl, depth, graze, &mf, &graze);
+    if (mf.count == 0) {  // nothing beyond the triangle after rounding: the clip's deepest point
       mf.count = 1;
-      mf.p[0] = vertex(h, vb + i) - nl * (0.5f * depth);
+      mf.p[0] = graze - nl * (0.5f * depth);
       mf.d[0] = depth;
     }
   } else {

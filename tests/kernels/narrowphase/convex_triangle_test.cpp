@@ -346,7 +346,10 @@ Stats check_pairs(const std::string& name, const std::vector<Pair>& pairs, const
         EXPECT_LE(tri_distance(T, pt), lim)
             << "point " << j << " of " << res.count << " off the triangle ("
             << (face ? "hull face" : (tface ? "triangle face" : "edges")) << ")";
-        EXPECT_LE(std::fabs(hull_sd(H, pt)), lim) << "point " << j << " off the hull's surface";
+        EXPECT_LE(std::fabs(hull_sd(H, pt)), lim)
+            << "point " << j << " of " << res.count << " off the hull's surface ("
+            << (face ? "hull face" : (tface ? "triangle face" : "edges")) << "; depth " << depth << ", n " << n.x
+            << " " << n.y << " " << n.z << ", point " << pt.x << " " << pt.y << " " << pt.z << ")";
         EXPECT_GT(res.pd[j], 0.0) << "pdepth " << j;
         EXPECT_LE(res.pd[j], depth + tol) << "pdepth " << j;
       }
