@@ -28,7 +28,10 @@
 //      no direction outside a 0.02 rad cone around n_ref within 2 tol of depth_ref, by
 //      nref's own probes and dense probes of the circles where whole circles of minima
 //      occur: the cylinder's horizontal one and those perpendicular to the edges; and
-//      the overlap rising by >= 1e-6 L 3e-3 rad from n_ref);
+//      the overlap rising by >= 1e-6 L 3e-3 rad from n_ref); in a flat valley the bound
+//      is the angle at which the overlap rises by kValleyNoise L, if that is larger (the
+//      valley as a quadratic through that rise; at IMPACT_TEST_INTENSITY=30 one lane
+//      near-parallel to the side was 1.19e-4 rad off);
 //  (d) each point p with depth d: p + n d/2 on the cylinder's surface, p - n d/2 on the
 //      triangle (within tol plus ulps of the largest coordinate), 0 < d <= depth;
 //  (e) the scalar and SIMD paths give the same bytes.
@@ -71,6 +74,7 @@ namespace nref = test::nref;
 
 constexpr double kRel = 1e-5;       // depth tolerance, of L
 constexpr double kAngleTol = 1e-4;  // rad, where the minimum is unique and conditioned
+constexpr double kValleyNoise = 4e-7;  // of L: twice the worst depth error measured
 
 double angle(const Vec3d& a, const Vec3d& b) {
   return std::atan2(a.cross(b).norm(), a.dot(b));
@@ -231,8 +235,10 @@ nref::Options dense_options() {
 /// cone overlaps by more than depth + 2 tol (nref's second best, a dense ring at 0.02 rad,
 /// and the circles where whole circles of minima occur: the cylinder's horizontal
 /// circle, the great circles perpendicular to the triangle's edges), and the overlap
-/// rises by >= 1e-6 L at 3e-3 rad from n_ref in every direction (its flat valleys).
-bool unique_minimum(const Query& q, const Vec3d& n_ref, double depth, double second, double tol) {
+/// rises by >= 1e-6 L at 3e-3 rad from n_ref in every direction (its flat valleys);
+/// *rise: that least rise.
+bool unique_minimum(const Query& q, const Vec3d& n_ref, double depth, double second, double tol,
+                    double* rise) {
   double best = second;
   const Vec3d t1 = n_ref.unitOrthogonal(), t2 = n_ref.cross(t1);
   auto ring = [&](double cone, int count) {
@@ -258,7 +264,8 @@ bool unique_minimum(const Query& q, const Vec3d& n_ref, double depth, double sec
     }
   }
   if (!(best > depth + 2 * tol)) return false;
-  return ring(3e-3, 96) - depth >= 1e-6 * size_of(q);
+  *rise = ring(3e-3, 96) - depth;
+  return *rise >= 1e-6 * size_of(q);
 }
 
 struct Ref {
@@ -266,6 +273,10 @@ struct Ref {
   Vec3d n = Vec3d::UnitZ();
   bool outside = false;
   bool unique = false;  // the normal is unique at this tolerance
+  // Where unique: the angle a normal may be off, kAngleTol or, in a flat valley, the
+  // angle at which the overlap rises by kValleyNoise L (the valley taken as quadratic
+  // from its rise at 3e-3 rad): a float kernel's overlap is only that exact.
+  double angle_tol = kAngleTol;
 };
 
 Ref reference(const Query& q) {
@@ -283,7 +294,9 @@ Ref reference(const Query& q) {
   const nref::PairResult s = nref::solve_pair(cylinder_shape(q), triangle_shape(q), {}, dense_options());
   f.depth = s.s;
   f.n = ev(s.n);
-  f.unique = s.unique(2 * tol) && unique_minimum(q, f.n, s.s, s.second, tol);
+  double rise = 0;
+  f.unique = s.unique(2 * tol) && unique_minimum(q, f.n, s.s, s.second, tol, &rise);
+  if (f.unique) f.angle_tol = std::max(kAngleTol, 3e-3 * std::sqrt(kValleyNoise * size_of(q) / rise));
   return f;
 }
 
@@ -361,8 +374,8 @@ void check_all(const std::vector<Query>& qs, const char* what, Stats* out_stats 
       if (f.unique) {
         const double ang = angle(h.n, f.n);
         if (is_simd) ++st.normals_checked, st.worst_angle = std::max(st.worst_angle, ang);
-        EXPECT_LE(ang, kAngleTol) << what << " lane " << k << " n " << h.n.transpose() << " ref "
-                                  << f.n.transpose() << path;
+        EXPECT_LE(ang, f.angle_tol) << what << " lane " << k << " n " << h.n.transpose() << " ref "
+                                    << f.n.transpose() << path;
       }
       check_points(q, h, ptol, what, k, path);
     }
