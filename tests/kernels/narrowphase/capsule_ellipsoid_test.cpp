@@ -30,7 +30,9 @@
 // alike); inside, every direction 0.02 rad or more from n_ref overlaps by more than
 // depth_ref + tol and the overlap rises by >= 1e-6 L at 3e-3 rad from n_ref in every
 // direction (64 samples of the ring, the lowest refined: a needle's flat valley is
-// narrow).
+// narrow); there the normal's bound grows to the angle at which the overlap rises by
+// kValleyNoise L where that is larger than kAngleTol (at IMPACT_TEST_INTENSITY=30 a
+// lane 1e5 from the origin was 1.9e-4 rad off, its depth exact).
 // Scenarios: random poses (outside, touching, through, deep) at sizes 1, 1e-4, 1e4 and
 // 1e5 from the origin; constructed touching (side and end on a surface point's normal:
 // exact depth and normal; count 0 at exactly touching within tol); pancakes and needles
@@ -69,6 +71,7 @@ namespace nref = test::nref;
 
 constexpr double kRel = 1e-5;       // depth tolerance, of L
 constexpr double kAngleTol = 1e-4;  // rad, where the minimum is well conditioned
+constexpr double kValleyNoise = 4e-7;  // of L: twice the worst depth error measured
 
 double angle(const Vec3d& a, const Vec3d& b) {
   return std::atan2(a.cross(b).norm(), a.dot(b));
@@ -264,6 +267,10 @@ struct Ref {
   Vec3d n;       // A to B
   bool through;  // the core meets the ellipsoid (support-overlap reference)
   bool conditioned;
+  // Where conditioned: the angle a normal may be off, kAngleTol or, through, in a flat
+  // valley, the angle at which the overlap rises by kValleyNoise L (the valley taken as
+  // quadratic from its rise at 3e-3 rad): a float kernel's overlap is only that exact.
+  double angle_tol = kAngleTol;
 };
 
 /// The overlap of the two shapes along n (A to B), the reference's function.
@@ -318,7 +325,11 @@ Ref reference(const Query& q, bool check_conditioning = true) {
   f.n = to_eigen(r.n);
   f.through = true;
   f.conditioned = r.unique(kRel * L);
-  if (f.conditioned) f.conditioned = ring_rise(a, b, r.n) >= 1e-6 * L;
+  if (f.conditioned) {
+    const double rise = ring_rise(a, b, r.n);
+    f.conditioned = rise >= 1e-6 * L;
+    if (f.conditioned) f.angle_tol = std::max(kAngleTol, 3e-3 * std::sqrt(kValleyNoise * L / rise));
+  }
   return f;
 }
 
@@ -382,8 +393,8 @@ void check_all(const std::vector<Query>& qs, const char* what, Stats* st_out = n
       if (f.conditioned) {
         const double ang = angle(h.n, f.n);
         st.worst_angle = std::max(st.worst_angle, ang);
-        EXPECT_LE(ang, kAngleTol) << what << " lane " << k << path << " n " << h.n.transpose() << " ref "
-                                  << f.n.transpose() << (f.through ? " through" : " outside");
+        EXPECT_LE(ang, f.angle_tol) << what << " lane " << k << path << " n " << h.n.transpose() << " ref "
+                                    << f.n.transpose() << (f.through ? " through" : " outside");
       }
     }
     if (f.s > tol && f.conditioned) ++st.normal_checked;
@@ -393,7 +404,7 @@ void check_all(const std::vector<Query>& qs, const char* what, Stats* st_out = n
       if (f.conditioned) st.worst_path_angle = std::max(st.worst_path_angle, pa);
       EXPECT_LE(pd, tol) << what << " lane " << k;
       if (f.conditioned) {
-        EXPECT_LE(pa, kAngleTol) << what << " lane " << k;
+        EXPECT_LE(pa, f.angle_tol) << what << " lane " << k;
       }
     }
   }
@@ -598,7 +609,7 @@ TEST(CapsuleEllipsoidCases, ConstructedTouching) {
       const Hit& h = hs[k];
       if (std::fabs(ts[k].depth) <= tol) {
         if (h.count) {
-          EXPECT_LE(h.depth, tol) << k;
+          EXPECT_LE(h.depth, ts[k].depth + tol) << k;
         }
         continue;
       }
@@ -608,8 +619,13 @@ TEST(CapsuleEllipsoidCases, ConstructedTouching) {
       worst = std::max(worst, std::fabs(h.depth - ts[k].depth) / L);
       worst_angle = std::max(worst_angle, angle(h.n, ts[k].n));
       EXPECT_NEAR(h.depth, ts[k].depth, tol) << k;
-      EXPECT_LE(angle(h.n, ts[k].n), kAngleTol)
-          << k << " n " << h.n.transpose() << " want " << ts[k].n.transpose();
+      // (in a flat valley, the bound of check_all: an end nearly tangent to the surface
+      // has the circle's candidate 3e-4 rad away within float noise of the minimum)
+      const double rise = ring_rise(capsule_shape(qs[k]), ellipsoid_shape(qs[k].b), to_nref(ts[k].n));
+      const double ang_tol = std::max(kAngleTol, 3e-3 * std::sqrt(kValleyNoise * L / std::max(rise, 1e-6 * L)));
+      EXPECT_LE(angle(h.n, ts[k].n), ang_tol)
+          << k << " n " << h.n.transpose() << " want " << ts[k].n.transpose() << " depth " << h.depth
+          << " want " << ts[k].depth << " (L " << L << ")";
     }
     std::printf("  touching: hits %d, worst depth %.2g L, angle %.2g\n", hits, worst, worst_angle);
     EXPECT_GT(hits, static_cast<int>(ts.size()) / 4);
