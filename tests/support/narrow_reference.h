@@ -491,6 +491,14 @@ struct PairResult {
   bool unique(double tol) const { return second > s + tol; }
 };
 
+/// How far a float kernel's normal may be off the reference's unique minimiser: `floor`,
+/// or, in a flat valley, the angle at which the overlap rises by `noise` above its
+/// minimum (the float overlap is only that exact), the valley taken as quadratic through
+/// `rise`, the overlap's least rise `at` rad from the minimiser (rise > 0).
+inline double valley_angle(double floor, double rise, double at, double noise) {
+  return std::max(floor, at * std::sqrt(noise / rise));
+}
+
 /// The reference collision data of A and B (B translated by b_shift).
 inline PairResult solve_pair(const Shape& a, const Shape& b, V3 b_shift = {}, const Options& opt = {}) {
   PairResult r;

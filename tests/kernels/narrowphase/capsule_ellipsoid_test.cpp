@@ -328,7 +328,7 @@ Ref reference(const Query& q, bool check_conditioning = true) {
   if (f.conditioned) {
     const double rise = ring_rise(a, b, r.n);
     f.conditioned = rise >= 1e-6 * L;
-    if (f.conditioned) f.angle_tol = std::max(kAngleTol, 3e-3 * std::sqrt(kValleyNoise * L / rise));
+    if (f.conditioned) f.angle_tol = nref::valley_angle(kAngleTol, rise, 3e-3, kValleyNoise * L);
   }
   return f;
 }
@@ -622,7 +622,7 @@ TEST(CapsuleEllipsoidCases, ConstructedTouching) {
       // (in a flat valley, the bound of check_all: an end nearly tangent to the surface
       // has the circle's candidate 3e-4 rad away within float noise of the minimum)
       const double rise = ring_rise(capsule_shape(qs[k]), ellipsoid_shape(qs[k].b), to_nref(ts[k].n));
-      const double ang_tol = std::max(kAngleTol, 3e-3 * std::sqrt(kValleyNoise * L / std::max(rise, 1e-6 * L)));
+      const double ang_tol = nref::valley_angle(kAngleTol, std::max(rise, 1e-6 * L), 3e-3, kValleyNoise * L);
       EXPECT_LE(angle(h.n, ts[k].n), ang_tol)
           << k << " n " << h.n.transpose() << " want " << ts[k].n.transpose() << " depth " << h.depth
           << " want " << ts[k].depth << " (L " << L << ")";

@@ -296,7 +296,7 @@ Ref reference(const Query& q) {
   f.n = ev(s.n);
   double rise = 0;
   f.unique = s.unique(2 * tol) && unique_minimum(q, f.n, s.s, s.second, tol, &rise);
-  if (f.unique) f.angle_tol = std::max(kAngleTol, 3e-3 * std::sqrt(kValleyNoise * size_of(q) / rise));
+  if (f.unique) f.angle_tol = nref::valley_angle(kAngleTol, rise, 3e-3, kValleyNoise * size_of(q));
   return f;
 }
 
