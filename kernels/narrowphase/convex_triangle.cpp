@@ -524,7 +524,8 @@ void hull_face_manifold(const HullView& h, uint32_t f, const Tri& T, float depth
     for (uint32_t i = b; i < e; ++i) {
       const V3 q = vertex(h, h.face_verts[i]);
       const V3 o = cross(q - a, n);
-      out = simd::fmax_nn(out, dot(o, wit - a) / std::sqrt(dot(o, o)));
+      const float oo = dot(o, o);
+      if (oo > 0.0f) out = simd::fmax_nn(out, dot(o, wit - a) / std::sqrt(oo));
       a = q;
     }
     if (-smax < out) *graze = top;
