@@ -55,8 +55,9 @@
 //     after rounding (grazing): one point, at the incident side's deepest vertex or at
 //     the clipped polygon's deepest point, whichever lies nearer the reference side
 //     (that vertex can lie outside the reference face: touching pairs at a face's
-//     rim); a face of more than 64 vertices: at that vertex. An edge axis wins: one point midway between the closest points of
-//     hull edge a and the triangle's support feature along -n (edge j, or a vertex, or
+//     rim); a face of more than 256 vertices: at that vertex. An edge axis wins: one
+//     point midway between the closest points of hull edge a and the triangle's
+//     support feature along -n (edge j, or a vertex, or
 //     the longest edge of a collinear triangle), where those are depth apart along n;
 //     else (a winner among nearly tied axes, e.g. a triangle edge nearly parallel to a
 //     hull face) the middle of the part of that feature, moved by depth along n, that
@@ -75,7 +76,7 @@
 // poses, ~5e-6 at worst where edge axes tie within the rounding band (asserted 1e-5 L,
 // normals 1e-4 rad where unique, against a brute-force double SAT).
 // No division without a guard: no NaN for finite input. No allocation (stack buffers:
-// the clip polygons, 2 x 68 points).
+// the clip polygons, 2 x 260 points, and the manifold, 261).
 // Paths: cfg.path kSimd runs the hull passes kSimdWidth faces / vertices / edges per
 // step, kScalar the same code one at a time (F = simd::Float1): the same formulas and
 // tie rules (bytes may differ where the two fuse multiply-adds differently and nearly
@@ -124,8 +125,11 @@ constexpr float kKeySlack = 1e-4f;
 /// hull within this times (size + coordinates) of its face planes.
 constexpr float kTouchSlack = 2e-6f;
 /// Clip buffers: a face polygon of up to kMaxFaceVerts vertices clipped by a triangle
-/// (or a triangle by such a face) has at most kMaxFaceVerts + 3 vertices.
-constexpr uint32_t kMaxFaceVerts = 64;
+/// (or a triangle by such a face) has at most kMaxFaceVerts + 3 vertices. 256: a cylinder
+/// or disk approximated by up to 256 segments keeps its clipped manifold (at 64, an
+/// 80-gon cap lying on a triangle got one point, at the hull's deepest vertex, which
+/// can lie outside the triangle); ~10 KB of stack per lane, untouched unless clipped.
+constexpr uint32_t kMaxFaceVerts = 256;
 constexpr uint32_t kMaxClip = kMaxFaceVerts + 4;
 
 IMPACT_INLINE float l1(V3 a) {

@@ -768,19 +768,31 @@ TEST(ConvexTriangle, NeedlePancakeAndLargeFaces) {
   const auto pairs = random_pairs(g, hulls, 0, 5, scaled(500), 1.0, 0.0);
   const Stats st = check_pairs("needle, pancake, 80-gon", pairs, hulls);
   EXPECT_GT(st.hits, pairs.size() / 5);
-  // A triangle lying on the 80-gon cap: a face contact whose polygon is too large to
-  // clip (one point, the deepest vertex).
+  {
+    std::vector<Eigen::Vector3f> pts;  // 5: a 300-gon prism (caps over kMaxFaceVerts = 256)
+    for (int i = 0; i < 300; ++i) {
+      const double t = 2 * M_PI * i / 300;
+      for (const float z : {-0.2f, 0.2f})
+        pts.emplace_back(static_cast<float>(0.8 * std::cos(t)), static_cast<float>(0.8 * std::sin(t)), z);
+    }
+    hulls.add(pts);
+  }
+  // A triangle lying on the 80-gon cap: a face contact, clipped (the triangle's three
+  // vertices below the cap); on the 300-gon's cap, too large to clip: one point, the
+  // deepest vertex.
   Pair q{};
-  q.hull = 4;
   const float R[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};
   std::copy(R, R + 9, q.R);
   const double z = 0.2 - 1e-3;
   set_v(&q, 0, {-0.3, -0.2, z}), set_v(&q, 1, {0.4, -0.2, z - 1e-4}), set_v(&q, 2, {0.0, 0.3, z});
-  check_pairs("on an 80-gon", {q}, hulls);
-  const PairResult r = run(Bucket({q}), hulls.store.view(), k::KernelPath::kSimd).result();
-  ASSERT_EQ(r.count, 1u);
-  EXPECT_NEAR(r.n.z(), 1.0, 1e-6);
-  EXPECT_NEAR(r.depth, 1.1e-3, 1e-6);
+  for (const uint32_t hull : {4u, 5u}) {
+    q.hull = hull;
+    check_pairs(hull == 4 ? "on an 80-gon" : "on a 300-gon", {q}, hulls);
+    const PairResult r = run(Bucket({q}), hulls.store.view(), k::KernelPath::kSimd).result();
+    ASSERT_EQ(r.count, hull == 4 ? 3u : 1u);
+    EXPECT_NEAR(r.n.z(), 1.0, 1e-6);
+    EXPECT_NEAR(r.depth, 1.1e-3, 1e-6);
+  }
 }
 
 TEST(ConvexTriangle, EdgeAxisAmongNearTies) {
