@@ -994,7 +994,9 @@ EpaResult epa_cores(const Leaf& A, const Leaf& B, const Simplex& start, float sc
 
 namespace {
 
-constexpr uint32_t kMaxFaceVerts = 32;
+/// Faces of up to this many vertices are clipped into a manifold (more: the witness point
+/// alone); 32 until 2026-11-28 (a 64-gon prism on a box got one point). Stack only.
+constexpr uint32_t kMaxFaceVerts = 256;
 constexpr uint32_t kMaxClip = 2 * kMaxFaceVerts + 8;
 
 /// Types whose supporting feature can be a flat face (or a straight line).

@@ -428,6 +428,53 @@ TEST(NarrowPhase, ScalarPathAgreesWithSimdPath) {
   EXPECT_LE(differ, a.size() / 200 + 1) << "of " << a.size();
 }
 
+TEST(NarrowPhase, HullFacesOfManyVerticesKeepTheirManifold) {
+  // A 64-gon prism (caps of 64 vertices: a cylinder as a hull) lying on its cap, 0.01
+  // into a box, a box-shaped hull and another such prism: face contacts whose manifold
+  // comes from clipping the cap (a cap over the clip buffers' size would give one point).
+  ShapeSet set;
+  ShapeId box, box_hull, prism, big_prism;
+  ASSERT_TRUE(IsOk(set.add_box(Eigen::Vector3f(1.0f, 0.5f, 1.0f), &box)));
+  std::vector<Eigen::Vector3f> corners;
+  for (int i = 0; i < 8; ++i)
+    corners.emplace_back((i & 1) ? 1.0f : -1.0f, (i & 2) ? 0.5f : -0.5f, (i & 4) ? 1.0f : -1.0f);
+  ASSERT_TRUE(IsOk(set.add_convex_hull(corners, &box_hull)));
+  auto ngon = [&](int n, float r, ShapeId* id) {
+    std::vector<Eigen::Vector3f> pts;
+    for (int i = 0; i < n; ++i) {
+      const double t = 2 * M_PI * i / n;
+      for (const float y : {-0.2f, 0.2f})
+        pts.emplace_back(static_cast<float>(r * std::cos(t)), y, static_cast<float>(r * std::sin(t)));
+    }
+    ASSERT_TRUE(IsOk(set.add_convex_hull(pts, id)));
+  };
+  ngon(64, 0.5f, &prism);
+  ngon(200, 0.8f, &big_prism);
+  const std::vector<ShapeId> shapes = {box, box_hull, big_prism, prism};
+  std::vector<Pose> poses(4);
+  poses[2].position = Eigen::Vector3f(0.0f, -0.4f + 0.19f, 0.0f);  // its top 0.01 into the next
+  poses[3].position = Eigen::Vector3f(0.1f, 0.5f + 0.2f - 0.01f, -0.05f);
+  for (uint32_t a : {0u, 1u, 2u}) {
+    SCOPED_TRACE(a);
+    if (a == 2) poses[3].position.y() = -0.01f + 0.19f;  // on the big prism's top cap (y = 0)
+    NarrowPhase np;
+    std::vector<Manifold> out;
+    const std::vector<ShapePair> pairs = {{a, 3}};
+    ASSERT_TRUE(IsOk(np.collide(set, shapes, poses, pairs, &out)));
+    ASSERT_EQ(out.size(), 1u);
+    const Manifold& m = out[0];
+    EXPECT_NEAR(m.normal.y(), 1.0f, 1e-5f);
+    EXPECT_NEAR(m.depth, 0.01f, 1e-5f);
+    EXPECT_EQ(m.point_count, 4u);
+    for (uint32_t i = 0; i < m.point_count; ++i) {
+      EXPECT_NEAR(m.point_depth[i], 0.01f, 1e-5f) << i;
+      // on the prism's bottom rim, seen along the normal
+      const Eigen::Vector3f q = m.points[i] - poses[3].position;
+      EXPECT_NEAR(std::hypot(q.x(), q.z()), 0.5f, 1e-3f) << i;
+    }
+  }
+}
+
 TEST(NarrowPhase, EmptyInputsGiveNoManifolds) {
   Zoo z;
   NarrowPhase np;
