@@ -522,27 +522,29 @@ void hull_face_manifold(const HullView& h, uint32_t f, const Tri& T, float depth
     const float s = fd - dot(n, buf[cur][i]);
     if (s > smax) smax = s, top = buf[cur][i];
   }
-  if (mf->count == 0 && cnt > 0) {
-    float out = 0.0f;
-    a = vertex(h, h.face_verts[e - 1]);
+  // wit against the side planes, walked once where needed: inside every one, and its
+  // largest distance outside one (0 inside).
+  bool walked = false, inside = true;
+  float out = 0.0f;
+  const auto walk = [&] {
+    if (walked) return;
+    walked = true;
+    V3 p = vertex(h, h.face_verts[e - 1]);
     for (uint32_t i = b; i < e; ++i) {
       const V3 q = vertex(h, h.face_verts[i]);
-      const V3 o = cross(q - a, n);
+      const V3 o = cross(q - p, n);
+      inside = inside && dot(o, wit) <= dot(o, p);
       const float oo = dot(o, o);
-      if (oo > 0.0f) out = simd::fmax_nn(out, dot(o, wit - a) / std::sqrt(oo));
-      a = q;
+      if (oo > 0.0f) out = simd::fmax_nn(out, dot(o, wit - p) / std::sqrt(oo));
+      p = q;
     }
+  };
+  if (mf->count == 0 && cnt > 0) {
+    walk();
     if (-smax < out) *graze = top;
   }
   if (!(mf->deepest() < depth * (1.0f - cvx::kWitnessJoin))) return;
-  bool inside = true;
-  a = vertex(h, h.face_verts[e - 1]);
-  for (uint32_t i = b; i < e; ++i) {
-    const V3 q = vertex(h, h.face_verts[i]);
-    const V3 o = cross(q - a, n);
-    inside = inside && dot(o, wit) <= dot(o, a);
-    a = q;
-  }
+  walk();
   if (inside) keep(wit);
 }
 
