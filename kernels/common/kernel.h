@@ -7,9 +7,13 @@
 #if defined(__GNUC__) || defined(__clang__)
 #define IMPACT_RESTRICT __restrict__
 #define IMPACT_INLINE inline __attribute__((always_inline))
+// After a lambda's parameter list: GCC otherwise keeps a lambda called many times in a
+// kernel out of line, passing its vector arguments through memory.
+#define IMPACT_LAMBDA_INLINE __attribute__((always_inline))
 #else
 #define IMPACT_RESTRICT
 #define IMPACT_INLINE inline
+#define IMPACT_LAMBDA_INLINE
 #endif
 
 #ifndef NDEBUG

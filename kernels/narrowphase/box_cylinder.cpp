@@ -257,7 +257,7 @@ IMPACT_INLINE void save_geo(Chunk<W>& ch, uint32_t j, const Geo<F>& g) {
 template <class F, uint32_t W>
 IMPACT_INLINE Geo<F> gather_geo(const Chunk<W>& ch, typename F::Int idx) {
   Geo<F> g;
-  auto gt = [&](int f) { return simd::gather(ch.geo[f], idx); };
+  auto gt = [&](int f) IMPACT_LAMBDA_INLINE { return simd::gather(ch.geo[f], idx); };
   g.c = V3<F>{gt(0), gt(1), gt(2)};
   for (int i = 0; i < 3; ++i) g.a[i] = V3<F>{gt(3 + 3 * i), gt(4 + 3 * i), gt(5 + 3 * i)};
   for (int i = 0; i < 3; ++i) g.e[i] = gt(12 + i);
@@ -289,10 +289,10 @@ IMPACT_INLINE void phase_a(const LeafSoA& a, const LeafSoA& b, uint32_t k, uint3
   const F slack = pair_slack(g);
   const V3<F> ez{zero, zero, one};
   // x and y built inside their shapes: only x - y = o n is left to test
-  auto along = [&](F o, const V3<F>& n, const V3<F>& x, const V3<F>& y) {
+  auto along = [&](F o, const V3<F>& n, const V3<F>& x, const V3<F>& y) IMPACT_LAMBDA_INLINE {
     return length_sq(x - y - o * n) <= slack * slack;
   };
-  auto consider = [&](F o, const V3<F>& n, const V3<F>& x, const V3<F>& y) {
+  auto consider = [&](F o, const V3<F>& n, const V3<F>& x, const V3<F>& y) IMPACT_LAMBDA_INLINE {
     best.take(o, n, x, along(o, n, x, y));
   };
   const V3<F> A[3] = {g.a[0] * g.e[0], g.a[1] * g.e[1], g.a[2] * g.e[2]};
@@ -416,12 +416,12 @@ IMPACT_INLINE void phase_a(const LeafSoA& a, const LeafSoA& b, uint32_t k, uint3
   Mask live2 = live;
   F apart_bound = best.o;
   if (simd::any(uncertified)) {
-    auto to_cyl = [&](const V3<F>& p) {
+    auto to_cyl = [&](const V3<F>& p) IMPACT_LAMBDA_INLINE {
       const F r2 = p.x * p.x + p.y * p.y;
       const F sc = select(r2 > g.rc * g.rc, g.rc / sqrt(select(r2 > zero, r2, one)), one);
       return V3<F>{p.x * sc, p.y * sc, clamp(p.z, -g.h, g.h)};
     };
-    auto to_box = [&](const V3<F>& p) {
+    auto to_box = [&](const V3<F>& p) IMPACT_LAMBDA_INLINE {
       const V3<F> q = p - g.c;
       V3<F> x = g.c;
       for (int i = 0; i < 3; ++i) x = madd(x, clamp(dot(q, g.a[i]), -g.e[i], g.e[i]), g.a[i]);

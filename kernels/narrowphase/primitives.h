@@ -645,7 +645,7 @@ struct WitnessedBest {
 /// st[4..6] x, st[7] any_o, st[8..10] any_n, st[11..13] any_x; lanes j .. j + width.
 template <class F, uint32_t L>
 IMPACT_INLINE void save_best(float (&st)[14][L], uint32_t j, const WitnessedBest<F>& b) {
-  auto st3 = [&](int f, const V3<F>& v) {
+  auto st3 = [&](int f, const V3<F>& v) IMPACT_LAMBDA_INLINE {
     v.x.store(st[f] + j), v.y.store(st[f + 1] + j), v.z.store(st[f + 2] + j);
   };
   b.o.store(st[0] + j);
@@ -657,8 +657,8 @@ IMPACT_INLINE void save_best(float (&st)[14][L], uint32_t j, const WitnessedBest
 }
 template <class F, uint32_t L>
 IMPACT_INLINE WitnessedBest<F> load_best(const float (&st)[14][L], uint32_t j) {
-  auto l1 = [&](int f) { return F::load(st[f] + j); };
-  auto l3 = [&](int f) { return V3<F>{l1(f), l1(f + 1), l1(f + 2)}; };
+  auto l1 = [&](int f) IMPACT_LAMBDA_INLINE { return F::load(st[f] + j); };
+  auto l3 = [&](int f) IMPACT_LAMBDA_INLINE { return V3<F>{l1(f), l1(f + 1), l1(f + 2)}; };
   WitnessedBest<F> b;
   b.o = l1(0), b.n = l3(1), b.x = l3(4), b.any_o = l1(7), b.any_n = l3(8), b.any_x = l3(11);
   return b;

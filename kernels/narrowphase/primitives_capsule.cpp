@@ -157,7 +157,7 @@ IMPACT_INLINE void capsule_capsule_block(const LeafSoA& a, const LeafSoA& b, con
   const F lo = max(-ha, sb - eb), hi = min(ha, sb + eb);
   const auto par = (c2 < F(kParallelSin * kParallelSin)) & (hi - lo > F(1e-4f) * (ha + hb));
   const F sna = dot(n, ua), snb = -dot(n, ub);
-  auto end_point = [&](F sa, V3<F>& p, F& d) {
+  auto end_point = [&](F sa, V3<F>& p, F& d) IMPACT_LAMBDA_INLINE {
     const V3<F> xa = ua * sa;
     const F tb = closest_on_segment(cb, ub, hb, xa);
     const V3<F> xb = madd(cb, tb, ub);
