@@ -19,7 +19,8 @@
 //  - edge x side (two lines): n = +-(a_i x z) / |a_i x z| (6);
 //  - vertex x side: n horizontal, from the vertex towards the axis (8);
 //  - vertex x rim: n from the rim circle's point nearest the vertex, with the sign the
-//    rim's normal cone allows (16);
+//    rim's normal cone allows (16; each only where the vertex is the box's support
+//    along its n, within 1e-3 of |n|_1 per axis: elsewhere it is no point of its piece);
 //  - edge interior x rim: n on the great circle n.a_i = 0, where o is the 2D signed
 //    distance from the edge's shadow point to the rim's shadow along a_i (an ellipse:
 //    the upper / lower half for the one rim / the other), by the fixed-step solve of
@@ -49,8 +50,9 @@
 // direction 1e-4 rad off. The least o of every candidate, valid or not, is kept as well
 // (an exact upper bound): where it is below the least valid o by more than rounding, it
 // is the answer, with its own witness. Ties keep the first in the order caps, faces,
-// edge-sides, vertex-sides, vertex-rims, the point pair's direction, edge-rims. The
-// vertex-rims and the point pair run only on lanes not certified to meet. Supports with ties (a face or line
+// edge-sides, vertex-sides, the point pair's direction, vertex-rims, edge-rims. The
+// point pair runs only on lanes not certified to meet, the vertex-rims only on those of
+// them that it did not separate. Supports with ties (a face or line
 // parallel to n) take the feature's point nearest the other shape's centre line
 // (kFree: |n.a| at or below it counts as parallel).
 // Contact points: one, midway between the witnesses. Where n is within kParallelSin of
@@ -65,11 +67,13 @@
 // input: an edge along the axis takes x as its horizontal normal; a vertex on the axis
 // takes x as its radial direction; coincident centres give a finite unit normal (the
 // ties above decide it).
-// Cost: 22 candidate directions in closed form per lane (+16 vertex-rims and the point
-// pair where the lane is not certified to meet), the pruned rim solves packed (at most
-// kArcIterations steps of 3 divisions and 2 square roots each; in the bench ~1.1 slots
-// per lane, 2.3 before the cone bound and the point pair), the two manifold
-// clips only where a lane of the block needs them; a block whose lanes are all farther
+// Cost: 22 candidate directions in closed form per lane (+ the point pair where the lane
+// is not certified to meet, + the vertex-rims where the point pair did not separate it:
+// ~5% of the bench's lanes, in ~54% of its blocks; the support test above drops most
+// vertex-rims of such a block, -10% of the kernel's time), the pruned rim solves packed
+// (at most kArcIterations steps of 3 divisions and 2 square roots each; in the bench ~1.1
+// slots per lane, 2.3 before the cone bound and the point pair), the two manifold clips
+// only where a lane of the block needs them; a block whose lanes are all farther
 // apart than their bounding spheres stops at that screen.
 // Both paths run the same template (F = FloatW, or Float1 for the scalar reference); a
 // lane's arithmetic is the same wherever it is packed, so its bytes do not depend on its
@@ -390,26 +394,6 @@ IMPACT_INLINE void phase_a(const LeafSoA& a, const LeafSoA& b, uint32_t k, uint3
   // Lanes not certified to meet; the two passes below run where a block has one, and
   // count only on those lanes (a lane's bytes must not depend on its neighbours).
   const Mask uncertified = live & ~meets;
-  // --- vertices against the rims (n from the rim point nearest the vertex): an edge of
-  // box - C, a minimiser only when the pair is apart, so only where it is not certified
-  // to meet ---
-  if (simd::any(uncertified)) {
-    for (int q = 0; q < 8; ++q) {
-      const V3<F>& v = vtx[q];
-      const F mx = vmx[q], my = vmy[q];
-      for (int s = 0; s < 2; ++s) {
-        const F zs(s == 0 ? 1.0f : -1.0f);
-        const V3<F> y{g.rc * mx, g.rc * my, zs * g.h};
-        const F radial = abs(vrho[q] - g.rc), vert = abs(v.z - zs * g.h);
-        F len;
-        const V3<F> n =
-            normalize_or(V3<F>{-radial * mx, -radial * my, -zs * vert},
-                         V3<F>{-mx * F(0.70710678f), -my * F(0.70710678f), -zs * F(0.70710678f)}, len);
-        consider(select(uncertified, score(g, n), never), n, v, y);
-      }
-    }
-  }
-
   // --- lanes that may be apart: a point pair (x in the box, y in the cylinder) by
   // alternating nearest points from the box centre. |x - y| bounds the distance, and
   // the direction y - x usually separates (o <= 0: the lane is done) ---
@@ -437,6 +421,40 @@ IMPACT_INLINE void phase_a(const LeafSoA& a, const LeafSoA& b, uint32_t k, uint3
     best.take(select(uncertified, score(g, n), never), n, x, Mask(false));
     live2 = near & (best.any_o > zero);
     apart_bound = select(uncertified, min(apart_bound, len), apart_bound);
+  }
+
+  // --- vertices against the rims (n from the rim point nearest the vertex): an edge of
+  // box - C, a minimiser only when the pair is apart, so only where it is not certified
+  // to meet, and only on lanes the point pair did not separate ---
+  const Mask unseparated = uncertified & live2;
+  if (simd::any(unseparated)) {
+    for (int q = 0; q < 8; ++q) {
+      const V3<F>& v = vtx[q];
+      const F mx = vmx[q], my = vmy[q];
+      for (int s = 0; s < 2; ++s) {
+        const F zs(s == 0 ? 1.0f : -1.0f);
+        const V3<F> y{g.rc * mx, g.rc * my, zs * g.h};
+        const F radial = abs(vrho[q] - g.rc), vert = abs(v.z - zs * g.h);
+        const V3<F> nu{-radial * mx, -radial * my, -zs * vert};
+        const V3<F> fb{-mx * F(0.70710678f), -my * F(0.70710678f), -zs * F(0.70710678f)};
+        // The piece holds the minimiser only where v is the box's support along n
+        // (sigma_i n.a_i >= 0, loosely: rounding); elsewhere the candidate is skipped,
+        // and where no lane of the block keeps it, so is its arithmetic.
+        const V3<F> nc = select(length_sq(nu) < tiny, fb, nu);
+        const F tol = F(-1e-3f) * (abs(nc.x) + abs(nc.y) + abs(nc.z));
+        Mask cone = unseparated;
+        for (int i = 0; i < 3; ++i) {
+          const F d = dot(nc, g.a[i]);
+          cone = cone & (((q >> i) & 1 ? -d : d) >= tol);
+        }
+        if (simd::none(cone)) continue;
+        F len;
+        const V3<F> n = normalize_or(nu, fb, len);
+        consider(select(cone, score(g, n), never), n, v, y);
+      }
+    }
+    live2 = near & (best.any_o > zero);
+    apart_bound = min(apart_bound, best.o);
   }
 
   // --- which edge-rim slots each lane still needs ---
