@@ -165,6 +165,16 @@ IMPACT_INLINE void score_pm(const Geo<F>& g, const V3<F>& n, F& plus, F& minus) 
   plus = s + nc, minus = s - nc;
 }
 
+/// score_pm for a horizontal unit n = (nx, ny, 0): the cap term drops and |n_xy| = 1
+/// (to rounding: the overlap along the unrounded unit direction).
+template <class F>
+IMPACT_INLINE void score_h_pm(const Geo<F>& g, F nx, F ny, F& plus, F& minus) {
+  F s = g.rc;
+  for (int i = 0; i < 3; ++i) s = s + g.e[i] * abs(nx * g.a[i].x + ny * g.a[i].y);
+  const F nc = nx * g.c.x + ny * g.c.y;
+  plus = s + nc, minus = s - nc;
+}
+
 template <class F>
 IMPACT_INLINE F pair_slack(const Geo<F>& g) {
   const F cm = max(max(abs(g.c.x), abs(g.c.y)), abs(g.c.z));
@@ -336,7 +346,7 @@ IMPACT_INLINE void phase_a(const LeafSoA& a, const LeafSoA& b, uint32_t k, uint3
     const F inv = one / sqrt(select(tilted, uxy2, one));
     const F wx = select(tilted, u.y * inv, one), wy = select(tilted, -u.x * inv, zero);
     F op, om;
-    score_pm(g, V3<F>{wx, wy, zero}, op, om);
+    score_h_pm(g, wx, wy, op, om);
     for (int s = 0; s < 2; ++s) {
       const F sg(s == 0 ? 1.0f : -1.0f);
       const V3<F> n{sg * wx, sg * wy, zero};
@@ -370,7 +380,9 @@ IMPACT_INLINE void phase_a(const LeafSoA& a, const LeafSoA& b, uint32_t k, uint3
     vtx[q] = v, vrho[q] = rho, vmx[q] = mx, vmy[q] = my;
     const V3<F> n{-mx, -my, zero};
     const V3<F> y{g.rc * mx, g.rc * my, clamp(v.z, -g.h, g.h)};
-    consider(score(g, n), n, v, y);
+    F o, o_flip;
+    score_h_pm(g, -mx, -my, o, o_flip);
+    consider(o, n, v, y);
   }
   // Certified to meet: a vertex in the cylinder, either centre in the other shape, or
   // the best valid candidate's witnesses in both shapes.
@@ -486,8 +498,12 @@ IMPACT_INLINE void phase_a(const LeafSoA& a, const LeafSoA& b, uint32_t k, uint3
       // the box's part A cos t + B sin t is least at an end unless both ends are
       // negative; the cylinder's h |n_z| + rc |n_xy| is at least min(h, rc).
       const F ea = g.e[ja] + sj * dot(g.a[ja], g.c), eb = g.e[ka] + sk * dot(g.a[ka], g.c);
-      const F box_min = select((ea <= zero) & (eb <= zero), -sqrt(ea * ea + eb * eb), min(ea, eb));
-      const Mask arc_ok = box_min + min(g.h, g.rc) <= best.any_o + slack;
+      // (box_min <= lim, box_min = -sqrt(ea^2 + eb^2) where both are negative: lim >= 0,
+      // or lim^2 <= ea^2 + eb^2, without the root)
+      const F lim = best.any_o + slack - min(g.h, g.rc);
+      const Mask both_neg = (ea <= zero) & (eb <= zero);
+      const Mask arc_ok = (both_neg & ((lim >= zero) | (lim * lim <= ea * ea + eb * eb))) |
+                          andnot(min(ea, eb) <= lim, both_neg);
       for (int s = 0; s < 2; ++s) {
         // slot 0: n_z >= 0 (the rim at -h); slot 1: n_z <= 0 (the rim at +h)
         const F z0(s == 0 ? -1.0f : 1.0f);
@@ -495,11 +511,12 @@ IMPACT_INLINE void phase_a(const LeafSoA& a, const LeafSoA& b, uint32_t k, uint3
         const F dp = z_p - rz, dm = z_m - rz;
         const F lb_z = select(dp * dm <= zero, zero, min(abs(dp), abs(dm)));
         // |x - y|^2 >= (rho(x) - rc)^2 + (x.z - rz)^2, each term bounded along the edge
-        const F lb = sqrt(lb_r * lb_r + lb_z * lb_z);
+        // (compared squared: bound > 0 on the live lanes, where any_o > 0)
+        const F lb2 = lb_r * lb_r + lb_z * lb_z;
         const F cone_eps(-1e-6f);
         const Mask cone =
             s == 0 ? ((za >= cone_eps) | (zk >= cone_eps)) : ((za <= -cone_eps) | (zk <= -cone_eps));
-        const Mask need = live2 & arc_ok & cone & (lb <= bound);
+        const Mask need = live2 & arc_ok & cone & (lb2 <= bound * bound);
         uint32_t bits = simd::bits(need);
         if (nb < W) bits &= (1u << nb) - 1u;
         const int32_t kind = static_cast<int32_t>(8 * i + 2 * q + s);
