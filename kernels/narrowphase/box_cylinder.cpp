@@ -285,6 +285,7 @@ template <class F, uint32_t W>
 IMPACT_INLINE void phase_a(const LeafSoA& a, const LeafSoA& b, uint32_t k, uint32_t j, uint32_t nb,
                            Chunk<W>& ch) {
   using Mask = typename F::Mask;
+  using Int = typename F::Int;
   const F zero(0.0f), one(1.0f), tiny(kTinySq), never(kNever);
   V3<F> cb;
   M3<F> rot;
@@ -476,6 +477,9 @@ IMPACT_INLINE void phase_a(const LeafSoA& a, const LeafSoA& b, uint32_t k, uint3
   // the closest features, no farther apart than a point pair of the two shapes.
   const F bound = select(meets, best.any_o, max(best.any_o, apart_bound)) + slack;
   uint32_t cnt = ch.nitems;
+  int32_t ids[W];
+  for (uint32_t l = 0; l < W; ++l) ids[l] = static_cast<int32_t>(j + l);
+  const Int lane_ids = Int::load(ids);
   for (int i = 0; i < 3; ++i) {
     const V3<F>& u = g.a[i];
     const int ja = (i + 1) % 3, ka = (i + 2) % 3;
@@ -519,14 +523,9 @@ IMPACT_INLINE void phase_a(const LeafSoA& a, const LeafSoA& b, uint32_t k, uint3
         const Mask need = live2 & arc_ok & cone & (lb2 <= bound * bound);
         uint32_t bits = simd::bits(need);
         if (nb < W) bits &= (1u << nb) - 1u;
-        const int32_t kind = static_cast<int32_t>(8 * i + 2 * q + s);
-        while (bits != 0) {
-          const uint32_t l = static_cast<uint32_t>(__builtin_ctz(bits));
-          bits &= bits - 1;
-          ch.lane[cnt] = static_cast<int32_t>(j + l);
-          ch.kind[cnt] = kind;
-          ++cnt;
-        }
+        // (branch-free: which slots a lane keeps is close to random)
+        Int(static_cast<int32_t>(8 * i + 2 * q + s)).store(ch.kind + cnt);
+        cnt += simd::compact_store(ch.lane + cnt, lane_ids, bits);
       }
     }
   }

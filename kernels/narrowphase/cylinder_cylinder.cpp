@@ -639,18 +639,17 @@ IMPACT_INLINE void phase_a(const LeafSoA& a, const LeafSoA& b, uint32_t k, uint3
     cert = cert | in_b(g, support_a(g, best.any_n)) | in_a(g, support_b(g, best.any_n));
     cut = select(cert, best.any_o, never);
     uint32_t cnt = ch.nitems;
+    int32_t ids[W];
+    for (uint32_t l = 0; l < W; ++l) ids[l] = static_cast<int32_t>(j + l);
+    using Int = typename F::Int;
+    const Int lane_ids = Int::load(ids);
     for (int pr = 0; pr < 4; ++pr) {
       const F tau((pr & 1) != 0 ? -1.0f : 1.0f), s((pr & 2) != 0 ? -1.0f : 1.0f);
       const Mask need = live & (rim_pair_bound(g, tau, s) < cut);
       uint32_t bits = simd::bits(need);
       if (nb < W) bits &= (1u << nb) - 1u;
-      while (bits != 0) {
-        const uint32_t l = static_cast<uint32_t>(__builtin_ctz(bits));
-        bits &= bits - 1;
-        ch.lane[cnt] = static_cast<int32_t>(j + l);
-        ch.pair[cnt] = pr;
-        ++cnt;
-      }
+      Int(pr).store(ch.pair + cnt);
+      cnt += simd::compact_store(ch.lane + cnt, lane_ids, bits);
     }
     ch.nitems = cnt;
   }

@@ -14,6 +14,7 @@
 //              gather_lanes(array of lanes, index lanes): lane i of array[index_i];
 //              expand_store<N>(dst, src, bits): the set lanes of dst from src[0, 1, ..]
 //              (the inverse of compacting a block's live lanes; float, or int32 to uint8);
+//              compact_store<N>(dst, int lanes, bits): the set lanes to dst[0, 1, ..];
 //              load_transposed(N row pointers): N rows of N floats, one per lane;
 //              tag / tag_index: a small index kept in a float's 5 low mantissa bits,
 //              so one max/min tree gives both the extreme and where it came from.
@@ -266,6 +267,27 @@ IMPACT_INLINE void expand_store(float* dst, const float* src, uint32_t bits) {
 #endif
   for (uint32_t i = 0; bits != 0; ++i, bits &= bits - 1u) dst[__builtin_ctz(bits)] = src[i];
 }
+/// Compact (the inverse of expand_store): the lanes of v whose bit is set in `bits`
+/// (bits < 2^N), in lane order, to dst[0 .. popcount(bits)); returns that count. It may
+/// write dst[count .. N) as well, so dst must hold N entries. Branch-free: AVX-512 at
+/// N = 16 compresses in a register and stores all 16 (the memory form is microcoded on
+/// some cores); elsewhere every lane is written and the cursor advances on set bits.
+template <uint32_t N>
+IMPACT_INLINE uint32_t compact_store(int32_t* dst, IntN<N> v, uint32_t bits) {
+#if defined(__AVX512F__)
+  if constexpr (N == 16) {
+    const auto k = static_cast<__mmask16>(bits);
+    _mm512_storeu_si512(dst, _mm512_maskz_compress_epi32(k, reinterpret_cast<__m512i>(v.v)));
+    return static_cast<uint32_t>(__builtin_popcount(bits));
+  }
+#endif
+  uint32_t c = 0;
+  for (uint32_t l = 0; l < N; ++l) {
+    dst[c] = v.v[l];
+    c += (bits >> l) & 1u;
+  }
+  return c;
+}
 /// expand_store for small counts: int32 src narrowed to uint8 dst (values 0 .. 255).
 template <uint32_t N>
 IMPACT_INLINE void expand_store(uint8_t* dst, const int32_t* src, uint32_t bits) {
@@ -493,6 +515,11 @@ IMPACT_INLINE bool any(MaskN<1> m) { return m.v; }
 IMPACT_INLINE bool all(MaskN<1> m) { return m.v; }
 IMPACT_INLINE bool none(MaskN<1> m) { return !m.v; }
 IMPACT_INLINE uint32_t bits(MaskN<1> m) { return m.v ? 1u : 0u; }
+template <>
+IMPACT_INLINE uint32_t compact_store<1>(int32_t* dst, IntN<1> v, uint32_t bits) {
+  dst[0] = v.v;
+  return bits & 1u;
+}
 // Same operand order as the x86 instructions, so both paths agree bit for bit.
 IMPACT_INLINE FloatN<1> min(FloatN<1> a, FloatN<1> b) { return a.v < b.v ? a : b; }
 IMPACT_INLINE FloatN<1> max(FloatN<1> a, FloatN<1> b) { return a.v > b.v ? a : b; }

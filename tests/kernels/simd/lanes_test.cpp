@@ -1,7 +1,8 @@
 // The lane reductions of kernels/simd/lanes.h (all_lanes, max_lowest_index) against a
 // brute-force loop over the lanes, at every width the vocabulary has (1, 4, 8, 16),
 // on random scores with many exact ties (small integers), -inf lanes and shuffled
-// indices: the maximum, and the lowest index among the lanes that hold it.
+// indices: the maximum, and the lowest index among the lanes that hold it; and
+// compact_store / expand_store against a loop over the set bits.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -50,6 +51,40 @@ TEST(Lanes, AllLanesAndMaxLowestIndexMatchALoop) {
   check_reductions<4>(2);
   check_reductions<8>(3);
   check_reductions<16>(4);
+}
+
+/// compact_store and expand_store against a plain loop over every mask (N <= 8) or
+/// random masks (N = 16): the set lanes in order, the count, and the round trip.
+template <uint32_t N>
+void check_compact_expand(uint32_t seed) {
+  std::mt19937 g(seed);
+  int32_t src[N];
+  for (uint32_t l = 0; l < N; ++l) src[l] = static_cast<int32_t>(g() % 100000) - 50000;
+  const IntN<N> v = IntN<N>::load(src);
+  const uint32_t masks = N <= 8 ? (1u << N) : 4096u;
+  for (uint32_t t = 0; t < masks; ++t) {
+    const uint32_t bits = N <= 8 ? t : (t < 2 ? (t == 0 ? 0u : (1u << N) - 1u) : g() & ((1u << N) - 1u));
+    int32_t want[N], got[N + 1];
+    uint32_t cnt = 0;
+    for (uint32_t l = 0; l < N; ++l)
+      if ((bits >> l) & 1u) want[cnt++] = src[l];
+    got[N] = 777;  // past the N entries it may write
+    ASSERT_EQ(compact_store(got, v, bits), cnt) << "width " << N << " bits " << bits;
+    for (uint32_t i = 0; i < cnt; ++i) ASSERT_EQ(got[i], want[i]) << "width " << N << " bits " << bits;
+    ASSERT_EQ(got[N], 777);
+    float packed[N], back[N];
+    for (uint32_t i = 0; i < N; ++i) packed[i] = static_cast<float>(got[i]), back[i] = -1.0f;
+    expand_store<N>(back, packed, bits);
+    for (uint32_t l = 0; l < N; ++l)
+      ASSERT_EQ(back[l], (bits >> l) & 1u ? static_cast<float>(src[l]) : -1.0f) << "width " << N;
+  }
+}
+
+TEST(Lanes, CompactAndExpandMatchALoop) {
+  check_compact_expand<1>(5);
+  check_compact_expand<4>(6);
+  check_compact_expand<8>(7);
+  check_compact_expand<16>(8);
 }
 
 TEST(Lanes, MaxLowestIndexReportsNoneForNaNOnly) {
