@@ -22,8 +22,8 @@
 // Newton steps from a certified lower bound (Newton on a concave function lands at or
 // below the root), a certified upper bound from any evaluated point, and a pole step on
 // the b|Y|/tau term where it dominates (Newton crawls there: points near the evolute's
-// cusps). At most kArcIterations steps; the loop stops early after a step that moved
-// no lane of any slot (the state is a step's only input, so every later step would
+// cusps). At most kArcIterations steps; a slot stops early after a step that moved
+// none of its lanes (its state is its step's only input, so every later step would
 // move nothing either): a lane's bytes are those of all kArcIterations steps and do
 // not depend on its block. Most blocks stop after 6 to 9 steps (box-cylinder bench).
 // Several solves of one block run as one loop over their slots (independent chains,
@@ -77,11 +77,15 @@ IMPACT_INLINE void half_ellipse_normals(const F (&b)[M], const F (&X)[M], const 
     dmin[s] = max(A[s], fl);  // k +- tau >= A at and below the root (q_1 <= 1)
     c[s] = lo[s];
   }
+  bool run[M];
+  for (int s = 0; s < M; ++s) run[s] = true;
   for (int i = 0; i < kArcIterations; ++i) {
-    // A step that moves no lane of any slot moves none again (the state is the step's
-    // only input): stopping there gives the bytes of all kArcIterations steps.
-    Mask moved(false);
+    // A step that moves no lane of a slot moves none of it again (the slot's state is
+    // its step's only input): that slot stops there, and the loop once all have, with
+    // the bytes of all kArcIterations steps.
+    bool any_run = false;
     for (int s = 0; s < M; ++s) {
+      if (!run[s]) continue;
       const F lo0 = lo[s], hi0 = hi[s], c0 = c[s];
       const F d1 = max(mul_add(sg[s], c[s], k[s]), dmin[s]);
       const F rr = one / (d1 * c[s]);
@@ -99,9 +103,10 @@ IMPACT_INLINE void half_ellipse_normals(const F (&b)[M], const F (&X)[M], const 
       const F tp = B[s] / sqrt(max(one - q1s, fl));
       const Mask pole = (q2s * r2 > q1s * r1) & (q1 < one) & (tp > lo[s]) & (tp < hi[s]);
       c[s] = select(pole, tp, lo[s]);
-      moved = moved | (lo[s] != lo0) | (hi[s] != hi0) | (c[s] != c0);
+      run[s] = simd::any((lo[s] != lo0) | (hi[s] != hi0) | (c[s] != c0));
+      any_run = any_run || run[s];
     }
-    if (simd::none(moved)) break;
+    if (!any_run) break;
   }
   for (int s = 0; s < M; ++s) {
     // Normal at the foot (x / a^2, y / b^2) = (X / (k +- tau), |Y| / tau), scaled by tau
