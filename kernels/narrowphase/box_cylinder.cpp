@@ -622,9 +622,17 @@ IMPACT_INLINE void phase_c(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA
     store_no_contact<F>(out, k);
     return;
   }
-  V3<F> cb;
-  M3<F> rot;
-  const Geo<F> g = load_geo<F>(a, b, k, cb, rot);
+  // phase A's geometry, kept in the chunk (the same floats, not recomputed)
+  const V3<F> cb = load_p<F>(b, k) - load_p<F>(a, k);
+  const M3<F> rot = load_r<F>(b, k);
+  Geo<F> g;
+  {
+    auto ld_geo = [&](int f) IMPACT_LAMBDA_INLINE { return F::load(ch.geo[f] + j); };
+    g.c = V3<F>{ld_geo(0), ld_geo(1), ld_geo(2)};
+    for (int i = 0; i < 3; ++i) g.a[i] = V3<F>{ld_geo(3 + 3 * i), ld_geo(4 + 3 * i), ld_geo(5 + 3 * i)};
+    for (int i = 0; i < 3; ++i) g.e[i] = ld_geo(12 + i);
+    g.rc = ld_geo(15), g.h = ld_geo(16);
+  }
   const F slack = pair_slack(g);
   // The least valid candidate, unless an invalid one is below it by more than rounding.
   const Mask use_any = (best.o >= never) | (best.any_o < best.o - F(4.0f) * slack);
