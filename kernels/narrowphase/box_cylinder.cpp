@@ -268,15 +268,20 @@ IMPACT_INLINE void save_geo(Chunk<W>& ch, uint32_t j, const Geo<F>& g) {
   g.rc.store(ch.geo[15] + j), g.h.store(ch.geo[16] + j);
 }
 
+/// A Geo from the chunk's 17 geometry rows (save_geo's layout), row f read by get(f).
+template <class F, class Get>
+IMPACT_INLINE Geo<F> read_geo(const Get& get) {
+  Geo<F> g;
+  g.c = V3<F>{get(0), get(1), get(2)};
+  for (int i = 0; i < 3; ++i) g.a[i] = V3<F>{get(3 + 3 * i), get(4 + 3 * i), get(5 + 3 * i)};
+  for (int i = 0; i < 3; ++i) g.e[i] = get(12 + i);
+  g.rc = get(15), g.h = get(16);
+  return g;
+}
+
 template <class F, uint32_t W>
 IMPACT_INLINE Geo<F> gather_geo(const Chunk<W>& ch, typename F::Int idx) {
-  Geo<F> g;
-  auto gt = [&](int f) IMPACT_LAMBDA_INLINE { return simd::gather(ch.geo[f], idx); };
-  g.c = V3<F>{gt(0), gt(1), gt(2)};
-  for (int i = 0; i < 3; ++i) g.a[i] = V3<F>{gt(3 + 3 * i), gt(4 + 3 * i), gt(5 + 3 * i)};
-  for (int i = 0; i < 3; ++i) g.e[i] = gt(12 + i);
-  g.rc = gt(15), g.h = gt(16);
-  return g;
+  return read_geo<F>([&](int f) IMPACT_LAMBDA_INLINE { return simd::gather(ch.geo[f], idx); });
 }
 
 /// Phase A for one block (lanes k.. of a / b, chunk lanes j..): the closed-form
@@ -477,9 +482,7 @@ IMPACT_INLINE void phase_a(const LeafSoA& a, const LeafSoA& b, uint32_t k, uint3
   // the closest features, no farther apart than a point pair of the two shapes.
   const F bound = select(meets, best.any_o, max(best.any_o, apart_bound)) + slack;
   uint32_t cnt = ch.nitems;
-  int32_t ids[W];
-  for (uint32_t l = 0; l < W; ++l) ids[l] = static_cast<int32_t>(j + l);
-  const Int lane_ids = Int::load(ids);
+  const Int lane_ids = simd::lane_ids<Int>(static_cast<int32_t>(j));
   for (int i = 0; i < 3; ++i) {
     const V3<F>& u = g.a[i];
     const int ja = (i + 1) % 3, ka = (i + 2) % 3;
@@ -625,14 +628,7 @@ IMPACT_INLINE void phase_c(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA
   // phase A's geometry, kept in the chunk (the same floats, not recomputed)
   const V3<F> cb = load_p<F>(b, k) - load_p<F>(a, k);
   const M3<F> rot = load_r<F>(b, k);
-  Geo<F> g;
-  {
-    auto ld_geo = [&](int f) IMPACT_LAMBDA_INLINE { return F::load(ch.geo[f] + j); };
-    g.c = V3<F>{ld_geo(0), ld_geo(1), ld_geo(2)};
-    for (int i = 0; i < 3; ++i) g.a[i] = V3<F>{ld_geo(3 + 3 * i), ld_geo(4 + 3 * i), ld_geo(5 + 3 * i)};
-    for (int i = 0; i < 3; ++i) g.e[i] = ld_geo(12 + i);
-    g.rc = ld_geo(15), g.h = ld_geo(16);
-  }
+  const Geo<F> g = read_geo<F>([&](int f) IMPACT_LAMBDA_INLINE { return F::load(ch.geo[f] + j); });
   const F slack = pair_slack(g);
   // The least valid candidate, unless an invalid one is below it by more than rounding.
   const Mask use_any = (best.o >= never) | (best.any_o < best.o - F(4.0f) * slack);

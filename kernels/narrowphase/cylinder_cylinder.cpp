@@ -639,10 +639,8 @@ IMPACT_INLINE void phase_a(const LeafSoA& a, const LeafSoA& b, uint32_t k, uint3
     cert = cert | in_b(g, support_a(g, best.any_n)) | in_a(g, support_b(g, best.any_n));
     cut = select(cert, best.any_o, never);
     uint32_t cnt = ch.nitems;
-    int32_t ids[W];
-    for (uint32_t l = 0; l < W; ++l) ids[l] = static_cast<int32_t>(j + l);
     using Int = typename F::Int;
-    const Int lane_ids = Int::load(ids);
+    const Int lane_ids = simd::lane_ids<Int>(static_cast<int32_t>(j));
     for (int pr = 0; pr < 4; ++pr) {
       const F tau((pr & 1) != 0 ? -1.0f : 1.0f), s((pr & 2) != 0 ? -1.0f : 1.0f);
       const Mask need = live & (rim_pair_bound(g, tau, s) < cut);

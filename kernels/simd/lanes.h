@@ -575,6 +575,14 @@ IMPACT_INLINE F lane_index() {
   return F::load(iota);
 }
 
+/// base, base + 1, ..., base + W - 1 as int lanes (a block's chunk lane indices).
+template <class I>
+IMPACT_INLINE I lane_ids(int32_t base) {
+  int32_t ids[I::kWidth];
+  for (uint32_t k = 0; k < I::kWidth; ++k) ids[k] = base + static_cast<int32_t>(k);
+  return I::load(ids);
+}
+
 /// Every lane = op folded over all of a's lanes (op associative and commutative, e.g.
 /// max or min): log2(W) butterfly steps, each a shuffle that swaps lane i with lane
 /// i ^ step. For W > 1.

@@ -61,6 +61,8 @@ void check_compact_expand(uint32_t seed) {
   int32_t src[N];
   for (uint32_t l = 0; l < N; ++l) src[l] = static_cast<int32_t>(g() % 100000) - 50000;
   const IntN<N> v = IntN<N>::load(src);
+  const IntN<N> ids = lane_ids<IntN<N>>(-3);
+  for (uint32_t l = 0; l < N; ++l) ASSERT_EQ(ids.lane(l), static_cast<int32_t>(l) - 3) << "width " << N;
   const uint32_t masks = N <= 8 ? (1u << N) : 4096u;
   for (uint32_t t = 0; t < masks; ++t) {
     const uint32_t bits = N <= 8 ? t : (t < 2 ? (t == 0 ? 0u : (1u << N) - 1u) : g() & ((1u << N) - 1u));
