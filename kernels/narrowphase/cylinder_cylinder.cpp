@@ -58,14 +58,21 @@
 // no miss. Without rule (3): 3 built rim pairs of ~2400 missed by up to 2.4e-3 L; with 12
 // samples instead of 16: 6; sampling the larger rim, or with rule (1) alone: a random
 // lane in ~3000 (up to 4e-3 L).
-// Cost: the rim pairs run only where a lane is not yet certified apart (some o <= 0) and,
-// where it is certified to meet (a centre in the other, a point of the axes' closest
-// pair, or either support point along the least o's normal, inside the other shape), only
-// where a lower bound of the two circles' distance (from either rim's frame) is below the
-// least o; they are listed per chunk of kChunkBlocks blocks and sampled W pairs at a
-// time, and their brackets refined W at a time, 4 groups side by side (independent
-// Newton chains), each lane frozen once a Newton step moves it by at most kArcFreeze (so
-// its bytes do not depend on its neighbours).
+// Cost: the side-rim solves run only where the caps and sides have not certified a lane
+// apart (some o <= 0), listed per chunk of kChunkBlocks blocks and solved W lanes at a
+// time (~60% of the bench's lanes); the rim pairs run only where a lane is still not
+// certified apart after them and, where it is certified to meet (a centre in the other, a
+// point of the axes' closest pair, or either support point along the least o's normal,
+// inside the other shape), only where a lower bound of the two circles' distance (from
+// either rim's frame) is below the least o; they are listed per chunk and sampled W
+// pairs at a time, and their brackets refined W at a time, 4 groups side by side
+// (independent Newton chains), each lane frozen once a Newton step moves it by at most
+// kArcFreeze (so its bytes do not depend on its neighbours). A bracket whose steps lie
+// wholly outside B's rim cone (rim_brackets: bounded from the samples and |f''|) is not
+// refined: ~18% of the brackets on the bench (1.94 -> 1.60 per rim pair; counted
+// 2026-11-29: of ~25k such brackets refined anyway, 0.1% ended valid, each at a bracket's
+// end, not a critical point, with the tangents' cross product as its normal, and above
+// its lane's least o).
 // impact_narrowbench BM_Kernel/cylinder-cylinder/simd/4096 (2-core Intel Xeon, idle): ~199
 // ns per pair, FCL 1378 in the same run (6.9x), the one-lane path 1404, GJK / EPA ~1900
 // before. Where it goes (parts switched off in turn, ~180 ns then): the rim pairs ~84
@@ -322,7 +329,7 @@ IMPACT_INLINE typename F::Int rim_brackets(const RimPair<F>& r, F cut, typename 
   using Int = typename F::Int;
   const F zero(0.0f), one(1.0f), half(0.5f), h(kArcStep), tiny(kTinySq);
   const Geo<F>& gs = r.gs;
-  F d2[kArcSamples], m[kArcSamples];
+  F d2[kArcSamples], m[kArcSamples], er[kArcSamples], ez[kArcSamples];
   for (int k = 0; k < kArcSamples; ++k) {
     const F ck(kArcCos[k]), sk(kArcSin.v[k]);
     const V3<F> p = madd(madd(r.q0, gs.ra * ck, gs.ax), gs.ra * sk, gs.ay);
@@ -331,6 +338,33 @@ IMPACT_INLINE typename F::Int rim_brackets(const RimPair<F>& r, F cut, typename 
     const F e = rho - gs.rb;
     d2[k] = p.z * p.z + e * e;
     m[k] = gs.ra * (p.z * t.z + e * (p.x * t.x + p.y * t.y) / rho);  // g'
+    er[k] = e, ez[k] = r.s * p.z;
+  }
+  // Steps outside B's rim cone: the offset x = (e radial, p_z) from B's circle must have
+  // e and s p_z of one sign (within kConeSlack) for -n to lie in B's cone. Over a step
+  // each lies within M h^2 / 8 of its chord (|p_z''| <= ra |(ax_z, ay_z)|, |e''| = |rho''|
+  // <= ra (1 + ra / rho), rho >= its ends' least less ra h / 2: rho is ra-Lipschitz);
+  // where every point of a step has them of opposite signs by a margin and lies farther
+  // than far from B's circle (x, not the tangents' cross product, gives the direction
+  // there), no critical point of D in the step is a valid rim point: a bracket made of
+  // such steps is not listed (a point it would end on is an upper bound no lower than
+  // the critical point that holds the minimum).
+  Mask outside[kArcSamples];
+  {
+    const F hh(0.125f * kArcStep * kArcStep), lip_h = gs.ra * F(0.5f * kArcStep);
+    const F bz = hh * gs.ra * sqrt(gs.ax.z * gs.ax.z + gs.ay.z * gs.ay.z);
+    const F far = gs.ra * F(0.5f * kArcStep + 1e-2f);
+    const F far2 = far * far;
+    for (int k = 0; k < kArcSamples; ++k) {
+      const int kn = (k + 1) % kArcSamples;
+      const F rlo = max(min(er[k], er[kn]) + gs.rb - lip_h, F(1e-3f) * gs.ra);
+      const F be = hh * gs.ra * (one + gs.ra / rlo);
+      const F elo = min(er[k], er[kn]) - be, ehi = max(er[k], er[kn]) + be;
+      const F zlo = min(ez[k], ez[kn]) - bz, zhi = max(ez[k], ez[kn]) + bz;
+      const F mg = F(4.0f * kConeSlack) * (max(abs(elo), abs(ehi)) + max(abs(zlo), abs(zhi)));
+      const Mask split = ((elo > mg) & (zhi < -mg)) | ((ehi < -mg) & (zlo > mg));
+      outside[k] = split & (min(d2[k], d2[kn]) > far2);
+    }
   }
   const F lip = gs.ra * F(0.5f * kArcStep);
   const F reach = (cut + lip) * (cut + lip);  // (inf where cut is kNever)
@@ -350,7 +384,7 @@ IMPACT_INLINE typename F::Int rim_brackets(const RimPair<F>& r, F cut, typename 
     const Mask dips = curved & (vs > zero) & (vs < one) & (qb * qb > F(4.0f) * qa * qc);
     const Mask up = dips & (m[k] >= zero) & (m[kn] >= zero) & (qa > zero);  // + - +: min after vs
     const Mask down = dips & (m[k] < zero) & (m[kn] < zero) & (qa < zero);  // - + -: min before vs
-    held[k] = (min(d2[k], d2[kn]) < reach) & (turn | up | down);
+    held[k] = andnot((min(d2[k], d2[kn]) < reach) & (turn | up | down), outside[k]);
     // Starts: for a turn, the interpolant's root of g' (one in the step: - to +; written
     // without cancellation), not the chord's: a flat stretch at one end can hold a
     // second pair of critical points, and Newton from the chord's root near it finds
@@ -371,7 +405,8 @@ IMPACT_INLINE typename F::Int rim_brackets(const RimPair<F>& r, F cut, typename 
     // minimum at either end): the two steps around it are one more bracket, from the
     // sample
     const int kp = (k + kArcSamples - 1) % kArcSamples, kn = (k + 1) % kArcSamples;
-    const Mask wide = (F(kStill) * abs(m[k]) < abs(m[kp]) + abs(m[kn])) & (d2[k] < reach);
+    const Mask wide = andnot((F(kStill) * abs(m[k]) < abs(m[kp]) + abs(m[kn])) & (d2[k] < reach),
+                             outside[kp] & outside[k]);
     for (int j = 0; j < kArcSlots; ++j) {
       const Mask put_w = wide & (cnt == Int(j));
       const Mask put_h = held[k] & (cnt + simd::to_int(wide) == Int(j));
@@ -498,6 +533,9 @@ struct Chunk {
   // best: o 0, n 1..3, x 4..6, any_o 7, any_n 8..10, any_x 11..13
   float st[14][kLanes];
   float cut[kLanes];
+  // lanes the side-rim solves run on (phase A lists them)
+  int32_t srl[kLanes + W];
+  uint32_t nsr = 0;
   int32_t lane[4 * kLanes + W];
   int32_t pair[4 * kLanes + W];
   uint32_t nitems = 0;
@@ -597,8 +635,39 @@ IMPACT_INLINE void phase_a(const LeafSoA& a, const LeafSoA& b, uint32_t k, uint3
       best.take(select(crossing, (sg == 0 ? cw : -cw) + rr, never), n, madd(axis_pt, g.ra, n), ok);
     }
   }
-  // --- A's side against B's rims (n.u = 0), B's side against A's rims (n.z = 0): the
-  // four half-ellipse solves in one loop (independent chains side by side) ---
+  // --- the lanes not yet certified apart (some o <= 0) go on to the side-rim solves and
+  // the rim pairs, packed (phase B) ---
+  const Mask live = near & (best.any_o > zero);
+  {
+    uint32_t bits = simd::bits(live);
+    if (nb < W) bits &= (1u << nb) - 1u;
+    ch.nsr += simd::compact_store(ch.srl + ch.nsr, simd::lane_ids<typename F::Int>(static_cast<int32_t>(j)), bits);
+  }
+  never.store(ch.cut + j);
+  best.o = select(near, best.o, F(-1.0f));
+  best.any_o = select(near, best.any_o, F(-1.0f));
+  save_best<F>(ch.st, j, best);
+}
+
+/// Phase B, side x rims, for W listed lanes (idx; the first `real` are the list's, the
+/// rest repeat the last): A's side against B's rims (n.u = 0) and B's side against A's
+/// rims (n.z = 0), the four half-ellipse solves in one loop (independent chains side by
+/// side), merged into the lanes' best after the caps and sides; then the rim pairs to
+/// solve of the lanes still not certified apart.
+template <class F, uint32_t W>
+IMPACT_INLINE void side_rims(Chunk<W>& ch, typename F::Int idx, uint32_t real, uint32_t& cnt) {
+  using Mask = typename F::Mask;
+  using Int = typename F::Int;
+  const F zero(0.0f), one(1.0f), never(kNever);
+  const V3<F> ez{zero, zero, one};
+  const Geo<F> g = read_geo<F>([&](int f) { return simd::gather(ch.geo[f], idx); });
+  Best<F> best;
+  {
+    auto l1 = [&](int f) IMPACT_LAMBDA_INLINE { return simd::gather(ch.st[f], idx); };
+    auto l3 = [&](int f) IMPACT_LAMBDA_INLINE { return V3<F>{l1(f), l1(f + 1), l1(f + 2)}; };
+    best.o = l1(0), best.n = l3(1), best.x = l3(4), best.any_o = l1(7), best.any_n = l3(8), best.any_x = l3(11);
+  }
+  const F slack = pair_slack(g);
   {
     const Geo<F> gs = swapped(g);  // B's centre and axis in A's frame
     rim::CoreRims<F> sa, sb;
@@ -623,9 +692,11 @@ IMPACT_INLINE void phase_a(const LeafSoA& a, const LeafSoA& b, uint32_t k, uint3
     }
   }
   // --- rim x rim pairs to solve, where a lane is not certified apart (some o <= 0) ---
-  const Mask live = near & (best.any_o > zero);
+  const Mask live = best.any_o > zero;
   F cut = never;
-  if (simd::any(live)) {
+  uint32_t keep = simd::bits(live);
+  if (real < W) keep &= (1u << real) - 1u;
+  if (keep != 0) {
     // certified to meet: a centre in the other, the axes' closest points, or either
     // shape's support point along the least o's normal inside the other (points of the
     // shapes: a cap candidate's witness x = y + o n need not be); then a rim pair
@@ -638,23 +709,29 @@ IMPACT_INLINE void phase_a(const LeafSoA& a, const LeafSoA& b, uint32_t k, uint3
     }
     cert = cert | in_b(g, support_a(g, best.any_n)) | in_a(g, support_b(g, best.any_n));
     cut = select(cert, best.any_o, never);
-    uint32_t cnt = ch.nitems;
-    using Int = typename F::Int;
-    const Int lane_ids = simd::lane_ids<Int>(static_cast<int32_t>(j));
     for (int pr = 0; pr < 4; ++pr) {
       const F tau((pr & 1) != 0 ? -1.0f : 1.0f), s((pr & 2) != 0 ? -1.0f : 1.0f);
-      const Mask need = live & (rim_pair_bound(g, tau, s) < cut);
-      uint32_t bits = simd::bits(need);
-      if (nb < W) bits &= (1u << nb) - 1u;
+      const uint32_t bits = simd::bits(rim_pair_bound(g, tau, s) < cut) & keep;
       Int(pr).store(ch.pair + cnt);
-      cnt += simd::compact_store(ch.lane + cnt, lane_ids, bits);
+      cnt += simd::compact_store(ch.lane + cnt, idx, bits);
     }
-    ch.nitems = cnt;
   }
-  cut.store(ch.cut + j);
-  best.o = select(near, best.o, F(-1.0f));
-  best.any_o = select(near, best.any_o, F(-1.0f));
-  save_best<F>(ch.st, j, best);
+  // back to the chunk's rows, the listed lanes only
+  float rows[15][W];
+  {
+    auto st3 = [&](int f, const V3<F>& v) IMPACT_LAMBDA_INLINE {
+      v.x.store(rows[f]), v.y.store(rows[f + 1]), v.z.store(rows[f + 2]);
+    };
+    best.o.store(rows[0]), st3(1, best.n), st3(4, best.x);
+    best.any_o.store(rows[7]), st3(8, best.any_n), st3(11, best.any_x);
+    cut.store(rows[14]);
+  }
+  int32_t ln[W];
+  idx.store(ln);
+  for (uint32_t l = 0; l < real; ++l) {
+    for (int f = 0; f < 14; ++f) ch.st[f][ln[l]] = rows[f][l];
+    ch.cut[ln[l]] = rows[14][l];
+  }
 }
 
 /// Phase B, refinement: M groups of W units from unit `at` (the last group padded by
@@ -709,6 +786,16 @@ IMPACT_INLINE void flush_units(Chunk<W>& ch, uint32_t count) {
 template <class F, uint32_t W>
 IMPACT_INLINE void phase_b(Chunk<W>& ch) {
   using Int = typename F::Int;
+  {
+    const uint32_t nsr = ch.nsr;
+    if (nsr == 0) return;
+    for (uint32_t l = nsr; l < (nsr + W - 1) / W * W; ++l) ch.srl[l] = ch.srl[nsr - 1];
+    uint32_t cnt = 0;
+    for (uint32_t at = 0; at < nsr; at += W)
+      side_rims<F, W>(ch, Int::load(ch.srl + at), nsr - at < W ? nsr - at : W, cnt);
+    ch.nsr = 0;
+    ch.nitems = cnt;
+  }
   const uint32_t total = ch.nitems;
   if (total == 0) return;
   const uint32_t groups = (total + W - 1) / W;
