@@ -329,41 +329,51 @@ IMPACT_INLINE typename F::Int rim_brackets(const RimPair<F>& r, F cut, typename 
   using Int = typename F::Int;
   const F zero(0.0f), one(1.0f), half(0.5f), h(kArcStep), tiny(kTinySq);
   const Geo<F>& gs = r.gs;
-  F d2[kArcSamples], m[kArcSamples], er[kArcSamples], ez[kArcSamples];
+  F d2[kArcSamples], m[kArcSamples], er[kArcSamples], ez[kArcSamples], eu[kArcSamples];
   for (int k = 0; k < kArcSamples; ++k) {
     const F ck(kArcCos[k]), sk(kArcSin.v[k]);
     const V3<F> p = madd(madd(r.q0, gs.ra * ck, gs.ax), gs.ra * sk, gs.ay);
     const V3<F> t = madd(gs.ay * ck, -sk, gs.ax);  // d p / d angle, over ra
     const F rho = sqrt(max(p.x * p.x + p.y * p.y, tiny));
+    const F irho = one / rho;
     const F e = rho - gs.rb;
     d2[k] = p.z * p.z + e * e;
-    m[k] = gs.ra * (p.z * t.z + e * (p.x * t.x + p.y * t.y) / rho);  // g'
+    m[k] = gs.ra * (p.z * t.z + e * (p.x * t.x + p.y * t.y) * irho);  // g'
     er[k] = e, ez[k] = r.s * p.z;
+    eu[k] = r.tau * (dot(p, gs.u) - gs.rb * (p.x * gs.u.x + p.y * gs.u.y) * irho);
   }
-  // Steps outside B's rim cone: the offset x = (e radial, p_z) from B's circle must have
-  // e and s p_z of one sign (within kConeSlack) for -n to lie in B's cone. Over a step
-  // each lies within M h^2 / 8 of its chord (|p_z''| <= ra |(ax_z, ay_z)|, |e''| = |rho''|
-  // <= ra (1 + ra / rho), rho >= its ends' least less ra h / 2: rho is ra-Lipschitz);
-  // where every point of a step has them of opposite signs by a margin and lies farther
-  // than far from B's circle (x, not the tangents' cross product, gives the direction
-  // there), no critical point of D in the step is a valid rim point: a bracket made of
-  // such steps is not listed (a point it would end on is an upper bound no lower than
-  // the critical point that holds the minimum).
+  // Steps outside the rims' cones. At a critical point of D (not on B's circle) the
+  // normal is +-x, x = p - rb (p_xy / rho, 0) = (e radial, p_z): valid only where tau x.u
+  // (A's cap side), e and s p_z (B's) have the signs of one of the two rules (plus: x.u
+  // >= 0, e <= 0, s p_z <= 0; minus: all reversed; within kConeSlack |x|). Over a step
+  // e and p_z lie within M h^2 / 8 of their chords (|p_z''| <= ra |(ax_z, ay_z)|, |e''| =
+  // |rho''| <= ra (1 + ra / rho)), and x.u = p0.u - rb (p_xy / rho).u_xy within L h / 2 of
+  // its ends' mean (L = rb ra |u_xy| / rho: B's angle turns at most ra / rho per unit of
+  // A's); rho is at least its ends' least less ra h / 2 (ra-Lipschitz). Where neither
+  // rule can hold anywhere in a step by a margin, and the step lies farther than far from
+  // B's circle (x, not the tangents' cross product, gives the normal there), no critical
+  // point of D in it is a valid rim point: a bracket made of such steps is not listed (a
+  // point it would end on is an upper bound no lower than the critical point that holds
+  // the minimum).
   Mask outside[kArcSamples];
   {
     const F hh(0.125f * kArcStep * kArcStep), lip_h = gs.ra * F(0.5f * kArcStep);
     const F bz = hh * gs.ra * sqrt(gs.ax.z * gs.ax.z + gs.ay.z * gs.ay.z);
+    const F lu = lip_h * gs.rb * sqrt(gs.u.x * gs.u.x + gs.u.y * gs.u.y);
     const F far = gs.ra * F(0.5f * kArcStep + 1e-2f);
     const F far2 = far * far;
     for (int k = 0; k < kArcSamples; ++k) {
       const int kn = (k + 1) % kArcSamples;
-      const F rlo = max(min(er[k], er[kn]) + gs.rb - lip_h, F(1e-3f) * gs.ra);
-      const F be = hh * gs.ra * (one + gs.ra / rlo);
+      const F irlo = one / max(min(er[k], er[kn]) + gs.rb - lip_h, F(1e-3f) * gs.ra);
+      const F be = hh * gs.ra * (one + gs.ra * irlo), bu = lu * irlo;
       const F elo = min(er[k], er[kn]) - be, ehi = max(er[k], er[kn]) + be;
       const F zlo = min(ez[k], ez[kn]) - bz, zhi = max(ez[k], ez[kn]) + bz;
+      const F um = half * (eu[k] + eu[kn]);
+      const F ulo = um - bu, uhi = um + bu;
       const F mg = F(4.0f * kConeSlack) * (max(abs(elo), abs(ehi)) + max(abs(zlo), abs(zhi)));
-      const Mask split = ((elo > mg) & (zhi < -mg)) | ((ehi < -mg) & (zlo > mg));
-      outside[k] = split & (min(d2[k], d2[kn]) > far2);
+      const Mask plus = (uhi >= -mg) & (elo <= mg) & (zlo <= mg);
+      const Mask minus = (ulo <= mg) & (ehi >= -mg) & (zhi >= -mg);
+      outside[k] = ~(plus | minus) & (min(d2[k], d2[kn]) > far2);
     }
   }
   const F lip = gs.ra * F(0.5f * kArcStep);
