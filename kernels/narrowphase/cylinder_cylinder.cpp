@@ -380,6 +380,7 @@ IMPACT_INLINE typename F::Int rim_brackets(const RimPair<F>& r, F cut, typename 
   const F reach = (cut + lip) * (cut + lip);  // (inf where cut is kNever)
   for (int j = 0; j < kArcSlots; ++j) slot_k[j] = Int(0), b_st[j] = half * h, b_span[j] = h;
   Int cnt(0);
+  int cmax = 0;
   const F ih = one / h;
   Mask held[kArcSamples];  // a bracket in step k
   F st[kArcSamples];
@@ -417,7 +418,9 @@ IMPACT_INLINE typename F::Int rim_brackets(const RimPair<F>& r, F cut, typename 
     const int kp = (k + kArcSamples - 1) % kArcSamples, kn = (k + 1) % kArcSamples;
     const Mask wide = andnot((F(kStill) * abs(m[k]) < abs(m[kp]) + abs(m[kn])) & (d2[k] < reach),
                              outside[kp] & outside[k]);
-    for (int j = 0; j < kArcSlots; ++j) {
+    // (slots past cmax + 1 cannot be written here: cmax bounds every lane's cnt)
+    const int last = cmax + 1 < kArcSlots ? cmax + 1 : kArcSlots - 1;
+    for (int j = 0; j <= last; ++j) {
       const Mask put_w = wide & (cnt == Int(j));
       const Mask put_h = held[k] & (cnt + simd::to_int(wide) == Int(j));
       slot_k[j] = select(put_w, Int(kp), select(put_h, Int(k), slot_k[j]));
@@ -425,6 +428,7 @@ IMPACT_INLINE typename F::Int rim_brackets(const RimPair<F>& r, F cut, typename 
       b_span[j] = select(put_w, F(2.0f) * h, select(put_h, h, b_span[j]));
     }
     cnt = cnt + simd::to_int(wide) + simd::to_int(held[k]);
+    cmax += (simd::any(wide) ? 1 : 0) + (simd::any(held[k]) ? 1 : 0);
   }
   return select(cnt > Int(kArcSlots), Int(kArcSlots), cnt);
 }
