@@ -67,8 +67,11 @@
 // input: an edge along the axis takes x as its horizontal normal; a vertex on the axis
 // takes x as its radial direction; coincident centres give a finite unit normal (the
 // ties above decide it).
-// Cost: 22 candidate directions in closed form per lane (+ the point pair where the lane
-// is not certified to meet, + the vertex-rims where the point pair did not separate it:
+// Cost: 22 candidate directions in closed form per lane: the caps and faces (10) on
+// every lane, the edges and vertices against the side (12) only on the lanes those do
+// not certify apart, listed per chunk and run W at a time (gathered geometry and best,
+// written back per lane: ~4-10% of the kernel on the bench, 2026-11-29) (+ the point
+// pair where the lane is not certified to meet, + the vertex-rims where the point pair did not separate it:
 // ~5% of the bench's lanes, in ~54% of its blocks; the support test above drops most
 // vertex-rims of such a block, -10% of the kernel's time), the pruned rim solves packed
 // (at most kArcIterations steps of 3 divisions and 2 square roots each; in the bench ~1.1
@@ -251,6 +254,9 @@ struct Chunk {
   float geo[17][kLanes];
   // best: o 0, n 1..3, x 4..6, any_o 7, any_n 8..10, any_x 11..13
   float st[14][kLanes];
+  // lanes phase B's first step runs on (phase A lists them)
+  int32_t live[kLanes + W];
+  uint32_t nlive = 0;
   int32_t lane[kSlots * kLanes + 4 * W];
   int32_t kind[kSlots * kLanes + 4 * W];
   uint32_t nitems = 0;
@@ -284,8 +290,8 @@ IMPACT_INLINE Geo<F> gather_geo(const Chunk<W>& ch, typename F::Int idx) {
   return read_geo<F>([&](int f) IMPACT_LAMBDA_INLINE { return simd::gather(ch.geo[f], idx); });
 }
 
-/// Phase A for one block (lanes k.. of a / b, chunk lanes j..): the closed-form
-/// candidates, and the edge-rim slots each lane still needs, appended to the chunk.
+/// Phase A for one block (lanes k.. of a / b, chunk lanes j..): the caps' and faces'
+/// candidates; the lanes they do not certify apart listed for rest_a.
 template <class F, uint32_t W>
 IMPACT_INLINE void phase_a(const LeafSoA& a, const LeafSoA& b, uint32_t k, uint32_t j, uint32_t nb,
                            Chunk<W>& ch) {
@@ -307,14 +313,6 @@ IMPACT_INLINE void phase_a(const LeafSoA& a, const LeafSoA& b, uint32_t k, uint3
     return;
   }
   const F slack = pair_slack(g);
-  const V3<F> ez{zero, zero, one};
-  // x and y built inside their shapes: only x - y = o n is left to test
-  auto along = [&](F o, const V3<F>& n, const V3<F>& x, const V3<F>& y) IMPACT_LAMBDA_INLINE {
-    return length_sq(x - y - o * n) <= slack * slack;
-  };
-  auto consider = [&](F o, const V3<F>& n, const V3<F>& x, const V3<F>& y) IMPACT_LAMBDA_INLINE {
-    best.take(o, n, x, along(o, n, x, y));
-  };
   const V3<F> A[3] = {g.a[0] * g.e[0], g.a[1] * g.e[1], g.a[2] * g.e[2]};
   const F ext_z = g.e[0] * abs(g.a[0].z) + g.e[1] * abs(g.a[1].z) + g.e[2] * abs(g.a[2].z);
 
@@ -344,6 +342,46 @@ IMPACT_INLINE void phase_a(const LeafSoA& a, const LeafSoA& b, uint32_t k, uint3
                 (abs(dot(q, g.a[j1])) <= g.e[j1] + slack) & (abs(dot(q, g.a[j2])) <= g.e[j2] + slack));
     }
   }
+  // --- the lanes not yet certified apart (some o <= 0) go on to the rest, packed
+  // (phase B) ---
+  {
+    uint32_t bits = simd::bits(near & (best.any_o > zero));
+    if (nb < W) bits &= (1u << nb) - 1u;
+    ch.nlive += simd::compact_store(ch.live + ch.nlive, simd::lane_ids<Int>(static_cast<int32_t>(j)), bits);
+  }
+  best.o = select(near, best.o, F(-1.0f));
+  best.any_o = select(near, best.any_o, F(-1.0f));
+  save_best<F>(ch.st, j, best);
+}
+
+/// Phase B, first step, for W listed lanes (idx; the first `real` are the list's, the
+/// rest repeat the last): the candidates after the caps and faces (edges and vertices
+/// against the side, the point pair and the vertex-rims where the lane may be apart),
+/// then the edge-rim slots each lane still needs, appended to the chunk; the lanes' best
+/// goes back to the chunk's rows.
+template <class F, uint32_t W>
+IMPACT_INLINE void rest_a(Chunk<W>& ch, typename F::Int idx, uint32_t real, uint32_t& cnt) {
+  using Mask = typename F::Mask;
+  using Int = typename F::Int;
+  const F zero(0.0f), one(1.0f), tiny(kTinySq), never(kNever);
+  const Geo<F> g = gather_geo<F, W>(ch, idx);
+  Best<F> best;
+  {
+    auto l1 = [&](int f) IMPACT_LAMBDA_INLINE { return simd::gather(ch.st[f], idx); };
+    auto l3 = [&](int f) IMPACT_LAMBDA_INLINE { return V3<F>{l1(f), l1(f + 1), l1(f + 2)}; };
+    best.o = l1(0), best.n = l3(1), best.x = l3(4), best.any_o = l1(7), best.any_n = l3(8), best.any_x = l3(11);
+  }
+  const Mask near(true);
+  const uint32_t keep = real < W ? (1u << real) - 1u : ~0u;
+  const F slack = pair_slack(g);
+  const V3<F> ez{zero, zero, one};
+  auto along = [&](F o, const V3<F>& n, const V3<F>& x, const V3<F>& y) IMPACT_LAMBDA_INLINE {
+    return length_sq(x - y - o * n) <= slack * slack;
+  };
+  auto consider = [&](F o, const V3<F>& n, const V3<F>& x, const V3<F>& y) IMPACT_LAMBDA_INLINE {
+    best.take(o, n, x, along(o, n, x, y));
+  };
+  const V3<F> A[3] = {g.a[0] * g.e[0], g.a[1] * g.e[1], g.a[2] * g.e[2]};
   // --- edge x side: n = +-(a_i x z) / |.|, the edge against the side line ---
   for (int i = 0; i < 3; ++i) {
     const V3<F>& u = g.a[i];
@@ -481,8 +519,6 @@ IMPACT_INLINE void phase_a(const LeafSoA& a, const LeafSoA& b, uint32_t k, uint3
   // every candidate's o (any_o >= the least o); where it may be apart, it also matters as
   // the closest features, no farther apart than a point pair of the two shapes.
   const F bound = select(meets, best.any_o, max(best.any_o, apart_bound)) + slack;
-  uint32_t cnt = ch.nitems;
-  const Int lane_ids = simd::lane_ids<Int>(static_cast<int32_t>(j));
   for (int i = 0; i < 3; ++i) {
     const V3<F>& u = g.a[i];
     const int ja = (i + 1) % 3, ka = (i + 2) % 3;
@@ -524,18 +560,26 @@ IMPACT_INLINE void phase_a(const LeafSoA& a, const LeafSoA& b, uint32_t k, uint3
         const Mask cone =
             s == 0 ? ((za >= cone_eps) | (zk >= cone_eps)) : ((za <= -cone_eps) | (zk <= -cone_eps));
         const Mask need = live2 & arc_ok & cone & (lb2 <= bound * bound);
-        uint32_t bits = simd::bits(need);
-        if (nb < W) bits &= (1u << nb) - 1u;
+        const uint32_t bits = simd::bits(need) & keep;
         // (branch-free: which slots a lane keeps is close to random)
         Int(static_cast<int32_t>(8 * i + 2 * q + s)).store(ch.kind + cnt);
-        cnt += simd::compact_store(ch.lane + cnt, lane_ids, bits);
+        cnt += simd::compact_store(ch.lane + cnt, idx, bits);
       }
     }
   }
-  ch.nitems = cnt;
-  best.o = select(near, best.o, F(-1.0f));
-  best.any_o = select(near, best.any_o, F(-1.0f));
-  save_best<F>(ch.st, j, best);
+  // back to the chunk's rows, the listed lanes only
+  float rows[14][W];
+  {
+    auto st3 = [&](int f, const V3<F>& v) IMPACT_LAMBDA_INLINE {
+      v.x.store(rows[f]), v.y.store(rows[f + 1]), v.z.store(rows[f + 2]);
+    };
+    best.o.store(rows[0]), st3(1, best.n), st3(4, best.x);
+    best.any_o.store(rows[7]), st3(8, best.any_n), st3(11, best.any_x);
+  }
+  int32_t ln[W];
+  idx.store(ln);
+  for (uint32_t l = 0; l < real; ++l)
+    for (int f = 0; f < 14; ++f) ch.st[f][ln[l]] = rows[f][l];
 }
 
 /// Phase B, one batch: M groups of W listed edge-rim slots from item g0 (their solves
@@ -601,6 +645,16 @@ IMPACT_INLINE void solve_batch(Chunk<W>& ch, uint32_t g0, uint32_t total) {
 /// solved 4 groups at a time, then 2, then 1.
 template <class F, uint32_t W>
 IMPACT_INLINE void phase_b(Chunk<W>& ch) {
+  using Int = typename F::Int;
+  {
+    const uint32_t nl = ch.nlive;
+    if (nl == 0) return;
+    for (uint32_t l = nl; l < (nl + W - 1) / W * W; ++l) ch.live[l] = ch.live[nl - 1];
+    uint32_t cnt = 0;
+    for (uint32_t at = 0; at < nl; at += W) rest_a<F, W>(ch, Int::load(ch.live + at), nl - at < W ? nl - at : W, cnt);
+    ch.nlive = 0;
+    ch.nitems = cnt;
+  }
   const uint32_t total = ch.nitems;
   if (total == 0) return;
   const uint32_t groups = (total + W - 1) / W;
