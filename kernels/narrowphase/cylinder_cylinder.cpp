@@ -78,6 +78,9 @@
 // before. Where it goes (parts switched off in turn, ~180 ns then): the rim pairs ~84
 // (sampling and brackets ~47, refinement ~37; ~0.75 rim pairs listed per lane), the four
 // side-rim solves ~34, the rest (caps, sides, certificate, listing, manifolds) ~60.
+// 2026-11-29 (2-core AMD EPYC, Zen 4), with the packing and the bracket prune above: ~117
+// ns, FCL 1221 in the same run (10.4x); perf by region: side-rim solves ~30% (the
+// half-ellipse loop half of that), bracket sampling ~24%, refinement ~15%, manifolds ~11%.
 // Contact points: one, midway between the witnesses. Where n is within kParallelSin of
 // both axes (cap on cap): each rim's 8 samples seen along n on the other's cap plane and
 // inside its disk, with their gaps, reduced to 4 (reduce4). Where n is within kParallelSin
