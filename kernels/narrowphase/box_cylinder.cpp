@@ -365,16 +365,12 @@ IMPACT_INLINE void rest_a(Chunk<W>& ch, typename F::Int idx, uint32_t real, uint
   using Int = typename F::Int;
   const F zero(0.0f), one(1.0f), tiny(kTinySq), never(kNever);
   const Geo<F> g = gather_geo<F, W>(ch, idx);
-  Best<F> best;
-  {
-    auto l1 = [&](int f) IMPACT_LAMBDA_INLINE { return simd::gather(ch.st[f], idx); };
-    auto l3 = [&](int f) IMPACT_LAMBDA_INLINE { return V3<F>{l1(f), l1(f + 1), l1(f + 2)}; };
-    best.o = l1(0), best.n = l3(1), best.x = l3(4), best.any_o = l1(7), best.any_n = l3(8), best.any_x = l3(11);
-  }
+  Best<F> best = gather_best<F>(ch.st, idx);
   const Mask near(true);
   const uint32_t keep = real < W ? (1u << real) - 1u : ~0u;
   const F slack = pair_slack(g);
   const V3<F> ez{zero, zero, one};
+  // x and y built inside their shapes: only x - y = o n is left to test
   auto along = [&](F o, const V3<F>& n, const V3<F>& x, const V3<F>& y) IMPACT_LAMBDA_INLINE {
     return length_sq(x - y - o * n) <= slack * slack;
   };
@@ -567,19 +563,7 @@ IMPACT_INLINE void rest_a(Chunk<W>& ch, typename F::Int idx, uint32_t real, uint
       }
     }
   }
-  // back to the chunk's rows, the listed lanes only
-  float rows[14][W];
-  {
-    auto st3 = [&](int f, const V3<F>& v) IMPACT_LAMBDA_INLINE {
-      v.x.store(rows[f]), v.y.store(rows[f + 1]), v.z.store(rows[f + 2]);
-    };
-    best.o.store(rows[0]), st3(1, best.n), st3(4, best.x);
-    best.any_o.store(rows[7]), st3(8, best.any_n), st3(11, best.any_x);
-  }
-  int32_t ln[W];
-  idx.store(ln);
-  for (uint32_t l = 0; l < real; ++l)
-    for (int f = 0; f < 14; ++f) ch.st[f][ln[l]] = rows[f][l];
+  scatter_best<F>(ch.st, idx, real, best);  // back to the chunk's rows, the listed lanes only
 }
 
 /// Phase B, one batch: M groups of W listed edge-rim slots from item g0 (their solves
@@ -651,7 +635,8 @@ IMPACT_INLINE void phase_b(Chunk<W>& ch) {
     if (nl == 0) return;
     for (uint32_t l = nl; l < (nl + W - 1) / W * W; ++l) ch.live[l] = ch.live[nl - 1];
     uint32_t cnt = 0;
-    for (uint32_t at = 0; at < nl; at += W) rest_a<F, W>(ch, Int::load(ch.live + at), nl - at < W ? nl - at : W, cnt);
+    for (uint32_t at = 0; at < nl; at += W)
+      rest_a<F, W>(ch, Int::load(ch.live + at), nl - at < W ? nl - at : W, cnt);
     ch.nlive = 0;
     ch.nitems = cnt;
   }

@@ -67,12 +67,16 @@
 // either rim's frame) is below the least o; they are listed per chunk and sampled W
 // pairs at a time, and their brackets refined W at a time, 4 groups side by side
 // (independent Newton chains), each lane frozen once a Newton step moves it by at most
-// kArcFreeze (so its bytes do not depend on its neighbours). A bracket whose steps lie
-// wholly outside B's rim cone (rim_brackets: bounded from the samples and |f''|) is not
-// refined: ~18% of the brackets on the bench (1.94 -> 1.60 per rim pair; counted
-// 2026-11-29: of ~25k such brackets refined anyway, 0.1% ended valid, each at a bracket's
-// end, not a critical point, with the tangents' cross product as its normal, and above
-// its lane's least o).
+// kArcFreeze (so its bytes do not depend on its neighbours). A bracket none of whose
+// points can meet the rims' cone rules (rim_brackets: the signs of the offset's radial
+// and axial parts from B's circle and of its part along A's axis, bounded over each step
+// from the samples) is not refined: 1.94 -> 1.17 brackets per rim pair on the bench, the
+// valid ones unchanged (counted 2026-11-29; with B's rule alone, 1.60: of ~25k brackets
+// it would drop, refined anyway, 0.1% ended valid, each at a bracket's end, not a
+// critical point, with the tangents' cross product as its normal and above its lane's
+// least o). Mutation check: an unsound version (the rules tested at the steps' ends
+// only) fails 5 of this kernel's tests; dropping the `far` guard fails none (it only
+// matters where rounding makes the offset's direction noise).
 // impact_narrowbench BM_Kernel/cylinder-cylinder/simd/4096 (2-core Intel Xeon, idle): ~199
 // ns per pair, FCL 1378 in the same run (6.9x), the one-lane path 1404, GJK / EPA ~1900
 // before. Where it goes (parts switched off in turn, ~180 ns then): the rim pairs ~84
@@ -419,8 +423,8 @@ IMPACT_INLINE typename F::Int rim_brackets(const RimPair<F>& r, F cut, typename 
     // minimum at either end): the two steps around it are one more bracket, from the
     // sample
     const int kp = (k + kArcSamples - 1) % kArcSamples, kn = (k + 1) % kArcSamples;
-    const Mask wide = andnot((F(kStill) * abs(m[k]) < abs(m[kp]) + abs(m[kn])) & (d2[k] < reach),
-                             outside[kp] & outside[k]);
+    const Mask wide =
+        andnot((F(kStill) * abs(m[k]) < abs(m[kp]) + abs(m[kn])) & (d2[k] < reach), outside[kp] & outside[k]);
     // (slots past cmax + 1 cannot be written here: cmax bounds every lane's cnt)
     const int last = cmax + 1 < kArcSlots ? cmax + 1 : kArcSlots - 1;
     for (int j = 0; j <= last; ++j) {
@@ -658,7 +662,8 @@ IMPACT_INLINE void phase_a(const LeafSoA& a, const LeafSoA& b, uint32_t k, uint3
   {
     uint32_t bits = simd::bits(live);
     if (nb < W) bits &= (1u << nb) - 1u;
-    ch.nsr += simd::compact_store(ch.srl + ch.nsr, simd::lane_ids<typename F::Int>(static_cast<int32_t>(j)), bits);
+    ch.nsr +=
+        simd::compact_store(ch.srl + ch.nsr, simd::lane_ids<typename F::Int>(static_cast<int32_t>(j)), bits);
   }
   never.store(ch.cut + j);
   best.o = select(near, best.o, F(-1.0f));
@@ -678,12 +683,7 @@ IMPACT_INLINE void side_rims(Chunk<W>& ch, typename F::Int idx, uint32_t real, u
   const F zero(0.0f), one(1.0f), never(kNever);
   const V3<F> ez{zero, zero, one};
   const Geo<F> g = read_geo<F>([&](int f) { return simd::gather(ch.geo[f], idx); });
-  Best<F> best;
-  {
-    auto l1 = [&](int f) IMPACT_LAMBDA_INLINE { return simd::gather(ch.st[f], idx); };
-    auto l3 = [&](int f) IMPACT_LAMBDA_INLINE { return V3<F>{l1(f), l1(f + 1), l1(f + 2)}; };
-    best.o = l1(0), best.n = l3(1), best.x = l3(4), best.any_o = l1(7), best.any_n = l3(8), best.any_x = l3(11);
-  }
+  Best<F> best = gather_best<F>(ch.st, idx);
   const F slack = pair_slack(g);
   {
     const Geo<F> gs = swapped(g);  // B's centre and axis in A's frame
@@ -734,21 +734,11 @@ IMPACT_INLINE void side_rims(Chunk<W>& ch, typename F::Int idx, uint32_t real, u
     }
   }
   // back to the chunk's rows, the listed lanes only
-  float rows[15][W];
-  {
-    auto st3 = [&](int f, const V3<F>& v) IMPACT_LAMBDA_INLINE {
-      v.x.store(rows[f]), v.y.store(rows[f + 1]), v.z.store(rows[f + 2]);
-    };
-    best.o.store(rows[0]), st3(1, best.n), st3(4, best.x);
-    best.any_o.store(rows[7]), st3(8, best.any_n), st3(11, best.any_x);
-    cut.store(rows[14]);
-  }
+  scatter_best<F>(ch.st, idx, real, best);
+  float cuts[W];
   int32_t ln[W];
-  idx.store(ln);
-  for (uint32_t l = 0; l < real; ++l) {
-    for (int f = 0; f < 14; ++f) ch.st[f][ln[l]] = rows[f][l];
-    ch.cut[ln[l]] = rows[14][l];
-  }
+  cut.store(cuts), idx.store(ln);
+  for (uint32_t l = 0; l < real; ++l) ch.cut[ln[l]] = cuts[l];
 }
 
 /// Phase B, refinement: M groups of W units from unit `at` (the last group padded by

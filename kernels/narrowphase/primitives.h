@@ -665,6 +665,33 @@ IMPACT_INLINE WitnessedBest<F> load_best(const float (&st)[14][L], uint32_t j) {
 }
 /// Merges one packed candidate per lane (o, n, x, valid) of cnt listed lanes (chunk lanes
 /// lane[0 .. cnt)) into the chunk's WitnessedBest state, lane by lane in list order.
+/// load_best for lanes idx of the chunk (a packed group's lanes).
+template <class F, uint32_t L>
+IMPACT_INLINE WitnessedBest<F> gather_best(const float (&st)[14][L], typename F::Int idx) {
+  auto l1 = [&](int f) IMPACT_LAMBDA_INLINE { return simd::gather(st[f], idx); };
+  auto l3 = [&](int f) IMPACT_LAMBDA_INLINE { return V3<F>{l1(f), l1(f + 1), l1(f + 2)}; };
+  WitnessedBest<F> b;
+  b.o = l1(0), b.n = l3(1), b.x = l3(4), b.any_o = l1(7), b.any_n = l3(8), b.any_x = l3(11);
+  return b;
+}
+/// save_best for the first `real` lanes of idx (a packed group's listed lanes; the
+/// padding lanes, repeats of the last, are not written).
+template <class F, uint32_t L>
+IMPACT_INLINE void scatter_best(float (&st)[14][L], typename F::Int idx, uint32_t real,
+                                const WitnessedBest<F>& b) {
+  constexpr uint32_t W = F::kWidth;
+  float rows[14][W];
+  auto st3 = [&](int f, const V3<F>& v) IMPACT_LAMBDA_INLINE {
+    v.x.store(rows[f]), v.y.store(rows[f + 1]), v.z.store(rows[f + 2]);
+  };
+  b.o.store(rows[0]), st3(1, b.n), st3(4, b.x);
+  b.any_o.store(rows[7]), st3(8, b.any_n), st3(11, b.any_x);
+  int32_t ln[W];
+  idx.store(ln);
+  for (uint32_t l = 0; l < real; ++l)
+    for (int f = 0; f < 14; ++f) st[f][ln[l]] = rows[f][l];
+}
+
 template <class F, uint32_t L>
 IMPACT_INLINE void merge_best(float (&st)[14][L], const int32_t* lane, uint32_t cnt, F o, const V3<F>& n,
                               const V3<F>& x, typename F::Mask valid) {
