@@ -37,7 +37,8 @@ kernels::LbvhView LbvhBroadPhase::view() const {
                            filtered_ ? static_.data() : nullptr,
                            info_.leaves,
                            lanes_.data(),
-                           kernels::lbvh_lane_stride(info_.leaves)};
+                           kernels::lbvh_lane_stride(info_.leaves),
+                           leaf_index_.data()};
 }
 
 Status LbvhBroadPhase::rebuild(const Executor& exec, kernels::AabbSoA boxes, kernels::PairFilter filter,

@@ -87,6 +87,10 @@ struct LbvhView {
   /// lanes + k * lane_stride. lbvh_find_pairs needs them; the other walks do not.
   const float* lanes;
   size_t lane_stride;
+  /// The leaves' body indices in sorted order (leaves[s].index, 4 bytes a leaf):
+  /// lbvh_find_pairs reads them instead of the 32-byte records, which a leaf tested
+  /// from the lane arrays has not brought into cache.
+  const uint32_t* ids;
 };
 
 /// Writes the pairs whose query leaf lies in r (see the order above) to out[0, capacity)

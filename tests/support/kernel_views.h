@@ -48,9 +48,12 @@ inline const host::Executor& serial() {
 }
 
 /// The view's lane arrays hold exactly its leaves' bounds, and the padding past n
-/// (+inf mins, -inf maxes) overlaps nothing (kernels::LbvhLanes).
+/// (+inf mins, -inf maxes) overlaps nothing (kernels::LbvhLanes); its id array holds
+/// the leaves' body indices.
 inline void expect_lanes_mirror_leaves(const kernels::LbvhView& v) {
   if (v.n == 0) return;
+  ASSERT_NE(v.ids, nullptr);
+  for (uint32_t s = 0; s < v.n; ++s) ASSERT_EQ(v.ids[s], v.leaves[s].index) << "leaf " << s;
   ASSERT_NE(v.lanes, nullptr);
   ASSERT_EQ(v.lane_stride, kernels::lbvh_lane_stride(v.n));
   ASSERT_GE(v.lane_stride, static_cast<size_t>(v.n) + kernels::kLbvhCluster);
