@@ -296,7 +296,6 @@ template <class F, uint32_t W>
 IMPACT_INLINE void phase_a(const LeafSoA& a, const LeafSoA& b, uint32_t k, uint32_t j, uint32_t nb,
                            Chunk<W>& ch) {
   using Mask = typename F::Mask;
-  using Int = typename F::Int;
   const F zero(0.0f), one(1.0f), tiny(kTinySq), never(kNever);
   V3<F> cb;
   M3<F> rot;
@@ -344,14 +343,8 @@ IMPACT_INLINE void phase_a(const LeafSoA& a, const LeafSoA& b, uint32_t k, uint3
   }
   // --- the lanes not yet certified apart (some o <= 0) go on to the rest, packed
   // (phase B) ---
-  {
-    uint32_t bits = simd::bits(near & (best.any_o > zero));
-    if (nb < W) bits &= (1u << nb) - 1u;
-    ch.nlive += simd::compact_store(ch.live + ch.nlive, simd::lane_ids<Int>(static_cast<int32_t>(j)), bits);
-  }
-  best.o = select(near, best.o, F(-1.0f));
-  best.any_o = select(near, best.any_o, F(-1.0f));
-  save_best<F>(ch.st, j, best);
+  list_lanes<F>(ch.live, ch.nlive, near & (best.any_o > zero), j, nb);
+  save_best_near<F>(ch.st, j, best, near);
 }
 
 /// Phase B, first step, for W listed lanes (idx; the first `real` are the list's, the
@@ -629,17 +622,12 @@ IMPACT_INLINE void solve_batch(Chunk<W>& ch, uint32_t g0, uint32_t total) {
 /// solved 4 groups at a time, then 2, then 1.
 template <class F, uint32_t W>
 IMPACT_INLINE void phase_b(Chunk<W>& ch) {
-  using Int = typename F::Int;
-  {
-    const uint32_t nl = ch.nlive;
-    if (nl == 0) return;
-    for (uint32_t l = nl; l < (nl + W - 1) / W * W; ++l) ch.live[l] = ch.live[nl - 1];
-    uint32_t cnt = 0;
-    for (uint32_t at = 0; at < nl; at += W)
-      rest_a<F, W>(ch, Int::load(ch.live + at), nl - at < W ? nl - at : W, cnt);
-    ch.nlive = 0;
-    ch.nitems = cnt;
-  }
+  if (ch.nlive == 0) return;
+  uint32_t cnt = 0;
+  for_each_listed<F>(ch.live, ch.nlive,
+                     [&](typename F::Int idx, uint32_t real) { rest_a<F, W>(ch, idx, real, cnt); });
+  ch.nlive = 0;
+  ch.nitems = cnt;
   const uint32_t total = ch.nitems;
   if (total == 0) return;
   const uint32_t groups = (total + W - 1) / W;

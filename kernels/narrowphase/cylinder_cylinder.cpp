@@ -658,17 +658,9 @@ IMPACT_INLINE void phase_a(const LeafSoA& a, const LeafSoA& b, uint32_t k, uint3
   }
   // --- the lanes not yet certified apart (some o <= 0) go on to the side-rim solves and
   // the rim pairs, packed (phase B) ---
-  const Mask live = near & (best.any_o > zero);
-  {
-    uint32_t bits = simd::bits(live);
-    if (nb < W) bits &= (1u << nb) - 1u;
-    ch.nsr +=
-        simd::compact_store(ch.srl + ch.nsr, simd::lane_ids<typename F::Int>(static_cast<int32_t>(j)), bits);
-  }
+  list_lanes<F>(ch.srl, ch.nsr, near & (best.any_o > zero), j, nb);
   never.store(ch.cut + j);
-  best.o = select(near, best.o, F(-1.0f));
-  best.any_o = select(near, best.any_o, F(-1.0f));
-  save_best<F>(ch.st, j, best);
+  save_best_near<F>(ch.st, j, best, near);
 }
 
 /// Phase B, side x rims, for W listed lanes (idx; the first `real` are the list's, the
@@ -793,13 +785,10 @@ IMPACT_INLINE void flush_units(Chunk<W>& ch, uint32_t count) {
 template <class F, uint32_t W>
 IMPACT_INLINE void phase_b(Chunk<W>& ch) {
   using Int = typename F::Int;
+  if (ch.nsr == 0) return;
   {
-    const uint32_t nsr = ch.nsr;
-    if (nsr == 0) return;
-    for (uint32_t l = nsr; l < (nsr + W - 1) / W * W; ++l) ch.srl[l] = ch.srl[nsr - 1];
     uint32_t cnt = 0;
-    for (uint32_t at = 0; at < nsr; at += W)
-      side_rims<F, W>(ch, Int::load(ch.srl + at), nsr - at < W ? nsr - at : W, cnt);
+    for_each_listed<F>(ch.srl, ch.nsr, [&](Int idx, uint32_t real) { side_rims<F, W>(ch, idx, real, cnt); });
     ch.nsr = 0;
     ch.nitems = cnt;
   }

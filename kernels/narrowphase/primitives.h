@@ -663,8 +663,36 @@ IMPACT_INLINE WitnessedBest<F> load_best(const float (&st)[14][L], uint32_t j) {
   b.o = l1(0), b.n = l3(1), b.x = l3(4), b.any_o = l1(7), b.any_n = l3(8), b.any_x = l3(11);
   return b;
 }
-/// Merges one packed candidate per lane (o, n, x, valid) of cnt listed lanes (chunk lanes
-/// lane[0 .. cnt)) into the chunk's WitnessedBest state, lane by lane in list order.
+/// Appends chunk lanes j + l (l < nb) where m is set to list[count ..] and advances
+/// count (list holds W entries past the end: compact_store writes them).
+template <class F>
+IMPACT_INLINE void list_lanes(int32_t* list, uint32_t& count, typename F::Mask m, uint32_t j,
+                              uint32_t nb) {
+  constexpr uint32_t W = F::kWidth;
+  uint32_t bits = simd::bits(m);
+  if (nb < W) bits &= (1u << nb) - 1u;
+  count += simd::compact_store(list + count, simd::lane_ids<typename F::Int>(static_cast<int32_t>(j)), bits);
+}
+
+/// group(idx, real) over list[0 .. count) W entries at a time (count > 0; the last group
+/// padded by repeating the last entry, real = the group's entries from the list).
+template <class F, class Group>
+IMPACT_INLINE void for_each_listed(int32_t* list, uint32_t count, Group&& group) {
+  constexpr uint32_t W = F::kWidth;
+  for (uint32_t l = count; l < (count + W - 1) / W * W; ++l) list[l] = list[count - 1];
+  for (uint32_t at = 0; at < count; at += W)
+    group(F::Int::load(list + at), count - at < W ? count - at : W);
+}
+
+/// save_best, the lanes not near marked apart (o = any_o = -1).
+template <class F, uint32_t L>
+IMPACT_INLINE void save_best_near(float (&st)[14][L], uint32_t j, WitnessedBest<F> b,
+                                  typename F::Mask near) {
+  b.o = select(near, b.o, F(-1.0f));
+  b.any_o = select(near, b.any_o, F(-1.0f));
+  save_best<F>(st, j, b);
+}
+
 /// load_best for lanes idx of the chunk (a packed group's lanes).
 template <class F, uint32_t L>
 IMPACT_INLINE WitnessedBest<F> gather_best(const float (&st)[14][L], typename F::Int idx) {
@@ -692,6 +720,8 @@ IMPACT_INLINE void scatter_best(float (&st)[14][L], typename F::Int idx, uint32_
     for (int f = 0; f < 14; ++f) st[f][ln[l]] = rows[f][l];
 }
 
+/// Merges one packed candidate per lane (o, n, x, valid) of cnt listed lanes (chunk lanes
+/// lane[0 .. cnt)) into the chunk's WitnessedBest state, lane by lane in list order.
 template <class F, uint32_t L>
 IMPACT_INLINE void merge_best(float (&st)[14][L], const int32_t* lane, uint32_t cnt, F o, const V3<F>& n,
                               const V3<F>& x, typename F::Mask valid) {
