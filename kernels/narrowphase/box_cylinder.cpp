@@ -71,7 +71,8 @@
 // every lane, the edges and vertices against the side (12) only on the lanes those do
 // not certify apart, listed per chunk and run W at a time (gathered geometry and best,
 // written back per lane: ~4-10% of the kernel on the bench, 2026-11-29) (+ the point
-// pair where the lane is not certified to meet, + the vertex-rims where the point pair did not separate it:
+// pair where the lane is not certified to meet, + the vertex-rims where the point pair
+// did not separate it:
 // ~5% of the bench's lanes, in ~54% of its blocks; the support test above drops most
 // vertex-rims of such a block, -10% of the kernel's time), the pruned rim solves packed
 // (at most kArcIterations steps of 3 divisions and 2 square roots each; in the bench ~1.1
@@ -296,7 +297,7 @@ template <class F, uint32_t W>
 IMPACT_INLINE void phase_a(const LeafSoA& a, const LeafSoA& b, uint32_t k, uint32_t j, uint32_t nb,
                            Chunk<W>& ch) {
   using Mask = typename F::Mask;
-  const F zero(0.0f), one(1.0f), tiny(kTinySq), never(kNever);
+  const F zero(0.0f);
   V3<F> cb;
   M3<F> rot;
   const Geo<F> g = load_geo<F>(a, b, k, cb, rot);
@@ -359,7 +360,6 @@ IMPACT_INLINE void rest_a(Chunk<W>& ch, typename F::Int idx, uint32_t real, uint
   const F zero(0.0f), one(1.0f), tiny(kTinySq), never(kNever);
   const Geo<F> g = gather_geo<F, W>(ch, idx);
   Best<F> best = gather_best<F>(ch.st, idx);
-  const Mask near(true);
   const uint32_t keep = real < W ? (1u << real) - 1u : ~0u;
   const F slack = pair_slack(g);
   const V3<F> ez{zero, zero, one};
@@ -435,7 +435,7 @@ IMPACT_INLINE void rest_a(Chunk<W>& ch, typename F::Int idx, uint32_t real, uint
     for (int i = 0; i < 3; ++i) y_in = y_in & (abs(dot(q, g.a[i])) <= g.e[i]);
     meets = meets | (has & (x_in | y_in));
   }
-  const Mask live = near & (best.any_o > zero);
+  const Mask live = best.any_o > zero;
   // Lanes not certified to meet; the two passes below run where a block has one, and
   // count only on those lanes (a lane's bytes must not depend on its neighbours).
   const Mask uncertified = live & ~meets;
@@ -464,7 +464,7 @@ IMPACT_INLINE void rest_a(Chunk<W>& ch, typename F::Int idx, uint32_t real, uint
     F len;
     const V3<F> n = normalize_or(y - x, ez, len);
     best.take(select(uncertified, score(g, n), never), n, x, Mask(false));
-    live2 = near & (best.any_o > zero);
+    live2 = best.any_o > zero;
     apart_bound = select(uncertified, min(apart_bound, len), apart_bound);
   }
 
@@ -498,7 +498,7 @@ IMPACT_INLINE void rest_a(Chunk<W>& ch, typename F::Int idx, uint32_t real, uint
         consider(select(cone, score(g, n), never), n, v, y);
       }
     }
-    live2 = near & (best.any_o > zero);
+    live2 = best.any_o > zero;
     apart_bound = min(apart_bound, best.o);
   }
 

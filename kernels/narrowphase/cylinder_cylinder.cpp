@@ -304,11 +304,17 @@ struct RimPair {
   V3<F> ca, q0;
 };
 
+/// The chunk's geometry rows of lanes idx.
+template <class F, class Chunk>
+IMPACT_INLINE Geo<F> gather_geo(const Chunk& ch, typename F::Int idx) {
+  return read_geo<F>([&](int f) IMPACT_LAMBDA_INLINE { return simd::gather(ch.geo[f], idx); });
+}
+
 /// The rim pairs (lane idx, pair pr) of the chunk's geometry.
 template <class F, class Chunk>
 IMPACT_INLINE RimPair<F> gather_rim_pair(const Chunk& ch, typename F::Int idx, typename F::Int pr) {
   RimPair<F> r;
-  r.g = read_geo<F>([&](int f) { return simd::gather(ch.geo[f], idx); });
+  r.g = gather_geo<F>(ch, idx);
   const F tau = simd::gather(kPairTau, pr), s = simd::gather(kPairS, pr);
   r.swap = r.g.ra > r.g.rb;
   r.gs = select_geo(r.swap, swapped(r.g), r.g);
@@ -674,7 +680,7 @@ IMPACT_INLINE void side_rims(Chunk<W>& ch, typename F::Int idx, uint32_t real, u
   using Int = typename F::Int;
   const F zero(0.0f), one(1.0f), never(kNever);
   const V3<F> ez{zero, zero, one};
-  const Geo<F> g = read_geo<F>([&](int f) { return simd::gather(ch.geo[f], idx); });
+  const Geo<F> g = gather_geo<F>(ch, idx);
   Best<F> best = gather_best<F>(ch.st, idx);
   const F slack = pair_slack(g);
   {
