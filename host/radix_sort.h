@@ -2,6 +2,8 @@
 // Executor. Sorts on bits [lo_bit, hi_bit); keys enter in the order that must win
 // ties (by convention their low 32 bits hold the original index), and the result
 // is the same bytes for any thread count. Passes whose digit is constant are skipped.
+// The range is split into the fewest passes of equal width (at most 11 bits; 8 for
+// small sorts).
 #pragma once
 
 #include <cstdint>
@@ -22,6 +24,8 @@ class RadixSorter {
 
   /// Keys per chunk; fixed, so chunking does not depend on the thread count.
   static constexpr uint32_t kGrain = 1u << 16;
+  /// Keys from which the passes use digits of up to kernels::kRadixMaxBits (else 8).
+  static constexpr uint32_t kWideDigits = 1u << 15;
 
  private:
   template <bool kWithValues>

@@ -6,7 +6,10 @@ void radix_histogram(const uint64_t* IMPACT_RESTRICT keys, RadixDigit digit, uin
   const uint32_t shift = digit.shift;
   const uint64_t m = digit.mask;
   // Four interleaved sub-histograms break the store-to-load dependency on hot digits.
-  uint32_t h[4][kRadixBuckets] = {};
+  const uint32_t buckets = digit.mask + 1;
+  uint32_t h[4][kRadixBuckets];
+  for (uint32_t j = 0; j < 4; ++j)
+    for (uint32_t d = 0; d < buckets; ++d) h[j][d] = 0;
   uint32_t i = r.begin;
   for (; i + 4 <= r.end; i += 4) {
     ++h[0][(keys[i + 0] >> shift) & m];
@@ -15,13 +18,13 @@ void radix_histogram(const uint64_t* IMPACT_RESTRICT keys, RadixDigit digit, uin
     ++h[3][(keys[i + 3] >> shift) & m];
   }
   for (; i < r.end; ++i) ++h[0][(keys[i] >> shift) & m];
-  for (uint32_t d = 0; d < kRadixBuckets; ++d) out_hist[d] = h[0][d] + h[1][d] + h[2][d] + h[3][d];
+  for (uint32_t d = 0; d < buckets; ++d) out_hist[d] = h[0][d] + h[1][d] + h[2][d] + h[3][d];
 }
 
-bool radix_offsets(uint32_t* io_hist, uint32_t chunk_count, uint64_t n) {
+bool radix_offsets(uint32_t* io_hist, uint32_t mask, uint32_t chunk_count, uint64_t n) {
   uint32_t running = 0;
   bool single = false;
-  for (uint32_t d = 0; d < kRadixBuckets; ++d) {
+  for (uint32_t d = 0; d <= mask; ++d) {
     uint64_t digit_total = 0;
     for (uint32_t c = 0; c < chunk_count; ++c) {
       uint32_t& slot = io_hist[static_cast<uint64_t>(c) * kRadixBuckets + d];

@@ -1,4 +1,4 @@
-// LSD radix sort building blocks for 64-bit keys, one 8-bit digit per pass.
+// LSD radix sort building blocks for 64-bit keys, one digit of up to 11 bits per pass.
 //
 // A pass over n keys split into chunks (fixed by n and a grain, never by the
 // thread count) is:
@@ -19,24 +19,29 @@
 
 namespace impact::kernels {
 
-inline constexpr uint32_t kRadixBits = 8;
-inline constexpr uint32_t kRadixBuckets = 1u << kRadixBits;
+/// Widest digit; the driver splits a sort range into the fewest passes of at most this
+/// many bits, of equal width (30 bits: 3 x 10, 32 bits: 11 + 11 + 10).
+inline constexpr uint32_t kRadixMaxBits = 11;
+/// Histogram entries per chunk (the widest digit's values).
+inline constexpr uint32_t kRadixBuckets = 1u << kRadixMaxBits;
 
-/// One pass's digit: (key >> shift) & mask, mask < 256 (narrower for the last
-/// pass, so bits above the sort range never affect the order).
+/// One pass's digit: (key >> shift) & mask, mask = 2^bits - 1 with bits <= kRadixMaxBits
+/// (the last pass narrower where the range ends, so bits above it never affect the order).
 struct RadixDigit {
   uint32_t shift;
   uint32_t mask;
 };
 
-/// out_hist[d] = number of keys in r whose digit is d (256 entries, overwritten).
+/// out_hist[d] = number of keys in r whose digit is d (d <= digit.mask; those entries
+/// overwritten).
 void radix_histogram(const uint64_t* IMPACT_RESTRICT keys, RadixDigit digit, uint32_t* out_hist, Range r);
 
-/// Turns chunk histograms (chunk-major: hist[c * 256 + d]) into scatter offsets in
-/// place. Returns true when one digit value holds every key (the pass can be skipped).
-bool radix_offsets(uint32_t* io_hist, uint32_t chunk_count, uint64_t n);
+/// Turns chunk histograms (chunk-major: hist[c * kRadixBuckets + d], d <= mask) into
+/// scatter offsets in place. Returns true when one digit value holds every key (the pass
+/// can be skipped).
+bool radix_offsets(uint32_t* io_hist, uint32_t mask, uint32_t chunk_count, uint64_t n);
 
-/// Stable scatter of the keys of r to out_keys at the chunk's offsets (256
+/// Stable scatter of the keys of r to out_keys at the chunk's offsets (mask + 1
 /// entries, advanced in place).
 void radix_scatter(const uint64_t* IMPACT_RESTRICT keys, RadixDigit digit, uint32_t* io_offsets,
                    uint64_t* IMPACT_RESTRICT out_keys, Range r);

@@ -103,20 +103,24 @@ TEST(RadixSort, EmptyBitRangeLeavesOrder) {
 
 TEST(RadixSort, BitRanges) {
   // Sort fields of every width from 1 to 32 bits, including widths that are not a
-  // multiple of the 8-bit digit. Bits at and above hi are zero (the library's
-  // callers size hi with bits_for(max key)); bits below lo are random payload.
+  // multiple of any digit width, with 8-bit digits (fewer than kWideDigits keys) and
+  // with the wide ones (up to 11 bits, passes of equal width: 30 bits as 3 x 10, 31
+  // as 11 + 10 + 10). Bits at and above hi are zero (the library's callers size hi
+  // with bits_for(max key)); bits below lo are random payload.
   std::mt19937_64 rng(5);
-  const uint32_t n = test::scaled(20000);
-  for (uint32_t lo : {0u, 3u, 32u}) {
-    for (uint32_t width : {1u, 5u, 7u, 8u, 9u, 13u, 16u, 21u, 24u, 31u, 32u}) {
-      const uint32_t hi = lo + width;
-      std::vector<uint64_t> keys(n);
-      for (auto& k : keys) {
-        const uint64_t f = rng() & ((1ull << width) - 1);
-        const uint64_t below = lo == 0 ? 0 : (rng() & ((1ull << lo) - 1));
-        k = (f << lo) | below;
+  for (uint32_t n : {test::scaled(20000), host::RadixSorter::kWideDigits + 999}) {
+    for (uint32_t lo : {0u, 3u, 32u}) {
+      for (uint32_t width : {1u, 5u, 7u, 8u, 9u, 11u, 12u, 13u, 16u, 21u, 22u, 24u, 30u, 31u, 32u}) {
+        const uint32_t hi = lo + width;
+        std::vector<uint64_t> keys(n);
+        for (auto& k : keys) {
+          const uint64_t f = rng() & ((1ull << width) - 1);
+          const uint64_t below = lo == 0 ? 0 : (rng() & ((1ull << lo) - 1));
+          k = (f << lo) | below;
+        }
+        EXPECT_EQ(radix(keys, lo, hi), reference_sort(keys, lo, hi))
+            << "bits [" << lo << ", " << hi << ") n " << n;
       }
-      EXPECT_EQ(radix(keys, lo, hi), reference_sort(keys, lo, hi)) << "bits [" << lo << ", " << hi << ")";
     }
   }
 }
@@ -124,14 +128,15 @@ TEST(RadixSort, BitRanges) {
 TEST(RadixSort, BitsAboveHiBitAreNotSortedOn) {
   // host/radix_sort.h: "Sorts on bits [lo_bit, hi_bit)". Keys whose bits at or
   // above hi_bit are set (payload the caller did not ask to sort on) must keep
-  // their input order among equal [lo, hi) fields. The sorter runs whole 8-bit
-  // digits, so with hi - lo not a multiple of 8 it also sorts on the bits up to
-  // the next digit boundary.
+  // their input order among equal [lo, hi) fields: the last pass's digit is cut at
+  // hi_bit. With 8-bit digits and with the wide ones.
   std::mt19937_64 rng(6);
-  std::vector<uint64_t> keys(4096);
-  for (auto& k : keys) k = rng();
-  for (auto [lo, hi] : {std::pair{32u, 45u}, std::pair{0u, 4u}, std::pair{8u, 12u}})
-    EXPECT_EQ(radix(keys, lo, hi), reference_sort(keys, lo, hi)) << "bits [" << lo << ", " << hi << ")";
+  for (uint32_t n : {4096u, host::RadixSorter::kWideDigits + 4096}) {
+    std::vector<uint64_t> keys(n);
+    for (auto& k : keys) k = rng();
+    for (auto [lo, hi] : {std::pair{32u, 45u}, std::pair{0u, 4u}, std::pair{8u, 12u}, std::pair{32u, 62u}})
+      EXPECT_EQ(radix(keys, lo, hi), reference_sort(keys, lo, hi)) << "bits [" << lo << ", " << hi << ") n " << n;
+  }
 }
 
 TEST(RadixSort, SkipsConstantDigitsCorrectly) {
@@ -196,7 +201,7 @@ TEST(RadixSort, KernelOffsetsAcrossChunks) {
   std::vector<uint32_t> hist(ranges.size() * kernels::kRadixBuckets);
   for (size_t c = 0; c < ranges.size(); ++c)
     kernels::radix_histogram(keys.data(), kernels::RadixDigit{0, 0xff}, hist.data() + c * kernels::kRadixBuckets, ranges[c]);
-  EXPECT_FALSE(kernels::radix_offsets(hist.data(), static_cast<uint32_t>(ranges.size()), keys.size()));
+  EXPECT_FALSE(kernels::radix_offsets(hist.data(), 0xff, static_cast<uint32_t>(ranges.size()), keys.size()));
   for (size_t c = 0; c < ranges.size(); ++c)
     kernels::radix_scatter(keys.data(), kernels::RadixDigit{0, 0xff}, hist.data() + c * kernels::kRadixBuckets, out.data(), ranges[c]);
   EXPECT_EQ(out, reference_sort(keys, 0, 8));
