@@ -36,7 +36,9 @@
 //    output blocks (prim::LiveOut).
 // Big hulls: a lane whose hull has more than kLaneVerts vertices is not listed and gets
 // collide_support_halfspace (one pair at a time, SIMD across its vertices) instead,
-// decided by its own hull.
+// decided by its own hull; the listing pass notes whether the range has any, so a range
+// without them is not walked again for them (2026-11-29: 25.7 -> 25.1 ns per pair,
+// medians of 5 alternated runs, AMD EPYC).
 // Preconditions: finite inputs, orthonormal R, unit nh (host-validated); a hull has at
 // least one vertex. Degenerate input: a hull lying in the plane (all depths 0) counts
 // 0, like exact touching; flat and needle hulls just give fewer points.
@@ -302,6 +304,7 @@ void convex_halfspace_range(const LeafSoA& a, const LeafSoA& b, const ManifoldSo
                             const NarrowConfig& cfg) {
   const HullView& h = cfg.hulls;
   constexpr uint32_t W = F::kWidth;
+  bool big = false;  // a lane's hull has more than kLaneVerts vertices
   for_each_live_group<F, 4, Below>(
       a, b, out, r,
       [&](const LeafSoA& va, const LeafSoA& vb, uint32_t at, uint32_t k, uint32_t nb, Below* below) {
@@ -313,7 +316,10 @@ void convex_halfspace_range(const LeafSoA& a, const LeafSoA& b, const ManifoldSo
         uint32_t go = 0;
         for (uint32_t l = 0; l < nb; ++l) {
           const uint32_t hb = h.vert_begin[a.ref[k + l]], c = h.vert_begin[a.ref[k + l] + 1] - hb;
-          if (c > kLaneVerts) continue;  // collide_support_halfspace, below
+          if (c > kLaneVerts) {  // collide_support_halfspace, below
+            big = true;
+            continue;
+          }
           below[l] = Below{below_bits<F>(h, hb, c, V3<F>{F(lx[l]), F(ly[l]), F(lz[l])}, F(lo[l])), hb};
           go |= (below[l].bits != 0 ? 1u : 0u) << l;
         }
@@ -322,7 +328,7 @@ void convex_halfspace_range(const LeafSoA& a, const LeafSoA& b, const ManifoldSo
       [&](const int32_t* index, const Below* below, uint32_t, LiveOut<F, 4>& o) {
         touching_group<F>(a, b, h, o, index, below);
       });
-  for (uint32_t l = r.begin; l < r.end; ++l) {
+  for (uint32_t l = r.begin; big && l < r.end; ++l) {
     if (h.vert_begin[a.ref[l] + 1] - h.vert_begin[a.ref[l]] > kLaneVerts) {
       collide_support_halfspace(a, b, out, Range{l, l + 1}, cfg, kLeafConvex);
     }
