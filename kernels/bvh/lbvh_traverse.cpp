@@ -11,6 +11,7 @@ namespace {
 // AVX-512).
 constexpr uint32_t kW = simd::kWideWidth;
 using F = simd::FloatN<kW>;
+using I = simd::IntN<kW>;
 constexpr uint32_t kVecs = kLbvhCluster / kW;
 static_assert(kLbvhCluster % kW == 0 && kLbvhCluster <= 64 && kLbvhTarget >= kLbvhCluster);
 // QueryCluster::load reads kLbvhCluster lanes from a cluster's first leaf, test_target
@@ -172,8 +173,13 @@ IMPACT_INLINE void test_target(const LbvhView& t, const QueryCluster& q, uint32_
   // query leaves.
   const size_t S = t.lane_stride;
   const uint32_t size = last - first + 1;
-  Pending pend[kLbvhTarget];
-  uint32_t np = 0;
+  // The survivors of all vectors first, compacted (simd::compact_store: one
+  // unpredictable loop exit per target instead of one per vector), then their tests.
+  // 2026-11-29 (AMD EPYC, alternated, medians of 4): BM_LbvhTraverse/1000000/1 44.1 ->
+  // 40.0 ms, /100000/1 3.47 -> 3.08.
+  int32_t surv[kLbvhTarget + kW];
+  uint32_t ns = 0;
+  const I lanes = simd::lane_ids<I>(static_cast<int32_t>(first));
   for (uint32_t o = 0; o < size; o += kW) {
     const float* L = t.lanes + first + o;
     const auto ov = (F::load(L) <= q.b_max_x) & (q.b_min_x <= F::load(L + 3 * S)) &
@@ -181,12 +187,14 @@ IMPACT_INLINE void test_target(const LbvhView& t, const QueryCluster& q, uint32_
                     (F::load(L + 2 * S) <= q.b_max_z) & (q.b_min_z <= F::load(L + 5 * S));
     uint32_t m = simd::bits(ov);
     if (size - o < kW) m &= (1u << (size - o)) - 1u;
-    while (m != 0) {
-      const uint32_t u = first + o + static_cast<uint32_t>(std::countr_zero(m));
-      m &= m - 1;
-      pend[np] = Pending{u, q.hits(t, u) & q.valid};
-      np += pend[np].m != 0 ? 1u : 0u;
-    }
+    ns += simd::compact_store(surv + ns, lanes + I(static_cast<int32_t>(o)), m);
+  }
+  Pending pend[kLbvhTarget];
+  uint32_t np = 0;
+  for (uint32_t i = 0; i < ns; ++i) {
+    const auto u = static_cast<uint32_t>(surv[i]);
+    pend[np] = Pending{u, q.hits(t, u) & q.valid};
+    np += pend[np].m != 0 ? 1u : 0u;
   }
   for (uint32_t i = 0; i < np; ++i) emit<kFiltered>(t, q, pend[i].u, pend[i].m, sink);
 }
