@@ -33,6 +33,12 @@
 //   cluster replaces it by the right children along its left spine. Each chunk starts
 //   with one root-to-cluster walk; a cluster belongs to the chunk holding its first
 //   leaf.
+// Branches: the tests are branch-free, and so is whether a tested leaf hit: a target's
+//   survivors of the bounds test are compacted over all its vectors first, then each
+//   tested against the cluster's leaves with its hits listed branch-free (the in-cluster
+//   tests likewise), and the pairs emitted after the loop, in the same order. The
+//   per-leaf branch (about half the tested leaves hit, unpredictably) and the per-vector
+//   survivor loop cost ~30% of the walk at 1M boxes (docs/lbvh.md).
 // Order (independent of the thread count and of the chunks): by cluster (leaf order);
 //   within a cluster, by the later leaf's sorted position t, then by the earlier
 //   leaf's s. That is, the pairs (s < t) sorted by (cluster of s, t, s). The walk
