@@ -242,7 +242,11 @@ IMPACT_INLINE void explore(const LbvhView& t, const QueryCluster& q, uint32_t no
     stack[top] = Item{h, cur.first, h};
     top += static_cast<uint32_t>(left_waits);
     IMPACT_ASSERT(top <= kLbvhMaxDepth + 1);
-    if (top > 0 && (stack[top - 1].ref & kTargetItem) == 0) prefetch_children(t, t.nodes[stack[top - 1].ref]);
+    // The children of every internal child pushed, at once (not only the stack's top,
+    // popped next: a right sibling popped later had its children's records fetched
+    // only then; 2026-11-29, BM_LbvhTraverse/1000000/1 38.9 -> 37.7 ms, medians of 4).
+    if (ro && !rc) prefetch_children(t, t.nodes[h + 1]);
+    if (left_waits) prefetch_children(t, t.nodes[h]);
   }
 }
 
