@@ -105,7 +105,7 @@ TEST(RadixSort, BitRanges) {
   // Sort fields of every width from 1 to 32 bits, including widths that are not a
   // multiple of any digit width, with 8-bit digits (fewer than kWideDigits keys) and
   // with the wide ones (up to 11 bits, passes of equal width: 30 bits as 3 x 10, 31
-  // as 11 + 10 + 10). Bits at and above hi are zero (the library's callers size hi
+  // as 11 + 11 + 9). Bits at and above hi are zero (the library's callers size hi
   // with bits_for(max key)); bits below lo are random payload.
   std::mt19937_64 rng(5);
   for (uint32_t n : {test::scaled(20000), host::RadixSorter::kWideDigits + 999}) {
@@ -135,7 +135,8 @@ TEST(RadixSort, BitsAboveHiBitAreNotSortedOn) {
     std::vector<uint64_t> keys(n);
     for (auto& k : keys) k = rng();
     for (auto [lo, hi] : {std::pair{32u, 45u}, std::pair{0u, 4u}, std::pair{8u, 12u}, std::pair{32u, 62u}})
-      EXPECT_EQ(radix(keys, lo, hi), reference_sort(keys, lo, hi)) << "bits [" << lo << ", " << hi << ") n " << n;
+      EXPECT_EQ(radix(keys, lo, hi), reference_sort(keys, lo, hi))
+          << "bits [" << lo << ", " << hi << ") n " << n;
   }
 }
 
