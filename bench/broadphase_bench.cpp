@@ -19,6 +19,9 @@
 //   BM_LbvhBuild / BM_LbvhRefit / BM_LbvhTraverse   the LBVH's phases apart:
 //       build() from scratch; update() as a refit after one frame of motion; pairs()
 //       on a fresh tree
+//   BM_RadixSortMorton30   the host's parallel radix sort alone on the LBVH's 30-bit
+//       Morton keys (code << 32 | index, random codes, sorted on bits [32, 62)): the
+//       unsorted keys copied in untimed before each sort; counter ns_per_key
 //   BM_<Grid|Lbvh>Coherent[Clustered|MixedSizes]   frame to frame: every box moves up
 //       to 0.05 m per axis, then update() + pairs() (LBVH: refit policy; grid: rebuild);
 //       64-frame episodes, the first move after each build untimed (micro_common.h)
@@ -61,6 +64,7 @@
 #include "bench/scenes/scenes.h"
 #include "host/broadphase/lbvh.h"
 #include "host/parallel.h"
+#include "host/radix_sort.h"
 #include "impact/impact.h"
 #include "tests/support/binned_sah.h"
 
@@ -236,6 +240,36 @@ void BM_LbvhBuild(benchmark::State& state) {
   }
   timer.stop();
   report_frames(state, n, timer, pair_count(state, bp, exec), /*pair_rate=*/false);
+}
+
+void BM_RadixSortMorton30(benchmark::State& state) {
+  const uint32_t n = static_cast<uint32_t>(state.range(0));
+  const impact::host::Executor exec(impact::Backend::kDefault, static_cast<uint32_t>(state.range(1)));
+  std::vector<uint64_t> keys(n), work(n);
+  uint64_t x = 0x9e3779b97f4a7c15ull;  // splitmix64: a fixed, reproducible key set
+  for (uint32_t i = 0; i < n; ++i) {
+    x += 0x9e3779b97f4a7c15ull;
+    uint64_t z = x;
+    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
+    z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
+    keys[i] = (((z ^ (z >> 31)) & ((uint64_t{1} << 30) - 1)) << 32) | i;
+  }
+  impact::host::RadixSorter sorter;
+  work = keys;
+  sorter.sort(exec, work.data(), n, 32, 62);  // grows the sorter's scratch
+  double seconds = 0.0;
+  for (auto _ : state) {
+    std::memcpy(work.data(), keys.data(), sizeof(uint64_t) * n);
+    const auto t0 = std::chrono::steady_clock::now();
+    sorter.sort(exec, work.data(), n, 32, 62);
+    const double dt = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    state.SetIterationTime(dt);
+    seconds += dt;
+    benchmark::DoNotOptimize(work.data());
+  }
+  const double sorts = static_cast<double>(state.iterations());
+  state.SetItemsProcessed(static_cast<int64_t>(sorts * n));
+  state.counters["ns_per_key"] = sorts > 0 && n > 0 ? seconds * 1e9 / (sorts * n) : 0.0;
 }
 
 void BM_LbvhTraverse(benchmark::State& state) {
@@ -444,6 +478,7 @@ BENCHMARK(BM_LbvhColdStart)->ArgsProduct({{k10k, k100k, k1M}, impact::bench::ben
 BENCHMARK(BM_LbvhBuild)->ArgsProduct({{k10k, k100k, k1M}, impact::bench::bench_thread_counts()})->UseRealTime()->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_LbvhRefit)->ArgsProduct({{k10k, k100k, k1M}, impact::bench::bench_thread_counts()})->UseManualTime()->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_LbvhTraverse)->ArgsProduct({{k10k, k100k, k1M}, impact::bench::bench_thread_counts()})->UseRealTime()->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_RadixSortMorton30)->ArgsProduct({{k10k, k100k, k1M}, impact::bench::bench_thread_counts()})->UseManualTime()->Unit(benchmark::kMillisecond);
 
 BENCHMARK(BM_GridCoherent)->ArgsProduct({{k10k, k100k, k1M}, impact::bench::bench_thread_counts()})->UseManualTime()->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_LbvhCoherent)->ArgsProduct({{k10k, k100k, k1M}, impact::bench::bench_thread_counts()})->UseManualTime()->Unit(benchmark::kMillisecond);
