@@ -642,26 +642,30 @@ struct WitnessedBest {
 };
 
 /// WitnessedBest lanes in a chunk's state, one array per field: st[0] o, st[1..3] n,
-/// st[4..6] x, st[7] any_o, st[8..10] any_n, st[11..13] any_x; lanes j .. j + width.
+/// st[4..6] x, st[7] any_o, st[8..10] any_n, st[11..13] any_x. write_best hands field f's
+/// lanes to put(f, lanes) and read_best builds one from row(f); the loads and stores
+/// below (contiguous lanes j .., or gathered / scattered listed lanes) go through them.
+template <class F, class Put>
+IMPACT_INLINE void write_best(const WitnessedBest<F>& b, Put&& put) {
+  auto p3 = [&](int f, const V3<F>& v) IMPACT_LAMBDA_INLINE { put(f, v.x), put(f + 1, v.y), put(f + 2, v.z); };
+  put(0, b.o), p3(1, b.n), p3(4, b.x);
+  put(7, b.any_o), p3(8, b.any_n), p3(11, b.any_x);
+}
+template <class F, class Row>
+IMPACT_INLINE WitnessedBest<F> read_best(Row&& row) {
+  auto l3 = [&](int f) IMPACT_LAMBDA_INLINE { return V3<F>{row(f), row(f + 1), row(f + 2)}; };
+  WitnessedBest<F> b;
+  b.o = row(0), b.n = l3(1), b.x = l3(4), b.any_o = row(7), b.any_n = l3(8), b.any_x = l3(11);
+  return b;
+}
+/// Lanes j .. j + width.
 template <class F, uint32_t L>
 IMPACT_INLINE void save_best(float (&st)[14][L], uint32_t j, const WitnessedBest<F>& b) {
-  auto st3 = [&](int f, const V3<F>& v) IMPACT_LAMBDA_INLINE {
-    v.x.store(st[f] + j), v.y.store(st[f + 1] + j), v.z.store(st[f + 2] + j);
-  };
-  b.o.store(st[0] + j);
-  st3(1, b.n);
-  st3(4, b.x);
-  b.any_o.store(st[7] + j);
-  st3(8, b.any_n);
-  st3(11, b.any_x);
+  write_best(b, [&](int f, const F& v) IMPACT_LAMBDA_INLINE { v.store(st[f] + j); });
 }
 template <class F, uint32_t L>
 IMPACT_INLINE WitnessedBest<F> load_best(const float (&st)[14][L], uint32_t j) {
-  auto l1 = [&](int f) IMPACT_LAMBDA_INLINE { return F::load(st[f] + j); };
-  auto l3 = [&](int f) IMPACT_LAMBDA_INLINE { return V3<F>{l1(f), l1(f + 1), l1(f + 2)}; };
-  WitnessedBest<F> b;
-  b.o = l1(0), b.n = l3(1), b.x = l3(4), b.any_o = l1(7), b.any_n = l3(8), b.any_x = l3(11);
-  return b;
+  return read_best<F>([&](int f) IMPACT_LAMBDA_INLINE { return F::load(st[f] + j); });
 }
 /// Appends chunk lanes j + l (l < nb) where m is set to list[count ..] and advances
 /// count (list holds W entries past the end: compact_store writes them).
@@ -696,11 +700,7 @@ IMPACT_INLINE void save_best_near(float (&st)[14][L], uint32_t j, WitnessedBest<
 /// load_best for lanes idx of the chunk (a packed group's lanes).
 template <class F, uint32_t L>
 IMPACT_INLINE WitnessedBest<F> gather_best(const float (&st)[14][L], typename F::Int idx) {
-  auto l1 = [&](int f) IMPACT_LAMBDA_INLINE { return simd::gather(st[f], idx); };
-  auto l3 = [&](int f) IMPACT_LAMBDA_INLINE { return V3<F>{l1(f), l1(f + 1), l1(f + 2)}; };
-  WitnessedBest<F> b;
-  b.o = l1(0), b.n = l3(1), b.x = l3(4), b.any_o = l1(7), b.any_n = l3(8), b.any_x = l3(11);
-  return b;
+  return read_best<F>([&](int f) IMPACT_LAMBDA_INLINE { return simd::gather(st[f], idx); });
 }
 /// save_best for the first `real` lanes of idx (a packed group's listed lanes; the
 /// padding lanes, repeats of the last, are not written).
@@ -709,11 +709,7 @@ IMPACT_INLINE void scatter_best(float (&st)[14][L], typename F::Int idx, uint32_
                                 const WitnessedBest<F>& b) {
   constexpr uint32_t W = F::kWidth;
   float rows[14][W];
-  auto st3 = [&](int f, const V3<F>& v) IMPACT_LAMBDA_INLINE {
-    v.x.store(rows[f]), v.y.store(rows[f + 1]), v.z.store(rows[f + 2]);
-  };
-  b.o.store(rows[0]), st3(1, b.n), st3(4, b.x);
-  b.any_o.store(rows[7]), st3(8, b.any_n), st3(11, b.any_x);
+  write_best(b, [&](int f, const F& v) IMPACT_LAMBDA_INLINE { v.store(rows[f]); });
   int32_t ln[W];
   idx.store(ln);
   for (uint32_t l = 0; l < real; ++l)
