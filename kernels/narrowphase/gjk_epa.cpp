@@ -1274,11 +1274,25 @@ uint32_t clip_faces(const Face& ref, const Face& inc, const Leaf& ref_leaf, V3 n
   return k;
 }
 
-/// Whether x + t dir lies in leaf l at t = depth (within tol; leaves without a chord,
-/// e.g. cylinders, count as holding it).
+/// Whether y = x + depth dir lies in leaf l within tol: outside none of its face planes
+/// by more than tol (box, convex hull; other leaves count as holding it). A distance to
+/// the planes, not the ray's chord through l: beside a sharp vertex the chord's end
+/// moves by a witness's rounding times the cotangent of the vertex's half angle, so a
+/// real vertex contact failed the chord form by 2e-7 of 9e-6 (a hull vertex just inside
+/// a cylinder's rim, IMPACT_TEST_INTENSITY=30, 2026-11-29), while the planes' distance
+/// moves by the rounding alone.
 bool reaches_at(const Leaf& l, V3 x, V3 dir, float depth, float tol) {
-  const Chord ch = chord(l, x, dir);
-  return ch.t_in <= depth + tol && depth - tol <= ch.t_out;
+  const V3 q = x + dir * depth - l.p;
+  if (l.type == kLeafBox) {
+    for (int i = 0; i < 3; ++i)
+      if (std::fabs(dot(l.ax[i], q)) > l.e[i] + tol) return false;
+  } else if (l.type == kLeafConvex) {
+    const HullView& h = *l.hulls;
+    const float qx = dot(q, l.ax[0]), qy = dot(q, l.ax[1]), qz = dot(q, l.ax[2]);
+    for (uint32_t f = h.face_begin[l.hull], fe = h.face_begin[l.hull + 1]; f < fe; ++f)
+      if (h.fnx[f] * qx + h.fny[f] * qy + h.fnz[f] * qz > h.fd[f] + tol) return false;
+  }
+  return true;
 }
 
 }  // namespace
