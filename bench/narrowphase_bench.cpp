@@ -12,7 +12,14 @@
 //   BM_Kernel/<pair>/<path>/<n>  one call of the bucket's kernel over all n lanes,
 //                                1 thread, path scalar or simd (NarrowConfig::path).
 //                                Inputs are the LeafSoA arrays of the scene, gathered
-//                                once; the output ManifoldSoA is reused
+//                                once; the output ManifoldSoA is reused. n = 512: the
+//                                block the public call gathers and hands a kernel
+//                                (kLaneBlock, narrow_phase.cpp), inputs and outputs in
+//                                L1 / L2, so the simple pairs' compute shows (but the
+//                                same 512 lanes over and over: a branchy scalar path's
+//                                branches can be learnt by the predictor); 4096: the
+//                                README's size (~0.3 MB for the simple pairs: L2
+//                                bandwidth bounds them); 65536: streams from L3 / memory
 //   BM_Collide/<pair>/<n>/<threads>  NarrowPhase::collide on a ShapeSet with one shape
 //                                per object (2n objects, pairs (2k, 2k+1)); triangles
 //                                are one-triangle meshes at the identity pose;
@@ -670,7 +677,7 @@ namespace nb = impact::bench::narrow;
 namespace kn = impact::kernels;
 using Clock = std::chrono::steady_clock;
 
-constexpr uint32_t k4k = 4096, k64k = 65536;
+constexpr uint32_t k512 = 512, k4k = 4096, k64k = 65536;
 
 void set_pair_counters(benchmark::State& state, const nb::PairScene& s, double ns, uint64_t hits,
                        uint32_t disagree) {
@@ -920,6 +927,7 @@ void register_all() {
          {std::pair{kn::KernelPath::kScalar, "scalar"}, std::pair{kn::KernelPath::kSimd, "simd"}}) {
       benchmark::RegisterBenchmark(("BM_Kernel/" + name + "/" + path_name).c_str(), BM_Kernel, pk.a, pk.b,
                                    path)
+          ->Arg(k512)
           ->Arg(k4k)
           ->Arg(k64k)
           ->Unit(benchmark::kMicrosecond);
