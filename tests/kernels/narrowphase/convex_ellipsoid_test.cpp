@@ -364,7 +364,15 @@ TEST_F(ConvexEllipsoid, RoundEllipsoidMatchesSphereHull) {
     ++hits;
     EXPECT_NEAR(x.depth, y.depth, tol) << k;
     if (x.depth > 1e-3) {
-      EXPECT_LE(nref::angle({x.n.x(), x.n.y(), x.n.z()}, {-y.n.x(), -y.n.y(), -y.n.z()}), 1e-3) << k;
+      // A vertex or edge contact's minimum is a valley: G rises as |c - q| t^2 / 2 a
+      // direction t away (c the sphere's centre, q the hull's point nearest it, |c - q| =
+      // r - depth), so directions whose overlap is within float rounding (4e-7 of the
+      // pair's size, ~2) of the least are this far apart (the other kernels' valley rule;
+      // 1.03e-3 seen at IMPACT_TEST_INTENSITY=30 with |c - q| = 0.345, both depths equal).
+      const double dist = std::max(static_cast<double>(c.b[k].e[0]) - x.depth, 1e-9);
+      const double valley = std::sqrt(2.0 * 4e-7 * 2.0 / dist);
+      EXPECT_LE(nref::angle({x.n.x(), x.n.y(), x.n.z()}, {-y.n.x(), -y.n.y(), -y.n.z()}), std::max(1e-3, valley))
+          << k;
     }
   }
   EXPECT_GT(hits, 50);
