@@ -177,40 +177,59 @@ struct Below {
   uint32_t vb;
 };
 
+/// N uint32 lanes as a generic vector (spelled per width, as simd::RawVec).
+template <uint32_t N>
+struct URaw;
+template <>
+struct URaw<4> {
+  typedef uint32_t U __attribute__((vector_size(16)));
+};
+template <>
+struct URaw<8> {
+  typedef uint32_t U __attribute__((vector_size(32)));
+};
+template <>
+struct URaw<16> {
+  typedef uint32_t U __attribute__((vector_size(64)));
+};
+
 /// Slot lists of I::kWidth (> 1) lanes, across the lanes: vi[j][l] = vb + the index of
 /// lane l's j-th set bit (past its count, its first), j < ns. A set bit's index is the
-/// exponent of its power of two converted to float (exact; bit 31 reads as -2^31, whose
-/// exponent field is 31 too); the two 32-bit halves of the mask in turn.
+/// exponent of its power of two converted to float (exact; bit 31, as a signed int
+/// -2^31, has exponent field 31 too); the two 32-bit halves of the mask in turn, in
+/// unsigned lanes (x & -x and x - 1 wrap there).
 template <class I>
 IMPACT_INLINE void slot_lists(const Below* below, uint32_t ns, int32_t (*vi)[I::kWidth]) {
   using R = typename I::Raw;
   using FR = typename simd::RawVec<I::kWidth>::F;
+  using U = typename URaw<I::kWidth>::U;
   constexpr uint32_t kW = I::kWidth;
-  alignas(64) int32_t lo_a[kW], hi_a[kW], vb_a[kW];
+  alignas(64) uint32_t lo_a[kW], hi_a[kW];
+  alignas(64) int32_t vb_a[kW];
   for (uint32_t l = 0; l < kW; ++l) {
-    lo_a[l] = static_cast<int32_t>(static_cast<uint32_t>(below[l].bits));
-    hi_a[l] = static_cast<int32_t>(static_cast<uint32_t>(below[l].bits >> 32));
+    lo_a[l] = static_cast<uint32_t>(below[l].bits);
+    hi_a[l] = static_cast<uint32_t>(below[l].bits >> 32);
     vb_a[l] = static_cast<int32_t>(below[l].vb);
   }
-  R lo = I::load(lo_a).v, hi = I::load(hi_a).v;
-  const R vb = I::load(vb_a).v, zero = R{} + 0;
-  auto lowest = [&](R x) -> R {  // index of x's lowest set bit (x != 0)
-    const FR f = __builtin_convertvector(x & -x, FR);
+  U lo, hi;
+  std::memcpy(&lo, lo_a, sizeof(U));
+  std::memcpy(&hi, hi_a, sizeof(U));
+  const R vb = I::load(vb_a).v;
+  const U zero = U{} + 0u;
+  auto lowest = [&](U x) -> R {  // index of x's lowest set bit (x != 0)
+    const FR f = __builtin_convertvector(reinterpret_cast<R>(x & (zero - x)), FR);
     R e;
     std::memcpy(&e, &f, sizeof(R));
     return ((e >> 23) & 255) - 127;
   };
-  auto next = [&]() -> R {
-    const R use_lo = lo != zero;
-    return use_lo ? lowest(lo) : lowest(hi) + 32;
-  };
+  auto next = [&]() -> R { return reinterpret_cast<R>(lo != zero) ? lowest(lo) : lowest(hi) + 32; };
   const R first = vb + next();
   for (uint32_t j = 0; j < ns; ++j) {
-    const R use_lo = lo != zero, any = (lo | hi) != zero;
+    const auto use_lo = lo != zero, any = (lo | hi) != zero;
     const R v = any ? vb + next() : first;
     std::memcpy(vi[j], &v, sizeof(R));
-    lo = use_lo ? lo & (lo - 1) : lo;
-    hi = use_lo ? hi : hi & (hi - 1);
+    lo = use_lo ? lo & (lo - 1u) : lo;
+    hi = use_lo ? hi : hi & (hi - 1u);
   }
 }
 
