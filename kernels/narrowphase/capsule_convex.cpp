@@ -22,7 +22,10 @@
 //     makes S parallel to that face, and sliding along S reaches an end point or the
 //     face's boundary at the same distance). So d = the least of (a) an end point's
 //     distance to its deepest plane f_i when it projects into f_i's polygon (or into a
-//     face tied with f_i up to the planes' rounding, as in sphere_convex.cpp), (b) the
+//     face tied with f_i up to the planes' rounding, as in sphere_convex.cpp) and the
+//     other end is not lower under that plane by more than its rounding (else the core
+//     slants down past the face's edge: the face's normal is no contact normal, its
+//     overlap exceeds r - the distance, and (b) holds the least distance), (b) the
 //     segment-to-segment distance from S to every hull edge of the adjacency list
 //     (Ericson 5.1.9, kSimdWidth edges per step in float, start ep and edge vector ed
 //     loaded contiguously from HullView, no gather; the edges within twice its
@@ -657,6 +660,15 @@ void capsule_convex_lane(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& 
         const float slack = 1e-5f * (l1(p) + std::fabs(h.fd[f]));
         f = near_tie_face(h, fb, fe, f, c, u, sh, p, s - slack, keep ? kept_a : nullptr,
                           keep ? kept_b : nullptr, &sf);
+      }
+      // f's normal is the contact normal only where this end is the core's support
+      // towards f's plane: where the other end lies lower by more than the planes'
+      // rounding, the overlap along f's normal exceeds r - sf (the core slants down past
+      // f's edge, and the edge candidate below holds the least distance).
+      if (f != fe) {
+        const V3 po = c + u * (i == 0 ? hl : -hl);
+        const float so = cvx::dot(face_normal(h, f), po) - h.fd[f];
+        if (so < sf - 1e-6f * (l1(po) + std::fabs(h.fd[f]))) f = fe;
       }
       if (f != fe && sf < face_d) {
         face_d = sf;
