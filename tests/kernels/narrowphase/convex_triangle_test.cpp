@@ -67,6 +67,10 @@ namespace nref = test::nref;
 
 constexpr double kRel = 1e-5;    // of L; float arithmetic gives ~1e-6
 constexpr double kAngle = 1e-4;  // rad, where the minimum is unique
+/// The kernel's face bias (convex_triangle.cpp kTieRel): a face axis stands unless an
+/// edge axis separates more by this of |separation| (plus 1e-6 of the size, within
+/// kRel), so a deep pair's depth may exceed the least overlap by that much.
+constexpr double kFaceBias = 1e-5;
 
 // --- lanes ------------------------------------------------------------------------------------
 
@@ -318,7 +322,9 @@ Stats check_pairs(const std::string& name, const std::vector<Pair>& pairs, const
       const double depth = res.depth;
       EXPECT_TRUE(std::isfinite(n.x) && std::isfinite(n.y) && std::isfinite(n.z) && std::isfinite(depth));
       EXPECT_NEAR(norm(n), 1.0, 1e-6);
-      EXPECT_NEAR(depth, depth_ref, tol);
+      // (a face axis held against a tied edge axis: 1.13e-5 L deep, 0.586 deep, at
+      // IMPACT_TEST_INTENSITY=30 against kRel's 1.04e-5)
+      EXPECT_NEAR(depth, depth_ref, tol + kFaceBias * std::fabs(depth_ref));
       st.worst_depth = std::max(st.worst_depth, std::fabs(depth - depth_ref) / L);
       EXPECT_NEAR(separation(H, T, n), -depth, tol) << "depth is not the overlap along n";
       if (ref.unique) {
