@@ -589,7 +589,10 @@ std::string check_ray(const RefShape& s, const Pose& pose, const Ray& ray, const
     }
     return true;
   };
-  auto on_surface = [&](double t) { return std::fabs(ref_sd(s, o + t * d)) <= 4 * tol; };
+  // A hit point carries the rounding of its own magnitude (|o + t d| <= |o| + t): far
+  // along a grazing ray the float t of a half-space hit moves the point 3.6e-5 off the
+  // plane at t = 749 (IMPACT_TEST_INTENSITY=30), a few float ulps of the point.
+  auto on_surface = [&](double t) { return std::fabs(ref_sd(s, o + t * d)) <= 4 * tol + 4e-7 * t; };
   char buf[512];
   std::snprintf(buf, sizeof buf, "[%s] o=(%.9g %.9g %.9g) d=(%.9g %.9g %.9g) tmax=%g size=%g: kernel hit=%d t=%.9g, ref hit=%d t=%.9g exit=%.9g",
                 to_string(s.type), o[0], o[1], o[2], d[0], d[1], d[2], tmax, s.size, h.hit, h.t, r.hit, r.t, r.t_exit);
