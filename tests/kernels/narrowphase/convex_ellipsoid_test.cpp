@@ -371,8 +371,8 @@ TEST_F(ConvexEllipsoid, RoundEllipsoidMatchesSphereHull) {
       // 1.03e-3 seen at IMPACT_TEST_INTENSITY=30 with |c - q| = 0.345, both depths equal).
       const double dist = std::max(static_cast<double>(c.b[k].e[0]) - x.depth, 1e-9);
       const double valley = std::sqrt(2.0 * 4e-7 * 2.0 / dist);
-      EXPECT_LE(nref::angle({x.n.x(), x.n.y(), x.n.z()}, {-y.n.x(), -y.n.y(), -y.n.z()}), std::max(1e-3, valley))
-          << k;
+      const double ang = nref::angle({x.n.x(), x.n.y(), x.n.z()}, {-y.n.x(), -y.n.y(), -y.n.z()});
+      EXPECT_LE(ang, std::max(1e-3, valley)) << k;
     }
   }
   EXPECT_GT(hits, 50);

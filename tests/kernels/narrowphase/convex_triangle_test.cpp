@@ -322,8 +322,8 @@ Stats check_pairs(const std::string& name, const std::vector<Pair>& pairs, const
       const double depth = res.depth;
       EXPECT_TRUE(std::isfinite(n.x) && std::isfinite(n.y) && std::isfinite(n.z) && std::isfinite(depth));
       EXPECT_NEAR(norm(n), 1.0, 1e-6);
-      // (a face axis held against a tied edge axis: 1.13e-5 L deep, 0.586 deep, at
-      // IMPACT_TEST_INTENSITY=30 against kRel's 1.04e-5)
+      // (a face axis held against a tied edge axis stood 1.13e-5 above the least
+      // overlap at depth 0.586, IMPACT_TEST_INTENSITY=30, against kRel's 1.04e-5)
       EXPECT_NEAR(depth, depth_ref, tol + kFaceBias * std::fabs(depth_ref));
       st.worst_depth = std::max(st.worst_depth, std::fabs(depth - depth_ref) / L);
       EXPECT_NEAR(separation(H, T, n), -depth, tol) << "depth is not the overlap along n";
