@@ -246,14 +246,8 @@ void BM_RadixSortMorton30(benchmark::State& state) {
   const uint32_t n = static_cast<uint32_t>(state.range(0));
   const impact::host::Executor exec(impact::Backend::kDefault, static_cast<uint32_t>(state.range(1)));
   std::vector<uint64_t> keys(n), work(n);
-  uint64_t x = 0x9e3779b97f4a7c15ull;  // splitmix64: a fixed, reproducible key set
-  for (uint32_t i = 0; i < n; ++i) {
-    x += 0x9e3779b97f4a7c15ull;
-    uint64_t z = x;
-    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ull;
-    z = (z ^ (z >> 27)) * 0x94d049bb133111ebull;
-    keys[i] = (((z ^ (z >> 31)) & ((uint64_t{1} << 30) - 1)) << 32) | i;
-  }
+  impact::bench::Rng rng(0x9e3779b97f4a7c15ull);  // a fixed, reproducible key set
+  for (uint32_t i = 0; i < n; ++i) keys[i] = ((rng.next_u64() & ((uint64_t{1} << 30) - 1)) << 32) | i;
   impact::host::RadixSorter sorter;
   work = keys;
   sorter.sort(exec, work.data(), n, 32, 62);  // grows the sorter's scratch

@@ -177,22 +177,6 @@ struct Below {
   uint32_t vb;
 };
 
-/// N uint32 lanes as a generic vector (spelled per width, as simd::RawVec).
-template <uint32_t N>
-struct URaw;
-template <>
-struct URaw<4> {
-  typedef uint32_t U __attribute__((vector_size(16)));
-};
-template <>
-struct URaw<8> {
-  typedef uint32_t U __attribute__((vector_size(32)));
-};
-template <>
-struct URaw<16> {
-  typedef uint32_t U __attribute__((vector_size(64)));
-};
-
 /// Slot lists of I::kWidth (> 1) lanes, across the lanes: vi[j][l] = vb + the index of
 /// lane l's j-th set bit (past its count, its first), j < ns. A set bit's index is the
 /// exponent of its power of two converted to float (exact; bit 31, as a signed int
@@ -202,7 +186,7 @@ template <class I>
 IMPACT_INLINE void slot_lists(const Below* below, uint32_t ns, int32_t (*vi)[I::kWidth]) {
   using R = typename I::Raw;
   using FR = typename simd::RawVec<I::kWidth>::F;
-  using U = typename URaw<I::kWidth>::U;
+  using U = typename simd::RawVec<I::kWidth>::U;
   constexpr uint32_t kW = I::kWidth;
   alignas(64) uint32_t lo_a[kW], hi_a[kW];
   alignas(64) int32_t vb_a[kW];
@@ -222,7 +206,7 @@ IMPACT_INLINE void slot_lists(const Below* below, uint32_t ns, int32_t (*vi)[I::
     std::memcpy(&e, &f, sizeof(R));
     return ((e >> 23) & 255) - 127;
   };
-  auto next = [&]() -> R { return reinterpret_cast<R>(lo != zero) ? lowest(lo) : lowest(hi) + 32; };
+  auto next = [&]() -> R { return lo != zero ? lowest(lo) : lowest(hi) + 32; };
   const R first = vb + next();
   for (uint32_t j = 0; j < ns; ++j) {
     const auto use_lo = lo != zero, any = (lo | hi) != zero;
