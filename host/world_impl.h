@@ -76,6 +76,7 @@ class WorldImpl {
   uint32_t shaped_count = 0;  // bodies with a shape: the step runs the general narrow phase
   host::NarrowRunner narrow;
   std::vector<const ShapeRecord*> narrow_rec;
+  std::vector<ShapeType> narrow_types;  // narrow_rec[i]->type
   std::vector<host::PosedObject> narrow_pose;
   std::vector<ShapeRecord> narrow_spheres;  // sphere records of plain bodies, then plane records
   std::vector<ShapePair> narrow_pairs;

@@ -5,14 +5,17 @@
 // Passes (each a for_each_chunk over a fixed grain, so the bytes never depend on
 // the thread count):
 //   poses      per object: the check of its shape id and pose, then quaternion ->
-//              rotation matrix (one pass, in NarrowPhase::Impl::collide)
+//              rotation matrix, with the record's e or hull index on the same 64-byte
+//              line and its type in a byte array (one pass, in NarrowPhase::Impl::collide;
+//              the World's step builds the same arrays)
 //   expand     per pair: its leaf pairs (a shape, a compound child, a mesh triangle
 //              found through the mesh's BVH), in (child_a, child_b) order, into
 //              per-chunk lists concatenated in chunk order
 //   bucket     key = (type_a * 8 + type_b) << 32 | record, LSD radix sort on the
 //              type bits: buckets are contiguous and keep record order inside
 //   gather + kernels  per block of up to 512 sorted positions of one bucket: both
-//              sides into a thread's LeafSoA scratch, then pair_kernel(ta, tb) on it
+//              sides into a thread's LeafSoA scratch, then pair_kernel(ta, tb) on it (a
+//              plain shape from its posed line alone, the others through their records)
 //   output     manifolds of touching records in record order = (pair, child_a,
 //              child_b) order
 #include <algorithm>
@@ -138,14 +141,16 @@ struct host::NarrowRunner::State {
   // Inputs of the current call.
   const ShapeStore* store = nullptr;
   const ShapeRecord* const* rec = nullptr;
+  const ShapeType* types = nullptr;
   const Posed* posed = nullptr;
   const ShapePair* pairs = nullptr;
 
   const ShapeRecord& shape(uint32_t obj) const { return *rec[obj]; }
 
-  Status run(const host::Executor& exec, const ShapeStore& store_in, std::span<const ShapeRecord* const> rec_in,
-             std::span<const Posed> posed_in, std::span<const ShapePair> pairs_in, const kernels::NarrowConfig& cfg_in,
-             std::vector<Manifold>* result, size_t* bad_pair);
+  Status run(const host::Executor& exec, const ShapeStore& store_in,
+             std::span<const ShapeRecord* const> rec_in, std::span<const ShapeType> types_in,
+             std::span<const Posed> posed_in, std::span<const ShapePair> pairs_in,
+             const kernels::NarrowConfig& cfg_in, std::vector<Manifold>* result, size_t* bad_pair);
 
   // --- expansion ---------------------------------------------------------------------
   Box3 leaf_bounds(uint32_t obj, uint32_t child) const;
@@ -158,7 +163,10 @@ struct host::NarrowRunner::State {
   void child_list(uint32_t obj, const Box3& other, std::vector<uint32_t>* out) const;
 
   // --- gather ------------------------------------------------------------------------
+  /// Lane k of s: object obj's leaf (child: of a compound or mesh, else kNoChild). A
+  /// plain shape from its PosedObject line alone; the others through fill_general.
   void fill(SideArrays& s, size_t k, uint32_t obj, uint32_t child) const;
+  void fill_general(SideArrays& s, size_t k, uint32_t obj, uint32_t child) const;
 };
 
 Box3 host::NarrowRunner::State::leaf_bounds(uint32_t obj, uint32_t child) const {
@@ -268,6 +276,21 @@ void host::NarrowRunner::State::child_list(uint32_t obj, const Box3& other, std:
 void host::NarrowRunner::State::expand(uint32_t pair_index, std::vector<LeafPair>* out,
                                std::vector<uint32_t>* ca, std::vector<uint32_t>* cb) const {
   const uint32_t a = pairs[pair_index].a, b = pairs[pair_index].b;
+  // Two plain shapes (the common case): one leaf pair, from the objects' lines alone.
+  const ShapeType ta = types[a], tb = types[b];
+  const bool a_plain = ta != ShapeType::kCompound && ta != ShapeType::kMesh;
+  const bool b_plain = tb != ShapeType::kCompound && tb != ShapeType::kMesh;
+  if (a_plain && b_plain) {
+    LeafPair lp;
+    lp.pair = pair_index;
+    lp.child_a = kNoChild;
+    lp.child_b = kNoChild;
+    lp.type_a = leaf_of(ta);
+    lp.type_b = leaf_of(tb);
+    lp.swapped = lp.type_a > lp.type_b ? 1 : 0;
+    out->push_back(lp);
+    return;
+  }
   const ShapeRecord& ra = shape(a);
   const ShapeRecord& rb = shape(b);
   auto leaf_type = [&](const ShapeRecord& r, uint32_t child) -> uint8_t {
@@ -287,12 +310,6 @@ void host::NarrowRunner::State::expand(uint32_t pair_index, std::vector<LeafPair
     lp.swapped = lp.type_a > lp.type_b ? 1 : 0;
     out->push_back(lp);
   };
-  const bool a_plain = ra.type != ShapeType::kCompound && ra.type != ShapeType::kMesh;
-  const bool b_plain = rb.type != ShapeType::kCompound && rb.type != ShapeType::kMesh;
-  if (a_plain && b_plain) {
-    emit(kNoChild, kNoChild);
-    return;
-  }
   // One side a half-space: the other side's children that reach below the plane.
   auto plane_of = [&](uint32_t obj, Eigen::Vector3f* n, float* d) {
     const ShapeRecord& r = shape(obj);
@@ -336,44 +353,52 @@ void host::NarrowRunner::State::expand(uint32_t pair_index, std::vector<LeafPair
   }
 }
 
-void host::NarrowRunner::State::fill(SideArrays& s, size_t k, uint32_t obj, uint32_t child) const {
-  const ShapeRecord* r = &shape(obj);
+// Only the fields the leaf type uses (leaf.h's table): a sphere lane writes 4 of the 22
+// arrays. Unused fields keep stale values that no kernel reads.
+namespace {
+inline void put_p(SideArrays& s, size_t k, const Eigen::Vector3f& p) {
+  for (int i = 0; i < 3; ++i) s.f[i][k] = p[i];
+}
+inline void put_r(SideArrays& s, size_t k, const Eigen::Matrix3f& R) {
+  for (int i = 0; i < 3; ++i) {
+    for (int j = 0; j < 3; ++j) s.f[3 + 3 * i + j][k] = R(i, j);
+  }
+}
+inline void put_e(SideArrays& s, size_t k, const float* e) {
+  for (int i = 0; i < 3; ++i) s.f[12 + i][k] = e[i];
+}
+}  // namespace
+
+inline void host::NarrowRunner::State::fill(SideArrays& s, size_t k, uint32_t obj, uint32_t child) const {
+  // Plain shapes (every leaf of a pair list without meshes or compounds): the pose as it
+  // is, and the record's fields from the same line.
   const Posed& P = posed[obj];
-  // Only the fields the leaf type uses (leaf.h's table): a sphere lane writes 4 of the
-  // 22 arrays. Unused fields keep stale values that no kernel reads.
-  auto put_p = [&](const Eigen::Vector3f& p) {
-    for (int i = 0; i < 3; ++i) s.f[i][k] = p[i];
-  };
-  auto put_r = [&](const Eigen::Matrix3f& R) {
-    for (int i = 0; i < 3; ++i) {
-      for (int j = 0; j < 3; ++j) s.f[3 + 3 * i + j][k] = R(i, j);
-    }
-  };
-  auto put_e = [&](const float* e) {
-    for (int i = 0; i < 3; ++i) s.f[12 + i][k] = e[i];
-  };
-  // Plain shapes (every leaf of a pair list without meshes or compounds): the pose as it is.
-  switch (r->type) {
+  switch (types[obj]) {
     case ShapeType::kSphere:
-      put_p(P.p);
-      s.f[12][k] = r->e[0];
+      put_p(s, k, P.p);
+      s.f[12][k] = P.leaf.e[0];
       return;
     case ShapeType::kCapsule:
     case ShapeType::kBox:
     case ShapeType::kCylinder:
     case ShapeType::kEllipsoid:
-      put_p(P.p);
-      put_r(P.R);
-      put_e(r->e);
+      put_p(s, k, P.p);
+      put_r(s, k, P.R);
+      put_e(s, k, P.leaf.e);
       return;
     case ShapeType::kConvex:
-      put_p(P.p);
-      put_r(P.R);
-      s.ref[k] = r->ref;
+      put_p(s, k, P.p);
+      put_r(s, k, P.R);
+      s.ref[k] = P.leaf.ref;
       return;
     default:
-      break;
+      fill_general(s, k, obj, child);
   }
+}
+
+void host::NarrowRunner::State::fill_general(SideArrays& s, size_t k, uint32_t obj, uint32_t child) const {
+  const ShapeRecord* r = &shape(obj);
+  const Posed& P = posed[obj];
   Eigen::Matrix3f R = P.R;
   Eigen::Vector3f p = P.p;
   if (r->type == ShapeType::kCompound) {
@@ -385,25 +410,25 @@ void host::NarrowRunner::State::fill(SideArrays& s, size_t k, uint32_t obj, uint
   float e[3] = {r->e[0], r->e[1], r->e[2]};
   switch (r->type) {
     case ShapeType::kSphere:
-      put_p(p);
+      put_p(s, k, p);
       s.f[12][k] = e[0];
       return;
     case ShapeType::kAabb:
-      put_p(p);
-      put_r(Eigen::Matrix3f::Identity());
-      put_e(e);
+      put_p(s, k, p);
+      put_r(s, k, Eigen::Matrix3f::Identity());
+      put_e(s, k, e);
       return;
     case ShapeType::kConvex:
-      put_p(p);
-      put_r(R);
+      put_p(s, k, p);
+      put_r(s, k, R);
       s.ref[k] = r->ref;
       return;
     case ShapeType::kHalfSpace: {
       const Eigen::Vector3f n = R * Eigen::Vector3f(e[0], e[1], e[2]);
       const Eigen::Vector3f nn = n / n.norm();
-      put_p(p + R * (Eigen::Vector3f(e[0], e[1], e[2]) * r->offset));
+      put_p(s, k, p + R * (Eigen::Vector3f(e[0], e[1], e[2]) * r->offset));
       const float ne[3] = {nn[0], nn[1], nn[2]};
-      put_e(ne);
+      put_e(s, k, ne);
       return;
     }
     case ShapeType::kMesh: {
@@ -411,7 +436,7 @@ void host::NarrowRunner::State::fill(SideArrays& s, size_t k, uint32_t obj, uint
       const Eigen::Vector3f v0 = R * m.vertices[m.indices[3 * child]] + p;
       const Eigen::Vector3f v1 = R * m.vertices[m.indices[3 * child + 1]] + p;
       const Eigen::Vector3f v2 = R * m.vertices[m.indices[3 * child + 2]] + p;
-      put_p(v0);
+      put_p(s, k, v0);
       for (int i = 0; i < 3; ++i) {
         s.f[15 + i][k] = v1[i];
         s.f[18 + i][k] = v2[i];
@@ -419,19 +444,22 @@ void host::NarrowRunner::State::fill(SideArrays& s, size_t k, uint32_t obj, uint
       return;
     }
     default:  // capsule, box, cylinder, ellipsoid (compound children)
-      put_p(p);
-      put_r(R);
-      put_e(e);
+      put_p(s, k, p);
+      put_r(s, k, R);
+      put_e(s, k, e);
       return;
   }
 }
 
 Status host::NarrowRunner::State::run(const host::Executor& exec, const ShapeStore& store_in,
-                                      std::span<const ShapeRecord* const> rec_in, std::span<const Posed> posed_in,
-                                      std::span<const ShapePair> pairs_in, const kernels::NarrowConfig& cfg_in,
-                                      std::vector<Manifold>* result, size_t* bad_pair) {
+                                      std::span<const ShapeRecord* const> rec_in,
+                                      std::span<const ShapeType> types_in, std::span<const Posed> posed_in,
+                                      std::span<const ShapePair> pairs_in,
+                                      const kernels::NarrowConfig& cfg_in, std::vector<Manifold>* result,
+                                      size_t* bad_pair) {
   store = &store_in;
   rec = rec_in.data();
+  types = types_in.data();
   posed = posed_in.data();
   pairs = pairs_in.data();
   if (bad_pair != nullptr) *bad_pair = pairs_in.size();
@@ -455,7 +483,7 @@ Status host::NarrowRunner::State::run(const host::Executor& exec, const ShapeSto
       if (bad_pair != nullptr) {
         const ShapePair& pr = pairs[k];
         if (pr.a >= objects || pr.b >= objects || pr.a == pr.b ||
-            (rec[pr.a]->type == ShapeType::kHalfSpace && rec[pr.b]->type == ShapeType::kHalfSpace)) {
+            (types[pr.a] == ShapeType::kHalfSpace && types[pr.b] == ShapeType::kHalfSpace)) {
           chunk_bad[chunk] = k;
           return;
         }
@@ -597,10 +625,11 @@ host::NarrowRunner::NarrowRunner() : s_(std::make_unique<State>()) {}
 host::NarrowRunner::~NarrowRunner() = default;
 
 Status host::NarrowRunner::run(const Executor& exec, const ShapeStore& store,
-                               std::span<const ShapeRecord* const> rec, std::span<const PosedObject> poses,
-                               std::span<const ShapePair> pairs, const kernels::NarrowConfig& cfg,
-                               std::vector<Manifold>* out, size_t* bad_pair) {
-  return s_->run(exec, store, rec, poses, pairs, cfg, out, bad_pair);
+                               std::span<const ShapeRecord* const> rec, std::span<const ShapeType> types,
+                               std::span<const PosedObject> poses, std::span<const ShapePair> pairs,
+                               const kernels::NarrowConfig& cfg, std::vector<Manifold>* out,
+                               size_t* bad_pair) {
+  return s_->run(exec, store, rec, types, poses, pairs, cfg, out, bad_pair);
 }
 
 // --- public ------------------------------------------------------------------------------
@@ -612,6 +641,7 @@ struct NarrowPhase::Impl {
   host::NarrowRunner runner;
   std::vector<Posed> posed;
   std::vector<const ShapeRecord*> rec;
+  std::vector<ShapeType> types;
   std::vector<uint32_t> first_bad;  // per chunk of objects: its first bad object
 
   Status collide(const ShapeSet& shapes, std::span<const ShapeId> shape_of_in,
@@ -640,6 +670,7 @@ Status NarrowPhase::Impl::collide(const ShapeSet& shapes, std::span<const ShapeI
   first_bad.assign(obj_chunks, 0xffffffffu);
   const size_t shape_count = store->shapes.size();
   rec.resize(n);
+  types.resize(n);
   posed.resize(n);
   exec.for_each_chunk(n, kExpandGrain, [&](uint32_t b, uint32_t e, uint32_t chunk) {
     for (uint32_t i = b; i < e; ++i) {
@@ -650,13 +681,12 @@ Status NarrowPhase::Impl::collide(const ShapeSet& shapes, std::span<const ShapeI
       }
       const ShapeRecord* r = &store->shapes[shape_of_in[i].index];
       rec[i] = r;
+      types[i] = r->type;
+      Posed& P = posed[i];
       // A sphere's rotation is never read (leaf.h: p and e0 only).
-      if (r->type == ShapeType::kSphere) {
-        posed[i].R.setIdentity();
-      } else {
-        posed[i].R = host::rotation_of(pose.orientation);
-      }
-      posed[i].p = pose.position;
+      if (r->type != ShapeType::kSphere) P.R = host::rotation_of(pose.orientation);
+      P.p = pose.position;
+      P.set_shape(*r);
     }
   });
   uint32_t bad_obj = n;
@@ -673,7 +703,8 @@ Status NarrowPhase::Impl::collide(const ShapeSet& shapes, std::span<const ShapeI
     }
   }
   size_t bad_pair = pairs_in.size();
-  const Status st = runner.run(exec, *store, rec, posed, pairs_in, host::config_of(options), result, &bad_pair);
+  const Status st =
+      runner.run(exec, *store, rec, types, posed, pairs_in, host::config_of(options), result, &bad_pair);
   if (bad_pair < pairs_in.size()) {
     const size_t k = bad_pair;
     const ShapePair& pr = pairs_in[k];

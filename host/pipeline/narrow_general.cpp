@@ -57,6 +57,7 @@ Status WorldImpl::general_narrow_phase() {
   const uint32_t objects = n + np;
   narrow_spheres.resize(objects);
   narrow_rec.resize(objects);
+  narrow_types.resize(objects);
   narrow_pose.resize(objects);
   exec.for_each_chunk(n, kGrain, [&](uint32_t b, uint32_t e, uint32_t) {
     for (uint32_t i = b; i < e; ++i) {
@@ -72,6 +73,8 @@ Status WorldImpl::general_narrow_phase() {
         narrow_rec[i] = &st.shapes[s.shape[i]];
         P.R = Eigen::Quaternionf(s.qw[i], s.qx[i], s.qy[i], s.qz[i]).toRotationMatrix();
       }
+      P.set_shape(*narrow_rec[i]);
+      narrow_types[i] = narrow_rec[i]->type;
     }
   });
   for (uint32_t j = 0; j < np; ++j) {
@@ -84,6 +87,8 @@ Status WorldImpl::general_narrow_phase() {
     narrow_rec[n + j] = &r;
     narrow_pose[n + j].R.setIdentity();
     narrow_pose[n + j].p.setZero();
+    narrow_pose[n + j].set_shape(r);
+    narrow_types[n + j] = r.type;
   }
   // Body pairs as the broad phase found them, then (body, plane) pairs that pass the
   // filter of the sphere path (dynamic bodies only, layers and masks both ways) and
@@ -122,7 +127,10 @@ Status WorldImpl::general_narrow_phase() {
     });
   }
   const kernels::NarrowConfig cfg = host::config_of(desc.narrow_phase);
-  if (Status r = narrow.run(exec, st, narrow_rec, narrow_pose, narrow_pairs, cfg, &manifolds); !r.ok()) return r;
+  if (Status r = narrow.run(exec, st, narrow_rec, narrow_types, narrow_pose, narrow_pairs, cfg, &manifolds);
+      !r.ok()) {
+    return r;
+  }
 
   // Manifold points -> contacts, in manifold order: points counted per chunk, scanned,
   // written in parallel.
