@@ -61,6 +61,7 @@
 
 #include "bench/bench_threads.h"
 #include "bench/scenes/narrow_scenes.h"
+#include "host/buffer.h"
 #include "host/narrowphase/convex_hull.h"
 #include "host/narrowphase/shape_store.h"
 #include "impact/narrowphase.h"
@@ -710,16 +711,18 @@ BENCHMARK(BM_StreamCopy)->Arg(1 << 20)->Arg(4 << 20)->Arg(16 << 20)->Arg(256 << 
 // --- kernels --------------------------------------------------------------------------------
 
 // LeafSoA arrays of one side of a scene (padded to a multiple of 16 lanes with copies
-// of lane 0, so wide loads past n stay in bounds).
+// of lane 0, so wide loads past n stay in bounds), laid out as the public call lays out
+// the blocks it hands a kernel (host::SoaArrays: A at phase 0, B at 22, results at 44).
 struct LeafArrays {
-  std::vector<float> p[3], r[9], e[3], w[6];
-  std::vector<uint32_t> ref;
+  impact::host::SoaArrays store;
+  float *p[3], *r[9], *e[3], *w[6];
+  uint32_t* ref;
   kn::LeafSoA view() const {
     kn::LeafSoA v{};
-    for (int i = 0; i < 3; ++i) v.p[i] = p[i].data(), v.e[i] = e[i].data();
-    for (int i = 0; i < 9; ++i) v.r[i] = r[i].data();
-    for (int i = 0; i < 6; ++i) v.w[i] = w[i].data();
-    v.ref = ref.data();
+    for (int i = 0; i < 3; ++i) v.p[i] = p[i], v.e[i] = e[i];
+    for (int i = 0; i < 9; ++i) v.r[i] = r[i];
+    for (int i = 0; i < 6; ++i) v.w[i] = w[i];
+    v.ref = ref;
     return v;
   }
 };
@@ -728,47 +731,45 @@ uint32_t padded(uint32_t n) {
   return (n + 15u) & ~15u;
 }
 
-LeafArrays gather(const std::vector<nb::Body>& bodies) {
+void gather(const std::vector<nb::Body>& bodies, uint32_t phase, LeafArrays* out) {
   const uint32_t n = static_cast<uint32_t>(bodies.size()), m = padded(n);
-  LeafArrays out;
-  for (auto& v : out.p) v.resize(m);
-  for (auto& v : out.r) v.resize(m);
-  for (auto& v : out.e) v.resize(m);
-  for (auto& v : out.w) v.resize(m);
-  out.ref.resize(m);
+  out->store.resize(22, m, phase);
+  for (int i = 0; i < 3; ++i) out->p[i] = out->store.get<float>(i);
+  for (int i = 0; i < 9; ++i) out->r[i] = out->store.get<float>(3 + i);
+  for (int i = 0; i < 3; ++i) out->e[i] = out->store.get<float>(12 + i);
+  for (int i = 0; i < 6; ++i) out->w[i] = out->store.get<float>(15 + i);
+  out->ref = out->store.get<uint32_t>(21);
   for (uint32_t k = 0; k < m; ++k) {
     const nb::Body& b = bodies[k < n ? k : 0];
-    for (int i = 0; i < 3; ++i) out.p[i][k] = b.p[i], out.e[i][k] = b.e[i];
-    for (int i = 0; i < 9; ++i) out.r[i][k] = b.r[i];
-    for (int i = 0; i < 6; ++i) out.w[i][k] = b.v[3 + i];
-    out.ref[k] = b.hull;
+    for (int i = 0; i < 3; ++i) out->p[i][k] = b.p[i], out->e[i][k] = b.e[i];
+    for (int i = 0; i < 9; ++i) out->r[i][k] = b.r[i];
+    for (int i = 0; i < 6; ++i) out->w[i][k] = b.v[3 + i];
+    out->ref[k] = b.hull;
   }
-  return out;
 }
 
 struct ManifoldArrays {
-  std::vector<uint8_t> count;
-  std::vector<float> n[3], depth, point[kn::kMaxManifoldPoints][3], pdepth[kn::kMaxManifoldPoints];
+  impact::host::SoaArrays store;
+  kn::ManifoldSoA v{};
   explicit ManifoldArrays(uint32_t lanes) {
     const uint32_t m = padded(lanes);
-    count.assign(m, 0);
-    for (auto& v : n) v.assign(m, 0.0f);
-    depth.assign(m, 0.0f);
-    for (auto& pt : point)
-      for (auto& v : pt) v.assign(m, 0.0f);
-    for (auto& v : pdepth) v.assign(m, 0.0f);
-  }
-  kn::ManifoldSoA view() {
-    kn::ManifoldSoA v{};
-    v.count = count.data();
-    for (int i = 0; i < 3; ++i) v.n[i] = n[i].data();
-    v.depth = depth.data();
+    store.resize(21, m, 44);
+    v.count = store.get<uint8_t>(0);
+    std::fill(v.count, v.count + m, uint8_t{0});
+    uint32_t at = 1;
+    auto next = [&]() {
+      float* f = store.get<float>(at++);
+      std::fill(f, f + m, 0.0f);
+      return f;
+    };
+    for (int i = 0; i < 3; ++i) v.n[i] = next();
+    v.depth = next();
     for (uint32_t j = 0; j < kn::kMaxManifoldPoints; ++j) {
-      for (int i = 0; i < 3; ++i) v.point[j][i] = point[j][i].data();
-      v.pdepth[j] = pdepth[j].data();
+      for (int i = 0; i < 3; ++i) v.point[j][i] = next();
+      v.pdepth[j] = next();
     }
-    return v;
   }
+  kn::ManifoldSoA view() { return v; }
 };
 
 // The library's hulls for the scene's point clouds (the same builder ShapeSet uses).
@@ -793,7 +794,9 @@ void BM_Kernel(benchmark::State& state, uint8_t ka, uint8_t kb, kn::KernelPath p
     state.SkipWithError("no kernel for this pair");
     return;
   }
-  const LeafArrays a = gather(s.a), b = gather(s.b);
+  LeafArrays a, b;
+  gather(s.a, 0, &a);
+  gather(s.b, 22, &b);
   const kn::LeafSoA av = a.view(), bv = b.view();
   ManifoldArrays out(n);
   const kn::ManifoldSoA ov = out.view();
@@ -808,8 +811,8 @@ void BM_Kernel(benchmark::State& state, uint8_t ka, uint8_t kb, kn::KernelPath p
   }
   const double ns = nb::thread_cpu_ns() - t0;
   uint64_t hits = 0;
-  for (uint32_t k = 0; k < n; ++k) hits += out.count[k] > 0 ? 1 : 0;
-  set_pair_counters(state, s, ns, hits, nb::disagreements(s, [&](uint32_t k) { return out.count[k] > 0; }));
+  for (uint32_t k = 0; k < n; ++k) hits += ov.count[k] > 0 ? 1 : 0;
+  set_pair_counters(state, s, ns, hits, nb::disagreements(s, [&](uint32_t k) { return ov.count[k] > 0; }));
   const uint32_t bytes = nb::bytes_per_pair(ka, kb);
   state.counters["bytes_per_pair"] = bytes;
   state.SetBytesProcessed(static_cast<int64_t>(state.iterations()) * n * bytes);

@@ -22,6 +22,7 @@
 #include <cmath>
 #include <string>
 
+#include "host/buffer.h"
 #include "host/narrowphase/narrow_phase.h"
 #include "host/narrowphase/pose.h"
 #include "host/narrowphase/shape_store.h"
@@ -83,40 +84,49 @@ struct Box3 {
 
 using Posed = host::PosedObject;
 
-/// SoA of one side of all records (indexed by sorted position).
+/// SoA of one side of a block of lanes, its arrays staggered (host::SoaArrays: phase 0
+/// for the kernel's A, 22 for its B; the outputs at 44).
 struct SideArrays {
-  std::vector<float> f[21];  // p[3], r[9], e[3], w[6]
-  std::vector<uint32_t> ref;
-  void resize(size_t n) {
-    for (auto& v : f) v.resize(n);
-    ref.resize(n);
+  host::SoaArrays store;
+  float* f[21] = {};  // p[3], r[9], e[3], w[6]
+  uint32_t* ref = nullptr;
+  size_t size = 0;
+  void resize(size_t n, uint32_t phase) {
+    store.resize(22, n, phase);
+    for (uint32_t i = 0; i < 21; ++i) f[i] = store.get<float>(i);
+    ref = store.get<uint32_t>(21);
+    size = n;
   }
   kernels::LeafSoA view(size_t offset) const {
     kernels::LeafSoA s{};
-    for (int i = 0; i < 3; ++i) s.p[i] = f[i].data() + offset;
-    for (int i = 0; i < 9; ++i) s.r[i] = f[3 + i].data() + offset;
-    for (int i = 0; i < 3; ++i) s.e[i] = f[12 + i].data() + offset;
-    for (int i = 0; i < 6; ++i) s.w[i] = f[15 + i].data() + offset;
-    s.ref = ref.data() + offset;
+    for (int i = 0; i < 3; ++i) s.p[i] = f[i] + offset;
+    for (int i = 0; i < 9; ++i) s.r[i] = f[3 + i] + offset;
+    for (int i = 0; i < 3; ++i) s.e[i] = f[12 + i] + offset;
+    for (int i = 0; i < 6; ++i) s.w[i] = f[15 + i] + offset;
+    s.ref = ref + offset;
     return s;
   }
 };
 
+/// The kernels' results for all records (indexed by sorted position), staggered as
+/// SideArrays.
 struct OutArrays {
-  std::vector<uint8_t> count;
-  std::vector<float> f[1 + 3 + 4 * 3 + 4];  // depth, n[3], point[4][3], pdepth[4]
+  host::SoaArrays store;
+  uint8_t* count = nullptr;
+  float* f[1 + 3 + 4 * 3 + 4] = {};  // depth, n[3], point[4][3], pdepth[4]
   void resize(size_t n) {
-    count.resize(n);
-    for (auto& v : f) v.resize(n);
+    store.resize(21, n, 44);
+    count = store.get<uint8_t>(0);
+    for (uint32_t i = 0; i < 20; ++i) f[i] = store.get<float>(1 + i);
   }
   kernels::ManifoldSoA view(size_t offset) {
     kernels::ManifoldSoA m{};
-    m.count = count.data() + offset;
-    m.depth = f[0].data() + offset;
-    for (int i = 0; i < 3; ++i) m.n[i] = f[1 + i].data() + offset;
+    m.count = count + offset;
+    m.depth = f[0] + offset;
+    for (int i = 0; i < 3; ++i) m.n[i] = f[1 + i] + offset;
     for (uint32_t k = 0; k < 4; ++k) {
-      for (int i = 0; i < 3; ++i) m.point[k][i] = f[4 + 3 * k + i].data() + offset;
-      m.pdepth[k] = f[16 + k].data() + offset;
+      for (int i = 0; i < 3; ++i) m.point[k][i] = f[4 + 3 * k + i] + offset;
+      m.pdepth[k] = f[16 + k] + offset;
     }
     return m;
   }
@@ -560,9 +570,9 @@ Status host::NarrowRunner::State::run(const host::Executor& exec, const ShapeSto
                                                             static_cast<LeafType>(bucket % kernels::kLeafTypeCount));
     IMPACT_ASSERT(kernel != nullptr);
     thread_local SideArrays scratch[2];
-    if (scratch[0].ref.size() < kLaneBlock) {
-      scratch[0].resize(kLaneBlock);
-      scratch[1].resize(kLaneBlock);
+    if (scratch[0].size < kLaneBlock) {
+      scratch[0].resize(kLaneBlock, 0);
+      scratch[1].resize(kLaneBlock, 22);
     }
     for (uint32_t s = blk.begin; s < blk.end; ++s) {
       const LeafPair& lp = records[order[s]];
