@@ -160,13 +160,13 @@ IMPACT_INLINE uint64_t below_bits(const HullView& h, uint32_t vb, uint32_t c, co
       pz[j] = in ? h.vz[vb + j] : 0.0f;
     }
     const F t = plane_dot(nl, F::load(px), F::load(py), F::load(pz));
-    return simd::bits(t < offl) & ((uint64_t{1} << c) - 1u);
+    return simd::bits_lt(t, offl) & ((uint64_t{1} << c) - 1u);
   }
   uint64_t bits = 0;
   for (uint32_t s = 0; s < c; s += kW) {
     const uint32_t at = s + kW <= c ? s : c - kW;
     const F t = plane_dot(nl, F::load(h.vx + vb + at), F::load(h.vy + vb + at), F::load(h.vz + vb + at));
-    bits |= static_cast<uint64_t>(simd::bits(t < offl)) << at;
+    bits |= static_cast<uint64_t>(simd::bits_lt(t, offl)) << at;
   }
   return bits;
 }

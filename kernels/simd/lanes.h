@@ -256,6 +256,19 @@ IMPACT_INLINE uint32_t bits(MaskN<N> m) {
   return r;
 }
 
+/// bits(a < b) (ordered: false for NaN), at N = 16 under AVX-512 straight from the compare
+/// into a mask register: GCC 12 otherwise widens the compare's mask to a vector and tests it
+/// back (two more instructions on the loop's chain).
+template <uint32_t N>
+IMPACT_INLINE uint32_t bits_lt(FloatN<N> a, FloatN<N> b) {
+#if defined(__AVX512F__)
+  if constexpr (N == 16) {
+    return static_cast<uint32_t>(
+        _mm512_cmp_ps_mask(reinterpret_cast<__m512>(a.v), reinterpret_cast<__m512>(b.v), _CMP_LT_OS));
+  }
+#endif
+  return bits(a < b);
+}
 /// Expand: for each set bit l of `bits` (l < N), in order, dst[l] = the next of src[0],
 /// src[1], ...; dst[l] for clear bits is not written (the inverse of compacting the set
 /// lanes). AVX-512 at N = 16: one expanding load and one masked store.
@@ -518,6 +531,7 @@ IMPACT_INLINE bool any(MaskN<1> m) { return m.v; }
 IMPACT_INLINE bool all(MaskN<1> m) { return m.v; }
 IMPACT_INLINE bool none(MaskN<1> m) { return !m.v; }
 IMPACT_INLINE uint32_t bits(MaskN<1> m) { return m.v ? 1u : 0u; }
+IMPACT_INLINE uint32_t bits_lt(FloatN<1> a, FloatN<1> b) { return a.v < b.v ? 1u : 0u; }
 template <>
 IMPACT_INLINE uint32_t compact_store<1>(int32_t* dst, IntN<1> v, uint32_t bits) {
   dst[0] = v.v;
