@@ -2,7 +2,7 @@
 // brute-force loop over the lanes, at every width the vocabulary has (1, 4, 8, 16),
 // on random scores with many exact ties (small integers), -inf lanes and shuffled
 // indices: the maximum, and the lowest index among the lanes that hold it; and
-// compact_store / expand_store against a loop over the set bits.
+// compact_store / expand_store against a loop over the set bits; bits_lt against a loop.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -87,6 +87,30 @@ TEST(Lanes, CompactAndExpandMatchALoop) {
   check_compact_expand<4>(6);
   check_compact_expand<8>(7);
   check_compact_expand<16>(8);
+}
+
+/// bits_lt(a, b) against the lane-by-lane comparison: ties, signed zeros, infinities and
+/// NaN (false either side).
+template <uint32_t N>
+void check_bits_lt(uint32_t seed) {
+  std::mt19937 g(seed);
+  const float pool[] = {-INFINITY, -1.5f, -0.0f, 0.0f, 1e-38f, 0.5f, 0.5f, 2.0f, INFINITY, NAN};
+  for (int trial = 0; trial < 4000; ++trial) {
+    float a[N], b[N];
+    uint32_t want = 0;
+    for (uint32_t l = 0; l < N; ++l) {
+      a[l] = pool[g() % 10], b[l] = pool[g() % 10];
+      want |= (a[l] < b[l] ? 1u : 0u) << l;
+    }
+    ASSERT_EQ(bits_lt(FloatN<N>::load(a), FloatN<N>::load(b)), want) << "width " << N;
+  }
+}
+
+TEST(Lanes, BitsLtMatchesALoop) {
+  check_bits_lt<1>(11);
+  check_bits_lt<4>(12);
+  check_bits_lt<8>(13);
+  check_bits_lt<16>(14);
 }
 
 TEST(Lanes, MaxLowestIndexReportsNoneForNaNOnly) {
