@@ -1,9 +1,11 @@
 // Host-owned storage: 64-byte aligned vectors for SoA arrays and scratch.
 #pragma once
 
+#include <atomic>
 #include <cstddef>
 #include <cstdint>
 #include <cstdlib>
+#include <cstring>
 #include <new>
 #include <vector>
 
@@ -12,6 +14,12 @@
 #endif
 
 namespace impact::host {
+
+/// 0 .. 62, turning with each call (AlignedAllocator's staggered blocks).
+inline uint32_t next_slot() {
+  static std::atomic<uint32_t> counter{0};
+  return counter.fetch_add(1, std::memory_order_relaxed) % 63u;
+}
 
 template <class T>
 struct AlignedAllocator {
@@ -24,20 +32,34 @@ struct AlignedAllocator {
   /// transparent huge pages: the random-access passes (grid gather and pair
   /// tests, solver scatters) otherwise miss the TLB on almost every access.
   static constexpr std::size_t kHugePage = std::size_t{1} << 21;
+  /// Blocks of at least this size start 1 to 63 cache lines past their alignment, the
+  /// count turning with each such allocation: the arrays of one SoA, allocated one
+  /// after another, then hold element i in different L1 sets. Aligned alike they would
+  /// all start at one offset modulo 4096, and a loop streaming ~10 of them (the
+  /// solver's contact arrays, a body store) would keep evicting its own lines (see
+  /// SoaArrays below). The shift sits in the 8 bytes before the block.
+  static constexpr std::size_t kStagger = std::size_t{1} << 16;
   T* allocate(std::size_t n) {
-    if (n > (~std::size_t{0} - kHugePage) / sizeof(T)) throw std::bad_alloc();
+    if (n > (~std::size_t{0} - 2 * kHugePage) / sizeof(T)) throw std::bad_alloc();
     const std::size_t raw = n * sizeof(T);
     const bool huge = raw >= kHugePage;
     const std::size_t align = huge ? kHugePage : kAlign;
-    const std::size_t bytes = ((raw + align - 1) / align) * align;
-    void* p = std::aligned_alloc(align, bytes == 0 ? kAlign : bytes);
+    const std::size_t shift = raw >= kStagger ? kAlign * (1 + next_slot()) : 0;
+    const std::size_t bytes = ((raw + shift + align - 1) / align) * align;
+    auto* p = static_cast<std::byte*>(std::aligned_alloc(align, bytes == 0 ? kAlign : bytes));
     if (!p) throw std::bad_alloc();
 #if defined(__linux__) && defined(MADV_HUGEPAGE)
     if (huge) madvise(p, bytes, MADV_HUGEPAGE);  // advisory: failure only costs speed
 #endif
-    return static_cast<T*>(p);
+    if (shift != 0) std::memcpy(p + shift - sizeof(std::size_t), &shift, sizeof(std::size_t));
+    return reinterpret_cast<T*>(p + shift);
   }
-  void deallocate(T* p, std::size_t) { std::free(p); }
+  void deallocate(T* p, std::size_t n) {
+    auto* b = reinterpret_cast<std::byte*>(p);
+    std::size_t shift = 0;
+    if (n * sizeof(T) >= kStagger) std::memcpy(&shift, b - sizeof(std::size_t), sizeof(std::size_t));
+    std::free(b - shift);
+  }
   template <class U>
   bool operator==(const AlignedAllocator<U>&) const { return true; }
 };
