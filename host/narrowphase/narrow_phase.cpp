@@ -693,8 +693,13 @@ Status NarrowPhase::Impl::collide(const ShapeSet& shapes, std::span<const ShapeI
       rec[i] = r;
       types[i] = r->type;
       Posed& P = posed[i];
-      // A sphere's rotation is never read (leaf.h: p and e0 only).
-      if (r->type != ShapeType::kSphere) P.R = host::rotation_of(pose.orientation);
+      // A sphere's rotation is never read (leaf.h: p and e0 only): the identity, no
+      // quaternion.
+      if (r->type == ShapeType::kSphere) {
+        P.R.setIdentity();
+      } else {
+        P.R = host::rotation_of(pose.orientation);
+      }
       P.p = pose.position;
       P.set_shape(*r);
     }

@@ -7,10 +7,10 @@
 // sides into LeafSoA arrays: lane k of A, of B and of the output belong to pair k of
 // the bucket. A kernel reads only the fields its two types use (table below), writes
 // only out lane k for k in its Range, and is correct for any partition of the bucket.
-// Layout for speed (not correctness): the streaming kernels run 2-3x slower when their
-// arrays start at one offset modulo 4096 or 16 bytes apart (L1 set conflicts, 4K
-// aliasing); the host lays each SoA out with host::SoaArrays (host/buffer.h), every
-// array at its own 64-byte slot modulo 4096.
+// Layout for speed (not correctness): the simplest kernels run up to 3x slower (box-box
+// ~12%) when their arrays start at one offset modulo 4096 or 16 bytes apart (L1 set
+// conflicts, 4K aliasing); the host lays each SoA out with host::SoaArrays
+// (host/buffer.h), every array at its own 64-byte slot modulo 4096.
 //
 // Field meaning per leaf type (all in the world frame; R is row-major, world = R*local + p):
 //   sphere      p = centre; e0 = radius

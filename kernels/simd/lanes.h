@@ -5,7 +5,8 @@
 // the scalar reference path).
 //
 //   FloatN<N>  N floats           arithmetic + - * /, unary -, compare -> MaskN<N>
-//   MaskN<N>   N lane predicates  & | ^ ~, andnot, any / all / none
+//   MaskN<N>   N lane predicates  & | ^ ~, andnot, any / all / none, bits (one bit a
+//              lane); bits_lt(a, b) = bits(a < b) without widening the mask (AVX-512)
 //   IntN<N>    N int32            + -, select, load / store, lane access (manifold point counts)
 //   verbs      load / store (contiguous, unaligned), broadcast (implicit from float),
 //              mul_add, min, max, abs, sqrt, select(mask, if_true, if_false),
