@@ -377,6 +377,17 @@ inline void put_r(SideArrays& s, size_t k, const Eigen::Matrix3f& R) {
 inline void put_e(SideArrays& s, size_t k, const float* e) {
   for (int i = 0; i < 3; ++i) s.f[12 + i][k] = e[i];
 }
+/// A half-space (local unit normal e, plane offset) posed by R, p: a point of the plane
+/// and the world normal, renormalised.
+inline void put_plane(SideArrays& s, size_t k, const Eigen::Matrix3f& R, const Eigen::Vector3f& p,
+                      const float* e, float offset) {
+  const Eigen::Vector3f el(e[0], e[1], e[2]);
+  const Eigen::Vector3f n = R * el;
+  const Eigen::Vector3f nn = n / n.norm();
+  put_p(s, k, p + R * (el * offset));
+  const float ne[3] = {nn[0], nn[1], nn[2]};
+  put_e(s, k, ne);
+}
 }  // namespace
 
 inline void host::NarrowRunner::State::fill(SideArrays& s, size_t k, uint32_t obj, uint32_t child) const {
@@ -400,6 +411,9 @@ inline void host::NarrowRunner::State::fill(SideArrays& s, size_t k, uint32_t ob
       put_p(s, k, P.p);
       put_r(s, k, P.R);
       s.ref[k] = P.leaf.ref;
+      return;
+    case ShapeType::kHalfSpace:
+      put_plane(s, k, P.R, P.p, P.leaf.e, P.offset);
       return;
     default:
       fill_general(s, k, obj, child);
@@ -433,14 +447,9 @@ void host::NarrowRunner::State::fill_general(SideArrays& s, size_t k, uint32_t o
       put_r(s, k, R);
       s.ref[k] = r->ref;
       return;
-    case ShapeType::kHalfSpace: {
-      const Eigen::Vector3f n = R * Eigen::Vector3f(e[0], e[1], e[2]);
-      const Eigen::Vector3f nn = n / n.norm();
-      put_p(s, k, p + R * (Eigen::Vector3f(e[0], e[1], e[2]) * r->offset));
-      const float ne[3] = {nn[0], nn[1], nn[2]};
-      put_e(s, k, ne);
+    case ShapeType::kHalfSpace:
+      put_plane(s, k, R, p, e, r->offset);
       return;
-    }
     case ShapeType::kMesh: {
       const MeshData& m = store->meshes[r->ref];
       const Eigen::Vector3f v0 = R * m.vertices[m.indices[3 * child]] + p;

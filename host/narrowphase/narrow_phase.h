@@ -24,8 +24,9 @@ kernels::NarrowConfig config_of(const NarrowPhaseOptions& options);
 
 /// An object's placement (world = R * local + p, R a rotation) and, on the same 64-byte
 /// line, what the gather copies from a plain shape's record: its e (sphere, capsule, box,
-/// cylinder, ellipsoid) or hull index (convex). So a plain pair's gather reads one line
-/// per object instead of chasing its record too. R of a sphere is never read.
+/// cylinder, ellipsoid, half-space) or hull index (convex), and a half-space's offset. So
+/// a plain pair's gather reads one line per object instead of chasing its record too.
+/// R of a sphere is never read.
 struct alignas(64) PosedObject {
   Eigen::Matrix3f R;
   Eigen::Vector3f p;
@@ -33,14 +34,16 @@ struct alignas(64) PosedObject {
     float e[3];    // the record's e (types other than convex)
     uint32_t ref;  // convex: the record's hull index
   } leaf;
+  float offset;  // the record's offset (a half-space's plane)
 
-  /// leaf from the object's record.
+  /// leaf and offset from the object's record.
   void set_shape(const ShapeRecord& r) {
     if (r.type == ShapeType::kConvex) {
       leaf.ref = r.ref;
     } else {
       for (int i = 0; i < 3; ++i) leaf.e[i] = r.e[i];
     }
+    offset = r.offset;
   }
 };
 static_assert(sizeof(PosedObject) == 64);
