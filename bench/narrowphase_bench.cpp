@@ -61,8 +61,8 @@
 
 #include "bench/bench_threads.h"
 #include "bench/scenes/narrow_scenes.h"
-#include "host/buffer.h"
 #include "host/narrowphase/convex_hull.h"
+#include "host/narrowphase/lane_arrays.h"
 #include "host/narrowphase/shape_store.h"
 #include "impact/narrowphase.h"
 #include "impact/shapes.h"
@@ -710,67 +710,24 @@ BENCHMARK(BM_StreamCopy)->Arg(1 << 20)->Arg(4 << 20)->Arg(16 << 20)->Arg(256 << 
 
 // --- kernels --------------------------------------------------------------------------------
 
-// LeafSoA arrays of one side of a scene (padded to a multiple of 16 lanes with copies
-// of lane 0, so wide loads past n stay in bounds), laid out as the public call lays out
-// the blocks it hands a kernel (host::SoaArrays: A at phase 0, B at 22, results at 44).
-struct LeafArrays {
-  impact::host::SoaArrays store;
-  float *p[3], *r[9], *e[3], *w[6];
-  uint32_t* ref;
-  kn::LeafSoA view() const {
-    kn::LeafSoA v{};
-    for (int i = 0; i < 3; ++i) v.p[i] = p[i], v.e[i] = e[i];
-    for (int i = 0; i < 9; ++i) v.r[i] = r[i];
-    for (int i = 0; i < 6; ++i) v.w[i] = w[i];
-    v.ref = ref;
-    return v;
-  }
-};
-
 uint32_t padded(uint32_t n) {
   return (n + 15u) & ~15u;
 }
 
-void gather(const std::vector<nb::Body>& bodies, uint32_t phase, LeafArrays* out) {
+// LeafSoA arrays of one side of a scene (padded to a multiple of 16 lanes with copies
+// of lane 0, so wide loads past n stay in bounds), in the public call's block layout
+// (host/narrowphase/lane_arrays.h).
+void gather(const std::vector<nb::Body>& bodies, uint32_t phase, impact::host::LeafArrays* out) {
   const uint32_t n = static_cast<uint32_t>(bodies.size()), m = padded(n);
-  out->store.resize(22, m, phase);
-  for (int i = 0; i < 3; ++i) out->p[i] = out->store.get<float>(i);
-  for (int i = 0; i < 9; ++i) out->r[i] = out->store.get<float>(3 + i);
-  for (int i = 0; i < 3; ++i) out->e[i] = out->store.get<float>(12 + i);
-  for (int i = 0; i < 6; ++i) out->w[i] = out->store.get<float>(15 + i);
-  out->ref = out->store.get<uint32_t>(21);
+  out->resize(m, phase);
   for (uint32_t k = 0; k < m; ++k) {
     const nb::Body& b = bodies[k < n ? k : 0];
-    for (int i = 0; i < 3; ++i) out->p[i][k] = b.p[i], out->e[i][k] = b.e[i];
-    for (int i = 0; i < 9; ++i) out->r[i][k] = b.r[i];
-    for (int i = 0; i < 6; ++i) out->w[i][k] = b.v[3 + i];
+    for (int i = 0; i < 3; ++i) out->f[i][k] = b.p[i], out->f[12 + i][k] = b.e[i];
+    for (int i = 0; i < 9; ++i) out->f[3 + i][k] = b.r[i];
+    for (int i = 0; i < 6; ++i) out->f[15 + i][k] = b.v[3 + i];
     out->ref[k] = b.hull;
   }
 }
-
-struct ManifoldArrays {
-  impact::host::SoaArrays store;
-  kn::ManifoldSoA v{};
-  explicit ManifoldArrays(uint32_t lanes) {
-    const uint32_t m = padded(lanes);
-    store.resize(21, m, 44);
-    v.count = store.get<uint8_t>(0);
-    std::fill(v.count, v.count + m, uint8_t{0});
-    uint32_t at = 1;
-    auto next = [&]() {
-      float* f = store.get<float>(at++);
-      std::fill(f, f + m, 0.0f);
-      return f;
-    };
-    for (int i = 0; i < 3; ++i) v.n[i] = next();
-    v.depth = next();
-    for (uint32_t j = 0; j < kn::kMaxManifoldPoints; ++j) {
-      for (int i = 0; i < 3; ++i) v.point[j][i] = next();
-      v.pdepth[j] = next();
-    }
-  }
-  kn::ManifoldSoA view() { return v; }
-};
 
 // The library's hulls for the scene's point clouds (the same builder ShapeSet uses).
 struct Hulls {
@@ -794,11 +751,14 @@ void BM_Kernel(benchmark::State& state, uint8_t ka, uint8_t kb, kn::KernelPath p
     state.SkipWithError("no kernel for this pair");
     return;
   }
-  LeafArrays a, b;
-  gather(s.a, 0, &a);
-  gather(s.b, 22, &b);
+  impact::host::LeafArrays a, b;
+  gather(s.a, impact::host::LeafArrays::kPhaseA, &a);
+  gather(s.b, impact::host::LeafArrays::kPhaseB, &b);
   const kn::LeafSoA av = a.view(), bv = b.view();
-  ManifoldArrays out(n);
+  impact::host::ManifoldArrays out;
+  out.resize(padded(n));
+  std::fill(out.count, out.count + padded(n), uint8_t{0});
+  for (float* f : out.f) std::fill(f, f + padded(n), 0.0f);
   const kn::ManifoldSoA ov = out.view();
   const Hulls hulls(s);
   kn::NarrowConfig cfg;

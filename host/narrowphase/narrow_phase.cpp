@@ -14,15 +14,16 @@
 //   bucket     key = (type_a * 8 + type_b) << 32 | record, LSD radix sort on the
 //              type bits: buckets are contiguous and keep record order inside
 //   gather + kernels  per block of up to 512 sorted positions of one bucket: both
-//              sides into a thread's LeafSoA scratch, then pair_kernel(ta, tb) on it (a
-//              plain shape from its posed line alone, the others through their records)
+//              sides into a thread's LeafSoA scratch (lane_arrays.h), then
+//              pair_kernel(ta, tb) on it (a plain shape from its posed line alone, the
+//              others through their records)
 //   output     manifolds of touching records in record order = (pair, child_a,
 //              child_b) order
 #include <algorithm>
 #include <cmath>
 #include <string>
 
-#include "host/buffer.h"
+#include "host/narrowphase/lane_arrays.h"
 #include "host/narrowphase/narrow_phase.h"
 #include "host/narrowphase/pose.h"
 #include "host/narrowphase/shape_store.h"
@@ -84,53 +85,7 @@ struct Box3 {
 
 using Posed = host::PosedObject;
 
-/// SoA of one side of a block of lanes, its arrays staggered (host::SoaArrays: phase 0
-/// for the kernel's A, 22 for its B; the outputs at 44).
-struct SideArrays {
-  host::SoaArrays store;
-  float* f[21] = {};  // p[3], r[9], e[3], w[6]
-  uint32_t* ref = nullptr;
-  size_t size = 0;
-  void resize(size_t n, uint32_t phase) {
-    store.resize(22, n, phase);
-    for (uint32_t i = 0; i < 21; ++i) f[i] = store.get<float>(i);
-    ref = store.get<uint32_t>(21);
-    size = n;
-  }
-  kernels::LeafSoA view(size_t offset) const {
-    kernels::LeafSoA s{};
-    for (int i = 0; i < 3; ++i) s.p[i] = f[i] + offset;
-    for (int i = 0; i < 9; ++i) s.r[i] = f[3 + i] + offset;
-    for (int i = 0; i < 3; ++i) s.e[i] = f[12 + i] + offset;
-    for (int i = 0; i < 6; ++i) s.w[i] = f[15 + i] + offset;
-    s.ref = ref + offset;
-    return s;
-  }
-};
-
-/// The kernels' results for all records (indexed by sorted position), staggered as
-/// SideArrays.
-struct OutArrays {
-  host::SoaArrays store;
-  uint8_t* count = nullptr;
-  float* f[1 + 3 + 4 * 3 + 4] = {};  // depth, n[3], point[4][3], pdepth[4]
-  void resize(size_t n) {
-    store.resize(21, n, 44);
-    count = store.get<uint8_t>(0);
-    for (uint32_t i = 0; i < 20; ++i) f[i] = store.get<float>(1 + i);
-  }
-  kernels::ManifoldSoA view(size_t offset) {
-    kernels::ManifoldSoA m{};
-    m.count = count + offset;
-    m.depth = f[0] + offset;
-    for (int i = 0; i < 3; ++i) m.n[i] = f[1 + i] + offset;
-    for (uint32_t k = 0; k < 4; ++k) {
-      for (int i = 0; i < 3; ++i) m.point[k][i] = f[4 + 3 * k + i] + offset;
-      m.pdepth[k] = f[16 + k] + offset;
-    }
-    return m;
-  }
-};
+using host::LeafArrays;
 
 }  // namespace
 
@@ -144,7 +99,7 @@ struct host::NarrowRunner::State {
   std::vector<uint32_t> order;     // sorted position -> record
   std::vector<uint32_t> position;  // record -> sorted position
   std::vector<Block> blocks;
-  OutArrays manifold;
+  host::ManifoldArrays manifold;
   std::vector<uint32_t> chunk_hits;
   std::vector<uint32_t> chunk_bad;  // per expansion chunk: its first bad pair (checked runs)
 
@@ -175,8 +130,8 @@ struct host::NarrowRunner::State {
   // --- gather ------------------------------------------------------------------------
   /// Lane k of s: object obj's leaf (child: of a compound or mesh, else kNoChild). A
   /// plain shape from its PosedObject line alone; the others through fill_general.
-  void fill(SideArrays& s, size_t k, uint32_t obj, uint32_t child) const;
-  void fill_general(SideArrays& s, size_t k, uint32_t obj, uint32_t child) const;
+  void fill(LeafArrays& s, size_t k, uint32_t obj, uint32_t child) const;
+  void fill_general(LeafArrays& s, size_t k, uint32_t obj, uint32_t child) const;
 };
 
 Box3 host::NarrowRunner::State::leaf_bounds(uint32_t obj, uint32_t child) const {
@@ -366,20 +321,20 @@ void host::NarrowRunner::State::expand(uint32_t pair_index, std::vector<LeafPair
 // Only the fields the leaf type uses (leaf.h's table): a sphere lane writes 4 of the 22
 // arrays. Unused fields keep stale values that no kernel reads.
 namespace {
-inline void put_p(SideArrays& s, size_t k, const Eigen::Vector3f& p) {
+inline void put_p(LeafArrays& s, size_t k, const Eigen::Vector3f& p) {
   for (int i = 0; i < 3; ++i) s.f[i][k] = p[i];
 }
-inline void put_r(SideArrays& s, size_t k, const Eigen::Matrix3f& R) {
+inline void put_r(LeafArrays& s, size_t k, const Eigen::Matrix3f& R) {
   for (int i = 0; i < 3; ++i) {
     for (int j = 0; j < 3; ++j) s.f[3 + 3 * i + j][k] = R(i, j);
   }
 }
-inline void put_e(SideArrays& s, size_t k, const float* e) {
+inline void put_e(LeafArrays& s, size_t k, const float* e) {
   for (int i = 0; i < 3; ++i) s.f[12 + i][k] = e[i];
 }
 /// A half-space (local unit normal e, plane offset) posed by R, p: a point of the plane
 /// and the world normal, renormalised.
-inline void put_plane(SideArrays& s, size_t k, const Eigen::Matrix3f& R, const Eigen::Vector3f& p,
+inline void put_plane(LeafArrays& s, size_t k, const Eigen::Matrix3f& R, const Eigen::Vector3f& p,
                       const float* e, float offset) {
   const Eigen::Vector3f el(e[0], e[1], e[2]);
   const Eigen::Vector3f n = R * el;
@@ -390,7 +345,7 @@ inline void put_plane(SideArrays& s, size_t k, const Eigen::Matrix3f& R, const E
 }
 }  // namespace
 
-inline void host::NarrowRunner::State::fill(SideArrays& s, size_t k, uint32_t obj, uint32_t child) const {
+inline void host::NarrowRunner::State::fill(LeafArrays& s, size_t k, uint32_t obj, uint32_t child) const {
   // Plain shapes (every leaf of a pair list without meshes or compounds): the pose as it
   // is, and the record's fields from the same line.
   const Posed& P = posed[obj];
@@ -420,7 +375,7 @@ inline void host::NarrowRunner::State::fill(SideArrays& s, size_t k, uint32_t ob
   }
 }
 
-void host::NarrowRunner::State::fill_general(SideArrays& s, size_t k, uint32_t obj, uint32_t child) const {
+void host::NarrowRunner::State::fill_general(LeafArrays& s, size_t k, uint32_t obj, uint32_t child) const {
   const ShapeRecord* r = &shape(obj);
   const Posed& P = posed[obj];
   Eigen::Matrix3f R = P.R;
@@ -578,10 +533,10 @@ Status host::NarrowRunner::State::run(const host::Executor& exec, const ShapeSto
     const kernels::PairKernel kernel = kernels::pair_kernel(static_cast<LeafType>(bucket / kernels::kLeafTypeCount),
                                                             static_cast<LeafType>(bucket % kernels::kLeafTypeCount));
     IMPACT_ASSERT(kernel != nullptr);
-    thread_local SideArrays scratch[2];
+    thread_local LeafArrays scratch[2];
     if (scratch[0].size < kLaneBlock) {
-      scratch[0].resize(kLaneBlock, 0);
-      scratch[1].resize(kLaneBlock, 22);
+      scratch[0].resize(kLaneBlock, host::LeafArrays::kPhaseA);
+      scratch[1].resize(kLaneBlock, host::LeafArrays::kPhaseB);
     }
     for (uint32_t s = blk.begin; s < blk.end; ++s) {
       const LeafPair& lp = records[order[s]];

@@ -1,0 +1,68 @@
+// The SoA blocks the narrow phase hands its pair kernels (kernels/narrowphase/leaf.h):
+// one side's LeafSoA and the ManifoldSoA results, each in one host::SoaArrays, so every
+// array sits at its own 64-byte slot modulo 4096 (docs/narrowphase.md, "Array layout").
+// NarrowRunner's per-thread scratch and results and the kernel benchmark share them, so
+// BM_Kernel measures the layout the library uses.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+
+#include "host/buffer.h"
+#include "kernels/narrowphase/leaf.h"
+
+namespace impact::host {
+
+/// One side of a block of lanes: f = p[3], r[9], e[3], w[6] (leaf.h's fields), then ref.
+/// The kernel's A at slot phase kPhaseA, its B at kPhaseB; the results at
+/// ManifoldArrays::kPhase.
+struct LeafArrays {
+  static constexpr uint32_t kPhaseA = 0, kPhaseB = 22;
+  SoaArrays store;
+  float* f[21] = {};
+  uint32_t* ref = nullptr;
+  std::size_t size = 0;
+
+  void resize(std::size_t n, uint32_t phase) {
+    store.resize(22, n, phase);
+    for (uint32_t i = 0; i < 21; ++i) f[i] = store.get<float>(i);
+    ref = store.get<uint32_t>(21);
+    size = n;
+  }
+  kernels::LeafSoA view(std::size_t offset = 0) const {
+    kernels::LeafSoA s{};
+    for (int i = 0; i < 3; ++i) s.p[i] = f[i] + offset;
+    for (int i = 0; i < 9; ++i) s.r[i] = f[3 + i] + offset;
+    for (int i = 0; i < 3; ++i) s.e[i] = f[12 + i] + offset;
+    for (int i = 0; i < 6; ++i) s.w[i] = f[15 + i] + offset;
+    s.ref = ref + offset;
+    return s;
+  }
+};
+
+/// The kernels' results: count, then f = depth, n[3], point[4][3], pdepth[4].
+struct ManifoldArrays {
+  static constexpr uint32_t kPhase = 44;
+  SoaArrays store;
+  uint8_t* count = nullptr;
+  float* f[1 + 3 + 4 * 3 + 4] = {};
+
+  void resize(std::size_t n) {
+    store.resize(21, n, kPhase);
+    count = store.get<uint8_t>(0);
+    for (uint32_t i = 0; i < 20; ++i) f[i] = store.get<float>(1 + i);
+  }
+  kernels::ManifoldSoA view(std::size_t offset = 0) const {
+    kernels::ManifoldSoA m{};
+    m.count = count + offset;
+    m.depth = f[0] + offset;
+    for (int i = 0; i < 3; ++i) m.n[i] = f[1 + i] + offset;
+    for (uint32_t k = 0; k < 4; ++k) {
+      for (int i = 0; i < 3; ++i) m.point[k][i] = f[4 + 3 * k + i] + offset;
+      m.pdepth[k] = f[16 + k] + offset;
+    }
+    return m;
+  }
+};
+
+}  // namespace impact::host
