@@ -34,11 +34,7 @@ IMPACT_INLINE uint32_t next_block(uint32_t i, uint32_t e) {
 /// changes no minimum or maximum; lanes past n are masked where a count matters).
 template <class F>
 IMPACT_INLINE F block(const float* p, uint32_t i, uint32_t n) {
-  constexpr uint32_t W = F::kWidth;
-  if (i + W <= n) return F::load(p + i);
-  float t[W];
-  for (uint32_t k = 0; k < W; ++k) t[k] = p[i + k < n ? i + k : n - 1];
-  return F::load(t);
+  return simd::load_clamped<F>(p, i, n);
 }
 
 /// Hulls of up to this many faces (edges) keep their pass values on the stack for the

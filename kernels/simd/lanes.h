@@ -7,7 +7,7 @@
 //   FloatN<N>  N floats           arithmetic + - * /, unary -, compare -> MaskN<N>
 //   MaskN<N>   N lane predicates  & | ^ ~, andnot, any / all / none, bits (one bit a
 //              lane); bits_lt(a, b) = bits(a < b) without widening the mask (AVX-512)
-//   IntN<N>    N int32            + -, select, load / store, lane access (manifold point counts)
+//   IntN<N>    N int32            + - * & >>, select, load / store, to_float, lane access
 //   verbs      load / store (contiguous, unaligned), broadcast (implicit from float),
 //              mul_add, min, max, abs, sqrt, select(mask, if_true, if_false),
 //              copysign-free sign helpers are built from select;
@@ -17,6 +17,7 @@
 //              (the inverse of compacting a block's live lanes; float, or int32 to uint8);
 //              compact_store<N>(dst, int lanes, bits): the set lanes to dst[0, 1, ..];
 //              load_transposed(N row pointers): N rows of N floats, one per lane;
+//              load_clamped<F>(p, i, n): p[i ..] with indices past n - 1 reading p[n - 1];
 //              tag / tag_index: a small index kept in a float's 5 low mantissa bits,
 //              so one max/min tree gives both the extreme and where it came from.
 //
@@ -170,6 +171,9 @@ struct IntN {
 
   friend IMPACT_INLINE IntN operator+(IntN a, IntN b) { return IntN(a.v + b.v); }
   friend IMPACT_INLINE IntN operator-(IntN a, IntN b) { return IntN(a.v - b.v); }
+  friend IMPACT_INLINE IntN operator&(IntN a, IntN b) { return IntN(a.v & b.v); }
+  /// Arithmetic shift right by s (0 <= s < 32).
+  friend IMPACT_INLINE IntN operator>>(IntN a, int s) { return IntN(a.v >> s); }
   friend IMPACT_INLINE MaskN<N> operator==(IntN a, IntN b) { return MaskN<N>(a.v == b.v); }
   friend IMPACT_INLINE MaskN<N> operator>(IntN a, IntN b) { return MaskN<N>(a.v > b.v); }
 };
@@ -195,6 +199,11 @@ IMPACT_INLINE MaskN<N> andnot(MaskN<N> a, MaskN<N> b) {
 template <uint32_t N>
 IMPACT_INLINE IntN<N> to_int(MaskN<N> m) {
   return IntN<N>(-m.v);
+}
+/// Each lane converted to float (rounded to nearest; exact below 2^24).
+template <uint32_t N>
+IMPACT_INLINE FloatN<N> to_float(IntN<N> i) {
+  return FloatN<N>(__builtin_convertvector(i.v, typename FloatN<N>::Raw));
 }
 
 template <uint32_t N>
@@ -268,6 +277,12 @@ IMPACT_INLINE uint32_t bits_lt(FloatN<N> a, FloatN<N> b) {
         _mm512_cmp_ps_mask(reinterpret_cast<__m512>(a.v), reinterpret_cast<__m512>(b.v), _CMP_LT_OS));
   }
 #endif
+#if defined(__AVX512F__) && defined(__AVX512VL__)
+  if constexpr (N == 8) {
+    return static_cast<uint32_t>(
+        _mm256_cmp_ps_mask(reinterpret_cast<__m256>(a.v), reinterpret_cast<__m256>(b.v), _CMP_LT_OS));
+  }
+#endif
   return bits(a < b);
 }
 /// Expand: for each set bit l of `bits` (l < N), in order, dst[l] = the next of src[0],
@@ -295,6 +310,14 @@ IMPACT_INLINE uint32_t compact_store(int32_t* dst, IntN<N> v, uint32_t bits) {
   if constexpr (N == 16) {
     const auto k = static_cast<__mmask16>(bits);
     _mm512_storeu_si512(dst, _mm512_maskz_compress_epi32(k, reinterpret_cast<__m512i>(v.v)));
+    return static_cast<uint32_t>(__builtin_popcount(bits));
+  }
+#endif
+#if defined(__AVX512F__) && defined(__AVX512VL__)
+  if constexpr (N == 8) {
+    const auto k = static_cast<__mmask8>(bits);
+    _mm256_storeu_si256(reinterpret_cast<__m256i*>(dst),
+                        _mm256_maskz_compress_epi32(k, reinterpret_cast<__m256i>(v.v)));
     return static_cast<uint32_t>(__builtin_popcount(bits));
   }
 #endif
@@ -488,6 +511,8 @@ struct IntN<1> {
   IMPACT_INLINE int32_t lane(uint32_t) const { return v; }
   friend IMPACT_INLINE IntN operator+(IntN a, IntN b) { return IntN(a.v + b.v); }
   friend IMPACT_INLINE IntN operator-(IntN a, IntN b) { return IntN(a.v - b.v); }
+  friend IMPACT_INLINE IntN operator&(IntN a, IntN b) { return IntN(a.v & b.v); }
+  friend IMPACT_INLINE IntN operator>>(IntN a, int s) { return IntN(a.v >> s); }
   friend IMPACT_INLINE MaskN<1> operator==(IntN a, IntN b) { return MaskN<1>(a.v == b.v); }
   friend IMPACT_INLINE MaskN<1> operator>(IntN a, IntN b) { return MaskN<1>(a.v > b.v); }
 };
@@ -528,6 +553,9 @@ IMPACT_INLINE IntN<1> select(MaskN<1> m, IntN<1> a, IntN<1> b) { return m.v ? a 
 IMPACT_INLINE MaskN<1> select(MaskN<1> m, MaskN<1> a, MaskN<1> b) { return m.v ? a : b; }
 IMPACT_INLINE MaskN<1> andnot(MaskN<1> a, MaskN<1> b) { return MaskN<1>(a.v && !b.v); }
 IMPACT_INLINE IntN<1> to_int(MaskN<1> m) { return IntN<1>(m.v ? 1 : 0); }
+IMPACT_INLINE FloatN<1> to_float(IntN<1> i) {
+  return FloatN<1>(static_cast<float>(i.v));
+}
 IMPACT_INLINE bool any(MaskN<1> m) { return m.v; }
 IMPACT_INLINE bool all(MaskN<1> m) { return m.v; }
 IMPACT_INLINE bool none(MaskN<1> m) { return !m.v; }
@@ -642,6 +670,32 @@ IMPACT_INLINE float max_lowest_index(F s, F idx, float none, float* out_idx) {
     *out_idx = bi.lane(0);
     return bs.lane(0);
   }
+}
+
+/// Lanes i .. i + W of p[0 .. n) (i < n), an index past n - 1 reading p[n - 1]: a pass
+/// over n items in whole blocks (a repeated item changes no minimum or maximum). The
+/// last block of n >= W items is the load of p[n - W ..] with its lanes moved into place
+/// (GCC: one permute; building it from W scalar stores and a vector load stalls on store
+/// forwarding, ~5% of hull-hull's time before 2026-11-29).
+template <class F>
+IMPACT_INLINE F load_clamped(const float* p, uint32_t i, uint32_t n) {
+  constexpr uint32_t W = F::kWidth;
+  if (i + W <= n) return F::load(p + i);
+#if defined(__GNUC__) && !defined(__clang__)
+  if constexpr (W > 1) {
+    if (n >= W) {
+      // Lane k takes item min(i + k, n - 1), which sits at lane min(i + k, n - 1) - (n - W).
+      using I = typename F::Int;
+      const I at = lane_ids<I>(static_cast<int32_t>(i + W - n));
+      const I last(static_cast<int32_t>(W - 1));
+      const I idx = select(at > last, last, at);
+      return F(__builtin_shuffle(F::load(p + n - W).v, idx.v));
+    }
+  }
+#endif
+  float t[W];
+  for (uint32_t k = 0; k < W; ++k) t[k] = p[i + k < n ? i + k : n - 1];
+  return F::load(t);
 }
 
 using FloatW = FloatN<kSimdWidth>;

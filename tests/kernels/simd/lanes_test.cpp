@@ -2,7 +2,8 @@
 // brute-force loop over the lanes, at every width the vocabulary has (1, 4, 8, 16),
 // on random scores with many exact ties (small integers), -inf lanes and shuffled
 // indices: the maximum, and the lowest index among the lanes that hold it; and
-// compact_store / expand_store against a loop over the set bits; bits_lt against a loop.
+// compact_store / expand_store against a loop over the set bits; bits_lt and load_clamped
+// against a loop.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -111,6 +112,31 @@ TEST(Lanes, BitsLtMatchesALoop) {
   check_bits_lt<4>(12);
   check_bits_lt<8>(13);
   check_bits_lt<16>(14);
+}
+
+/// load_clamped against the lane-by-lane clamp: every block start of arrays of 1 .. 3N
+/// items (the permuted tail where n >= N, the scalar one below), read from a buffer
+/// that ends with the array (a read past it would reach the guard values).
+template <uint32_t N>
+void check_load_clamped() {
+  float buf[4 * N + 8];
+  for (uint32_t n = 1; n <= 3 * N; ++n) {
+    float* p = buf + 2;
+    for (uint32_t k = 0; k < 4 * N + 8; ++k) buf[k] = -1.0f;
+    for (uint32_t k = 0; k < n; ++k) p[k] = static_cast<float>(k) + 0.25f;
+    for (uint32_t i = 0; i < n; ++i) {
+      const FloatN<N> v = load_clamped<FloatN<N>>(p, i, n);
+      for (uint32_t l = 0; l < N; ++l)
+        ASSERT_EQ(v.lane(l), p[std::min(i + l, n - 1)]) << "width " << N << " n " << n << " i " << i;
+    }
+  }
+}
+
+TEST(Lanes, LoadClampedMatchesALoop) {
+  check_load_clamped<1>();
+  check_load_clamped<4>();
+  check_load_clamped<8>();
+  check_load_clamped<16>();
 }
 
 TEST(Lanes, MaxLowestIndexReportsNoneForNaNOnly) {
