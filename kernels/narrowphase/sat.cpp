@@ -847,30 +847,48 @@ void collide_sat_general_lane(const Leaf& A, const Leaf& B, LaneContact* out, Sa
 
   // 2. Edge query: edges whose cone bound cannot beat the best face by the bias are
   // dropped; the rest pass the Gauss map test pairwise.
+  // A second bound from one vertex of the other side (s <= n.(v_B - p_A) for any v_B in
+  // B): the vertex deepest below the best face of the other side, near the contact, where
+  // the ball's bound is loosest.
   const float thr = s_face + bias;
+  const uint32_t wb = argmax_dot(S.bvx, S.bvy, S.bvz, 0, PB.nv, -PA.fnx[fa], -PA.fny[fa], -PA.fnz[fa]);
+  const uint32_t wa = argmax_dot(S.avx, S.avy, S.avz, 0, PA.nv, -S.bfx[fb], -S.bfy[fb], -S.bfz[fb]);
   uint32_t na = 0;
-  for (uint32_t e = 0; e < PA.ne; e += kW) {
-    const F u = cone_bound(load_tail(PA.emx, e, PA.ne), load_tail(PA.emy, e, PA.ne), load_tail(PA.emz, e, PA.ne),
-                           load_tail(PA.ecos, e, PA.ne), load_tail(PA.esin, e, PA.ne), tx - load_tail(PA.epx, e, PA.ne),
-                           ty - load_tail(PA.epy, e, PA.ne), tz - load_tail(PA.epz, e, PA.ne)) -
-                F(ball_b);
-    u.store(S.u + e);
+  {
+    const F vx(S.bvx[wb]), vy(S.bvy[wb]), vz(S.bvz[wb]);
+    for (uint32_t e = 0; e < PA.ne; e += kW) {
+      const F mx = load_tail(PA.emx, e, PA.ne), my = load_tail(PA.emy, e, PA.ne),
+              mz = load_tail(PA.emz, e, PA.ne);
+      const F c = load_tail(PA.ecos, e, PA.ne), sn = load_tail(PA.esin, e, PA.ne);
+      const F px = load_tail(PA.epx, e, PA.ne), py = load_tail(PA.epy, e, PA.ne),
+              pz = load_tail(PA.epz, e, PA.ne);
+      const F u = simd::min(cone_bound(mx, my, mz, c, sn, tx - px, ty - py, tz - pz) - F(ball_b),
+                            cone_bound(mx, my, mz, c, sn, vx - px, vy - py, vz - pz));
+      u.store(S.u + e);
+    }
   }
   for (uint32_t e = 0; e < PA.ne; ++e) {
     S.aedge[na] = e;
     S.au[na] = S.u[e];
     na += S.u[e] > thr ? 1u : 0u;
   }
-  for (uint32_t e = 0; e < PB.ne; e += kW) {
-    const F mx = load_tail(PB.emx, e, PB.ne), my = load_tail(PB.emy, e, PB.ne), mz = load_tail(PB.emz, e, PB.ne);
-    const F x = load_tail(PB.epx, e, PB.ne), y = load_tail(PB.epy, e, PB.ne), z = load_tail(PB.epz, e, PB.ne);
-    const F px = tx + r00 * x + r01 * y + r02 * z, py = ty + r10 * x + r11 * y + r12 * z,
-            pz = tz + r20 * x + r21 * y + r22 * z;
-    const F u = cone_bound(r00 * mx + r01 * my + r02 * mz, r10 * mx + r11 * my + r12 * mz, r20 * mx + r21 * my + r22 * mz,
-                           load_tail(PB.ecos, e, PB.ne), load_tail(PB.esin, e, PB.ne), -px, -py, -pz) -
-                F(ball_a);
-    u.store(S.u + e);
-    px.store(S.tpx + e), py.store(S.tpy + e), pz.store(S.tpz + e);
+  {
+    const F vx(S.avx[wa]), vy(S.avy[wa]), vz(S.avz[wa]);
+    for (uint32_t e = 0; e < PB.ne; e += kW) {
+      const F mx = load_tail(PB.emx, e, PB.ne), my = load_tail(PB.emy, e, PB.ne),
+              mz = load_tail(PB.emz, e, PB.ne);
+      const F x = load_tail(PB.epx, e, PB.ne), y = load_tail(PB.epy, e, PB.ne),
+              z = load_tail(PB.epz, e, PB.ne);
+      const F px = tx + r00 * x + r01 * y + r02 * z, py = ty + r10 * x + r11 * y + r12 * z,
+              pz = tz + r20 * x + r21 * y + r22 * z;
+      const F ox = r00 * mx + r01 * my + r02 * mz, oy = r10 * mx + r11 * my + r12 * mz,
+              oz = r20 * mx + r21 * my + r22 * mz;
+      const F c = load_tail(PB.ecos, e, PB.ne), sn = load_tail(PB.esin, e, PB.ne);
+      const F u = simd::min(cone_bound(ox, oy, oz, c, sn, -px, -py, -pz) - F(ball_a),
+                            cone_bound(ox, oy, oz, c, sn, vx - px, vy - py, vz - pz));
+      u.store(S.u + e);
+      px.store(S.tpx + e), py.store(S.tpy + e), pz.store(S.tpz + e);
+    }
   }
   uint32_t nbc = 0;  // candidate indices first, without branches
   for (uint32_t e = 0; e < PB.ne; ++e) {
