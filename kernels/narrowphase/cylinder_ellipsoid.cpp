@@ -73,6 +73,8 @@
 // FCL ~1820 in the same run (3.7x), GJK / EPA ~2390 before.
 // Both paths run the same template (F = FloatW, or Float1 for the scalar reference).
 #include <cstdint>
+#include <cstring>
+#include <type_traits>
 
 // First: the pragma must precede the shared solvers' templates to cover them.
 #include "kernels/narrowphase/no_contract.h"
@@ -188,17 +190,33 @@ IMPACT_INLINE typename F::Mask may_touch(const V3<F>& dw, const V3<F>& ua, F ra,
   return m;
 }
 
-/// The collision data of W lanes that may touch: n (world, A to B), depth, and the
-/// point relative to A's centre.
+/// A lane's solve between solve_front and solve_back: the model, the kept starts and the
+/// steps they have taken, the exact candidates, and what the output needs. Every member
+/// is a vector of W 4-byte lanes, so lanes move in and out of it field by field (Queue).
 template <class F>
-IMPACT_INLINE void solve(const V3<F>& dw, const V3<F>& ua, F ra, F ha, const V3<F>& eb, const M3<F>& rb,
-                         V3<F>& out_n, F& out_depth, V3<F>& out_point) {
+struct Solve {
+  Pair<F> p;
+  newton::Start<F> kept[kKept];
+  V3<F> cap, circle, dw, pa;
+  F cap_g, circle_g, least, size;
+  F av[3];
+  M3<F> rb;
+  typename F::Int it, row;
+};
+
+/// The collision data of W lanes that may touch, part 1: the candidates and the solve up
+/// to its kept starts' phase, which runs until no more than defer_at lanes still move
+/// (0: to the end). Returns those lanes (to finish with newton::minimise_rest); the
+/// others are ready for solve_back.
+template <class F>
+IMPACT_INLINE typename F::Mask solve_front(const V3<F>& dw, const V3<F>& ua, F ra, F ha, const V3<F>& eb,
+                                           const M3<F>& rb, Solve<F>& sv, uint32_t defer_at) {
   using Mask = typename F::Mask;
   const F zero(0.0f), one(1.0f), big(3.0e38f);
   const F emax = max(max(eb.x, eb.y), eb.z);
   const F size = max(max(emax, ra), ha);
   const F inv = one / max(size, F(1e-30f));
-  Pair<F> p;
+  Pair<F>& p = sv.p;
   const F av[3] = {eb.x * inv, eb.y * inv, eb.z * inv};
   for (int i = 0; i < 3; ++i) p.a2[i] = av[i] * av[i];
   p.u = rb.apply_t(ua);
@@ -298,10 +316,32 @@ IMPACT_INLINE void solve(const V3<F>& dw, const V3<F>& ua, F ra, F ha, const V3<
   F least = min(cap_g, circle_g);
   for (int s = 0; s < kStarts; ++s) least = min(least, bf[s]);
 
-  // 3. The solve; then the least of the caps, the circle and the solve.
+  // 3. The solve (its kept phase possibly left to the caller).
+  int it;
+  const Mask moving = newton::minimise_front<F, kStarts, Pair<F>, kKept>(
+      p, bn, bf, (least <= zero) | (size <= zero), sv.kept, &it, defer_at);
+  sv.it = typename F::Int(it);
+  sv.cap = cap, sv.circle = circle, sv.dw = dw;
+  sv.cap_g = cap_g, sv.circle_g = circle_g, sv.least = least, sv.size = size;
+  for (int i = 0; i < 3; ++i) sv.av[i] = av[i];
+  sv.rb = rb;
+  return moving;
+}
+
+/// Part 2: the least of the caps, the circle and the solve; n (world, A to B), depth,
+/// and the point relative to A's centre.
+template <class F>
+IMPACT_INLINE void solve_back(const Solve<F>& sv, V3<F>& out_n, F& out_depth, V3<F>& out_point) {
+  using Mask = typename F::Mask;
+  const F zero(0.0f), one(1.0f);
+  const Pair<F>& p = sv.p;
+  const V3<F>&cap = sv.cap, &circle = sv.circle, &dw = sv.dw;
+  const F cap_g = sv.cap_g, circle_g = sv.circle_g, least = sv.least, size = sv.size;
+  const F* av = sv.av;
+  const M3<F>& rb = sv.rb;
   F best;
   V3<F> m;
-  newton::minimise<F, kStarts, Pair<F>, kKept>(p, bn, bf, (least <= zero) | (size <= zero), best, m);
+  newton::minimise_finish<F, kKept>(sv.kept, best, m);
   best = p.overlap(m);
   {
     const Mask take = circle_g <= best;
@@ -326,12 +366,65 @@ IMPACT_INLINE void solve(const V3<F>& dw, const V3<F>& ua, F ra, F ha, const V3<
   out_point = madd(dw + rb.apply(xb), F(0.5f) * out_depth, out_n);
 }
 
+/// Lanes set aside by solve_front, field by field (a Solve<F> seen as rows of W int32):
+/// filled by compaction, emptied W at a time from the end.
+template <class F>
+struct Queue {
+  static constexpr uint32_t kW = F::kWidth;
+  static constexpr uint32_t kRows = sizeof(Solve<F>) / (4 * kW);
+  static_assert(sizeof(Solve<F>) == kRows * 4 * kW && std::is_trivially_copyable_v<Solve<F>>);
+  int32_t q[kRows][2 * kW];  // < kW held between pushes, a push adds <= kW
+  uint32_t n = 0;
+
+  IMPACT_INLINE void push(const Solve<F>& sv, uint32_t bits) {
+    alignas(64) int32_t raw[kRows][kW];
+    std::memcpy(raw, &sv, sizeof raw);
+    uint32_t c = 0;
+    for (uint32_t r = 0; r < kRows; ++r) c = simd::compact_store(q[r] + n, F::Int::load(raw[r]), bits);
+    n += c;
+  }
+  /// The last min(n, kW) entries (fewer: the last one repeated) into sv; returns how many.
+  IMPACT_INLINE uint32_t pop(Solve<F>& sv) {
+    const uint32_t cnt = n < kW ? n : kW, at = n - cnt;
+    alignas(64) int32_t raw[kRows][kW];
+    if (cnt == kW) {
+      for (uint32_t r = 0; r < kRows; ++r) std::memcpy(raw[r], q[r] + at, sizeof raw[r]);
+    } else {
+      for (uint32_t r = 0; r < kRows; ++r)
+        for (uint32_t l = 0; l < kW; ++l) raw[r][l] = q[r][at + (l < cnt ? l : cnt - 1)];
+    }
+    std::memcpy(&sv, raw, sizeof raw);
+    n = at;
+    return cnt;
+  }
+};
+
 /// The range through prim::for_each_live_group: the screen writes count 0 for every lane
 /// and lists those that may touch (may_touch); the solve runs on full groups of them.
+/// The kept starts' phase runs in the group while more than a quarter of its lanes still
+/// move (measured: ~8 steps per 16-lane group with ~1.5 lanes moving); the rest are set
+/// aside and finished packed W at a time, the chunk's last ones before its expansion.
 template <class F>
 IMPACT_INLINE void cylinder_ellipsoid_range(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out,
                                             Range r) {
   using Int = typename F::Int;
+  constexpr uint32_t W = F::kWidth;
+  constexpr uint32_t kDeferAt = W > 1 ? W / 4 : 0;  // one lane: never set aside
+  Queue<F> queue;
+  auto finish = [&](LiveOut<F, 1>& o, uint32_t keep) {
+    while (queue.n > keep) {
+      Solve<F> sv;
+      const uint32_t cnt = queue.pop(sv);
+      newton::minimise_rest<F, Pair<F>, kKept>(sv.p, sv.kept, sv.it);
+      Lanes<F, 1> m;
+      solve_back(sv, m.n, m.depth, m.point[0]);
+      m.count = simd::to_int(m.depth > F(0.0f));
+      m.pdepth[0] = m.depth;
+      int32_t rows[W];
+      sv.row.store(rows);
+      o.put_rows(m, sv.pa, rows, cnt);
+    }
+  };
   for_each_live_group<F, 1>(
       a, b, out, r,
       [&](const LeafSoA& va, const LeafSoA& vb, uint32_t at, uint32_t, uint32_t, NoExtra*) {
@@ -339,18 +432,28 @@ IMPACT_INLINE void cylinder_ellipsoid_range(const LeafSoA& a, const LeafSoA& b, 
         return simd::bits(may_touch(dw, load_axis_z<F>(va, at), ld<F>(va.e[0], at), ld<F>(va.e[1], at),
                                     load_e<F>(vb, at), load_r<F>(vb, at)));
       },
-      [&](const int32_t* index, const NoExtra*, uint32_t, LiveOut<F, 1>& o) {
+      [&](const int32_t* index, const NoExtra*, uint32_t cnt, LiveOut<F, 1>& o) {
         const Int idx = Int::load(index);
         const V3<F> pa = gather3<F>(a.p, idx);
         const V3<F> dw = gather3<F>(b.p, idx) - pa;
         const M3<F> ra = gather_r<F>(a, idx);
+        Solve<F> sv;
+        const auto moving = solve_front(dw, ra.c[2], simd::gather(a.e[0], idx), simd::gather(a.e[1], idx),
+                                        gather3<F>(b.e, idx), gather_r<F>(b, idx), sv, kDeferAt);
         Lanes<F, 1> m;
-        solve(dw, ra.c[2], simd::gather(a.e[0], idx), simd::gather(a.e[1], idx), gather3<F>(b.e, idx),
-              gather_r<F>(b, idx), m.n, m.depth, m.point[0]);
+        solve_back(sv, m.n, m.depth, m.point[0]);
         m.count = simd::to_int(m.depth > F(0.0f));
         m.pdepth[0] = m.depth;
         o.put(m, pa);
-      });
+        const uint32_t aside = simd::bits(moving) & ((1u << cnt) - 1u);  // padding lanes repeat a real one
+        if (aside != 0) {
+          sv.pa = pa;
+          sv.row = simd::lane_ids<Int>(static_cast<int32_t>(o.row));
+          queue.push(sv, aside);
+          finish(o, W - 1);  // full groups only
+        }
+      },
+      [&](LiveOut<F, 1>& o) { finish(o, 0); });
 }
 
 }  // namespace

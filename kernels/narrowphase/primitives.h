@@ -236,6 +236,28 @@ struct LiveOut {
       m.pdepth[j].store(f[7 + 4 * j] + row);
     }
   }
+  /// Lanes l < cnt of m to rows rows[l] (any rows of the chunk's list; a kernel that
+  /// finishes some lanes after their group, for_each_live_group's `finish`).
+  template <uint32_t P>
+  IMPACT_INLINE void put_rows(const Lanes<F, P>& m, const V3<F>& origin, const int32_t* rows, uint32_t cnt) {
+    static_assert(S <= P);
+    float t[kFields][kW];
+    int32_t c[kW];
+    m.count.store(c);
+    m.n.x.store(t[0]), m.n.y.store(t[1]), m.n.z.store(t[2]);
+    m.depth.store(t[3]);
+    for (uint32_t j = 0; j < S; ++j) {
+      (origin.x + m.point[j].x).store(t[4 + 4 * j]);
+      (origin.y + m.point[j].y).store(t[5 + 4 * j]);
+      (origin.z + m.point[j].z).store(t[6 + 4 * j]);
+      m.pdepth[j].store(t[7 + 4 * j]);
+    }
+    for (uint32_t l = 0; l < cnt; ++l) {
+      const auto r = static_cast<uint32_t>(rows[l]);
+      count[r] = c[l];
+      for (uint32_t q = 0; q < kFields; ++q) f[q][r] = t[q][l];
+    }
+  }
   /// Rows at .. at + popcount(bits) to the set lanes of block k .. k + W of out.
   IMPACT_INLINE void expand(const ManifoldSoA& out, uint32_t k, uint32_t bits, uint32_t at) const {
     simd::expand_store<kW>(out.count + k, count + at, bits);
@@ -258,14 +280,17 @@ struct LiveOut {
 ///     last); it hands its result, S point slots, to o.put (a LiveOut<F, S>), and the
 ///     driver writes them to lanes index[0 .. cnt) of the output once the chunk's groups
 ///     are done (LiveOut::expand, block by block).
+///   finish(o) (optional): after the chunk's groups, before the expansion: a kernel that
+///     set some lanes aside (their group's row o.row + l) completes them here, packed
+///     into full groups, through o.put_rows.
 /// The list and its length stay local here: appending through a struct member after the
 /// byte stores of out.count made GCC reload and store the length around every lane (a
 /// uint8_t store may alias anything; convex-halfspace measured ~30% slower that way).
 /// Every computation is lane-wise, so a pair's bytes do not depend on which lanes share
 /// its block or group.
-template <class F, uint32_t S, class Extra = NoExtra, class Screen, class Group>
+template <class F, uint32_t S, class Extra = NoExtra, class Screen, class Group, class Finish>
 IMPACT_INLINE void for_each_live_group(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out, Range r,
-                                       Screen&& screen, Group&& group) {
+                                       Screen&& screen, Group&& group, Finish&& finish) {
   constexpr uint32_t W = F::kWidth;
   constexpr uint32_t kChunk = 16 * W;
   LiveOut<F, S> lo;
@@ -305,12 +330,19 @@ IMPACT_INLINE void for_each_live_group(const LeafSoA& a, const LeafSoA& b, const
       lo.row = g;
       group(index + g, extra + g, cnt, lo);
     }
+    finish(lo);
     for (uint32_t j = 0, at = 0; j < n; j += W) {
       const uint32_t bits = block_bits[j / W];
       lo.expand(out, k0 + j, bits, at);
       at += static_cast<uint32_t>(std::popcount(bits));
     }
   }
+}
+/// Without a finish step.
+template <class F, uint32_t S, class Extra = NoExtra, class Screen, class Group>
+IMPACT_INLINE void for_each_live_group(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out, Range r,
+                                       Screen&& screen, Group&& group) {
+  for_each_live_group<F, S, Extra>(a, b, out, r, screen, group, [](LiveOut<F, S>&) {});
 }
 
 /// Defines the PairKernel `name` over the lane template `block<F>(a, b, out, k)`

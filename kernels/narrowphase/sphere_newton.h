@@ -23,6 +23,8 @@
 // data only. The least f of those kept wins (ties: the lower start).
 #pragma once
 
+#include <bit>
+
 #include "kernels/narrowphase/primitives.h"
 
 namespace impact::kernels::newton {
@@ -288,10 +290,15 @@ IMPACT_INLINE void select_starts(const F* cx, const F* cy, const F* cz, const F*
 }
 
 /// Runs the starts bn (f values bf; lanes in `done`, or whose start is 3e38, stay
-/// frozen) as the header describes; the least f reached and its unit direction.
+/// frozen) as the header describes, up to the kept starts' phase: those (kept[0 ..
+/// kKept)) run until every lane's are frozen or kMaxIterations steps are done, or, with
+/// defer_at > 0, until no more than defer_at lanes still move. Returns those lanes (none
+/// otherwise) and in *it the steps done; the caller finishes them with minimise_rest,
+/// packed with other blocks' (their bytes do not depend on which lanes share a block).
 template <class F, int kStarts, class Model, int kKept = kKeep>
-IMPACT_INLINE void minimise(const Model& p, const V3<F>* bn, const F* bf, typename F::Mask done, F& best,
-                            V3<F>& n) {
+IMPACT_INLINE typename F::Mask minimise_front(const Model& p, const V3<F>* bn, const F* bf,
+                                              typename F::Mask done, Start<F>* kept, int* it,
+                                              uint32_t defer_at) {
   using Mask = typename F::Mask;
   const F big(3.0e38f);
   Start<F> st[kStarts];
@@ -300,15 +307,15 @@ IMPACT_INLINE void minimise(const Model& p, const V3<F>* bn, const F* bf, typena
     p.evaluate(bn[s], st[s]);
     st[s].frozen = done | (bf[s] >= big);
   }
-  auto run = [&](int count, int from, int to) {
-    for (int it = from; it < to; ++it) {
-      Mask all = st[0].frozen;
-      for (int s = 1; s < count; ++s) all = all & st[s].frozen;
-      if (simd::all(all)) break;
-      step_all<F, kStarts>(p, st, count);
-    }
+  auto all_frozen = [&](int count) {
+    Mask all = st[0].frozen;
+    for (int s = 1; s < count; ++s) all = all & st[s].frozen;
+    return all;
   };
-  run(kStarts, 0, kSpread);
+  for (int i = 0; i < kSpread; ++i) {
+    if (simd::all(all_frozen(kStarts))) break;
+    step_all<F, kStarts>(p, st, kStarts);
+  }
   for (int i = 0; i < kKept; ++i) {
     for (int j = kStarts - 1; j > i; --j) {
       const Mask lower = st[j].f < st[j - 1].f;
@@ -317,7 +324,43 @@ IMPACT_INLINE void minimise(const Model& p, const V3<F>* bn, const F* bf, typena
       st[j] = pick(lower, hi, lo);
     }
   }
-  run(kKept, kSpread, kMaxIterations);
+  Mask moving(false);
+  int at = kSpread;
+  for (; at < kMaxIterations; ++at) {
+    const uint32_t m = simd::bits(~all_frozen(kKept));
+    if (m == 0) break;
+    if (static_cast<uint32_t>(std::popcount(m)) <= defer_at) {
+      moving = ~all_frozen(kKept);
+      break;
+    }
+    step_all<F, kStarts>(p, st, kKept);
+  }
+  for (int s = 0; s < kKept; ++s) kept[s] = st[s];
+  *it = at;
+  return moving;
+}
+
+/// The kept starts of minimise_front's deferred lanes, each with its own count of steps
+/// done (it), run on until frozen or kMaxIterations (the same steps as without the
+/// deferral).
+template <class F, class Model, int kKept = kKeep>
+IMPACT_INLINE void minimise_rest(const Model& p, Start<F>* st, typename F::Int it) {
+  using Int = typename F::Int;
+  for (;;) {
+    const auto capped = it > Int(kMaxIterations - 1);
+    auto all = st[0].frozen | capped;
+    for (int s = 1; s < kKept; ++s) all = all & (st[s].frozen | capped);
+    if (simd::all(all)) break;
+    for (int s = 0; s < kKept; ++s) st[s].frozen = st[s].frozen | capped;
+    step_all<F, kKept>(p, st, kKept);
+    it = it + Int(1);
+  }
+}
+
+/// The least f of the kept starts and its unit direction.
+template <class F, int kKept = kKeep>
+IMPACT_INLINE void minimise_finish(const Start<F>* st, F& best, V3<F>& n) {
+  using Mask = typename F::Mask;
   best = st[0].f;
   n = st[0].n;
   // The least f; within f's noise (kNoiseSlack roundings) of it, the smaller gradient.
@@ -331,6 +374,17 @@ IMPACT_INLINE void minimise(const Model& p, const V3<F>* bn, const F* bf, typena
     n = select(take, st[s].n, n);
   }
   n = n * (F(1.0f) / sqrt(simd::length_sq(n)));
+}
+
+/// minimise_front without deferral, then minimise_finish: the least f reached and its
+/// unit direction.
+template <class F, int kStarts, class Model, int kKept = kKeep>
+IMPACT_INLINE void minimise(const Model& p, const V3<F>* bn, const F* bf, typename F::Mask done, F& best,
+                            V3<F>& n) {
+  Start<F> kept[kKept];
+  int it;
+  minimise_front<F, kStarts, Model, kKept>(p, bn, bf, done, kept, &it, 0u);
+  minimise_finish<F, kKept>(kept, best, n);
 }
 
 }  // namespace impact::kernels::newton
