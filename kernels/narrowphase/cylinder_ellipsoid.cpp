@@ -73,8 +73,6 @@
 // FCL ~1820 in the same run (3.7x), GJK / EPA ~2390 before.
 // Both paths run the same template (F = FloatW, or Float1 for the scalar reference).
 #include <cstdint>
-#include <cstring>
-#include <type_traits>
 
 // First: the pragma must precede the shared solvers' templates to cover them.
 #include "kernels/narrowphase/no_contract.h"
@@ -366,39 +364,6 @@ IMPACT_INLINE void solve_back(const Solve<F>& sv, V3<F>& out_n, F& out_depth, V3
   out_point = madd(dw + rb.apply(xb), F(0.5f) * out_depth, out_n);
 }
 
-/// Lanes set aside by solve_front, field by field (a Solve<F> seen as rows of W int32):
-/// filled by compaction, emptied W at a time from the end.
-template <class F>
-struct Queue {
-  static constexpr uint32_t kW = F::kWidth;
-  static constexpr uint32_t kRows = sizeof(Solve<F>) / (4 * kW);
-  static_assert(sizeof(Solve<F>) == kRows * 4 * kW && std::is_trivially_copyable_v<Solve<F>>);
-  int32_t q[kRows][2 * kW];  // < kW held between pushes, a push adds <= kW
-  uint32_t n = 0;
-
-  IMPACT_INLINE void push(const Solve<F>& sv, uint32_t bits) {
-    alignas(64) int32_t raw[kRows][kW];
-    std::memcpy(raw, &sv, sizeof raw);
-    uint32_t c = 0;
-    for (uint32_t r = 0; r < kRows; ++r) c = simd::compact_store(q[r] + n, F::Int::load(raw[r]), bits);
-    n += c;
-  }
-  /// The last min(n, kW) entries (fewer: the last one repeated) into sv; returns how many.
-  IMPACT_INLINE uint32_t pop(Solve<F>& sv) {
-    const uint32_t cnt = n < kW ? n : kW, at = n - cnt;
-    alignas(64) int32_t raw[kRows][kW];
-    if (cnt == kW) {
-      for (uint32_t r = 0; r < kRows; ++r) std::memcpy(raw[r], q[r] + at, sizeof raw[r]);
-    } else {
-      for (uint32_t r = 0; r < kRows; ++r)
-        for (uint32_t l = 0; l < kW; ++l) raw[r][l] = q[r][at + (l < cnt ? l : cnt - 1)];
-    }
-    std::memcpy(&sv, raw, sizeof raw);
-    n = at;
-    return cnt;
-  }
-};
-
 /// The range through prim::for_each_live_group: the screen writes count 0 for every lane
 /// and lists those that may touch (may_touch); the solve runs on full groups of them.
 /// The kept starts' phase runs in the group while more than a quarter of its lanes still
@@ -410,7 +375,7 @@ IMPACT_INLINE void cylinder_ellipsoid_range(const LeafSoA& a, const LeafSoA& b, 
   using Int = typename F::Int;
   constexpr uint32_t W = F::kWidth;
   constexpr uint32_t kDeferAt = W > 1 ? W / 4 : 0;  // one lane: never set aside
-  Queue<F> queue;
+  LaneQueue<F, Solve<F>> queue;
   auto finish = [&](LiveOut<F, 1>& o, uint32_t keep) {
     while (queue.n > keep) {
       Solve<F> sv;

@@ -23,6 +23,7 @@
 #include <cfloat>
 #include <cstdint>
 #include <cstring>
+#include <type_traits>
 
 #include "kernels/narrowphase/leaf.h"
 #include "kernels/simd/lanes.h"
@@ -344,6 +345,41 @@ IMPACT_INLINE void for_each_live_group(const LeafSoA& a, const LeafSoA& b, const
                                        Screen&& screen, Group&& group) {
   for_each_live_group<F, S, Extra>(a, b, out, r, screen, group, [](LiveOut<F, S>&) {});
 }
+
+/// Lanes of a struct T of W-lane vectors (4-byte lanes, e.g. a solve's state) set aside
+/// to be finished later packed into full blocks: a lane moves field by field (T seen as
+/// rows of W int32), pushed by compaction, popped W at a time from the end.
+template <class F, class T>
+struct LaneQueue {
+  static constexpr uint32_t kW = F::kWidth;
+  static constexpr uint32_t kRows = sizeof(T) / (4 * kW);
+  static_assert(sizeof(T) == kRows * 4 * kW && std::is_trivially_copyable_v<T>);
+  int32_t q[kRows][2 * kW];  // fewer than kW held between pushes (pop after each), a push adds <= kW
+  uint32_t n = 0;
+
+  /// The lanes of v whose bit is set, appended.
+  IMPACT_INLINE void push(const T& v, uint32_t bits) {
+    alignas(64) int32_t raw[kRows][kW];
+    std::memcpy(raw, &v, sizeof raw);
+    uint32_t c = 0;
+    for (uint32_t r = 0; r < kRows; ++r) c = simd::compact_store(q[r] + n, F::Int::load(raw[r]), bits);
+    n += c;
+  }
+  /// The last min(n, kW) entries into v (fewer: the last one repeated); returns how many.
+  IMPACT_INLINE uint32_t pop(T& v) {
+    const uint32_t cnt = n < kW ? n : kW, at = n - cnt;
+    alignas(64) int32_t raw[kRows][kW];
+    if (cnt == kW) {
+      for (uint32_t r = 0; r < kRows; ++r) std::memcpy(raw[r], q[r] + at, sizeof raw[r]);
+    } else {
+      for (uint32_t r = 0; r < kRows; ++r)
+        for (uint32_t l = 0; l < kW; ++l) raw[r][l] = q[r][at + (l < cnt ? l : cnt - 1)];
+    }
+    std::memcpy(&v, raw, sizeof raw);
+    n = at;
+    return cnt;
+  }
+};
 
 /// Defines the PairKernel `name` over the lane template `block<F>(a, b, out, k)`
 /// writing P point slots: the one-lane scalar path for KernelPath::kScalar, the
