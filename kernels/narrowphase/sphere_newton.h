@@ -316,13 +316,29 @@ IMPACT_INLINE typename F::Mask minimise_front(const Model& p, const V3<F>* bn, c
     if (simd::all(all_frozen(kStarts))) break;
     step_all<F, kStarts>(p, st, kStarts);
   }
-  for (int i = 0; i < kKept; ++i) {
-    for (int j = kStarts - 1; j > i; --j) {
-      const Mask lower = st[j].f < st[j - 1].f;
-      const Start<F> hi = st[j - 1], lo = st[j];
-      st[j - 1] = pick(lower, lo, hi);
-      st[j] = pick(lower, hi, lo);
+  // The kKept least f in order, the first among ties (what a stable sort gives): their
+  // indices first, then one select per start and field (not a bubble of whole starts).
+  {
+    using Int = typename F::Int;
+    Int taken[kKept];
+    for (int i = 0; i < kKept; ++i) {
+      F least(INFINITY);
+      Int at(0);
+      for (int s = 0; s < kStarts; ++s) {
+        Mask free(true);
+        for (int j = 0; j < i; ++j) free = andnot(free, taken[j] == Int(s));
+        const Mask lower = free & (st[s].f < least);
+        least = select(lower, st[s].f, least);
+        at = select(lower, Int(s), at);
+      }
+      taken[i] = at;
     }
+    Start<F> least[kKept];
+    for (int i = 0; i < kKept; ++i) {
+      least[i] = st[0];
+      for (int s = 1; s < kStarts; ++s) least[i] = pick(taken[i] == Int(s), st[s], least[i]);
+    }
+    for (int i = 0; i < kKept; ++i) st[i] = least[i];
   }
   Mask moving(false);
   int at = kSpread;
