@@ -282,6 +282,7 @@ IMPACT_INLINE void select_starts(const F* cx, const F* cy, const F* cz, const F*
     const V3<F> c{simd::gather_lanes(cx, idx), simd::gather_lanes(cy, idx), simd::gather_lanes(cz, idx)};
     bf[s] = select(any_left, simd::gather_lanes(cf, idx), big);
     bn[s] = select(any_left, c, V3<F>{zero, zero, one});
+    if (s + 1 == kStarts) break;  // no selection follows
     for (int i = 0; i < kCand; ++i) {
       const F cs = abs(cx[i] * c.x + cy[i] * c.y + cz[i] * c.z);
       key[i] = select(cs >= F(kDistinctCos), big, key[i]);
