@@ -193,7 +193,8 @@ IMPACT_INLINE typename F::Mask may_touch(const V3<F>& dw, const V3<F>& ua, F ra,
 
 /// A lane's solve between solve_front and solve_back: the model, the kept starts and the
 /// steps they have taken, the exact candidates, and what the output needs. Every member
-/// is a vector of W 4-byte lanes, so lanes move in and out of it field by field (Queue).
+/// is a vector of W 4-byte lanes, so lanes move in and out of it field by field
+/// (prim::LaneQueue).
 template <class F>
 struct Solve {
   Pair<F> p;
@@ -329,10 +330,10 @@ IMPACT_INLINE typename F::Mask solve_front(const V3<F>& dw, const V3<F>& ua, F r
   return moving;
 }
 
-/// Part 2: the least of the caps, the circle and the solve; n (world, A to B), depth,
-/// and the point relative to A's centre.
+/// Part 2: the least of the caps, the circle and the solve: count, n (world, A to B),
+/// depth, and the point relative to A's centre (its depth in pdepth[0]).
 template <class F>
-IMPACT_INLINE void solve_back(const Solve<F>& sv, V3<F>& out_n, F& out_depth, V3<F>& out_point) {
+IMPACT_INLINE Lanes<F, 1> solve_back(const Solve<F>& sv) {
   using Mask = typename F::Mask;
   const F zero(0.0f), one(1.0f);
   const Pair<F>& p = sv.p;
@@ -362,9 +363,13 @@ IMPACT_INLINE void solve_back(const Solve<F>& sv, V3<F>& out_n, F& out_depth, V3
   const F he = sqrt(length_sq(am));
   const F sc = size / select(he > zero, he, one);
   const V3<F> xb{av[0] * am.x * sc, av[1] * am.y * sc, av[2] * am.z * sc};
-  out_depth = best * size;
-  out_n = -rb.apply(m);
-  out_point = madd(dw + rb.apply(xb), F(0.5f) * out_depth, out_n);
+  Lanes<F, 1> out;
+  out.depth = best * size;
+  out.n = -rb.apply(m);
+  out.point[0] = madd(dw + rb.apply(xb), F(0.5f) * out.depth, out.n);
+  out.pdepth[0] = out.depth;
+  out.count = simd::to_int(out.depth > zero);
+  return out;
 }
 
 /// The range through prim::for_each_live_group: the screen writes count 0 for every lane
@@ -384,13 +389,9 @@ IMPACT_INLINE void cylinder_ellipsoid_range(const LeafSoA& a, const LeafSoA& b, 
       Solve<F> sv;
       const uint32_t cnt = queue.pop(sv);
       newton::minimise_rest<F, Pair<F>, kKept>(sv.p, sv.kept, sv.it);
-      Lanes<F, 1> m;
-      solve_back(sv, m.n, m.depth, m.point[0]);
-      m.count = simd::to_int(m.depth > F(0.0f));
-      m.pdepth[0] = m.depth;
       int32_t rows[W];
       sv.row.store(rows);
-      o.put_rows(m, sv.pa, rows, cnt);
+      o.put_rows(solve_back(sv), sv.pa, rows, cnt);
     }
   };
   for_each_live_group<F, 1>(
@@ -408,11 +409,7 @@ IMPACT_INLINE void cylinder_ellipsoid_range(const LeafSoA& a, const LeafSoA& b, 
         Solve<F> sv;
         const auto moving = solve_front(dw, ra.c[2], simd::gather(a.e[0], idx), simd::gather(a.e[1], idx),
                                         gather3<F>(b.e, idx), gather_r<F>(b, idx), sv, kDeferAt);
-        Lanes<F, 1> m;
-        solve_back(sv, m.n, m.depth, m.point[0]);
-        m.count = simd::to_int(m.depth > F(0.0f));
-        m.pdepth[0] = m.depth;
-        o.put(m, pa);
+        o.put(solve_back(sv), pa);
         const uint32_t aside = simd::bits(moving) & ((1u << cnt) - 1u);  // padding lanes repeat a real one
         if (aside != 0) {
           sv.pa = pa;

@@ -275,7 +275,6 @@ struct Scratch {
   // flushed past kHitFlush (one A edge appends at most kSatMaxEdges + kW).
   int32_t hit[kHitFlush + kSatMaxEdges + 2 * kW];
   uint32_t bedge[kSatMaxEdges + kW];
-  float au[kSatMaxEdges + kW];  // their bounds
 };
 
 /// Copies n values into dst and pads it to kW with the last one.
@@ -873,7 +872,6 @@ void collide_sat_general_lane(const Leaf& A, const Leaf& B, LaneContact* out, Sa
   }
   for (uint32_t e = 0; e < PA.ne; ++e) {
     S.aedge[na] = e;
-    S.au[na] = S.u[e];
     na += S.u[e] > thr ? 1u : 0u;
   }
   {

@@ -20,7 +20,10 @@
 // its kKeep least and runs them until they freeze (accepted step below kStepTol at a
 // positive definite Hessian, or radius below kRadiusTol) or kMaxIterations; the block
 // stops when every kept (lane, start) is frozen, so each lane's bytes depend on its own
-// data only. The least f of those kept wins (ties: the lower start).
+// data only. The least f of those kept wins (ties: the lower start). minimise is
+// minimise_front + minimise_finish; a kernel may instead stop the kept phase once few of
+// a block's lanes still move and finish those packed with other blocks' (minimise_rest,
+// each lane with its own count of steps: the same bytes; cylinder_ellipsoid.cpp).
 #pragma once
 
 #include <bit>
@@ -334,12 +337,12 @@ IMPACT_INLINE typename F::Mask minimise_front(const Model& p, const V3<F>* bn, c
       }
       taken[i] = at;
     }
-    Start<F> least[kKept];
+    Start<F> chosen[kKept];
     for (int i = 0; i < kKept; ++i) {
-      least[i] = st[0];
-      for (int s = 1; s < kStarts; ++s) least[i] = pick(taken[i] == Int(s), st[s], least[i]);
+      chosen[i] = st[0];
+      for (int s = 1; s < kStarts; ++s) chosen[i] = pick(taken[i] == Int(s), st[s], chosen[i]);
     }
-    for (int i = 0; i < kKept; ++i) st[i] = least[i];
+    for (int i = 0; i < kKept; ++i) st[i] = chosen[i];
   }
   Mask moving(false);
   int at = kSpread;

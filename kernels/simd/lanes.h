@@ -7,7 +7,7 @@
 //   FloatN<N>  N floats           arithmetic + - * /, unary -, compare -> MaskN<N>
 //   MaskN<N>   N lane predicates  & | ^ ~, andnot, any / all / none, bits (one bit a
 //              lane); bits_lt(a, b) = bits(a < b) without widening the mask (AVX-512)
-//   IntN<N>    N int32            + - * & >>, select, load / store, to_float, lane access
+//   IntN<N>    N int32            + - & >>, select, load / store, to_float, lane access
 //   verbs      load / store (contiguous, unaligned), broadcast (implicit from float),
 //              mul_add, min, max, abs, sqrt, select(mask, if_true, if_false),
 //              copysign-free sign helpers are built from select;
