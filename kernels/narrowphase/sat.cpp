@@ -74,6 +74,7 @@
 #include "kernels/narrowphase/sat.h"
 
 #include <cmath>
+#include <initializer_list>
 
 #include "kernels/simd/lanes.h"
 
@@ -913,11 +914,14 @@ void collide_sat_general_lane(const Leaf& A, const Leaf& B, LaneContact* out, Sa
     S.el2[nb] = dot(ed, ed);
     ++nb;
   }
-  // Padding lanes: c = d fails the first sign test (CBA * DBA = CBA^2 >= 0).
-  for (uint32_t k = nb; k < padded(nb); ++k) {
-    S.cx[k] = S.dx[k] = 1.0f, S.cy[k] = S.dy[k] = 0.0f, S.cz[k] = S.dz[k] = 0.0f;
-    S.qx[k] = S.qy[k] = S.qz[k] = 0.0f;
-    S.ex[k] = S.ey[k] = S.ez[k] = S.px[k] = S.py[k] = S.pz[k] = S.el2[k] = 0.0f;
+  // Padding lanes: c = d fails the first sign test (CBA * DBA = CBA^2 >= 0). One vector
+  // store per array (the arrays hold kW past any count; GCC turned the per-lane loop
+  // into a memset call per array).
+  {
+    const F one(1.0f), zero(0.0f);
+    one.store(S.cx + nb), one.store(S.dx + nb);
+    for (float* row : {S.cy, S.cz, S.dy, S.dz, S.qx, S.qy, S.qz, S.ex, S.ey, S.ez, S.px, S.py, S.pz, S.el2})
+      zero.store(row + nb);
   }
   float s_edge = -INFINITY;
   uint32_t best_a = 0, best_b = 0;
@@ -944,7 +948,8 @@ void collide_sat_general_lane(const Leaf& A, const Leaf& B, LaneContact* out, Sa
     }
     uint32_t nh = 0;
     auto separations = [&]() {  // (b) over hits 0 .. nh
-      for (uint32_t k = nh; k < padded(nh); ++k) S.hit[k] = 0;
+      // The last block's padding: valid indices (a vector store: GCC made a loop a memset).
+      simd::IntN<kW>(0).store(S.hit + nh);
       for (uint32_t k = 0; k < nh; k += kW) {
         const auto in = simd::IntN<kW>(static_cast<int32_t>(nh - k)) > lane_i;
         const simd::IntN<kW> hk = simd::IntN<kW>::load(S.hit + k);
