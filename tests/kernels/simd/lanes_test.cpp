@@ -115,8 +115,8 @@ TEST(Lanes, BitsLtMatchesALoop) {
 }
 
 /// load_clamped against the lane-by-lane clamp: every block start of arrays of 1 .. 3N
-/// items (the permuted tail where n >= N, the scalar one below), read from a buffer
-/// that ends with the array (a read past it would reach the guard values).
+/// items (the permuted tail where n >= N, the scalar one below), each inside a buffer
+/// of guard values (-1), so a lane that read past the array's last item would fail.
 template <uint32_t N>
 void check_load_clamped() {
   float buf[4 * N + 8];
