@@ -607,6 +607,10 @@ std::unique_ptr<PairScene> generate(uint8_t ka, uint8_t kb, uint32_t n) {
 
 }  // namespace
 
+double body_size(const PairScene& s, const Body& b) {
+  return bounding_radius(s, b);
+}
+
 const char* kind_name(uint8_t k) {
   static const char* const names[] = {"sphere",   "capsule",   "box",      "convex",
                                       "cylinder", "ellipsoid", "triangle", "halfspace"};
@@ -743,30 +747,39 @@ struct Hulls {
   }
 };
 
+// A scene's lanes in the kernels' layouts: both sides' LeafSoA arrays, the zeroed
+// output and the hulls, ready for the pair kind's kernel.
+struct KernelBucket {
+  impact::host::LeafArrays a, b;
+  impact::host::ManifoldArrays out;
+  Hulls hulls;
+  kn::NarrowConfig cfg;
+  kn::PairKernel kernel;
+  KernelBucket(const nb::PairScene& s, kn::KernelPath path)
+      : hulls(s), kernel(kn::pair_kernel(static_cast<kn::LeafType>(s.ka), static_cast<kn::LeafType>(s.kb))) {
+    gather(s.a, impact::host::LeafArrays::kPhaseA, &a);
+    gather(s.b, impact::host::LeafArrays::kPhaseB, &b);
+    out.resize(padded(s.n));
+    std::fill(out.count, out.count + padded(s.n), uint8_t{0});
+    for (float* f : out.f) std::fill(f, f + padded(s.n), 0.0f);
+    cfg.path = path;
+    cfg.hulls = hulls.store.view();
+  }
+};
+
 void BM_Kernel(benchmark::State& state, uint8_t ka, uint8_t kb, kn::KernelPath path) {
   const uint32_t n = static_cast<uint32_t>(state.range(0));
   const nb::PairScene& s = nb::pair_scene(ka, kb, n);
-  const kn::PairKernel kernel = kn::pair_kernel(static_cast<kn::LeafType>(ka), static_cast<kn::LeafType>(kb));
-  if (!kernel) {
+  KernelBucket bucket(s, path);
+  if (!bucket.kernel) {
     state.SkipWithError("no kernel for this pair");
     return;
   }
-  impact::host::LeafArrays a, b;
-  gather(s.a, impact::host::LeafArrays::kPhaseA, &a);
-  gather(s.b, impact::host::LeafArrays::kPhaseB, &b);
-  const kn::LeafSoA av = a.view(), bv = b.view();
-  impact::host::ManifoldArrays out;
-  out.resize(padded(n));
-  std::fill(out.count, out.count + padded(n), uint8_t{0});
-  for (float* f : out.f) std::fill(f, f + padded(n), 0.0f);
-  const kn::ManifoldSoA ov = out.view();
-  const Hulls hulls(s);
-  kn::NarrowConfig cfg;
-  cfg.path = path;
-  cfg.hulls = hulls.store.view();
+  const kn::LeafSoA av = bucket.a.view(), bv = bucket.b.view();
+  const kn::ManifoldSoA ov = bucket.out.view();
   const double t0 = nb::thread_cpu_ns();
   for (auto _ : state) {
-    kernel(av, bv, ov, kn::Range{0, n}, cfg);
+    bucket.kernel(av, bv, ov, kn::Range{0, n}, bucket.cfg);
     benchmark::ClobberMemory();
   }
   const double ns = nb::thread_cpu_ns() - t0;
@@ -777,6 +790,24 @@ void BM_Kernel(benchmark::State& state, uint8_t ka, uint8_t kb, kn::KernelPath p
   state.counters["bytes_per_pair"] = bytes;
   state.SetBytesProcessed(static_cast<int64_t>(state.iterations()) * n * bytes);
 }
+
+}  // namespace
+
+std::vector<nb::LaneResult> nb::kernel_results(const PairScene& s) {
+  KernelBucket bucket(s, kn::KernelPath::kSimd);
+  std::vector<LaneResult> r(s.n);
+  if (!bucket.kernel) return r;
+  const kn::ManifoldSoA ov = bucket.out.view();
+  bucket.kernel(bucket.a.view(), bucket.b.view(), ov, kn::Range{0, s.n}, bucket.cfg);
+  for (uint32_t k = 0; k < s.n; ++k) {
+    r[k].count = ov.count[k];
+    for (int i = 0; i < 3; ++i) r[k].n[i] = ov.n[i][k];
+    r[k].depth = ov.depth[k];
+  }
+  return r;
+}
+
+namespace {
 
 // --- public API -----------------------------------------------------------------------------
 

@@ -23,6 +23,8 @@
 // near-touch band; from one untimed pass after the timed loop).
 #include <benchmark/benchmark.h>
 
+#include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <memory>
 #include <string>
@@ -76,6 +78,84 @@ void set_peer_counters(benchmark::State& state, const nb::PairScene& s, double n
   state.counters["hit_frac"] = n ? static_cast<double>(hits) / n : 0.0;
   state.SetItemsProcessed(static_cast<int64_t>(state.iterations()) * n);
 }
+
+// How a peer's contacts compare with ours, on the lanes both report touching (from the
+// untimed pass). With size = the two bodies' bounding radii (A's alone against a
+// half-space) and overlap(n) = max over A of n.x - min over B of n.y along a unit n
+// (A to B), in double from the generator's support functions (every n gives at least
+// the penetration depth, the least overlap over n, so of two normals the one of smaller
+// overlap is the better answer):
+//   depth_dev   |the peer's depth - ours| / size
+//   normal_dev  the angle between the two normals, degrees
+//   excess      (overlap(peer's normal) - overlap(our normal)) / size: > 0 where our
+//               normal is the better one, < 0 where the peer's is (bounded pairs only)
+//   self_gap    |overlap(our normal) - our depth| / size: our own answer's consistency
+// Counters: both_hit, the p50 / p99 / max of depth_dev and normal_dev (deg), the p50 /
+// p99 / min of excess and the max of self_gap.
+class Agreement {
+ public:
+  explicit Agreement(const nb::PairScene& s) : s_(s), ours_(nb::kernel_results(s)) {}
+
+  /// Lane k: the peer touches with this depth and normal (any length, A to B).
+  void add(uint32_t k, double depth, const double n[3]) {
+    const nb::LaneResult& o = ours_[k];
+    if (o.count == 0) return;
+    const double nl = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+    if (!(nl > 0)) {  // no direction (a peer may return a zero normal): worst case
+      depth_dev_.push_back(std::fabs(depth - o.depth) / size(k));
+      normal_dev_.push_back(180.0);
+      return;
+    }
+    const double pn[3] = {n[0] / nl, n[1] / nl, n[2] / nl}, on[3] = {o.n[0], o.n[1], o.n[2]};
+    const double c[3] = {pn[1] * on[2] - pn[2] * on[1], pn[2] * on[0] - pn[0] * on[2],
+                         pn[0] * on[1] - pn[1] * on[0]};
+    depth_dev_.push_back(std::fabs(depth - o.depth) / size(k));
+    normal_dev_.push_back(std::atan2(std::sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]),
+                                     pn[0] * on[0] + pn[1] * on[1] + pn[2] * on[2]) *
+                          (180.0 / 3.14159265358979323846));
+    if (s_.b[k].kind == nb::kHalfSpace) return;
+    const double ol = std::sqrt(on[0] * on[0] + on[1] * on[1] + on[2] * on[2]);
+    const double oun[3] = {on[0] / ol, on[1] / ol, on[2] / ol};
+    const double o_ours = overlap(k, oun);
+    excess_.push_back((overlap(k, pn) - o_ours) / size(k));
+    self_gap_.push_back(std::fabs(o_ours - o.depth) / size(k));
+  }
+
+  void set_counters(benchmark::State& state) {
+    state.counters["both_hit"] = static_cast<double>(depth_dev_.size());
+    state.counters["depth_dev_p50"] = quantile(&depth_dev_, 0.5);
+    state.counters["depth_dev_p99"] = quantile(&depth_dev_, 0.99);
+    state.counters["depth_dev_max"] = quantile(&depth_dev_, 1.0);
+    state.counters["normal_dev_deg_p50"] = quantile(&normal_dev_, 0.5);
+    state.counters["normal_dev_deg_p99"] = quantile(&normal_dev_, 0.99);
+    state.counters["normal_dev_deg_max"] = quantile(&normal_dev_, 1.0);
+    if (excess_.empty()) return;
+    state.counters["excess_p50"] = quantile(&excess_, 0.5);
+    state.counters["excess_p99"] = quantile(&excess_, 0.99);
+    state.counters["excess_min"] = quantile(&excess_, 0.0);
+    state.counters["self_gap_max"] = quantile(&self_gap_, 1.0);
+  }
+
+ private:
+  double size(uint32_t k) const { return nb::body_size(s_, s_.a[k]) + nb::body_size(s_, s_.b[k]); }
+  double overlap(uint32_t k, const double n[3]) const {
+    const double m[3] = {-n[0], -n[1], -n[2]};
+    double sa[3], sb[3];
+    nb::support(s_, s_.a[k], n, sa);
+    nb::support(s_, s_.b[k], m, sb);
+    return n[0] * (sa[0] - sb[0]) + n[1] * (sa[1] - sb[1]) + n[2] * (sa[2] - sb[2]);
+  }
+  static double quantile(std::vector<double>* v, double q) {
+    if (v->empty()) return 0.0;
+    const auto at = static_cast<size_t>(q * static_cast<double>(v->size() - 1));
+    std::nth_element(v->begin(), v->begin() + static_cast<std::ptrdiff_t>(at), v->end());
+    return (*v)[at];
+  }
+
+  const nb::PairScene& s_;
+  std::vector<nb::LaneResult> ours_;
+  std::vector<double> depth_dev_, normal_dev_, excess_, self_gap_;
+};
 #endif  // IMPACT_BENCH_HAVE_FCL || IMPACT_BENCH_HAVE_CCD
 
 // --- FCL ------------------------------------------------------------------------------------
@@ -174,11 +254,26 @@ void BM_Fcl(benchmark::State& state, uint8_t ka, uint8_t kb) {
   }
   const double ns = nb::thread_cpu_ns() - t0;
   std::vector<uint8_t> hit(n);
+  Agreement agree(s);
+  // FCL's shape-mesh contacts (a shape against our triangle, a one-triangle BVHModel)
+  // give the normal from the mesh to the shape, against its documented convention (o1
+  // to o2): measured ~180 degrees off on those pairs; compared here flipped. (Mesh-mesh
+  // and mesh-half-space follow the convention.)
+  const double sign = kb == nb::kTriangle && ka != nb::kTriangle ? -1.0 : 1.0;
   for (uint32_t k = 0; k < n; ++k) {
     result.clear();
     hit[k] = fcl::collide(ga[k].get(), ta[k], gb[k].get(), tb[k], request, result) > 0 ? 1 : 0;
+    if (hit[k] == 0) continue;
+    // The deepest of FCL's contacts (their normal is one: the first's).
+    double depth = 0;
+    for (size_t c = 0; c < result.numContacts(); ++c)
+      depth = std::max(depth, result.getContact(c).penetration_depth);
+    const fcl::Vector3d& fn = result.getContact(0).normal;
+    const double dir[3] = {sign * fn.x(), sign * fn.y(), sign * fn.z()};
+    agree.add(k, depth, dir);
   }
   set_peer_counters(state, s, ns, hit);
+  agree.set_counters(state);
 }
 
 #endif  // IMPACT_BENCH_HAVE_FCL
@@ -214,9 +309,9 @@ void BM_Ccd(benchmark::State& state, uint8_t ka, uint8_t kb, CcdQuery query) {
   ccd.center1 = ccd_centre;
   ccd.center2 = ccd_centre;
   ccd.max_iterations = 100;
+  ccd_real_t depth = 0;  // the last lane's penetration (the queries that give one)
+  ccd_vec3_t dir{}, pos{};
   auto lane = [&](uint32_t k) -> uint8_t {
-    ccd_real_t depth;
-    ccd_vec3_t dir, pos;
     switch (query) {
       case CcdQuery::kGjkIntersect:
         return ccdGJKIntersect(&oa[k], &ob[k], &ccd) ? 1 : 0;
@@ -235,8 +330,13 @@ void BM_Ccd(benchmark::State& state, uint8_t ka, uint8_t kb, CcdQuery query) {
   }
   const double ns = nb::thread_cpu_ns() - t0;
   std::vector<uint8_t> hit(n);
-  for (uint32_t k = 0; k < n; ++k) hit[k] = lane(k);
+  Agreement agree(s);
+  for (uint32_t k = 0; k < n; ++k) {
+    hit[k] = lane(k);
+    if (hit[k] != 0 && query != CcdQuery::kGjkIntersect) agree.add(k, depth, dir.v);
+  }
   set_peer_counters(state, s, ns, hit);
+  if (query != CcdQuery::kGjkIntersect) agree.set_counters(state);
 }
 
 #endif  // IMPACT_BENCH_HAVE_CCD

@@ -135,6 +135,21 @@ inline double thread_cpu_ns() {
   return static_cast<double>(ts.tv_sec) * 1e9 + static_cast<double>(ts.tv_nsec);
 }
 
+/// A body's bounding radius about its centre (0 for a half-space): the scale of a pair's
+/// depth deviations.
+double body_size(const PairScene& s, const Body& b);
+
+/// Our collision data of one lane (the fields a peer's contact can be compared with).
+struct LaneResult {
+  uint8_t count = 0;
+  float n[3] = {0, 0, 0};  ///< unit normal, A to B
+  float depth = 0;
+};
+
+/// Every lane of the scene through the library's SIMD kernel for its kind (as
+/// BM_Kernel runs it), for comparing a peer's answers with ours.
+std::vector<LaneResult> kernel_results(const PairScene& s);
+
 /// Registers the peers' benchmarks of one pair kind (bench/narrowphase_peers.cpp;
 /// none when no peer was found at configure time).
 void register_peer_benchmarks(uint8_t ka, uint8_t kb);
