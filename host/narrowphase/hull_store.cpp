@@ -89,6 +89,7 @@ uint32_t HullStore::add(const HullData& h) {
     vx.push_back(v.x());
     vy.push_back(v.y());
     vz.push_back(v.z());
+    vxyz.insert(vxyz.end(), {v.x(), v.y(), v.z(), 0.0f});
   }
   vert_begin.push_back(static_cast<uint32_t>(vx.size()));
   for (size_t f = 0; f < h.faces.size(); ++f) {
@@ -117,6 +118,7 @@ kernels::HullView HullStore::view() const {
   v.vx = vx.data();
   v.vy = vy.data();
   v.vz = vz.data();
+  v.vxyz = vxyz.data();
   v.face_begin = face_begin.data();
   v.fnx = fnx.data();
   v.fny = fny.data();

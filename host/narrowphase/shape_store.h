@@ -26,6 +26,7 @@ struct HullData {
 struct HullStore {
   std::vector<uint32_t> vert_begin{0}, face_begin{0}, face_vert_begin{0}, edge_begin{0};
   std::vector<float> vx, vy, vz, fnx, fny, fnz, fd, ex, ey, ez;
+  std::vector<float> vxyz;  ///< the vertices again, 4 floats each (x, y, z, 0)
   std::vector<uint32_t> face_verts;
   /// Edge adjacency (kernels::HullView, hull-local indices), from the faces in add().
   std::vector<uint32_t> adj_begin{0}, ev0, ev1, ef0, ef1;

@@ -25,7 +25,8 @@
 // 2. Picks, W listed lanes per group (the last group padded with repeats): the lanes'
 //    plane and pose by simd::gather; slot j of lane l is lane l's j-th vertex below, in
 //    vertex order (past its count, its first again: a vertex seen again changes no
-//    first strict maximum), the slots' vertices by simd::gather. So every slot of every
+//    first strict maximum), the slots' vertices by simd::gather_xyz (HullView::vxyz, a
+//    16-byte record per vertex: one load a lane and a transpose). So every slot of every
 //    lane lies below and the passes run over full vectors of touching lanes only: the
 //    deepest, then the farthest, the widest and the outmost, each a running strict
 //    maximum carrying its vertex (two interleaved chains per pick, merged by (score,
@@ -55,8 +56,8 @@
 // previous lane kernel (a block walked every lane's whole hull through
 // simd::load_transposed and ran the picks over every slot below in any lane of the
 // block); see docs/narrowphase.md for the same-run FCL figures. Per touching group:
-// 21 gathers (pose, plane) and 3 per slot (~6 slots per group on the bench, ~3.3 used per
-// lane). Variants measured and dropped: blocks without compaction (picks over the
+// 18 gathers (pose, plane) and a gather_xyz per slot (~6 slots per group on the bench,
+// ~3.3 used per lane). Variants measured and dropped: blocks without compaction (picks over the
 // block's lanes, contiguous loads and stores: ~48 vs ~44 on one loaded run), the
 // vertices below copied into the group's slots by the listing pass instead of gathered
 // (no gain), a third pass moving the picks to the world frame per block with
@@ -70,6 +71,11 @@
 // Slot lists built across the group's lanes (slot_lists: a set bit's index from its power
 // of two's float exponent) instead of a scalar count-trailing-zeros loop per lane
 // (2026-11-29, AMD EPYC, medians of 6 alternated runs): 24.9 -> 24.4 ns.
+// The slots' vertices by 16-byte record loads and a transpose (simd::gather_xyz) instead
+// of three 16-lane gathers per slot, which cost ~17 cycles each on this core (a probe
+// that loaded the pose contiguously instead of by its 18 gathers ran 3.2 ns faster, one
+// that loaded the vertices so 4.2 ns): 21.5 -> 19.3 ns (2026-11-29, AMD EPYC, medians
+// of 5 alternated runs).
 #include <bit>
 #include <cmath>
 #include <cstdint>
@@ -260,8 +266,8 @@ IMPACT_INLINE void touching_group(const LeafSoA& a, const LeafSoA& b, const Hull
   const F zero(0.0f), half(0.5f);
   FirstMax<F> deepest(zero, V3<F>{zero, zero, zero});
   for (uint32_t j = 0; j < ns; ++j) {
-    const I v = I::load(vi[j]);
-    const F x = simd::gather(h.vx, v), y = simd::gather(h.vy, v), z = simd::gather(h.vz, v);
+    F x, y, z;
+    simd::gather_xyz(h.vxyz, vi[j], &x, &y, &z);
     const F d = vertex_depth(nl, offl, x, y, z);
     buf.x[j] = x, buf.y[j] = y, buf.z[j] = z;
     if (j % 2 == 0) {

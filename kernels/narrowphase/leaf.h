@@ -93,6 +93,7 @@ struct HullView {
   const float* vx;
   const float* vy;
   const float* vz;
+  const float* vxyz;                // vertex v again as one record: vxyz[4 v ..] = x, y, z, 0
   const uint32_t* face_begin;       // [h], [h + 1]
   const float* fnx;
   const float* fny;

@@ -17,6 +17,8 @@
 //              (the inverse of compacting a block's live lanes; float, or int32 to uint8);
 //              compact_store<N>(dst, int lanes, bits): the set lanes to dst[0, 1, ..];
 //              load_transposed(N row pointers): N rows of N floats, one per lane;
+//              gather_xyz(records, index array): x, y, z of 4-float records, a record
+//              a lane (16-byte loads and a transpose, no gather);
 //              load_clamped<F>(p, i, n): p[i ..] with indices past n - 1 reading p[n - 1];
 //              tag / tag_index: a small index kept in a float's 5 low mantissa bits,
 //              so one max/min tree gives both the extreme and where it came from.
@@ -438,6 +440,66 @@ IMPACT_INLINE FloatN<N> gather(const float* base, IntN<N> idx) {
   return r;
 }
 
+/// Lane i of x, y, z = xyzw[4 idx[i] + 0, 1, 2]: records of 4 floats (x, y, z and one
+/// unused), one 16-byte load a lane and a 4 x 4 transpose per 128-bit chunk instead of
+/// three gathers (a 16-lane gather on AMD Zen 4 costs ~17 cycles; hull-half-space's
+/// vertex slots: 22.5 -> 19.4 ns per pair). Records need no alignment.
+template <uint32_t N>
+IMPACT_INLINE void gather_xyz(const float* xyzw, const int32_t* idx, FloatN<N>* x, FloatN<N>* y,
+                              FloatN<N>* z) {
+#if defined(__SSE2__)
+  using Raw = typename FloatN<N>::Raw;
+  auto rec = [&](uint32_t l) { return _mm_loadu_ps(xyzw + 4 * static_cast<int64_t>(idx[l])); };
+#endif
+#if defined(__AVX512F__)
+  if constexpr (N == 16) {
+    auto four = [&](uint32_t l) {  // lanes l, l + 4, l + 8, l + 12 in chunks 0 .. 3
+      __m512 r = _mm512_zextps128_ps512(rec(l));
+      r = _mm512_insertf32x4(r, rec(l + 4), 1);
+      r = _mm512_insertf32x4(r, rec(l + 8), 2);
+      return _mm512_insertf32x4(r, rec(l + 12), 3);
+    };
+    const __m512 a = four(0), b = four(1), c = four(2), d = four(3);
+    // (The maskz forms: GCC 12's plain unpack takes an "undefined" source that
+    // -Wmaybe-uninitialized reports; an all-ones mask compiles to the plain instruction.)
+    const __m512 ab0 = _mm512_maskz_unpacklo_ps(0xffff, a, b), ab1 = _mm512_maskz_unpackhi_ps(0xffff, a, b);
+    const __m512 cd0 = _mm512_maskz_unpacklo_ps(0xffff, c, d), cd1 = _mm512_maskz_unpackhi_ps(0xffff, c, d);
+    *x = FloatN<N>(reinterpret_cast<Raw>(_mm512_shuffle_ps(ab0, cd0, 0x44)));
+    *y = FloatN<N>(reinterpret_cast<Raw>(_mm512_shuffle_ps(ab0, cd0, 0xee)));
+    *z = FloatN<N>(reinterpret_cast<Raw>(_mm512_shuffle_ps(ab1, cd1, 0x44)));
+    return;
+  }
+#endif
+#if defined(__AVX__)
+  if constexpr (N == 8) {
+    auto two = [&](uint32_t l) { return _mm256_set_m128(rec(l + 4), rec(l)); };
+    const __m256 a = two(0), b = two(1), c = two(2), d = two(3);
+    const __m256 ab0 = _mm256_unpacklo_ps(a, b), ab1 = _mm256_unpackhi_ps(a, b);
+    const __m256 cd0 = _mm256_unpacklo_ps(c, d), cd1 = _mm256_unpackhi_ps(c, d);
+    *x = FloatN<N>(reinterpret_cast<Raw>(_mm256_shuffle_ps(ab0, cd0, 0x44)));
+    *y = FloatN<N>(reinterpret_cast<Raw>(_mm256_shuffle_ps(ab0, cd0, 0xee)));
+    *z = FloatN<N>(reinterpret_cast<Raw>(_mm256_shuffle_ps(ab1, cd1, 0x44)));
+    return;
+  }
+#endif
+#if defined(__SSE2__)
+  if constexpr (N == 4) {
+    const __m128 a = rec(0), b = rec(1), c = rec(2), d = rec(3);
+    const __m128 ab0 = _mm_unpacklo_ps(a, b), ab1 = _mm_unpackhi_ps(a, b);
+    const __m128 cd0 = _mm_unpacklo_ps(c, d), cd1 = _mm_unpackhi_ps(c, d);
+    *x = FloatN<N>(reinterpret_cast<Raw>(_mm_movelh_ps(ab0, cd0)));
+    *y = FloatN<N>(reinterpret_cast<Raw>(_mm_movehl_ps(cd0, ab0)));
+    *z = FloatN<N>(reinterpret_cast<Raw>(_mm_movelh_ps(ab1, cd1)));
+    return;
+  }
+  (void)rec;
+#endif
+  for (uint32_t i = 0; i < N; ++i) {
+    const float* r = xyzw + 4 * static_cast<int64_t>(idx[i]);
+    x->v[i] = r[0], y->v[i] = r[1], z->v[i] = r[2];
+  }
+}
+
 /// out[j] lane i = rows[i][j] for i, j < N: N rows of N contiguous floats (one row per
 /// lane, no alignment needed), transposed; the per-lane walk over a short array without
 /// gathers (N loads and a shuffle network: 24 shuffles for N = 8, where 8 gathers cost
@@ -575,6 +637,11 @@ IMPACT_INLINE FloatN<1> abs(FloatN<1> a) { return FloatN<1>(std::fabs(a.v)); }
 IMPACT_INLINE FloatN<1> gather(const float* base, IntN<1> idx) { return FloatN<1>(base[idx.v]); }
 IMPACT_INLINE FloatN<1> gather_lanes(const FloatN<1>* arr, IntN<1> idx) { return arr[idx.v]; }
 IMPACT_INLINE void load_transposed(const float* const* rows, FloatN<1>* out) { out[0] = FloatN<1>(rows[0][0]); }
+IMPACT_INLINE void gather_xyz(const float* xyzw, const int32_t* idx, FloatN<1>* x, FloatN<1>* y,
+                              FloatN<1>* z) {
+  const float* r = xyzw + 4 * static_cast<int64_t>(idx[0]);
+  *x = FloatN<1>(r[0]), *y = FloatN<1>(r[1]), *z = FloatN<1>(r[2]);
+}
 IMPACT_INLINE FloatN<1> tag(FloatN<1> key, int32_t i) {
   uint32_t b;
   std::memcpy(&b, &key.v, 4);

@@ -139,6 +139,34 @@ TEST(Lanes, LoadClampedMatchesALoop) {
   check_load_clamped<16>();
 }
 
+/// gather_xyz against reading the records lane by lane: random indices (repeats
+/// included) into 40 distinct records, from a base that is not 16-byte aligned.
+template <uint32_t N>
+void check_gather_xyz(uint32_t seed) {
+  std::mt19937 g(seed);
+  float buf[4 * 40 + 1];
+  float* rec = buf + 1;
+  for (uint32_t k = 0; k < 4 * 40; ++k) rec[k] = static_cast<float>(k) + 0.5f;
+  for (int round = 0; round < 200; ++round) {
+    int32_t idx[N];
+    for (uint32_t l = 0; l < N; ++l) idx[l] = static_cast<int32_t>(g() % 40);
+    FloatN<N> x, y, z;
+    gather_xyz(rec, idx, &x, &y, &z);
+    for (uint32_t l = 0; l < N; ++l) {
+      ASSERT_EQ(x.lane(l), rec[4 * idx[l]]) << "width " << N << " lane " << l;
+      ASSERT_EQ(y.lane(l), rec[4 * idx[l] + 1]) << "width " << N << " lane " << l;
+      ASSERT_EQ(z.lane(l), rec[4 * idx[l] + 2]) << "width " << N << " lane " << l;
+    }
+  }
+}
+
+TEST(Lanes, GatherXyzMatchesALoop) {
+  check_gather_xyz<1>(21);
+  check_gather_xyz<4>(22);
+  check_gather_xyz<8>(23);
+  check_gather_xyz<16>(24);
+}
+
 TEST(Lanes, MaxLowestIndexReportsNoneForNaNOnly) {
   const float nan = std::nanf("");
   float s[8], idx[8];
