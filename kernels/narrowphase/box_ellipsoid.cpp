@@ -373,7 +373,6 @@ IMPACT_INLINE void finish(const Frame<F>& fr, const Best<F>& best, LiveOut<F, 1>
 /// separating: about half on the bench); the pieces run on full groups of them.
 template <class F>
 IMPACT_INLINE void box_ellipsoid_range(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out, Range r) {
-  using Int = typename F::Int;
   for_each_live_group<F, 1>(
       a, b, out, r,
       [&](const LeafSoA& va, const LeafSoA& vb, uint32_t at, uint32_t, uint32_t, NoExtra*) {
@@ -382,9 +381,9 @@ IMPACT_INLINE void box_ellipsoid_range(const LeafSoA& a, const LeafSoA& b, const
         return simd::bits(may_touch(fr, face_best(fr)));
       },
       [&](const int32_t* index, const NoExtra*, uint32_t, LiveOut<F, 1>& o) {
-        const Int idx = Int::load(index);
-        const Frame<F> fr = make_frame(gather3<F>(a.p, idx), gather_r<F>(a, idx), gather3<F>(a.e, idx),
-                                       gather3<F>(b.p, idx), gather_r<F>(b, idx), gather3<F>(b.e, idx));
+        const GroupRows<F> rows(index, r);
+        const Frame<F> fr =
+            make_frame(rows.v3(a.p), rows.rot(a), rows.v3(a.e), rows.v3(b.p), rows.rot(b), rows.v3(b.e));
         Best<F> best = face_best(fr);
         pieces(fr, best);
         finish(fr, best, o);

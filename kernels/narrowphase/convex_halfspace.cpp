@@ -230,14 +230,12 @@ IMPACT_INLINE void slot_lists(const Below* below, uint32_t ns, int32_t (*vi)[I::
 /// every lane is below and the picks run over full vectors. Hands the group's result to o.
 template <class F>
 IMPACT_INLINE void touching_group(const LeafSoA& a, const LeafSoA& b, const HullView& h, LiveOut<F, 4>& o,
-                                  const int32_t* live, const Below* below) {
+                                  const int32_t* live, const Below* below, Range r) {
   using I = typename F::Int;
   constexpr uint32_t kW = F::kWidth;
-  const I idx = I::load(live);
-  const V3<F> pa = gather3<F>(a.p, idx);
-  const V3<F> nh = gather3<F>(b.e, idx);
-  const V3<F> pb = gather3<F>(b.p, idx);
-  const M3<F> ra = gather_r<F>(a, idx);
+  const GroupRows<F> rows(live, r);
+  const V3<F> pa = rows.v3(a.p), nh = rows.v3(b.e), pb = rows.v3(b.p);
+  const M3<F> ra = rows.rot(a);
   V3<F> nl;
   F offl;
   local_plane(pa, ra, nh, pb, &nl, &offl);
@@ -377,7 +375,7 @@ void convex_halfspace_range(const LeafSoA& a, const LeafSoA& b, const ManifoldSo
         return go;
       },
       [&](const int32_t* index, const Below* below, uint32_t, LiveOut<F, 4>& o) {
-        touching_group<F>(a, b, h, o, index, below);
+        touching_group<F>(a, b, h, o, index, below, r);
       });
   for (uint32_t l = r.begin; big && l < r.end; ++l) {
     if (h.vert_begin[a.ref[l] + 1] - h.vert_begin[a.ref[l]] > kLaneVerts) {

@@ -402,13 +402,13 @@ IMPACT_INLINE void cylinder_ellipsoid_range(const LeafSoA& a, const LeafSoA& b, 
                                     load_e<F>(vb, at), load_r<F>(vb, at)));
       },
       [&](const int32_t* index, const NoExtra*, uint32_t cnt, LiveOut<F, 1>& o) {
-        const Int idx = Int::load(index);
-        const V3<F> pa = gather3<F>(a.p, idx);
-        const V3<F> dw = gather3<F>(b.p, idx) - pa;
-        const M3<F> ra = gather_r<F>(a, idx);
+        const GroupRows<F> rows(index, r);
+        const V3<F> pa = rows.v3(a.p);
+        const V3<F> dw = rows.v3(b.p) - pa;
+        const M3<F> ra = rows.rot(a);
         Solve<F> sv;
-        const auto moving = solve_front(dw, ra.c[2], simd::gather(a.e[0], idx), simd::gather(a.e[1], idx),
-                                        gather3<F>(b.e, idx), gather_r<F>(b, idx), sv, kDeferAt);
+        const auto moving =
+            solve_front(dw, ra.c[2], rows(a.e[0]), rows(a.e[1]), rows.v3(b.e), rows.rot(b), sv, kDeferAt);
         o.put(solve_back(sv), pa);
         const uint32_t aside = simd::bits(moving) & ((1u << cnt) - 1u);  // padding lanes repeat a real one
         if (aside != 0) {

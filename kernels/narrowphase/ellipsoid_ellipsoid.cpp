@@ -217,7 +217,6 @@ IMPACT_INLINE void solve(const V3<F>& dw, const V3<F>& ea, const V3<F>& eb, cons
 /// and lists those that may touch (may_touch); the solve runs on full groups of them.
 template <class F>
 IMPACT_INLINE void ellipsoid_ellipsoid_range(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out, Range r) {
-  using Int = typename F::Int;
   for_each_live_group<F, 1>(
       a, b, out, r,
       [&](const LeafSoA& va, const LeafSoA& vb, uint32_t at, uint32_t, uint32_t, NoExtra*) {
@@ -226,12 +225,11 @@ IMPACT_INLINE void ellipsoid_ellipsoid_range(const LeafSoA& a, const LeafSoA& b,
             may_touch(dw, load_e<F>(va, at), load_e<F>(vb, at), load_r<F>(va, at), load_r<F>(vb, at)));
       },
       [&](const int32_t* index, const NoExtra*, uint32_t, LiveOut<F, 1>& o) {
-        const Int idx = Int::load(index);
-        const V3<F> pa = gather3<F>(a.p, idx);
-        const V3<F> dw = gather3<F>(b.p, idx) - pa;
+        const GroupRows<F> rows(index, r);
+        const V3<F> pa = rows.v3(a.p);
+        const V3<F> dw = rows.v3(b.p) - pa;
         Lanes<F, 1> m;
-        solve(dw, gather3<F>(a.e, idx), gather3<F>(b.e, idx), gather_r<F>(a, idx), gather_r<F>(b, idx), m.n,
-              m.depth, m.point[0]);
+        solve(dw, rows.v3(a.e), rows.v3(b.e), rows.rot(a), rows.rot(b), m.n, m.depth, m.point[0]);
         m.count = simd::to_int(m.depth > F(0.0f));
         m.pdepth[0] = m.depth;
         o.put(m, pa);

@@ -4,14 +4,15 @@
 // indices: the maximum, and the lowest index among the lanes that hold it; and
 // compact_store / expand_store against a loop over the set bits; bits_lt and load_clamped
 // against a loop.
+#include "kernels/simd/lanes.h"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <random>
-
-#include "kernels/simd/lanes.h"
+#include <vector>
 
 namespace impact::kernels::simd {
 namespace {
@@ -165,6 +166,40 @@ TEST(Lanes, GatherXyzMatchesALoop) {
   check_gather_xyz<4>(22);
   check_gather_xyz<8>(23);
   check_gather_xyz<16>(24);
+}
+
+/// SortedGather against reading lane by lane: ascending indices (repeats included, as a
+/// padded group's) into an array of exactly `end` floats (so ASan sees any read past
+/// it), spans from 0 to past the windowed case's 64, starts anywhere from begin to the
+/// array's end, ranges shorter and longer than two windows.
+template <uint32_t N>
+void check_sorted_gather(uint32_t seed) {
+  std::mt19937 g(seed);
+  for (int round = 0; round < 2000; ++round) {
+    const auto begin = static_cast<int32_t>(g() % 8);
+    const auto end = begin + static_cast<int32_t>(N + g() % 300);
+    std::vector<float> arr(static_cast<size_t>(end));
+    for (size_t k = 0; k < arr.size(); ++k) arr[k] = static_cast<float>(k) * 0.5f + 1.0f;
+    const int32_t max_span = std::min<int32_t>(end - begin, round % 2 == 0 ? 70 : 300);
+    const auto span = static_cast<int32_t>(g() % static_cast<uint32_t>(max_span));
+    const int32_t lo = begin + static_cast<int32_t>(g() % static_cast<uint32_t>(end - begin - span));
+    int32_t idx[N];
+    for (uint32_t l = 0; l < N; ++l)
+      idx[l] = lo + static_cast<int32_t>(g() % static_cast<uint32_t>(span + 1));
+    std::sort(idx, idx + N);
+    const SortedGather<N> rows(IntN<N>::load(idx), idx[0], idx[N - 1], begin, end);
+    const FloatN<N> v = rows(arr.data());
+    for (uint32_t l = 0; l < N; ++l)
+      ASSERT_EQ(v.lane(l), arr[static_cast<size_t>(idx[l])])
+          << "width " << N << " lane " << l << " round " << round;
+  }
+}
+
+TEST(Lanes, SortedGatherMatchesALoop) {
+  check_sorted_gather<1>(31);
+  check_sorted_gather<4>(32);
+  check_sorted_gather<8>(33);
+  check_sorted_gather<16>(34);
 }
 
 TEST(Lanes, MaxLowestIndexReportsNoneForNaNOnly) {
