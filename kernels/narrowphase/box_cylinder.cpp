@@ -87,6 +87,7 @@
 // secular equation of the point-ellipse distance (Eberly, "Distance from a Point to an
 // Ellipse, an Ellipsoid, or a Hyperellipsoid", Geometric Tools, 2013).
 #include <cstdint>
+#include <iterator>
 
 #include "kernels/narrowphase/pair_kernels.h"
 #include "kernels/narrowphase/primitives.h"
@@ -292,7 +293,9 @@ IMPACT_INLINE Geo<F> read_geo(const Get& get) {
 
 template <class F, uint32_t W>
 IMPACT_INLINE Geo<F> gather_geo(const Chunk<W>& ch, typename F::Int idx) {
-  return read_geo<F>([&](int f) IMPACT_LAMBDA_INLINE { return simd::gather(ch.geo[f], idx); });
+  // Ascending chunk lanes (listed in order): read by windows (simd::SortedGather).
+  const simd::SortedGather<F::kWidth> rows(idx, 0, static_cast<int32_t>(std::size(ch.geo[0])));
+  return read_geo<F>([&](int f) IMPACT_LAMBDA_INLINE { return rows(ch.geo[f]); });
 }
 
 /// Phase A for one block (lanes k.. of a / b, chunk lanes j..): the caps' and faces'

@@ -105,6 +105,7 @@
 // an Ellipsoid, or a Hyperellipsoid", Geometric Tools, 2013); safeguarded Newton (Press
 // et al., Numerical Recipes, rtsafe).
 #include <cstdint>
+#include <iterator>
 
 #include "kernels/narrowphase/pair_kernels.h"
 #include "kernels/narrowphase/primitives.h"
@@ -307,7 +308,9 @@ struct RimPair {
 /// The chunk's geometry rows of lanes idx.
 template <class F, class Chunk>
 IMPACT_INLINE Geo<F> gather_geo(const Chunk& ch, typename F::Int idx) {
-  return read_geo<F>([&](int f) IMPACT_LAMBDA_INLINE { return simd::gather(ch.geo[f], idx); });
+  // Ascending chunk lanes (listed in order): read by windows (simd::SortedGather).
+  const simd::SortedGather<F::kWidth> rows(idx, 0, static_cast<int32_t>(std::size(ch.geo[0])));
+  return read_geo<F>([&](int f) IMPACT_LAMBDA_INLINE { return rows(ch.geo[f]); });
 }
 
 /// The rim pairs (lane idx, pair pr) of the chunk's geometry.

@@ -202,8 +202,7 @@ template <class F>
 class GroupRows {
  public:
   IMPACT_INLINE GroupRows(const int32_t* live, Range r)
-      : g_(F::Int::load(live), live[0], live[F::kWidth - 1], static_cast<int32_t>(r.begin),
-           static_cast<int32_t>(r.end)) {}
+      : g_(F::Int::load(live), static_cast<int32_t>(r.begin), static_cast<int32_t>(r.end)) {}
   IMPACT_INLINE F operator()(const float* p) const { return g_(p); }
   IMPACT_INLINE V3<F> v3(const float* const* p) const { return {g_(p[0]), g_(p[1]), g_(p[2])}; }
   IMPACT_INLINE M3<F> rot(const LeafSoA& s) const {
@@ -775,10 +774,12 @@ IMPACT_INLINE void save_best_near(float (&st)[14][L], uint32_t j, WitnessedBest<
   save_best<F>(st, j, b);
 }
 
-/// load_best for lanes idx of the chunk (a packed group's lanes).
+/// load_best for lanes idx of the chunk (a packed group's lanes, ascending: read by
+/// windows, simd::SortedGather).
 template <class F, uint32_t L>
 IMPACT_INLINE WitnessedBest<F> gather_best(const float (&st)[14][L], typename F::Int idx) {
-  return read_best<F>([&](int f) IMPACT_LAMBDA_INLINE { return simd::gather(st[f], idx); });
+  const simd::SortedGather<F::kWidth> rows(idx, 0, static_cast<int32_t>(L));
+  return read_best<F>([&](int f) IMPACT_LAMBDA_INLINE { return rows(st[f]); });
 }
 /// save_best for the first `real` lanes of idx (a packed group's listed lanes; the
 /// padding lanes, repeats of the last, are not written).

@@ -440,29 +440,31 @@ IMPACT_INLINE FloatN<N> gather(const float* base, IntN<N> idx) {
   return r;
 }
 
-/// base[idx_i] in lane i for several arrays base and one index vector whose lanes are
-/// ascending, from lo = idx_0 to hi = idx_{N-1}, inside [begin, end) where every array
-/// may be read (a chunk's live lanes, listed in order). At 16 lanes (AVX-512) with the
-/// lanes within 64 of each other: each array read as one or two 32-float windows, each
-/// two loads and a two-source permute (vpermt2ps), where a 16-lane gather costs ~17
-/// cycles on AMD Zen 4; otherwise (other widths, wider spans, short ranges) gather().
-/// The same values either way.
+/// base[idx_i] in lane i for several arrays base and one index vector, every idx_i in
+/// [begin, end) where each array may be read. Meant for a chunk's live lanes listed in
+/// order (ascending, close together): at 16 lanes (AVX-512), when every lane lies in
+/// [idx_0, idx_0 + 64) (or in the last 32 of the range), each array is read as one or
+/// two 32-float windows, each two loads and a two-source permute (vpermt2ps), where a
+/// 16-lane gather costs ~17 cycles on AMD Zen 4; otherwise (other widths, lanes out of
+/// order or farther apart, ranges under 32) by gather(). The same values either way.
 template <uint32_t N>
 class SortedGather {
  public:
-  IMPACT_INLINE SortedGather(IntN<N> idx, int32_t lo, int32_t hi, int32_t begin, int32_t end) : idx_(idx) {
+  IMPACT_INLINE SortedGather(IntN<N> idx, int32_t begin, int32_t end) : idx_(idx) {
 #if defined(__AVX512F__)
     if constexpr (N == 16) {
+      const __m512i i = reinterpret_cast<__m512i>(idx.v), k32 = _mm512_set1_epi32(32);
+      const int32_t lo = idx.v[0];
       const int32_t w0 = lo < end - 32 ? lo : end - 32, w1 = w0 + 32 < end - 32 ? w0 + 32 : end - 32;
-      const __m512i i = reinterpret_cast<__m512i>(idx.v);
       w_[0] = w0, w_[1] = w1;
       rel_[0] = _mm512_sub_epi32(i, _mm512_set1_epi32(w0));
       rel_[1] = _mm512_sub_epi32(i, _mm512_set1_epi32(w1));
-      in1_ = _mm512_cmpge_epu32_mask(rel_[0], _mm512_set1_epi32(32));  // not in window 0
-      windows_ = end - begin < 32 || hi - lo >= 64 ? 0 : in1_ != 0 ? 2 : 1;
+      in1_ = _mm512_cmpge_epu32_mask(rel_[0], k32);  // not in window 0 (below it too)
+      const __mmask16 out = _mm512_mask_cmpge_epu32_mask(in1_, rel_[1], k32);
+      windows_ = end - begin < 32 || lo < begin || out != 0 ? 0 : in1_ != 0 ? 2 : 1;
     }
 #else
-    (void)lo, (void)hi, (void)begin, (void)end;
+    (void)begin, (void)end;
 #endif
   }
   IMPACT_INLINE FloatN<N> operator()(const float* base) const {
@@ -693,7 +695,7 @@ IMPACT_INLINE void load_transposed(const float* const* rows, FloatN<1>* out) { o
 template <>
 class SortedGather<1> {
  public:
-  IMPACT_INLINE SortedGather(IntN<1> idx, int32_t, int32_t, int32_t, int32_t) : idx_(idx) {}
+  IMPACT_INLINE SortedGather(IntN<1> idx, int32_t, int32_t) : idx_(idx) {}
   IMPACT_INLINE FloatN<1> operator()(const float* base) const { return FloatN<1>(base[idx_.v]); }
 
  private:

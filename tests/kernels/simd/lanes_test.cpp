@@ -168,10 +168,11 @@ TEST(Lanes, GatherXyzMatchesALoop) {
   check_gather_xyz<16>(24);
 }
 
-/// SortedGather against reading lane by lane: ascending indices (repeats included, as a
-/// padded group's) into an array of exactly `end` floats (so ASan sees any read past
-/// it), spans from 0 to past the windowed case's 64, starts anywhere from begin to the
-/// array's end, ranges shorter and longer than two windows.
+/// SortedGather against reading lane by lane: indices (repeats included, as a padded
+/// group's) into an array of exactly `end` floats (so ASan sees any read past it),
+/// spans from 0 to past the windowed case's 64, starts anywhere from begin to the
+/// array's end, ranges shorter and longer than two windows; ascending (the use), and in
+/// every fourth round shuffled (the lanes out of order must still read right).
 template <uint32_t N>
 void check_sorted_gather(uint32_t seed) {
   std::mt19937 g(seed);
@@ -187,7 +188,8 @@ void check_sorted_gather(uint32_t seed) {
     for (uint32_t l = 0; l < N; ++l)
       idx[l] = lo + static_cast<int32_t>(g() % static_cast<uint32_t>(span + 1));
     std::sort(idx, idx + N);
-    const SortedGather<N> rows(IntN<N>::load(idx), idx[0], idx[N - 1], begin, end);
+    if (round % 4 == 3) std::shuffle(idx, idx + N, g);
+    const SortedGather<N> rows(IntN<N>::load(idx), begin, end);
     const FloatN<N> v = rows(arr.data());
     for (uint32_t l = 0; l < N; ++l)
       ASSERT_EQ(v.lane(l), arr[static_cast<size_t>(idx[l])])
