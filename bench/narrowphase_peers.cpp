@@ -20,7 +20,9 @@
 // time, n = 4096 lanes. Counters as in narrowphase_bench.cpp: ns_per_pair, hits (lanes
 // the peer reports in contact), expected (lanes the generator placed overlapping),
 // near_touch, disagree (lanes whose answer contradicts the placement outside the
-// near-touch band; from one untimed pass after the timed loop).
+// near-touch band; from one untimed pass after the timed loop), and from the same pass,
+// for the peers that return a contact, how it compares with ours (class Agreement:
+// depth_dev_*, normal_dev_deg_*, excess_*, self_gap_max; scripts/peer_accuracy_table.py).
 #include <benchmark/benchmark.h>
 
 #include <algorithm>

@@ -44,6 +44,8 @@ def main(path):
         if v is None:
             return ""
         p = 100 * v
+        if abs(p) >= 10:
+            return f"{p:.0f}"
         return f"{p:.2g}" if abs(p) >= 1e-3 else ("0" if abs(p) < 1e-6 else f"{p:.0e}")
 
     def pair(r, peer, a, b, f):
