@@ -23,18 +23,18 @@
 //    (nl.x < offl, i.e. depth offl - nl.x > 0). A lane with none gets count 0 and is done
 //    (about half the lanes on the bench); the others are listed (compacted).
 // 2. Picks, W listed lanes per group (the last group padded with repeats): the lanes'
-//    plane and pose by simd::gather; slot j of lane l is lane l's j-th vertex below, in
-//    vertex order (past its count, its first again: a vertex seen again changes no
-//    first strict maximum), the slots' vertices by simd::gather_xyz (HullView::vxyz, a
-//    16-byte record per vertex: one load a lane and a transpose). So every slot of every
-//    lane lies below and the passes run over full vectors of touching lanes only: the
-//    deepest, then the farthest, the widest and the outmost, each a running strict
-//    maximum carrying its vertex (two interleaved chains per pick, merged by (score,
-//    lowest slot): the first vertex wins ties, as in collide_support_halfspace); depths
-//    recomputed from the chosen vertices (the same expression, the same bits). Only
-//    the chosen vertices go back to the world frame, relative to A's position
-//    (precision far from the origin); the driver expands the chunk's results into the
-//    output blocks (prim::LiveOut).
+//    plane and pose by prim::GroupRows (windows of the rows, not gathers); slot j of
+//    lane l is lane l's j-th vertex below, in vertex order (past its count, its first
+//    again: a vertex seen again changes no first strict maximum), the slots' vertices
+//    by simd::gather_xyz (HullView::vxyz, a 16-byte record per vertex: one load a lane
+//    and a transpose). So every slot of every lane lies below and the passes run over
+//    full vectors of touching lanes only: the deepest, then the farthest, the widest
+//    and the outmost, each a running strict maximum carrying its vertex (two
+//    interleaved chains per pick, merged by (score, lowest slot): the first vertex wins
+//    ties, as in collide_support_halfspace); depths recomputed from the chosen vertices
+//    (the same expression, the same bits). Only the chosen vertices go back to the
+//    world frame, relative to A's position (precision far from the origin); the driver
+//    expands the chunk's results into the output blocks (prim::LiveOut).
 // Big hulls: a lane whose hull has more than kLaneVerts vertices is not listed and gets
 // collide_support_halfspace (one pair at a time, SIMD across its vertices) instead,
 // decided by its own hull; the listing pass notes whether the range has any, so a range
@@ -56,12 +56,13 @@
 // previous lane kernel (a block walked every lane's whole hull through
 // simd::load_transposed and ran the picks over every slot below in any lane of the
 // block); see docs/narrowphase.md for the same-run FCL figures. Per touching group:
-// 18 gathers (pose, plane) and a gather_xyz per slot (~6 slots per group on the bench,
-// ~3.3 used per lane). Variants measured and dropped: blocks without compaction (picks over the
-// block's lanes, contiguous loads and stores: ~48 vs ~44 on one loaded run), the
-// vertices below copied into the group's slots by the listing pass instead of gathered
-// (no gain), a third pass moving the picks to the world frame per block with
-// contiguous loads (no gain), groups sorted by number of vertices below (no gain).
+// 18 pose and plane rows read (GroupRows) and a gather_xyz per slot (~6 slots per group
+// on the bench, ~3.3 used per lane). Variants measured and dropped: blocks without
+// compaction (picks over the block's lanes, contiguous loads and stores: ~48 vs ~44 on
+// one loaded run), the vertices below copied into the group's slots by the listing
+// pass instead of gathered (no gain), a third pass moving the picks to the world frame
+// per block with contiguous loads (no gain), groups sorted by number of vertices below
+// (no gain).
 // At 16 lanes (kPairWidth, 2026-11-28; 2-core AVX-512 Xeon, three alternations against
 // the 8-lane build): 27.5-28.7 -> 25.4-26.3 ns per pair (1.09x), FCL 224-230 in the
 // same runs.
@@ -75,7 +76,8 @@
 // of three 16-lane gathers per slot, which cost ~17 cycles each on this core (a probe
 // that loaded the pose contiguously instead of by its 18 gathers ran 3.2 ns faster, one
 // that loaded the vertices so 4.2 ns): 21.5 -> 19.3 ns (2026-11-29, AMD EPYC, medians
-// of 5 alternated runs).
+// of 5 alternated runs); the pose rows by simd::SortedGather's windows (GroupRows)
+// instead of 18 gathers: 18.5 -> 16.4 ns (FCL 196 in the full run after it: 11.9x).
 #include <bit>
 #include <cmath>
 #include <cstdint>

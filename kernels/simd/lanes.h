@@ -19,6 +19,8 @@
 //              load_transposed(N row pointers): N rows of N floats, one per lane;
 //              gather_xyz(records, index array): x, y, z of 4-float records, a record
 //              a lane (16-byte loads and a transpose, no gather);
+//              SortedGather(index lanes, begin, end)(array): gather's values for index
+//              lanes close together (a listed group), by windows and permutes;
 //              load_clamped<F>(p, i, n): p[i ..] with indices past n - 1 reading p[n - 1];
 //              tag / tag_index: a small index kept in a float's 5 low mantissa bits,
 //              so one max/min tree gives both the extreme and where it came from.
@@ -443,8 +445,8 @@ IMPACT_INLINE FloatN<N> gather(const float* base, IntN<N> idx) {
 /// base[idx_i] in lane i for several arrays base and one index vector, every idx_i in
 /// [begin, end) where each array may be read. Meant for a chunk's live lanes listed in
 /// order (ascending, close together): at 16 lanes (AVX-512), when every lane lies in
-/// [idx_0, idx_0 + 64) (or in the last 32 of the range), each array is read as one or
-/// two 32-float windows, each two loads and a two-source permute (vpermt2ps), where a
+/// [idx_0, idx_0 + 64), each array is read as one or two 32-float windows (inside
+/// [begin, end): the last window ends at end), each two loads and a two-source permute (vpermt2ps), where a
 /// 16-lane gather costs ~17 cycles on AMD Zen 4; otherwise (other widths, lanes out of
 /// order or farther apart, ranges under 32) by gather(). The same values either way.
 template <uint32_t N>
@@ -498,7 +500,7 @@ class SortedGather {
 /// Lane i of x, y, z = xyzw[4 idx[i] + 0, 1, 2]: records of 4 floats (x, y, z and one
 /// unused), one 16-byte load a lane and a 4 x 4 transpose per 128-bit chunk instead of
 /// three gathers (a 16-lane gather on AMD Zen 4 costs ~17 cycles; hull-half-space's
-/// vertex slots: 22.5 -> 19.4 ns per pair). Records need no alignment.
+/// vertex slots: 21.5 -> 19.3 ns per pair). Records need no alignment.
 template <uint32_t N>
 IMPACT_INLINE void gather_xyz(const float* xyzw, const int32_t* idx, FloatN<N>* x, FloatN<N>* y,
                               FloatN<N>* z) {
