@@ -536,14 +536,17 @@ IMPACT_INLINE void box_box_block(const LeafSoA& a, const LeafSoA& b, const Manif
 }
 
 /// The face manifold of queue entries j .. j + W (entries past `valid` are padding and
-/// are not written): inputs gathered by pair index, outputs scattered back.
+/// are not written): inputs read by pair index (ascending, inside the chunk [c0, c1):
+/// simd::SortedGather's windows), outputs scattered back.
 template <class F>
-IMPACT_INLINE void box_box_face_queued(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out, const FaceQueue& q,
-                                       uint32_t j, uint32_t valid) {
+IMPACT_INLINE void box_box_face_queued(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out,
+                                       const FaceQueue& q, uint32_t j, uint32_t valid, uint32_t c0,
+                                       uint32_t c1) {
   using Int = typename F::Int;
   const F zero(0.0f);
-  const Int idx = Int::load(q.idx + j);
-  auto g = [&](const float* p) { return simd::gather(p, idx); };
+  const simd::SortedGather<F::kWidth> rows(Int::load(q.idx + j), static_cast<int32_t>(c0),
+                                           static_cast<int32_t>(c1));
+  auto g = [&](const float* p) { return rows(p); };
   const V3<F> pa{g(a.p[0]), g(a.p[1]), g(a.p[2])};
   const V3<F> t = V3<F>{g(b.p[0]), g(b.p[1]), g(b.p[2])} - pa;
   M3<F> ra, rb;
@@ -599,7 +602,7 @@ void box_box_compact(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out,
     for (uint32_t j = 0; j < q.n; j += W) {
       const uint32_t valid = q.n - j < W ? q.n - j : W;
       for (uint32_t i = valid; i < W; ++i) q.copy(j + valid - 1, j + i);
-      box_box_face_queued<F>(a, b, out, q, j, valid);
+      box_box_face_queued<F>(a, b, out, q, j, valid, c0, c1);
     }
   }
 }
