@@ -17,8 +17,9 @@
 //              (the inverse of compacting a block's live lanes; float, or int32 to uint8);
 //              compact_store<N>(dst, int lanes, bits): the set lanes to dst[0, 1, ..];
 //              load_transposed(N row pointers): N rows of N floats, one per lane;
-//              gather_xyz(records, index array): x, y, z of 4-float records, a record
-//              a lane (16-byte loads and a transpose, no gather);
+//              gather4(records, stride, index array): 4 floats of each lane's record
+//              (16-byte loads and a transpose, no gather); gather_xyz: the first three
+//              of 4-float records;
 //              SortedGather(index lanes, begin, end)(array): gather's values for index
 //              lanes close together (a listed group), by windows and permutes;
 //              load_clamped<F>(p, i, n): p[i ..] with indices past n - 1 reading p[n - 1];
@@ -497,16 +498,17 @@ class SortedGather {
 #endif
 };
 
-/// Lane i of x, y, z = xyzw[4 idx[i] + 0, 1, 2]: records of 4 floats (x, y, z and one
-/// unused), one 16-byte load a lane and a 4 x 4 transpose per 128-bit chunk instead of
-/// three gathers (a 16-lane gather on AMD Zen 4 costs ~17 cycles; hull-half-space's
-/// vertex slots: 21.5 -> 19.3 ns per pair). Records need no alignment.
+/// Lane i of out[c] = base[stride idx[i] + c], c < 4: four consecutive floats of
+/// records `stride` floats apart, one 16-byte load a lane and a 4 x 4 transpose per
+/// 128-bit chunk instead of four gathers (a 16-lane gather on AMD Zen 4 costs ~17
+/// cycles). No alignment needed; the 4 floats must be readable.
 template <uint32_t N>
-IMPACT_INLINE void gather_xyz(const float* xyzw, const int32_t* idx, FloatN<N>* x, FloatN<N>* y,
-                              FloatN<N>* z) {
+IMPACT_INLINE void gather4(const float* base, int32_t stride, const int32_t* idx, FloatN<N>* out) {
 #if defined(__SSE2__)
   using Raw = typename FloatN<N>::Raw;
-  auto rec = [&](uint32_t l) { return _mm_loadu_ps(xyzw + 4 * static_cast<int64_t>(idx[l])); };
+  auto rec = [&](uint32_t l) {
+    return _mm_loadu_ps(base + static_cast<int64_t>(stride) * static_cast<int64_t>(idx[l]));
+  };
 #endif
 #if defined(__AVX512F__)
   if constexpr (N == 16) {
@@ -521,9 +523,10 @@ IMPACT_INLINE void gather_xyz(const float* xyzw, const int32_t* idx, FloatN<N>* 
     // -Wmaybe-uninitialized reports; an all-ones mask compiles to the plain instruction.)
     const __m512 ab0 = _mm512_maskz_unpacklo_ps(0xffff, a, b), ab1 = _mm512_maskz_unpackhi_ps(0xffff, a, b);
     const __m512 cd0 = _mm512_maskz_unpacklo_ps(0xffff, c, d), cd1 = _mm512_maskz_unpackhi_ps(0xffff, c, d);
-    *x = FloatN<N>(reinterpret_cast<Raw>(_mm512_shuffle_ps(ab0, cd0, 0x44)));
-    *y = FloatN<N>(reinterpret_cast<Raw>(_mm512_shuffle_ps(ab0, cd0, 0xee)));
-    *z = FloatN<N>(reinterpret_cast<Raw>(_mm512_shuffle_ps(ab1, cd1, 0x44)));
+    out[0] = FloatN<N>(reinterpret_cast<Raw>(_mm512_shuffle_ps(ab0, cd0, 0x44)));
+    out[1] = FloatN<N>(reinterpret_cast<Raw>(_mm512_shuffle_ps(ab0, cd0, 0xee)));
+    out[2] = FloatN<N>(reinterpret_cast<Raw>(_mm512_shuffle_ps(ab1, cd1, 0x44)));
+    out[3] = FloatN<N>(reinterpret_cast<Raw>(_mm512_shuffle_ps(ab1, cd1, 0xee)));
     return;
   }
 #endif
@@ -533,9 +536,10 @@ IMPACT_INLINE void gather_xyz(const float* xyzw, const int32_t* idx, FloatN<N>* 
     const __m256 a = two(0), b = two(1), c = two(2), d = two(3);
     const __m256 ab0 = _mm256_unpacklo_ps(a, b), ab1 = _mm256_unpackhi_ps(a, b);
     const __m256 cd0 = _mm256_unpacklo_ps(c, d), cd1 = _mm256_unpackhi_ps(c, d);
-    *x = FloatN<N>(reinterpret_cast<Raw>(_mm256_shuffle_ps(ab0, cd0, 0x44)));
-    *y = FloatN<N>(reinterpret_cast<Raw>(_mm256_shuffle_ps(ab0, cd0, 0xee)));
-    *z = FloatN<N>(reinterpret_cast<Raw>(_mm256_shuffle_ps(ab1, cd1, 0x44)));
+    out[0] = FloatN<N>(reinterpret_cast<Raw>(_mm256_shuffle_ps(ab0, cd0, 0x44)));
+    out[1] = FloatN<N>(reinterpret_cast<Raw>(_mm256_shuffle_ps(ab0, cd0, 0xee)));
+    out[2] = FloatN<N>(reinterpret_cast<Raw>(_mm256_shuffle_ps(ab1, cd1, 0x44)));
+    out[3] = FloatN<N>(reinterpret_cast<Raw>(_mm256_shuffle_ps(ab1, cd1, 0xee)));
     return;
   }
 #endif
@@ -544,17 +548,29 @@ IMPACT_INLINE void gather_xyz(const float* xyzw, const int32_t* idx, FloatN<N>* 
     const __m128 a = rec(0), b = rec(1), c = rec(2), d = rec(3);
     const __m128 ab0 = _mm_unpacklo_ps(a, b), ab1 = _mm_unpackhi_ps(a, b);
     const __m128 cd0 = _mm_unpacklo_ps(c, d), cd1 = _mm_unpackhi_ps(c, d);
-    *x = FloatN<N>(reinterpret_cast<Raw>(_mm_movelh_ps(ab0, cd0)));
-    *y = FloatN<N>(reinterpret_cast<Raw>(_mm_movehl_ps(cd0, ab0)));
-    *z = FloatN<N>(reinterpret_cast<Raw>(_mm_movelh_ps(ab1, cd1)));
+    out[0] = FloatN<N>(reinterpret_cast<Raw>(_mm_movelh_ps(ab0, cd0)));
+    out[1] = FloatN<N>(reinterpret_cast<Raw>(_mm_movehl_ps(cd0, ab0)));
+    out[2] = FloatN<N>(reinterpret_cast<Raw>(_mm_movelh_ps(ab1, cd1)));
+    out[3] = FloatN<N>(reinterpret_cast<Raw>(_mm_movehl_ps(cd1, ab1)));
     return;
   }
   (void)rec;
 #endif
   for (uint32_t i = 0; i < N; ++i) {
-    const float* r = xyzw + 4 * static_cast<int64_t>(idx[i]);
-    x->v[i] = r[0], y->v[i] = r[1], z->v[i] = r[2];
+    const float* r = base + static_cast<int64_t>(stride) * static_cast<int64_t>(idx[i]);
+    for (uint32_t c = 0; c < 4; ++c) out[c].v[i] = r[c];
   }
+}
+
+/// Lane i of x, y, z = xyzw[4 idx[i] + 0, 1, 2]: records of 4 floats (x, y, z and one
+/// unused), by gather4 (hull-half-space's vertex slots: 21.5 -> 19.3 ns per pair, where
+/// they took three gathers).
+template <uint32_t N>
+IMPACT_INLINE void gather_xyz(const float* xyzw, const int32_t* idx, FloatN<N>* x, FloatN<N>* y,
+                              FloatN<N>* z) {
+  FloatN<N> r[4];
+  gather4(xyzw, 4, idx, r);
+  *x = r[0], *y = r[1], *z = r[2];
 }
 
 /// out[j] lane i = rows[i][j] for i, j < N: N rows of N contiguous floats (one row per
@@ -703,6 +719,10 @@ class SortedGather<1> {
  private:
   IntN<1> idx_;
 };
+IMPACT_INLINE void gather4(const float* base, int32_t stride, const int32_t* idx, FloatN<1>* out) {
+  const float* r = base + static_cast<int64_t>(stride) * static_cast<int64_t>(idx[0]);
+  for (int c = 0; c < 4; ++c) out[c] = FloatN<1>(r[c]);
+}
 IMPACT_INLINE void gather_xyz(const float* xyzw, const int32_t* idx, FloatN<1>* x, FloatN<1>* y,
                               FloatN<1>* z) {
   const float* r = xyzw + 4 * static_cast<int64_t>(idx[0]);
