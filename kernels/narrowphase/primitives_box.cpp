@@ -537,23 +537,17 @@ IMPACT_INLINE void box_box_block(const LeafSoA& a, const LeafSoA& b, const Manif
 
 /// The face manifold of queue entries j .. j + W (entries past `valid` are padding and
 /// are not written): inputs read by pair index (ascending, inside the chunk [c0, c1):
-/// simd::SortedGather's windows), outputs scattered back.
+/// GroupRows' windows), outputs scattered back.
 template <class F>
 IMPACT_INLINE void box_box_face_queued(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out,
                                        const FaceQueue& q, uint32_t j, uint32_t valid, uint32_t c0,
                                        uint32_t c1) {
   using Int = typename F::Int;
   const F zero(0.0f);
-  const simd::SortedGather<F::kWidth> rows(Int::load(q.idx + j), static_cast<int32_t>(c0),
-                                           static_cast<int32_t>(c1));
-  auto g = [&](const float* p) { return rows(p); };
-  const V3<F> pa{g(a.p[0]), g(a.p[1]), g(a.p[2])};
-  const V3<F> t = V3<F>{g(b.p[0]), g(b.p[1]), g(b.p[2])} - pa;
-  M3<F> ra, rb;
-  for (uint32_t c = 0; c < 3; ++c) {
-    ra.c[c] = {g(a.r[c]), g(a.r[3 + c]), g(a.r[6 + c])};
-    rb.c[c] = {g(b.r[c]), g(b.r[3 + c]), g(b.r[6 + c])};
-  }
+  const GroupRows<F> g(q.idx + j, Range{c0, c1});
+  const V3<F> pa = g.v3(a.p);
+  const V3<F> t = g.v3(b.p) - pa;
+  const M3<F> ra = g.rot(a), rb = g.rot(b);
   const F eA[3] = {g(a.e[0]), g(a.e[1]), g(a.e[2])}, eB[3] = {g(b.e[0]), g(b.e[1]), g(b.e[2])};
   const F axis = F::load(q.axis + j), best = F::load(q.best + j);
   const V3<F> n{F::load(q.nx + j), F::load(q.ny + j), F::load(q.nz + j)};

@@ -446,10 +446,11 @@ IMPACT_INLINE FloatN<N> gather(const float* base, IntN<N> idx) {
 /// base[idx_i] in lane i for several arrays base and one index vector, every idx_i in
 /// [begin, end) where each array may be read. Meant for a chunk's live lanes listed in
 /// order (ascending, close together): at 16 lanes (AVX-512), when every lane lies in
-/// [idx_0, idx_0 + 64), each array is read as one or two 32-float windows (inside
-/// [begin, end): the last window ends at end), each two loads and a two-source permute (vpermt2ps), where a
-/// 16-lane gather costs ~17 cycles on AMD Zen 4; otherwise (other widths, lanes out of
-/// order or farther apart, ranges under 32) by gather(). The same values either way.
+/// [idx_0, idx_0 + 64), each array is read as one or two 32-float windows inside
+/// [begin, end) (the last one ending at end at most), each two loads and a two-source
+/// permute (vpermt2ps), where a 16-lane gather costs ~17 cycles on AMD Zen 4; otherwise
+/// (other widths, lanes out of order or farther apart, ranges under 32) by gather().
+/// The same values either way.
 template <uint32_t N>
 class SortedGather {
  public:
@@ -722,11 +723,6 @@ class SortedGather<1> {
 IMPACT_INLINE void gather4(const float* base, int32_t stride, const int32_t* idx, FloatN<1>* out) {
   const float* r = base + static_cast<int64_t>(stride) * static_cast<int64_t>(idx[0]);
   for (int c = 0; c < 4; ++c) out[c] = FloatN<1>(r[c]);
-}
-IMPACT_INLINE void gather_xyz(const float* xyzw, const int32_t* idx, FloatN<1>* x, FloatN<1>* y,
-                              FloatN<1>* z) {
-  const float* r = xyzw + 4 * static_cast<int64_t>(idx[0]);
-  *x = FloatN<1>(r[0]), *y = FloatN<1>(r[1]), *z = FloatN<1>(r[2]);
 }
 IMPACT_INLINE FloatN<1> tag(FloatN<1> key, int32_t i) {
   uint32_t b;
