@@ -134,14 +134,12 @@ Status check_desc(const WorldDesc& d) {
   return Status();
 }
 
-template <class T>
-void push(host::Buffer<T>& v, T x) {
-  v.push_back(x);
-}
-
 }  // namespace
 
-WorldImpl::WorldImpl(const WorldDesc& d) : desc(d), exec(d.backend, d.threads) { configure_broad_phase(); }
+WorldImpl::WorldImpl(const WorldDesc& d) : desc(d), exec(d.backend, d.threads) {
+  if (desc.interpolation) bodies.enable(host::FieldSet::kInterpolation);
+  configure_broad_phase();
+}
 
 void WorldImpl::configure_broad_phase() {
   positions_changed();
@@ -153,31 +151,24 @@ void WorldImpl::configure_broad_phase() {
   broad_phase.set_lbvh_options(o);
 }
 
-void WorldImpl::swap_remove_body(uint32_t slot) {
-  broad_phase.invalidate();  // slots change meaning
-  positions_changed();
-  BodyStore& s = bodies;
-  const uint32_t last_slot = static_cast<uint32_t>(s.size() - 1);
-  auto move = [&](auto& v) {
-    if (v.empty()) return;
-    v[slot] = v[last_slot];
-    v.pop_back();
-  };
-  for (auto* v : {&s.pos_x, &s.pos_y, &s.pos_z, &s.vel_x, &s.vel_y, &s.vel_z, &s.inv_mass, &s.radius,
-                  &s.restitution, &s.prev_x, &s.prev_y, &s.prev_z})
-    move(*v);
-  move(s.layer);
-  move(s.mask);
-  move(s.is_static);
-  if (!s.shape.empty() && s.shape[slot] != kNoShape) --shaped_count;
-  move(s.shape);
-  for (auto* v : {&s.qx, &s.qy, &s.qz, &s.qw}) move(*v);
-  const BodyHandle gone = s.handle[slot];
-  if (slot != last_slot) {
-    s.handle[slot] = s.handle[last_slot];
-    body_handles.rebind(s.handle[slot].index, slot);
+void WorldImpl::slots_changed(bool bodies_moved) {
+  if (bodies_moved) {
+    broad_phase.invalidate();
+    positions_changed();
+    pairs.clear();
   }
-  s.handle.pop_back();
+  contacts.clear();
+  solver.forget();
+  solver.clear_impulses();
+}
+
+void WorldImpl::swap_remove_body(uint32_t slot) {
+  host::BodyStore& s = bodies;
+  const auto last_slot = static_cast<uint32_t>(s.size() - 1);
+  if (s.on(host::FieldSet::kShaped) && s.shape[slot] != host::kNoShape) --shaped_count;
+  const BodyHandle gone = s.handle[slot];
+  s.swap_remove(slot);
+  if (slot != last_slot) body_handles.rebind(s.handle[slot].index, slot);
   body_handles.release(gone.index);
 }
 
@@ -201,61 +192,40 @@ BodyHandle append_body(WorldImpl& w, const Eigen::Vector3f& p, const Eigen::Vect
                        float inv_mass, float radius, float restitution, uint32_t layer,
                        uint32_t mask, ShapeId shape = {},
                        const Eigen::Quaternionf& q = Eigen::Quaternionf::Identity()) {
-  BodyStore& s = w.bodies;
-  const uint32_t slot = static_cast<uint32_t>(s.size());
-  const bool fields_on = !s.shape.empty() || shape.valid();
-  if (shape.valid() && s.shape.empty()) {  // the first shaped body: every body gets the fields
-    s.shape.assign(slot, kNoShape);
-    for (auto* a : {&s.qx, &s.qy, &s.qz}) a->assign(slot, 0.0f);
-    s.qw.assign(slot, 1.0f);
-  }
-  if (fields_on) {
-    const Eigen::Quaternionf n = q.normalized();
-    push(s.shape, shape.valid() ? shape.index : kNoShape);
-    push(s.qx, n.x());
-    push(s.qy, n.y());
-    push(s.qz, n.z());
-    push(s.qw, n.w());
-    if (shape.valid()) ++w.shaped_count;
-  }
-  push(s.pos_x, p.x());
-  push(s.pos_y, p.y());
-  push(s.pos_z, p.z());
-  push(s.vel_x, v.x());
-  push(s.vel_y, v.y());
-  push(s.vel_z, v.z());
-  push(s.inv_mass, inv_mass);
-  push(s.radius, radius);
-  push(s.restitution, restitution);
-  push(s.layer, layer);
-  push(s.mask, mask);
-  push(s.is_static, static_cast<uint8_t>(inv_mass == 0.0f));
-  if (w.desc.interpolation) {
-    push(s.prev_x, p.x());
-    push(s.prev_y, p.y());
-    push(s.prev_z, p.z());
-  }
-  BodyHandle h;
-  w.body_handles.acquire(slot, &h.index, &h.generation);
-  s.handle.push_back(h);
+  host::BodyStore& s = w.bodies;
+  const auto slot = static_cast<uint32_t>(s.size());
+  if (shape.valid()) s.enable(host::FieldSet::kShaped);  // the first shaped body: every body gets the fields
+  host::BodyRow row;
+  row.pos_x = p.x();
+  row.pos_y = p.y();
+  row.pos_z = p.z();
+  row.vel_x = v.x();
+  row.vel_y = v.y();
+  row.vel_z = v.z();
+  row.inv_mass = inv_mass;
+  row.radius = radius;
+  row.restitution = restitution;
+  row.layer = layer;
+  row.mask = mask;
+  row.is_static = static_cast<uint8_t>(inv_mass == 0.0f);
+  row.prev_x = p.x();
+  row.prev_y = p.y();
+  row.prev_z = p.z();
+  row.shape = shape.valid() ? shape.index : host::kNoShape;
+  const Eigen::Quaternionf n = q.normalized();
+  row.qx = n.x();
+  row.qy = n.y();
+  row.qz = n.z();
+  row.qw = n.w();
+  w.body_handles.acquire(slot, &row.handle.index, &row.handle.generation);
+  s.append(row);
+  if (shape.valid()) ++w.shaped_count;
   w.broad_phase.invalidate();
   w.positions_changed();
-  return h;
+  return row.handle;
 }
 
-void reserve_bodies(WorldImpl& w, size_t extra) {
-  BodyStore& s = w.bodies;
-  const size_t n = s.size() + extra;
-  for (auto* v : {&s.pos_x, &s.pos_y, &s.pos_z, &s.vel_x, &s.vel_y, &s.vel_z, &s.inv_mass, &s.radius,
-                  &s.restitution})
-    v->reserve(n);
-  if (w.desc.interpolation)
-    for (auto* v : {&s.prev_x, &s.prev_y, &s.prev_z}) v->reserve(n);
-  s.layer.reserve(n);
-  s.mask.reserve(n);
-  s.is_static.reserve(n);
-  s.handle.reserve(n);
-}
+void reserve_bodies(WorldImpl& w, size_t extra) { w.bodies.reserve(w.bodies.size() + extra); }
 
 Status check_capacity(const WorldImpl& w, size_t extra, const char* where) {
   if (w.bodies.size() + extra > kMaxBodies)
@@ -354,7 +324,7 @@ Status World::destroy_bodies(std::span<const BodyHandle> handles) {
   std::sort(sorted.begin(), sorted.end());  // validation only; does not shape results
   if (std::adjacent_find(sorted.begin(), sorted.end()) != sorted.end())
     return invalid("destroy_bodies", "the same body is listed twice");
-  impl_->prev_contacts = 0;  // slots move: last step's contact keys no longer apply
+  impl_->slots_changed(true);  // slots move: last step's results and contact keys no longer apply
   for (const BodyHandle& h : handles) {
     // Look up again: earlier removals may have moved this body to another slot.
     impl_->swap_remove_body(impl_->body_handles.lookup(h.index, h.generation));
@@ -369,14 +339,14 @@ Status World::set_positions(std::span<const BodyHandle> handles, std::span<const
   if (Status s = resolve(*impl_, handles, "set_positions", &slots); !s.ok()) return s;
   for (size_t i = 0; i < values.size(); ++i)
     if (Status s = check_position("set_positions: body " + std::to_string(i), values[i]); !s.ok()) return s;
-  BodyStore& b = impl_->bodies;
+  host::BodyStore& b = impl_->bodies;
   impl_->positions_changed();
   for (size_t i = 0; i < values.size(); ++i) {
     const uint32_t k = slots[i];
     b.pos_x[k] = values[i].x();
     b.pos_y[k] = values[i].y();
     b.pos_z[k] = values[i].z();
-    if (impl_->desc.interpolation) {  // a teleport does not interpolate
+    if (b.on(host::FieldSet::kInterpolation)) {  // a teleport does not interpolate
       b.prev_x[k] = values[i].x();
       b.prev_y[k] = values[i].y();
       b.prev_z[k] = values[i].z();
@@ -392,7 +362,7 @@ Status World::set_velocities(std::span<const BodyHandle> handles, std::span<cons
   if (Status s = resolve(*impl_, handles, "set_velocities", &slots); !s.ok()) return s;
   for (size_t i = 0; i < values.size(); ++i)
     if (Status s = check_velocity("set_velocities: body " + std::to_string(i), values[i]); !s.ok()) return s;
-  BodyStore& b = impl_->bodies;
+  host::BodyStore& b = impl_->bodies;
   for (size_t i = 0; i < values.size(); ++i) {
     b.vel_x[slots[i]] = values[i].x();
     b.vel_y[slots[i]] = values[i].y();
@@ -406,7 +376,7 @@ Status World::get_positions(std::span<const BodyHandle> handles, std::span<Eigen
     return Status(StatusCode::kSizeMismatch, "get_positions: handles and out differ in length");
   std::vector<uint32_t> slots;
   if (Status s = resolve(*impl_, handles, "get_positions", &slots); !s.ok()) return s;
-  const BodyStore& b = impl_->bodies;
+  const host::BodyStore& b = impl_->bodies;
   for (size_t i = 0; i < out.size(); ++i) out[i] = {b.pos_x[slots[i]], b.pos_y[slots[i]], b.pos_z[slots[i]]};
   return Status();
 }
@@ -416,7 +386,7 @@ Status World::get_velocities(std::span<const BodyHandle> handles, std::span<Eige
     return Status(StatusCode::kSizeMismatch, "get_velocities: handles and out differ in length");
   std::vector<uint32_t> slots;
   if (Status s = resolve(*impl_, handles, "get_velocities", &slots); !s.ok()) return s;
-  const BodyStore& b = impl_->bodies;
+  const host::BodyStore& b = impl_->bodies;
   for (size_t i = 0; i < out.size(); ++i) out[i] = {b.vel_x[slots[i]], b.vel_y[slots[i]], b.vel_z[slots[i]]};
   return Status();
 }
@@ -430,19 +400,7 @@ Status World::slot_of(BodyHandle handle, uint32_t* out_slot) const {
 
 size_t World::body_count() const { return impl_->bodies.size(); }
 
-BodyArrays World::bodies() const {
-  const BodyStore& b = impl_->bodies;
-  const size_t n = b.size();
-  return BodyArrays{{b.pos_x.data(), n},    {b.pos_y.data(), n},  {b.pos_z.data(), n},
-                    {b.vel_x.data(), n},    {b.vel_y.data(), n},  {b.vel_z.data(), n},
-                    {b.inv_mass.data(), n}, {b.radius.data(), n}, {b.restitution.data(), n},
-                    {b.layer.data(), n},    {b.mask.data(), n},   {b.handle.data(), n},
-                    {b.shape.data(), b.shape.size()},
-                    {b.qx.data(), b.qx.size()},
-                    {b.qy.data(), b.qy.size()},
-                    {b.qz.data(), b.qz.size()},
-                    {b.qw.data(), b.qw.size()}};
-}
+BodyArrays World::bodies() const { return host::body_arrays(impl_->bodies); }
 
 // --- planes -----------------------------------------------------------------------------
 
@@ -462,7 +420,7 @@ Status World::create_planes(std::span<const PlaneDesc> descs, std::span<PlaneHan
     if (!(d.restitution >= 0.0f && d.restitution <= 1.0f))
       return invalid(who, "restitution must be in [0, 1], got " + fmt_float(d.restitution));
   }
-  PlaneStore& p = impl_->planes;
+  host::PlaneStore& p = impl_->planes;
   for (size_t i = 0; i < descs.size(); ++i) {
     const PlaneDesc& d = descs[i];
     const Eigen::Vector3d nd = d.normal.cast<double>();
@@ -484,7 +442,7 @@ Status World::create_planes(std::span<const PlaneDesc> descs, std::span<PlaneHan
 }
 
 Status World::destroy_planes(std::span<const PlaneHandle> handles) {
-  PlaneStore& p = impl_->planes;
+  host::PlaneStore& p = impl_->planes;
   std::vector<uint32_t> slots(handles.size());
   for (size_t i = 0; i < handles.size(); ++i) {
     const uint32_t slot = impl_->plane_handles.lookup(handles[i].index, handles[i].generation);
@@ -499,7 +457,7 @@ Status World::destroy_planes(std::span<const PlaneHandle> handles) {
   std::sort(sorted.begin(), sorted.end());
   if (std::adjacent_find(sorted.begin(), sorted.end()) != sorted.end())
     return invalid("destroy_planes", "the same plane is listed twice");
-  impl_->prev_contacts = 0;  // plane slots move: last step's contact keys no longer apply
+  impl_->slots_changed(false);  // plane slots move: last step's results and contact keys no longer apply
   for (const PlaneHandle& h : handles) {
     const uint32_t slot = impl_->plane_handles.lookup(h.index, h.generation);
     const uint32_t last = static_cast<uint32_t>(p.size() - 1);
@@ -520,7 +478,7 @@ Status World::destroy_planes(std::span<const PlaneHandle> handles) {
 size_t World::plane_count() const { return impl_->planes.size(); }
 
 PlaneArrays World::planes() const {
-  const PlaneStore& p = impl_->planes;
+  const host::PlaneStore& p = impl_->planes;
   return PlaneArrays{p.normal_x, p.normal_y, p.normal_z, p.offset, p.restitution, p.layer, p.mask, p.handle};
 }
 
@@ -564,7 +522,7 @@ Status World::interpolated_positions(std::span<Eigen::Vector3f> out) const {
     return Status(StatusCode::kSizeMismatch, "interpolated_positions: out has " + std::to_string(out.size()) +
                                                  " entries for " + std::to_string(w.bodies.size()) + " bodies");
   const float a = w.alpha, b = 1.0f - w.alpha;
-  const BodyStore& s = w.bodies;
+  const host::BodyStore& s = w.bodies;
   for (size_t i = 0; i < out.size(); ++i)
     out[i] = {b * s.prev_x[i] + a * s.pos_x[i], b * s.prev_y[i] + a * s.pos_y[i],
               b * s.prev_z[i] + a * s.pos_z[i]};
@@ -576,12 +534,25 @@ Status World::interpolated_positions(std::span<Eigen::Vector3f> out) const {
 const StepStats& World::last_step() const { return impl_->last; }
 
 ContactArrays World::contacts() const {
-  const ContactStore& c = impl_->contacts;
-  const size_t n = c.count;
-  return ContactArrays{{c.a.data(), n},        {c.b.data(), n},        {c.b_is_plane.data(), n},
-                       {c.normal_x.data(), n}, {c.normal_y.data(), n}, {c.normal_z.data(), n},
-                       {c.depth.data(), n},    {c.point_x.data(), n},  {c.point_y.data(), n},
-                       {c.point_z.data(), n},  {impl_->impulse_out.data(), n}};
+  const host::ContactManifolds& c = impl_->contacts;
+  const size_t m = c.manifolds, p = c.points;
+  const std::span<const float> impulse = impl_->solver.impulses();
+  ContactArrays out;
+  out.a = {c.a.data(), m};
+  out.b = {c.b.data(), m};
+  out.b_is_plane = {c.b_is_plane.data(), m};
+  out.normal_x = {c.normal[0].data(), m};
+  out.normal_y = {c.normal[1].data(), m};
+  out.normal_z = {c.normal[2].data(), m};
+  out.depth = {c.depth.data(), m};
+  out.point_count = {c.count.data(), m};
+  out.first_points = {c.first_point.data(), c.first_point.empty() ? 0 : m};
+  out.point_x = {c.point[0].data(), p};
+  out.point_y = {c.point[1].data(), p};
+  out.point_z = {c.point[2].data(), p};
+  out.point_depth = {c.point_depth.data(), p};
+  out.impulse = {impulse.data(), impulse.size() == p ? p : 0};
+  return out;
 }
 
 static_assert(sizeof(BodyPair) == sizeof(kernels::Pair) && alignof(BodyPair) == alignof(kernels::Pair));
@@ -619,7 +590,8 @@ Status World::query_points(const PointQueries& queries, QueryHits* out) {
 }
 
 uint64_t World::state_hash() const {
-  // FNV-1a over the bytes of every state array, in slot order.
+  // FNV-1a over the body count and the bytes of every array of the body field table
+  // (host/body_store.h) that is on, in table order, each in slot order.
   uint64_t h = 1469598103934665603ull;
   auto mix = [&](const void* data, size_t bytes) {
     const auto* p = static_cast<const unsigned char*>(data);
@@ -628,11 +600,10 @@ uint64_t World::state_hash() const {
       h *= 1099511628211ull;
     }
   };
-  const BodyStore& s = impl_->bodies;
+  const host::BodyStore& s = impl_->bodies;
   const size_t n = s.size();
   mix(&n, sizeof n);
-  for (const auto* v : {&s.pos_x, &s.pos_y, &s.pos_z, &s.vel_x, &s.vel_y, &s.vel_z})
-    mix(v->data(), n * sizeof(float));
+  host::for_each_body_array(s, [&](const auto& v) { mix(v.data(), v.size() * sizeof(v[0])); });
   return h;
 }
 

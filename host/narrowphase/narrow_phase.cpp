@@ -23,6 +23,7 @@
 #include <cmath>
 #include <string>
 
+#include "host/broadphase/broadphase.h"
 #include "host/narrowphase/lane_arrays.h"
 #include "host/narrowphase/narrow_phase.h"
 #include "host/narrowphase/pose.h"
@@ -31,6 +32,8 @@
 #include "host/radix_sort.h"
 #include "impact/narrowphase.h"
 #include "kernels/narrowphase/leaf.h"
+#include "kernels/narrowphase/sphere_plane.h"
+#include "kernels/narrowphase/sphere_sphere.h"
 
 namespace impact {
 
@@ -42,6 +45,8 @@ constexpr uint32_t kExpandGrain = 2048;
 constexpr uint32_t kLaneGrain = 1024;
 /// Lanes gathered and run together (both sides' scratch: ~90 KB, in L2).
 constexpr uint32_t kLaneBlock = 512;
+/// Pairs per chunk of the sphere buckets' count and write passes.
+constexpr uint32_t kContactGrain = 1u << 13;
 
 /// Sorted positions [begin, end) of one bucket.
 struct Block {
@@ -100,7 +105,8 @@ struct host::NarrowRunner::State {
   std::vector<uint32_t> position;  // record -> sorted position
   std::vector<Block> blocks;
   host::ManifoldArrays manifold;
-  std::vector<uint32_t> chunk_hits;
+  std::vector<uint32_t> chunk_hits, chunk_points;
+  host::Buffer<uint64_t> body_offsets, plane_offsets;  // run_spheres' count -> scan
   std::vector<uint32_t> chunk_bad;  // per expansion chunk: its first bad pair (checked runs)
 
   // Inputs of the current call.
@@ -108,14 +114,15 @@ struct host::NarrowRunner::State {
   const ShapeRecord* const* rec = nullptr;
   const ShapeType* types = nullptr;
   const Posed* posed = nullptr;
-  const ShapePair* pairs = nullptr;
+  host::PairList pairs;
+  uint32_t first_plane = host::kNoPlanes;
 
   const ShapeRecord& shape(uint32_t obj) const { return *rec[obj]; }
 
-  Status run(const host::Executor& exec, const ShapeStore& store_in,
-             std::span<const ShapeRecord* const> rec_in, std::span<const ShapeType> types_in,
-             std::span<const Posed> posed_in, std::span<const ShapePair> pairs_in,
-             const kernels::NarrowConfig& cfg_in, std::vector<Manifold>* result, size_t* bad_pair);
+  Status run(const host::Executor& exec, const host::NarrowObjects& objects, const host::PairList& pairs_in,
+             const kernels::NarrowConfig& cfg_in, host::ContactManifolds* out, size_t* bad_pair);
+  Status run_spheres(const host::Executor& exec, const host::SphereObjects& objects,
+                     const host::PairList& pairs_in, host::ContactManifolds* out);
 
   // --- expansion ---------------------------------------------------------------------
   Box3 leaf_bounds(uint32_t obj, uint32_t child) const;
@@ -425,50 +432,48 @@ void host::NarrowRunner::State::fill_general(LeafArrays& s, size_t k, uint32_t o
   }
 }
 
-Status host::NarrowRunner::State::run(const host::Executor& exec, const ShapeStore& store_in,
-                                      std::span<const ShapeRecord* const> rec_in,
-                                      std::span<const ShapeType> types_in, std::span<const Posed> posed_in,
-                                      std::span<const ShapePair> pairs_in,
-                                      const kernels::NarrowConfig& cfg_in, std::vector<Manifold>* result,
-                                      size_t* bad_pair) {
-  store = &store_in;
-  rec = rec_in.data();
-  types = types_in.data();
-  posed = posed_in.data();
-  pairs = pairs_in.data();
+Status host::NarrowRunner::State::run(const host::Executor& exec, const host::NarrowObjects& objects,
+                                      const host::PairList& pairs_in, const kernels::NarrowConfig& cfg_in,
+                                      host::ContactManifolds* out, size_t* bad_pair) {
+  store = objects.store;
+  rec = objects.rec.data();
+  types = objects.types.data();
+  posed = objects.poses.data();
+  pairs = pairs_in;
+  first_plane = objects.first_plane;
   if (bad_pair != nullptr) *bad_pair = pairs_in.size();
   if (pairs_in.size() >= 0xffffffffu) {
-    result->clear();
+    out->clear();
     return Status(StatusCode::kCapacityExceeded, "narrow phase: more than 2^32 - 2 pairs");
   }
 
   // Expansion into leaf-pair records, per chunk, concatenated in chunk order. A checked
   // run checks each pair first and stops its chunk at the first bad one.
   const auto np = static_cast<uint32_t>(pairs_in.size());
-  const auto objects = static_cast<uint32_t>(rec_in.size());
+  const auto object_count = static_cast<uint32_t>(objects.rec.size());
   const uint32_t chunks = host::chunk_count(np, kExpandGrain);
   chunk_records.resize(chunks);
   chunk_bad.assign(chunks, 0xffffffffu);
   exec.for_each_chunk(np, kExpandGrain, [&](uint32_t b, uint32_t e, uint32_t chunk) {
-    std::vector<LeafPair>& out = chunk_records[chunk];
-    out.clear();
+    std::vector<LeafPair>& list = chunk_records[chunk];
+    list.clear();
     std::vector<uint32_t> ca, cb;
     for (uint32_t k = b; k < e; ++k) {
       if (bad_pair != nullptr) {
-        const ShapePair& pr = pairs[k];
-        if (pr.a >= objects || pr.b >= objects || pr.a == pr.b ||
+        const kernels::Pair& pr = pairs[k];
+        if (pr.a >= object_count || pr.b >= object_count || pr.a == pr.b ||
             (types[pr.a] == ShapeType::kHalfSpace && types[pr.b] == ShapeType::kHalfSpace)) {
           chunk_bad[chunk] = k;
           return;
         }
       }
-      expand(k, &out, &ca, &cb);
+      expand(k, &list, &ca, &cb);
     }
   });
   if (bad_pair != nullptr) {
     for (uint32_t c = 0; c < chunks; ++c) {
       if (chunk_bad[c] != 0xffffffffu) {
-        *bad_pair = chunk_bad[c];  // *result untouched, as after the object checks
+        *bad_pair = chunk_bad[c];  // *out untouched, as after the object checks
         return Status(StatusCode::kInvalidArgument, "narrow phase: bad pair");
       }
     }
@@ -476,7 +481,7 @@ Status host::NarrowRunner::State::run(const host::Executor& exec, const ShapeSto
   size_t total = 0;
   for (uint32_t c = 0; c < chunks; ++c) total += chunk_records[c].size();
   if (total >= 0xffffffffu) {
-    result->clear();
+    out->clear();
     return Status(StatusCode::kCapacityExceeded,
                   "narrow phase: more than 2^32 - 2 leaf pairs after expanding meshes and compounds");
   }
@@ -540,7 +545,7 @@ Status host::NarrowRunner::State::run(const host::Executor& exec, const ShapeSto
     }
     for (uint32_t s = blk.begin; s < blk.end; ++s) {
       const LeafPair& lp = records[order[s]];
-      const ShapePair& pr = pairs[lp.pair];
+      const kernels::Pair& pr = pairs[lp.pair];
       const uint32_t k = s - blk.begin;
       if (lp.swapped) {
         fill(scratch[0], k, pr.b, lp.child_b);
@@ -554,37 +559,112 @@ Status host::NarrowRunner::State::run(const host::Executor& exec, const ShapeSto
            cfg);
   });
 
-  // Output in record order.
-  const uint32_t out_chunks = host::chunk_count(nr, kLaneGrain * 4);
+  // Output in record order: touching records and their points counted per chunk,
+  // scanned, then written at the chunk's offsets.
+  const uint32_t out_grain = kLaneGrain * 4;
+  const uint32_t out_chunks = host::chunk_count(nr, out_grain);
   chunk_hits.assign(out_chunks + 1, 0);
-  exec.for_each_chunk(nr, kLaneGrain * 4, [&](uint32_t b, uint32_t e, uint32_t chunk) {
-    uint32_t hits = 0;
-    for (uint32_t i = b; i < e; ++i) hits += manifold.count[position[i]] > 0 ? 1u : 0u;
+  chunk_points.assign(out_chunks + 1, 0);
+  exec.for_each_chunk(nr, out_grain, [&](uint32_t b, uint32_t e, uint32_t chunk) {
+    uint32_t hits = 0, points = 0;
+    for (uint32_t i = b; i < e; ++i) {
+      const uint32_t count = std::min<uint32_t>(manifold.count[position[i]], kernels::kMaxManifoldPoints);
+      hits += count > 0 ? 1u : 0u;
+      points += count;
+    }
     chunk_hits[chunk + 1] = hits;
+    chunk_points[chunk + 1] = points;
   });
-  for (uint32_t c = 0; c < out_chunks; ++c) chunk_hits[c + 1] += chunk_hits[c];
-  // Every field of every manifold is written below: a result vector kept from an
-  // earlier call is only resized (no construction of the elements it already has).
-  result->resize(chunk_hits[out_chunks]);
-  exec.for_each_chunk(nr, kLaneGrain * 4, [&](uint32_t b, uint32_t e, uint32_t chunk) {
-    uint32_t at = chunk_hits[chunk];
+  for (uint32_t c = 0; c < out_chunks; ++c) {
+    chunk_hits[c + 1] += chunk_hits[c];
+    chunk_points[c + 1] += chunk_points[c];
+  }
+  const uint32_t total_hits = chunk_hits[out_chunks], total_points = chunk_points[out_chunks];
+  out->resize(total_hits, total_points, total_points == total_hits, false);
+  const kernels::ContactManifoldArrays c = out->view();
+  exec.for_each_chunk(nr, out_grain, [&](uint32_t b, uint32_t e, uint32_t chunk) {
+    uint32_t m = chunk_hits[chunk], p = chunk_points[chunk];
     for (uint32_t i = b; i < e; ++i) {
       const uint32_t s = position[i];
-      const uint32_t count = manifold.count[s];
+      const uint32_t count = std::min<uint32_t>(manifold.count[s], kernels::kMaxManifoldPoints);
       if (count == 0) continue;
       const LeafPair& lp = records[i];
-      Manifold& m = (*result)[at++];
-      m.pair = lp.pair;
-      m.child_a = lp.child_a;
-      m.child_b = lp.child_b;
+      const kernels::Pair& pr = pairs[lp.pair];
+      c.pair[m] = lp.pair;
+      c.a[m] = pr.a;
+      const bool plane = pr.b >= first_plane;
+      c.b[m] = plane ? pr.b - first_plane : pr.b;
+      c.b_is_plane[m] = plane ? 1 : 0;
+      c.child_a[m] = lp.child_a;
+      c.child_b[m] = lp.child_b;
       const float sign = lp.swapped ? -1.0f : 1.0f;
-      m.normal = Eigen::Vector3f(manifold.f[1][s], manifold.f[2][s], manifold.f[3][s]) * sign;
-      m.depth = manifold.f[0][s];
-      m.point_count = std::min<uint32_t>(count, kernels::kMaxManifoldPoints);
+      for (int k = 0; k < 3; ++k) c.normal[k][m] = manifold.f[1 + k][s] * sign;
+      c.depth[m] = manifold.f[0][s];
+      c.count[m] = static_cast<uint8_t>(count);
+      if (c.first_point != nullptr) c.first_point[m] = p;
+      for (uint32_t k = 0; k < count; ++k, ++p) {
+        for (uint32_t d = 0; d < 3; ++d) c.point[d][p] = manifold.f[4 + 3 * k + d][s];
+        c.point_depth[p] = manifold.f[16 + k][s];
+        c.feature[p] = k;
+      }
+      ++m;
+    }
+  });
+  return {};
+}
+
+Status host::NarrowRunner::State::run_spheres(const host::Executor& exec, const host::SphereObjects& objects,
+                                              const host::PairList& pairs_in, host::ContactManifolds* out) {
+  const kernels::SphereView sv = objects.spheres;
+  const kernels::PlaneView pv = objects.planes;
+  const auto nb = static_cast<uint32_t>(pairs_in.first.size());
+  const auto np = static_cast<uint32_t>(pairs_in.second.size());
+  const kernels::Pair* body_pairs = pairs_in.first.data();
+  const kernels::Pair* plane_pairs = pairs_in.second.data();
+  const uint64_t n_body = host::count_and_scan(exec, nb, kContactGrain, body_offsets, [&](uint32_t b, uint32_t e) {
+    return kernels::sphere_sphere_count(body_pairs, sv, {b, e});
+  });
+  const uint64_t n_plane =
+      np == 0 ? 0 : host::count_and_scan(exec, np, kContactGrain, plane_offsets, [&](uint32_t b, uint32_t e) {
+        return kernels::sphere_plane_count(plane_pairs, sv, pv, objects.first_plane, {b, e});
+      });
+  if (n_body + n_plane >= 0xffffffffull) {
+    out->clear();
+    return Status(StatusCode::kCapacityExceeded, "narrow phase: more than 2^32 - 2 contacts");
+  }
+  out->resize(n_body + n_plane, n_body + n_plane, true, true);
+  const kernels::ContactManifoldArrays c = out->view();
+  exec.for_each_chunk(nb, kContactGrain, [&](uint32_t b, uint32_t e, uint32_t k) {
+    kernels::sphere_sphere_write(body_pairs, sv, 0, c, body_offsets[k], {b, e});
+  });
+  if (n_plane > 0) {
+    exec.for_each_chunk(np, kContactGrain, [&](uint32_t b, uint32_t e, uint32_t k) {
+      kernels::sphere_plane_write(plane_pairs, sv, pv, objects.first_plane, nb, c, n_body + plane_offsets[k], {b, e});
+    });
+  }
+  return {};
+}
+
+void host::to_manifolds(const Executor& exec, const ContactManifolds& cm, std::vector<Manifold>* out) {
+  const auto nm = static_cast<uint32_t>(cm.manifolds);
+  // Every field of every manifold is written below: a result vector kept from an
+  // earlier call is only resized (no construction of the elements it already has).
+  out->resize(nm);
+  const kernels::ContactManifoldArrays c = cm.view();
+  exec.for_each_chunk(nm, kLaneGrain * 4, [&](uint32_t b, uint32_t e, uint32_t) {
+    for (uint32_t i = b; i < e; ++i) {
+      Manifold& m = (*out)[i];
+      m.pair = c.pair[i];
+      m.child_a = kernels::child_a_of(c, i);
+      m.child_b = kernels::child_b_of(c, i);
+      m.normal = Eigen::Vector3f(c.normal[0][i], c.normal[1][i], c.normal[2][i]);
+      m.depth = c.depth[i];
+      m.point_count = c.count[i];
+      const uint32_t p = kernels::first_point_of(c, i);
       for (uint32_t k = 0; k < 4; ++k) {
         if (k < m.point_count) {
-          m.points[k] = Eigen::Vector3f(manifold.f[4 + 3 * k][s], manifold.f[5 + 3 * k][s], manifold.f[6 + 3 * k][s]);
-          m.point_depth[k] = manifold.f[16 + k][s];
+          m.points[k] = Eigen::Vector3f(c.point[0][p + k], c.point[1][p + k], c.point[2][p + k]);
+          m.point_depth[k] = c.point_depth[p + k];
         } else {
           m.points[k].setZero();
           m.point_depth[k] = 0.0f;
@@ -592,18 +672,19 @@ Status host::NarrowRunner::State::run(const host::Executor& exec, const ShapeSto
       }
     }
   });
-  return {};
 }
 
 host::NarrowRunner::NarrowRunner() : s_(std::make_unique<State>()) {}
 host::NarrowRunner::~NarrowRunner() = default;
 
-Status host::NarrowRunner::run(const Executor& exec, const ShapeStore& store,
-                               std::span<const ShapeRecord* const> rec, std::span<const ShapeType> types,
-                               std::span<const PosedObject> poses, std::span<const ShapePair> pairs,
-                               const kernels::NarrowConfig& cfg, std::vector<Manifold>* out,
-                               size_t* bad_pair) {
-  return s_->run(exec, store, rec, types, poses, pairs, cfg, out, bad_pair);
+Status host::NarrowRunner::run(const Executor& exec, const NarrowObjects& objects, const PairList& pairs,
+                               const kernels::NarrowConfig& cfg, ContactManifolds* out, size_t* bad_pair) {
+  return s_->run(exec, objects, pairs, cfg, out, bad_pair);
+}
+
+Status host::NarrowRunner::run_spheres(const Executor& exec, const SphereObjects& objects, const PairList& pairs,
+                                       ContactManifolds* out) {
+  return s_->run_spheres(exec, objects, pairs, out);
 }
 
 // --- public ------------------------------------------------------------------------------
@@ -617,6 +698,7 @@ struct NarrowPhase::Impl {
   std::vector<const ShapeRecord*> rec;
   std::vector<ShapeType> types;
   std::vector<uint32_t> first_bad;  // per chunk of objects: its first bad object
+  host::ContactManifolds contacts;
 
   Status collide(const ShapeSet& shapes, std::span<const ShapeId> shape_of_in,
                  std::span<const Pose> poses, std::span<const ShapePair> pairs_in,
@@ -682,8 +764,14 @@ Status NarrowPhase::Impl::collide(const ShapeSet& shapes, std::span<const ShapeI
     }
   }
   size_t bad_pair = pairs_in.size();
-  const Status st =
-      runner.run(exec, *store, rec, types, posed, pairs_in, host::config_of(options), result, &bad_pair);
+  static_assert(sizeof(ShapePair) == sizeof(kernels::Pair) && alignof(ShapePair) == alignof(kernels::Pair));
+  const host::PairList list{{reinterpret_cast<const kernels::Pair*>(pairs_in.data()), pairs_in.size()}, {}};
+  host::NarrowObjects objects;
+  objects.store = store;
+  objects.rec = rec;
+  objects.types = types;
+  objects.poses = posed;
+  const Status st = runner.run(exec, objects, list, host::config_of(options), &contacts, &bad_pair);
   if (bad_pair < pairs_in.size()) {
     const size_t k = bad_pair;
     const ShapePair& pr = pairs_in[k];
@@ -698,6 +786,11 @@ Status NarrowPhase::Impl::collide(const ShapeSet& shapes, std::span<const ShapeI
     return Status(StatusCode::kInvalidArgument,
                   "pair " + std::to_string(k) + ": two half-spaces have no finite collision data");
   }
+  if (!st.ok()) {
+    result->clear();
+    return st;
+  }
+  host::to_manifolds(exec, contacts, result);
   return st;
 }
 

@@ -8,10 +8,13 @@
 
 #include <Eigen/Core>
 
+#include "host/contact_manifolds.h"
 #include "host/narrowphase/shape_store.h"
 #include "host/parallel.h"
 #include "impact/narrowphase.h"
 #include "impact/status.h"
+#include "kernels/broadphase/grid.h"
+#include "kernels/common/body_views.h"
 #include "kernels/narrowphase/leaf.h"
 
 namespace impact::host {
@@ -48,8 +51,46 @@ struct alignas(64) PosedObject {
 };
 static_assert(sizeof(PosedObject) == 64);
 
-/// Expansion, bucketing, gather, kernels and output of host/narrowphase/narrow_phase.cpp.
-/// Keeps its scratch between calls.
+/// The pair list of a run: pair k is first[k] for k < first.size(), else
+/// second[k - first.size()] (a World passes its broad-phase pairs and its body-plane
+/// pairs without joining them).
+struct PairList {
+  std::span<const kernels::Pair> first;
+  std::span<const kernels::Pair> second;
+  size_t size() const { return first.size() + second.size(); }
+  const kernels::Pair& operator[](size_t k) const {
+    return k < first.size() ? first[k] : second[k - first.size()];
+  }
+};
+
+/// Objects at or past NarrowObjects::first_plane are a World's static planes.
+inline constexpr uint32_t kNoPlanes = 0xffffffffu;
+
+/// The objects of a run: object i is shape *rec[i] (it may point outside store, e.g.
+/// a sphere or half-space record of the caller's own; convex/mesh/compound records
+/// index into store), types[i] = rec[i]->type (a compact copy: the pair pass reads
+/// only it), poses[i] its rotation and position with set_shape(*rec[i]) applied.
+/// Manifolds name an object b >= first_plane by its plane index b - first_plane, with
+/// b_is_plane set.
+struct NarrowObjects {
+  const ShapeStore* store = nullptr;
+  std::span<const ShapeRecord* const> rec;
+  std::span<const ShapeType> types;
+  std::span<const PosedObject> poses;
+  uint32_t first_plane = kNoPlanes;
+};
+
+/// A World of plain spheres: bodies read straight from the body store, planes from
+/// the plane store; plane j is object first_plane + j of the pair list.
+struct SphereObjects {
+  kernels::SphereView spheres;
+  kernels::PlaneView planes;
+  uint32_t first_plane = 0;
+};
+
+/// The narrow phase of host/narrowphase/narrow_phase.cpp: expansion, bucketing by
+/// leaf-type pair, gather, the pair kernels, and the ordered output into the one
+/// contact layout (host::ContactManifolds). Keeps its scratch between calls.
 class NarrowRunner {
  public:
   NarrowRunner();
@@ -57,24 +98,30 @@ class NarrowRunner {
   NarrowRunner(NarrowRunner&&) noexcept = default;
   NarrowRunner& operator=(NarrowRunner&&) noexcept = default;
 
-  /// Inputs are valid (the caller checked them): rec[i] is object i's shape (it may
-  /// point outside store, e.g. a sphere or half-space record of the caller's own;
-  /// convex/mesh/compound records index into store), types[i] = rec[i]->type (a compact
-  /// copy: the pair pass reads only it), poses[i] its rotation and position with
-  /// set_shape(*rec[i]) applied, pairs index objects (a != b, not two half-spaces). cfg.hulls is set here.
-  /// bad_pair: null, or the pairs are checked as they are expanded (indices in range,
-  /// a != b, not two half-spaces): when one fails, *bad_pair is the lowest failing
-  /// index, *out is left empty and the call returns kInvalidArgument (the caller words
-  /// the message); else *bad_pair = pairs.size(). The check rides on the expansion,
-  /// which reads the same records, instead of costing a pass of its own.
-  Status run(const Executor& exec, const ShapeStore& store, std::span<const ShapeRecord* const> rec,
-             std::span<const ShapeType> types, std::span<const PosedObject> poses,
-             std::span<const ShapePair> pairs, const kernels::NarrowConfig& cfg, std::vector<Manifold>* out,
-             size_t* bad_pair = nullptr);
+  /// Collision data of every pair (inputs valid: the caller checked them; pairs index
+  /// objects, a != b, not two half-spaces) into *out, in (pair, child_a, child_b) order.
+  /// cfg.hulls is set here. bad_pair: null, or the pairs are checked as they are
+  /// expanded (indices in range, a != b, not two half-spaces): when one fails,
+  /// *bad_pair is the lowest failing index, *out is left as it was and the call returns
+  /// kInvalidArgument (the caller words the message); else *bad_pair = pairs.size().
+  /// The check rides on the expansion, which reads the same records, instead of
+  /// costing a pass of its own.
+  Status run(const Executor& exec, const NarrowObjects& objects, const PairList& pairs,
+             const kernels::NarrowConfig& cfg, ContactManifolds* out, size_t* bad_pair = nullptr);
+
+  /// The sphere buckets of a World without shapes: pairs.first are sphere-sphere
+  /// pairs (the sphere_sphere kernels), pairs.second (body, first_plane + j) pairs from
+  /// the plane filter (sphere_plane kernels); one-point manifolds in pair order.
+  Status run_spheres(const Executor& exec, const SphereObjects& objects, const PairList& pairs,
+                     ContactManifolds* out);
 
  private:
   struct State;
   std::unique_ptr<State> s_;
 };
+
+/// The public Manifold of every manifold of c (pair, children, normal, depth and
+/// points), in c's order; *out is resized to c.manifolds.
+void to_manifolds(const Executor& exec, const ContactManifolds& c, std::vector<Manifold>* out);
 
 }  // namespace impact::host

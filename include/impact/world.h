@@ -1,5 +1,6 @@
-// World: a batch of sphere bodies and static planes stored as structure-of-arrays,
-// stepped by a fixed-timestep pipeline of flat data-parallel passes.
+// World: a batch of bodies (plain spheres, or any shape of World::shapes()) and static
+// planes stored as structure-of-arrays, stepped by a fixed-timestep pipeline of flat
+// data-parallel passes (the stages of host/pipeline/step.cpp).
 //
 // Thread safety: a World is not internally synchronised. Calls on one World must
 // not overlap; different Worlds may be used from different threads.
@@ -79,7 +80,8 @@ struct PassTimes {
 /// What the last step did.
 struct StepStats {
   uint64_t pairs = 0;          ///< broad-phase candidate pairs (body-body)
-  uint64_t contacts = 0;       ///< narrow-phase contacts (body-body plus body-plane)
+  uint64_t manifolds = 0;      ///< contact manifolds (body-body plus body-plane)
+  uint64_t contacts = 0;       ///< contact points of those manifolds (the solver's contacts)
   uint64_t plane_contacts = 0; ///< of which body-plane
   PassTimes ms;
 };
@@ -120,21 +122,34 @@ struct PlaneArrays {
   size_t size() const { return handles.size(); }
 };
 
-/// Collision data of the last step, one entry per contact, in a deterministic
-/// order (body-body contacts in broad-phase pair order, then body-plane contacts
-/// by body slot then plane). The normal points from a to b; depth > 0 is overlap;
-/// point lies midway between the two surfaces' deepest points. The safe
-/// (overlap-free) positions are a - normal*depth*wa and b + normal*depth*wb with
-/// w = inv_mass / (inv_mass_a + inv_mass_b).
+/// Collision data of the last step as contact manifolds, one per touching pair (or
+/// compound child / mesh triangle pair), in a deterministic order: body-body manifolds
+/// in broad-phase pair order, then body-plane ones by body slot then plane. Manifold m:
+/// bodies a[m] and b[m] (b[m] is a plane index when b_is_plane[m]), a unit normal from
+/// a to b, depth[m] > 0 the overlap; the safe (overlap-free) positions are
+/// a - normal*depth*wa and b + normal*depth*wb with w = inv_mass / (inv_mass_a +
+/// inv_mass_b). Its point_count[m] points (1 to 4) are entries first_point(m) ..
+/// first_point(m) + point_count[m] - 1 of the point arrays: each midway between the two
+/// surfaces, with its own depth along the normal and the solver's impulse.
 struct ContactArrays {
   std::span<const uint32_t> a;        ///< body slot
   std::span<const uint32_t> b;        ///< body slot, or plane index if b_is_plane
   std::span<const uint8_t> b_is_plane;
   std::span<const float> normal_x, normal_y, normal_z;
-  std::span<const float> depth;
-  std::span<const float> point_x, point_y, point_z;
-  std::span<const float> impulse;     ///< accumulated normal impulse, N*s
+  std::span<const float> depth;       ///< m, the manifold's (deepest point's) overlap
+  std::span<const uint8_t> point_count;
+  /// Per manifold: its first point. Empty when every manifold has one point, whose
+  /// index is then the manifold's (a world of plain spheres); see first_point().
+  std::span<const uint32_t> first_points;
+  std::span<const float> point_x, point_y, point_z;  ///< per point, world, m
+  std::span<const float> point_depth;                ///< per point: overlap along the normal, m
+  std::span<const float> impulse;                    ///< per point: accumulated normal impulse, N*s
+  /// Manifolds.
   size_t size() const { return a.size(); }
+  /// Points of all manifolds.
+  size_t points() const { return point_x.size(); }
+  /// Index of manifold m's first point.
+  size_t first_point(size_t m) const { return first_points.empty() ? m : first_points[m]; }
 };
 
 class WorldImpl;
@@ -187,8 +202,9 @@ class World {
 
   // --- time --------------------------------------------------------------------
   /// Runs exactly one fixed step of desc().fixed_dt; last_step() then describes it.
-  /// Fails only when a capacity is exceeded (more than 2^32 - 1 pairs or 2^31 - 1
-  /// contacts); the bodies have then been integrated but not collided.
+  /// Fails when a capacity is exceeded (more than 2^32 - 1 pairs or 2^31 - 1 contact
+  /// points) or a body left the supported range |x| <= 1e18 m; the bodies have then
+  /// been integrated but not collided, and contacts() is empty.
   Status step();
   /// Adds frame_seconds (>= 0, finite) to the accumulator and runs as many fixed
   /// steps as fit (at most max_steps_per_frame). Invalid frame time runs nothing.
@@ -203,8 +219,10 @@ class World {
   const StepStats& last_step() const;
   ContactArrays contacts() const;
   std::span<const BodyPair> pairs() const;
-  /// 64-bit hash of every body's state bytes in slot order; equal hashes across
-  /// thread counts and backends are the determinism contract.
+  /// 64-bit hash of the bytes of every body field (position, velocity, mass, radius,
+  /// restitution, filters, handles, and orientation and shape once a body has one) in
+  /// slot order; equal hashes across thread counts and backends are the determinism
+  /// contract.
   uint64_t state_hash() const;
 
   // --- queries ("what is near me", include/impact/broadphase.h) --------------------

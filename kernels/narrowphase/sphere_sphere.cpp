@@ -19,8 +19,8 @@ uint64_t sphere_sphere_count(const Pair* IMPACT_RESTRICT pairs, SphereView s, Ra
   return count;
 }
 
-void sphere_sphere_write(const Pair* IMPACT_RESTRICT pairs, SphereView s, ContactSoA out,
-                         uint64_t offset, Range r) {
+void sphere_sphere_write(const Pair* IMPACT_RESTRICT pairs, SphereView s, uint32_t pair_base,
+                         const ContactManifoldArrays& out, uint64_t offset, Range r) {
   uint64_t c = offset;
   for (uint32_t k = r.begin; k < r.end; ++k) {
     const uint32_t a = pairs[k].a, b = pairs[k].b;
@@ -41,17 +41,21 @@ void sphere_sphere_write(const Pair* IMPACT_RESTRICT pairs, SphereView s, Contac
       ny = dy * inv;
       nz = dz * inv;
     }
+    const float depth = rs - dist;
+    const float h = 0.5f * (ra - rb);
+    out.pair[c] = pair_base + k;
     out.a[c] = a;
     out.b[c] = b;
     out.b_is_plane[c] = 0;
-    out.normal_x[c] = nx;
-    out.normal_y[c] = ny;
-    out.normal_z[c] = nz;
-    out.depth[c] = rs - dist;
-    const float h = 0.5f * (ra - rb);
-    out.point_x[c] = 0.5f * (s.pos_x[a] + s.pos_x[b]) + nx * h;
-    out.point_y[c] = 0.5f * (s.pos_y[a] + s.pos_y[b]) + ny * h;
-    out.point_z[c] = 0.5f * (s.pos_z[a] + s.pos_z[b]) + nz * h;
+    out.normal[0][c] = nx;
+    out.normal[1][c] = ny;
+    out.normal[2][c] = nz;
+    out.depth[c] = depth;
+    out.count[c] = 1;
+    out.point[0][c] = 0.5f * (s.pos_x[a] + s.pos_x[b]) + nx * h;
+    out.point[1][c] = 0.5f * (s.pos_y[a] + s.pos_y[b]) + ny * h;
+    out.point[2][c] = 0.5f * (s.pos_z[a] + s.pos_z[b]) + nz * h;
+    out.point_depth[c] = depth;
     ++c;
   }
 }

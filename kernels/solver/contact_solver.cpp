@@ -5,22 +5,36 @@
 namespace impact::kernels {
 namespace {
 
-// Solver slot of body b: planes map to the immovable zero entry at body_count.
-IMPACT_INLINE uint32_t solver_b(SolverContacts c, uint32_t k, uint32_t body_count) {
-  return c.b_is_plane[k] ? body_count : c.b[k];
+// Solver slot of manifold m's body b: planes map to the immovable zero entry at body_count.
+IMPACT_INLINE uint32_t solver_b(const ContactManifoldArrays& c, uint32_t m, uint32_t body_count) {
+  return c.b_is_plane[m] ? body_count : c.b[m];
 }
 
-// Relative normal velocity (b minus a) along n.
-IMPACT_INLINE float normal_velocity(SolverContacts c, const BodyState* s, uint32_t body_count, uint32_t k) {
-  const BodyState& A = s[c.a[k]];
-  const BodyState& B = s[solver_b(c, k, body_count)];
-  return (B.x - A.x) * c.normal_x[k] + (B.y - A.y) * c.normal_y[k] + (B.z - A.z) * c.normal_z[k];
+// Relative normal velocity (b minus a) along manifold m's normal.
+IMPACT_INLINE float normal_velocity(const ContactManifoldArrays& c, const BodyState* s, uint32_t body_count,
+                                    uint32_t m) {
+  const BodyState& A = s[c.a[m]];
+  const BodyState& B = s[solver_b(c, m, body_count)];
+  return (B.x - A.x) * c.normal[0][m] + (B.y - A.y) * c.normal[1][m] + (B.z - A.z) * c.normal[2][m];
 }
 
-IMPACT_INLINE void set_delta(SolverContacts c, BodyContacts adj, uint32_t k, float d) {
-  const float x = d * c.normal_x[k], y = d * c.normal_y[k], z = d * c.normal_z[k];
-  float* va = adj.delta + 4ull * adj.pos[2ull * k];
-  float* vb = adj.delta + 4ull * adj.pos[2ull * k + 1];
+// fn(m, p) for every point p of every manifold m in r, in order.
+template <class Fn>
+IMPACT_INLINE void for_each_point(const ContactManifoldArrays& c, Range r, Fn&& fn) {
+  if (c.first_point == nullptr) {
+    for (uint32_t m = r.begin; m < r.end; ++m) fn(m, m);
+  } else {
+    for (uint32_t m = r.begin; m < r.end; ++m) {
+      const uint32_t p0 = c.first_point[m], p1 = p0 + c.count[m];
+      for (uint32_t p = p0; p < p1; ++p) fn(m, p);
+    }
+  }
+}
+
+IMPACT_INLINE void set_delta(const ContactManifoldArrays& c, BodyContacts adj, uint32_t m, uint32_t p, float d) {
+  const float x = d * c.normal[0][m], y = d * c.normal[1][m], z = d * c.normal[2][m];
+  float* va = adj.delta + 4ull * adj.pos[2ull * p];
+  float* vb = adj.delta + 4ull * adj.pos[2ull * p + 1];
   va[0] = -x;
   va[1] = -y;
   va[2] = -z;
@@ -61,15 +75,15 @@ void commit_displacement_state(const BodyState* IMPACT_RESTRICT s, float* IMPACT
   }
 }
 
-void contact_body_keys(SolverContacts c, const float* inv_mass, uint32_t body_count,
+void contact_body_keys(const ContactManifoldArrays& c, const float* inv_mass, uint32_t body_count,
                        uint64_t* IMPACT_RESTRICT out_keys, Range r) {
-  for (uint32_t k = r.begin; k < r.end; ++k) {
-    const uint32_t ia = c.a[k];
+  for_each_point(c, r, [&](uint32_t m, uint32_t p) IMPACT_LAMBDA_INLINE {
+    const uint32_t ia = c.a[m];
     const uint64_t ka = inv_mass[ia] > 0.0f ? ia : body_count;
-    const uint64_t kb = (!c.b_is_plane[k] && inv_mass[c.b[k]] > 0.0f) ? c.b[k] : body_count;
-    out_keys[2ull * k] = (ka << 32) | (2ull * k);
-    out_keys[2ull * k + 1] = (kb << 32) | (2ull * k + 1);
-  }
+    const uint64_t kb = (!c.b_is_plane[m] && inv_mass[c.b[m]] > 0.0f) ? c.b[m] : body_count;
+    out_keys[2ull * p] = (ka << 32) | (2ull * p);
+    out_keys[2ull * p + 1] = (kb << 32) | (2ull * p + 1);
+  });
 }
 
 void contact_entry_positions(const uint64_t* IMPACT_RESTRICT sorted_keys, uint32_t* IMPACT_RESTRICT out_pos,
@@ -77,37 +91,39 @@ void contact_entry_positions(const uint64_t* IMPACT_RESTRICT sorted_keys, uint32
   for (uint32_t e = r.begin; e < r.end; ++e) out_pos[static_cast<uint32_t>(sorted_keys[e])] = e;
 }
 
-void contact_prepare(const SolverParams& p, SolverContacts c, const BodyState* s, uint32_t body_count,
-                     const float* restitution, const float* plane_restitution, BodyContacts adj, Range r) {
-  for (uint32_t k = r.begin; k < r.end; ++k) {
-    const uint32_t ia = c.a[k];
+void contact_prepare(const SolverParams& p, const ContactManifoldArrays& c, SolverRows rows, const BodyState* s,
+                     uint32_t body_count, const float* restitution, const float* plane_restitution,
+                     BodyContacts adj, Range r) {
+  for_each_point(c, r, [&](uint32_t m, uint32_t k) IMPACT_LAMBDA_INLINE {
+    const uint32_t ia = c.a[m];
     float w = s[ia].inv_mass * static_cast<float>(adj.start[ia + 1] - adj.start[ia]);
     float e = restitution[ia];
-    if (c.b_is_plane[k]) {
-      e = std::max(e, plane_restitution[c.b[k]]);
+    if (c.b_is_plane[m]) {
+      e = std::max(e, plane_restitution[c.b[m]]);
     } else {
-      const uint32_t ib = c.b[k];
+      const uint32_t ib = c.b[m];
       w += s[ib].inv_mass * static_cast<float>(adj.start[ib + 1] - adj.start[ib]);
       e = std::max(e, restitution[ib]);
     }
-    c.mass[k] = w > 0.0f ? 1.0f / w : 0.0f;
-    const float vn = normal_velocity(c, s, body_count, k);
-    c.target[k] = vn < -p.restitution_threshold ? -e * vn : 0.0f;
-    c.impulse[k] = 0.0f;
-  }
+    rows.mass[k] = w > 0.0f ? 1.0f / w : 0.0f;
+    const float vn = normal_velocity(c, s, body_count, m);
+    rows.target[k] = vn < -p.restitution_threshold ? -e * vn : 0.0f;
+    rows.impulse[k] = 0.0f;
+  });
 }
 
-void contact_pair_keys(SolverContacts c, uint64_t* IMPACT_RESTRICT out_keys, Range r) {
-  for (uint32_t k = r.begin; k < r.end; ++k)
-    out_keys[k] = (static_cast<uint64_t>(c.a[k]) << 32) | c.b[k] | (c.b_is_plane[k] ? 0x80000000ull : 0ull) |
-                  (c.point != nullptr ? static_cast<uint64_t>(c.point[k] & 3u) << 29 : 0ull);
+void contact_pair_keys(const ContactManifoldArrays& c, uint64_t* IMPACT_RESTRICT out_keys, Range r) {
+  for_each_point(c, r, [&](uint32_t m, uint32_t p) IMPACT_LAMBDA_INLINE {
+    out_keys[p] = (static_cast<uint64_t>(c.a[m]) << 32) | c.b[m] | (c.b_is_plane[m] ? 0x80000000ull : 0ull) |
+                  (static_cast<uint64_t>(feature_of(c, m, p) & 3u) << 29);
+  });
 }
 
-void contact_warm_start(SolverContacts c, BodyContacts adj, const uint64_t* IMPACT_RESTRICT keys,
-                        WarmStart prev, Range r) {
-  for (uint32_t k = r.begin; k < r.end; ++k) {
+void contact_warm_start(const ContactManifoldArrays& c, SolverRows rows, BodyContacts adj,
+                        const uint64_t* IMPACT_RESTRICT keys, WarmStart prev, Range r) {
+  for_each_point(c, r, [&](uint32_t m, uint32_t k) IMPACT_LAMBDA_INLINE {
     const uint64_t key = keys[k];
-    const uint32_t a = c.a[k];
+    const uint32_t a = c.a[m];
     float imp = 0.0f;
     if (a < prev.body_count) {
       // Last step's contacts of body a: a handful, scanned linearly.
@@ -118,19 +134,20 @@ void contact_warm_start(SolverContacts c, BodyContacts adj, const uint64_t* IMPA
         }
       }
     }
-    c.impulse[k] = imp;
-    set_delta(c, adj, k, imp);
-  }
+    rows.impulse[k] = imp;
+    set_delta(c, adj, m, k, imp);
+  });
 }
 
-void contact_solve(SolverContacts c, BodyContacts adj, const BodyState* s, uint32_t body_count, Range r) {
-  for (uint32_t k = r.begin; k < r.end; ++k) {
-    const float vn = normal_velocity(c, s, body_count, k);
-    const float old = c.impulse[k];
-    const float next = std::max(old + c.mass[k] * (c.target[k] - vn), 0.0f);
-    c.impulse[k] = next;
-    set_delta(c, adj, k, next - old);
-  }
+void contact_solve(const ContactManifoldArrays& c, SolverRows rows, BodyContacts adj, const BodyState* s,
+                   uint32_t body_count, Range r) {
+  for_each_point(c, r, [&](uint32_t m, uint32_t k) IMPACT_LAMBDA_INLINE {
+    const float vn = normal_velocity(c, s, body_count, m);
+    const float old = rows.impulse[k];
+    const float next = std::max(old + rows.mass[k] * (rows.target[k] - vn), 0.0f);
+    rows.impulse[k] = next;
+    set_delta(c, adj, m, k, next - old);
+  });
 }
 
 void body_apply(BodyContacts adj, BodyState* io, Range r) {
@@ -151,13 +168,13 @@ void body_apply(BodyContacts adj, BodyState* io, Range r) {
   }
 }
 
-void contact_position_target(const SolverParams& p, SolverContacts c, const BodyState* s, uint32_t body_count,
-                             float dt, Range r) {
-  for (uint32_t k = r.begin; k < r.end; ++k) {
-    const float depth = c.depth[k] - dt * normal_velocity(c, s, body_count, k);
-    c.target[k] = p.position_correction * std::max(depth - p.penetration_slop, 0.0f);
-    c.impulse[k] = 0.0f;
-  }
+void contact_position_target(const SolverParams& p, const ContactManifoldArrays& c, SolverRows rows,
+                             const BodyState* s, uint32_t body_count, float dt, Range r) {
+  for_each_point(c, r, [&](uint32_t m, uint32_t k) IMPACT_LAMBDA_INLINE {
+    const float depth = c.point_depth[k] - dt * normal_velocity(c, s, body_count, m);
+    rows.target[k] = p.position_correction * std::max(depth - p.penetration_slop, 0.0f);
+    rows.impulse[k] = 0.0f;
+  });
 }
 
 }  // namespace impact::kernels

@@ -18,7 +18,7 @@
 // static bodies and planes use the sentinel body id n_bodies and are skipped.
 //
 // Warm starting: each contact has a key (a << 32 | b, with bit 31 set when b is a
-// plane); last step's keys are kept sorted with their impulses, and a contact
+// plane and the point's feature key in bits 29-30); last step's keys are kept sorted with their impulses, and a contact
 // that persists starts from warm_start * last impulse (Catto, "Iterative Dynamics
 // with Temporal Coherence", GDC 2005), so stacks converge over steps, not within one.
 //
@@ -26,6 +26,10 @@
 // instead of velocities ("split impulses" / pseudo-velocities): the target of a
 // contact is position_correction * max(depth - slop, 0), reached without adding
 // kinetic energy; then positions move by the displacement.
+//
+// Contacts are the points of the step's manifolds (kernels/common/contact_manifolds.h):
+// one solver row per point, along its manifold's normal. The contact passes take a
+// range of manifolds and handle each one's points (rows first_point .. + count).
 //
 // Passes (each output element written by exactly one index):
 //   pack_*_state             per body: hot 16-byte state (velocity or displacement, w)
@@ -40,6 +44,7 @@
 //   unpack / commit          per body: velocities back, or p += displacement
 #pragma once
 
+#include "kernels/common/contact_manifolds.h"
 #include "kernels/common/kernel.h"
 
 namespace impact::kernels {
@@ -60,20 +65,11 @@ struct alignas(16) BodyState {
 };
 static_assert(sizeof(BodyState) == 16);
 
-struct SolverContacts {
-  const uint32_t* a;
-  const uint32_t* b;
-  const uint8_t* b_is_plane;
-  const float* normal_x;
-  const float* normal_y;
-  const float* normal_z;
-  const float* depth;
-  float* mass;       ///< 1 / (w_a k_a + w_b k_b), 0 if both immovable
-  float* target;     ///< desired relative normal velocity (or displacement) after the solve
-  float* impulse;    ///< accumulated normal impulse, N s
-  /// Manifold point index 0..3 of each contact (null: all 0): part of the warm-start
-  /// key, so the points of one pair keep their own impulses. Requires b < 2^29.
-  const uint8_t* point = nullptr;
+/// The solver's rows, one per contact point (row p = point p of the manifolds).
+struct SolverRows {
+  float* mass;     ///< 1 / (w_a k_a + w_b k_b), 0 if both immovable
+  float* target;   ///< desired relative normal velocity (or displacement) after the solve
+  float* impulse;  ///< accumulated normal impulse, N s
 };
 
 /// CSR adjacency of bodies to contacts. Entry e in [start[i], start[i+1]) belongs
@@ -107,30 +103,35 @@ void unpack_velocity_state(const BodyState* IMPACT_RESTRICT s, float* IMPACT_RES
 void commit_displacement_state(const BodyState* IMPACT_RESTRICT s, float* IMPACT_RESTRICT px,
                                float* IMPACT_RESTRICT py, float* IMPACT_RESTRICT pz, Range r);
 
-void contact_body_keys(SolverContacts c, const float* inv_mass, uint32_t body_count,
+/// Per manifold in r, per point p: the CSR keys 2p (side a) and 2p + 1 (side b).
+void contact_body_keys(const ContactManifoldArrays& c, const float* inv_mass, uint32_t body_count,
                        uint64_t* IMPACT_RESTRICT out_keys, Range r);
 
 /// pos[entry] = e for each sorted CSR key e in r (entry = low 32 bits of the key).
 void contact_entry_positions(const uint64_t* IMPACT_RESTRICT sorted_keys, uint32_t* IMPACT_RESTRICT out_pos,
                              Range r);
 
-void contact_prepare(const SolverParams& p, SolverContacts c, const BodyState* s, uint32_t body_count,
-                     const float* restitution, const float* plane_restitution, BodyContacts adj, Range r);
+// The passes below take a Range of manifolds and handle every point of each.
+void contact_prepare(const SolverParams& p, const ContactManifoldArrays& c, SolverRows rows, const BodyState* s,
+                     uint32_t body_count, const float* restitution, const float* plane_restitution,
+                     BodyContacts adj, Range r);
 
-void contact_pair_keys(SolverContacts c, uint64_t* IMPACT_RESTRICT out_keys, Range r);
+/// Per point: a << 32 | b | (b is a plane) << 31 | (feature & 3) << 29.
+void contact_pair_keys(const ContactManifoldArrays& c, uint64_t* IMPACT_RESTRICT out_keys, Range r);
 
-void contact_warm_start(SolverContacts c, BodyContacts adj, const uint64_t* IMPACT_RESTRICT keys,
-                        WarmStart prev, Range r);
+void contact_warm_start(const ContactManifoldArrays& c, SolverRows rows, BodyContacts adj,
+                        const uint64_t* IMPACT_RESTRICT keys, WarmStart prev, Range r);
 
-void contact_solve(SolverContacts c, BodyContacts adj, const BodyState* s, uint32_t body_count, Range r);
+void contact_solve(const ContactManifoldArrays& c, SolverRows rows, BodyContacts adj, const BodyState* s,
+                   uint32_t body_count, Range r);
 
 /// Per body: state += inv_mass * sum of its entries' deltas.
 void body_apply(BodyContacts adj, BodyState* io, Range r);
 
-/// Writes position targets to c.target and zeroes c.impulse. The target is
-/// position_correction * max(depth' - slop, 0), where depth' = depth - dt * v_n is
-/// the overlap left once positions move with the solved velocities s.
-void contact_position_target(const SolverParams& p, SolverContacts c, const BodyState* s, uint32_t body_count,
-                             float dt, Range r);
+/// Writes position targets to rows.target and zeroes rows.impulse. The target is
+/// position_correction * max(depth' - slop, 0), where depth' = point depth - dt * v_n
+/// is the overlap left once positions move with the solved velocities s.
+void contact_position_target(const SolverParams& p, const ContactManifoldArrays& c, SolverRows rows,
+                             const BodyState* s, uint32_t body_count, float dt, Range r);
 
 }  // namespace impact::kernels

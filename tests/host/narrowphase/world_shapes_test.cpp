@@ -106,12 +106,18 @@ TEST(WorldShapes, BoxesRestAtTheirClosedFormHeights) {
     EXPECT_NEAR(p[i].y(), expect[i], 0.02f) << "body " << i;
     EXPECT_LT(v[i].norm(), 0.05f) << "body " << i;
   }
-  // Face contacts on the floor: 4 points per resting box, normals into the plane.
+  // Face contacts on the floor: one manifold of 4 points per resting box, normals into
+  // the plane, the points consecutive and each within the manifold's depth.
   const ContactArrays c = w->contacts();
-  EXPECT_EQ(c.size(), 4 * h.size());
+  EXPECT_EQ(c.size(), h.size());
+  EXPECT_EQ(c.points(), 4 * h.size());
   for (size_t k = 0; k < c.size(); ++k) {
     EXPECT_TRUE(c.b_is_plane[k]);
     EXPECT_NEAR(c.normal_y[k], -1.0f, 1e-5f);
+    EXPECT_EQ(c.point_count[k], 4u);
+    EXPECT_EQ(c.first_point(k), 4 * k);
+    for (size_t q = c.first_point(k); q < c.first_point(k) + c.point_count[k]; ++q)
+      EXPECT_LE(c.point_depth[q], c.depth[k] + 1e-6f) << "manifold " << k << " point " << q;
   }
 }
 
@@ -416,10 +422,16 @@ TEST(WorldShapes, DestroyingTheShapedBodiesReturnsToTheSpherePath) {
   std::vector<BodyHandle> h(3);
   ASSERT_TRUE(IsOk(w->create_bodies(d, h)));
   ASSERT_TRUE(IsOk(w->step()));
-  EXPECT_EQ(w->contacts().size(), 1u + 4u + 1u);
+  EXPECT_EQ(w->contacts().size(), 3u);
+  EXPECT_EQ(w->contacts().points(), 1u + 4u + 1u);
+  EXPECT_EQ(w->last_step().contacts, 1u + 4u + 1u);
+  EXPECT_EQ(w->last_step().manifolds, 3u);
   ASSERT_TRUE(IsOk(w->destroy_bodies({&h[1], 1})));
+  EXPECT_EQ(w->contacts().size(), 0u);  // the last step's results named the old slots
   ASSERT_TRUE(IsOk(w->step()));
   EXPECT_EQ(w->contacts().size(), 2u);
+  EXPECT_EQ(w->contacts().points(), 2u);
+  EXPECT_TRUE(w->contacts().first_points.empty());  // the sphere path: one point each
 }
 
 }  // namespace

@@ -111,5 +111,65 @@ TEST(Reorder, SlotsAndHandlesStayConsistentInALargeScene) {
   EXPECT_GT(moved, h.size() / 2) << "the scene should have been re-sorted";
 }
 
+TEST(Reorder, EveryBodyFieldTravelsWithItsBody) {
+  // Each body gets its own value of every per-body field (mass, radius, restitution,
+  // layer, mask, shape, orientation, and the interpolation's previous position); far
+  // apart and without gravity nothing collides, so after re-sorts every field read back
+  // through the body's handle must be the one it was created with.
+  WorldDesc d = test::zero_gravity_desc();
+  d.reorder_interval = 1;
+  d.interpolation = true;
+  auto world = test::make_world(d);
+  ShapeId box;
+  IMPACT_ASSERT_OK(world->shapes().add_box(Eigen::Vector3f(0.1f, 0.1f, 0.1f), &box));
+  const uint32_t n = 400;
+  std::vector<BodyDesc> bodies(n);
+  for (uint32_t i = 0; i < n; ++i) {
+    BodyDesc& b = bodies[i];
+    // Created in reverse spatial order, so the grid's order permutes every slot.
+    b.position = {static_cast<float>(n - i) * 2.0f, 0.0f, 0.0f};
+    b.inv_mass = 1.0f + static_cast<float>(i);
+    b.radius = 0.2f + 0.001f * static_cast<float>(i);
+    b.restitution = static_cast<float>(i) / static_cast<float>(n);
+    b.layer = 1u << (i % 31);
+    b.mask = ~(1u << (i % 29));
+    if (i % 3 == 0) {
+      b.shape = box;
+      b.orientation = Eigen::Quaternionf(Eigen::AngleAxisf(0.01f * static_cast<float>(i), Eigen::Vector3f::UnitZ()));
+    }
+  }
+  std::vector<BodyHandle> h(n);
+  IMPACT_ASSERT_OK(world->create_bodies(bodies, h));
+  for (int k = 0; k < 3; ++k) IMPACT_ASSERT_OK(world->step());
+  IMPACT_ASSERT_OK(world->advance(0.5f * d.fixed_dt));  // no step: alpha 0.5
+  std::vector<Eigen::Vector3f> interp(n);
+  IMPACT_ASSERT_OK(world->interpolated_positions(interp));
+  const BodyArrays b = world->bodies();
+  ASSERT_EQ(b.shape.size(), n);
+  size_t moved = 0;
+  for (uint32_t i = 0; i < n; ++i) {
+    uint32_t slot = 0;
+    IMPACT_ASSERT_OK(world->slot_of(h[i], &slot));
+    moved += slot != i;
+    const BodyDesc& e = bodies[i];
+    EXPECT_EQ(b.inv_mass[slot], e.inv_mass) << i;
+    EXPECT_EQ(b.restitution[slot], e.restitution) << i;
+    EXPECT_EQ(b.layer[slot], e.layer) << i;
+    EXPECT_EQ(b.mask[slot], e.mask) << i;
+    EXPECT_EQ(b.shape[slot], i % 3 == 0 ? box.index : BodyArrays::kSphereBody) << i;
+    if (i % 3 != 0) {
+      EXPECT_EQ(b.radius[slot], e.radius) << i;
+    }
+    const Eigen::Quaternionf q = e.orientation.normalized();
+    EXPECT_EQ(b.qx[slot], q.x()) << i;
+    EXPECT_EQ(b.qz[slot], q.z()) << i;
+    EXPECT_EQ(b.qw[slot], q.w()) << i;
+    // At rest: the previous position is the position, so the blend is it exactly.
+    EXPECT_EQ(interp[slot].x(), e.position.x()) << i;
+    EXPECT_EQ(b.pos_x[slot], e.position.x()) << i;
+  }
+  EXPECT_GT(moved, n / 2) << "the scene should have been re-sorted";
+}
+
 }  // namespace
 }  // namespace impact

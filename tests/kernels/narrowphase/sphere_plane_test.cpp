@@ -74,6 +74,9 @@ void check(const std::vector<BodyDesc>& bodies, const std::vector<PlaneDesc>& pl
 
   const ContactArrays c = world->contacts();
   std::vector<size_t> plane_rows;
+  // A world of plain spheres: one point per manifold, point k belongs to manifold k.
+  ASSERT_EQ(c.points(), c.size());
+  ASSERT_TRUE(c.first_points.empty());
   bool plane_seen = false;
   for (size_t k = 0; k < c.size(); ++k) {
     if (c.b_is_plane[k]) {

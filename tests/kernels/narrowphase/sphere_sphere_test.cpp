@@ -69,6 +69,9 @@ void check_contacts(const std::vector<BodyDesc>& descs, const char* what, size_t
   IMPACT_ASSERT_OK(world->step());
   const ContactArrays c = world->contacts();
   const auto pairs = world->pairs();
+  // A world of plain spheres: one point per manifold, point k belongs to manifold k.
+  ASSERT_EQ(c.points(), c.size());
+  ASSERT_TRUE(c.first_points.empty());
 
   double scale = 1.0;
   for (const BodyDesc& d : descs) scale = std::max<double>(scale, d.position.cwiseAbs().maxCoeff());
