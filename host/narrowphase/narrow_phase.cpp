@@ -352,7 +352,7 @@ inline void put_plane(LeafArrays& s, size_t k, const Eigen::Matrix3f& R, const E
 }
 }  // namespace
 
-inline void host::NarrowRunner::State::fill(LeafArrays& s, size_t k, uint32_t obj, uint32_t child) const {
+IMPACT_INLINE void host::NarrowRunner::State::fill(LeafArrays& s, size_t k, uint32_t obj, uint32_t child) const {
   // Plain shapes (every leaf of a pair list without meshes or compounds): the pose as it
   // is, and the record's fields from the same line.
   const Posed& P = posed[obj];

@@ -17,8 +17,9 @@ namespace impact {
 
 /// A pair of objects: indices into the shapes / poses spans of a collide() call.
 struct ShapePair {
-  uint32_t a;
-  uint32_t b;
+  uint32_t a;  ///< first object
+  uint32_t b;  ///< second object; normals point from a to b
+  /// Equal when both indices are.
   friend bool operator==(const ShapePair&, const ShapePair&) = default;
 };
 
@@ -69,16 +70,24 @@ struct Manifold {
   float point_depth[4] = {0, 0, 0, 0};  ///< penetration along normal at each point
 };
 
-/// Runs the narrow phase; keeps its scratch between calls.
+/// Runs the narrow phase; keeps its scratch between calls. Internally it fills the
+/// library's one contact layout (SoA manifolds and points) and converts it to
+/// Manifold structs at the end of collide().
 class NarrowPhase {
  public:
+  /// Invalid options are kept out: the defaults stay and every collide() fails with
+  /// the options' error until set_options() succeeds.
   explicit NarrowPhase(const NarrowPhaseOptions& options = {});
+  /// Frees the scratch.
   ~NarrowPhase();
+  /// Moves the options and scratch.
   NarrowPhase(NarrowPhase&&) noexcept;
+  /// Moves the options and scratch.
   NarrowPhase& operator=(NarrowPhase&&) noexcept;
 
   /// Validates options (kInvalidArgument naming the field).
   Status set_options(const NarrowPhaseOptions& options);
+  /// The options in force.
   const NarrowPhaseOptions& options() const;
 
   /// Collision data of every pair: object i is shapes[shape_of[i]] at poses[i].

@@ -74,7 +74,12 @@ struct WorldDesc {
 
 /// Wall time of each pass of the last step, ms.
 struct PassTimes {
-  double integrate = 0, bounds = 0, broad_phase = 0, narrow_phase = 0, solve = 0, total = 0;
+  double integrate = 0;     ///< both halves of semi-implicit Euler
+  double bounds = 0;        ///< the broad phase's boxes
+  double broad_phase = 0;   ///< candidate body pairs
+  double narrow_phase = 0;  ///< the plane filter and the contact manifolds
+  double solve = 0;         ///< velocity solve and position correction
+  double total = 0;         ///< the whole step (every stage, the re-sort included)
 };
 
 /// What the last step did.
@@ -83,7 +88,7 @@ struct StepStats {
   uint64_t manifolds = 0;      ///< contact manifolds (body-body plus body-plane)
   uint64_t contacts = 0;       ///< contact points of those manifolds (the solver's contacts)
   uint64_t plane_contacts = 0; ///< of which body-plane
-  PassTimes ms;
+  PassTimes ms;                ///< wall time per pass
 };
 
 /// What one advance() call did.
@@ -97,18 +102,22 @@ struct FrameResult {
 /// call that creates or destroys bodies or steps (a step may re-sort slots, see
 /// WorldDesc::reorder_interval). Slot i belongs to handles[i].
 struct BodyArrays {
-  std::span<const float> pos_x, pos_y, pos_z;
-  std::span<const float> vel_x, vel_y, vel_z;
-  std::span<const float> inv_mass, radius, restitution;
-  std::span<const uint32_t> layer, mask;
-  std::span<const BodyHandle> handles;
+  std::span<const float> pos_x, pos_y, pos_z;         ///< position, m
+  std::span<const float> vel_x, vel_y, vel_z;         ///< velocity, m/s
+  std::span<const float> inv_mass;                    ///< 1/kg, 0 = static
+  std::span<const float> radius;                      ///< m: the sphere, or a shape's bounding radius
+  std::span<const float> restitution;                 ///< in [0, 1]
+  std::span<const uint32_t> layer, mask;              ///< collision filter
+  std::span<const BodyHandle> handles;                ///< slot -> handle
   /// Per body: the index of its shape in World::shapes() (ShapeId::index), or
   /// kSphereBody for a plain sphere of `radius`; and its orientation, a unit
   /// quaternion (qx, qy, qz, qw). All five are empty while no body has a shape (every
   /// body is then a sphere at the identity orientation).
   std::span<const uint32_t> shape;
   std::span<const float> qx, qy, qz, qw;
+  /// The shape index of a plain sphere body.
   static constexpr uint32_t kSphereBody = 0xffffffffu;
+  /// Bodies.
   size_t size() const { return handles.size(); }
 };
 
@@ -116,9 +125,12 @@ struct BodyArrays {
 /// unit normals) in dense storage order. Valid until planes are created or destroyed.
 /// Slot i belongs to handles[i]; it is the plane index of ContactArrays::b.
 struct PlaneArrays {
-  std::span<const float> normal_x, normal_y, normal_z, offset, restitution;
-  std::span<const uint32_t> layer, mask;
-  std::span<const PlaneHandle> handles;
+  std::span<const float> normal_x, normal_y, normal_z;  ///< unit outward normal
+  std::span<const float> offset;                        ///< m, along the normal
+  std::span<const float> restitution;                   ///< in [0, 1]
+  std::span<const uint32_t> layer, mask;                ///< collision filter
+  std::span<const PlaneHandle> handles;                 ///< slot -> handle
+  /// Planes.
   size_t size() const { return handles.size(); }
 };
 
@@ -134,10 +146,10 @@ struct PlaneArrays {
 struct ContactArrays {
   std::span<const uint32_t> a;        ///< body slot
   std::span<const uint32_t> b;        ///< body slot, or plane index if b_is_plane
-  std::span<const uint8_t> b_is_plane;
-  std::span<const float> normal_x, normal_y, normal_z;
+  std::span<const uint8_t> b_is_plane;  ///< 1: b is a plane index
+  std::span<const float> normal_x, normal_y, normal_z;  ///< unit, from a to b
   std::span<const float> depth;       ///< m, the manifold's (deepest point's) overlap
-  std::span<const uint8_t> point_count;
+  std::span<const uint8_t> point_count;  ///< 1 to 4
   /// Per manifold: its first point. Empty when every manifold has one point, whose
   /// index is then the manifold's (a world of plain spheres); see first_point().
   std::span<const uint32_t> first_points;
@@ -158,10 +170,12 @@ struct SphereQueries;
 struct PointQueries;
 struct QueryHits;
 
+/// A simulated world: bodies, planes and shapes, stepped at a fixed timestep.
 class World {
  public:
   /// Validates desc and makes a world. On error *out is left empty.
   [[nodiscard]] static Status create(const WorldDesc& desc, std::unique_ptr<World>* out);
+  /// Frees every array of the world; its handles must not be used after.
   ~World();
   World(const World&) = delete;
   World& operator=(const World&) = delete;
@@ -180,24 +194,36 @@ class World {
                        std::span<BodyHandle> out);
   /// Removes bodies; their handles go stale. All-or-nothing.
   Status destroy_bodies(std::span<const BodyHandle> handles);
+  /// Moves bodies (m; a teleport: no interpolation across it). All-or-nothing.
   Status set_positions(std::span<const BodyHandle> handles, std::span<const Eigen::Vector3f> values);
+  /// Sets velocities (m/s, finite). All-or-nothing.
   Status set_velocities(std::span<const BodyHandle> handles, std::span<const Eigen::Vector3f> values);
+  /// Positions of the given bodies, out[i] for handles[i].
   Status get_positions(std::span<const BodyHandle> handles, std::span<Eigen::Vector3f> out) const;
+  /// Velocities of the given bodies, out[i] for handles[i].
   Status get_velocities(std::span<const BodyHandle> handles, std::span<Eigen::Vector3f> out) const;
   /// Dense slot of a live handle, or an error.
   Status slot_of(BodyHandle handle, uint32_t* out_slot) const;
+  /// Live bodies.
   size_t body_count() const;
+  /// Every body field as read-only spans in slot order (see BodyArrays for validity).
   BodyArrays bodies() const;
 
   /// The shapes bodies may carry (BodyDesc::shape). Add shapes before creating the
   /// bodies that use them; shapes are never removed.
   ShapeSet& shapes();
+  /// Read-only access to the world's shapes.
   const ShapeSet& shapes() const;
 
   // --- planes ------------------------------------------------------------------
+  /// Adds static planes (normals normalised, offsets scaled with them); out receives
+  /// one handle each. All-or-nothing.
   Status create_planes(std::span<const PlaneDesc> descs, std::span<PlaneHandle> out);
+  /// Removes planes; their handles go stale. All-or-nothing.
   Status destroy_planes(std::span<const PlaneHandle> handles);
+  /// Live planes.
   size_t plane_count() const;
+  /// Every plane field as read-only spans in slot order.
   PlaneArrays planes() const;
 
   // --- time --------------------------------------------------------------------
@@ -216,8 +242,13 @@ class World {
   Status interpolated_positions(std::span<Eigen::Vector3f> out) const;
 
   // --- results -------------------------------------------------------------------
+  /// Counts and pass times of the last step.
   const StepStats& last_step() const;
+  /// The last step's contact manifolds (see ContactArrays); valid until the next call
+  /// that steps, creates or destroys bodies or planes.
   ContactArrays contacts() const;
+  /// The last step's broad-phase pairs (body slots, a < b), in the order the contacts
+  /// follow; valid like contacts().
   std::span<const BodyPair> pairs() const;
   /// 64-bit hash of the bytes of every body field (position, velocity, mass, radius,
   /// restitution, filters, handles, and orientation and shape once a body has one) in
@@ -236,18 +267,25 @@ class World {
   /// first query refreshes it through the structure's coherent update (LBVH refit per
   /// WorldDesc::lbvh_update, grid rebuild, ...), which the next step builds on.
   Status query_aabbs(const AabbQueries& queries, QueryHits* out);
+  /// The sphere form of query_aabbs.
   Status query_spheres(const SphereQueries& queries, QueryHits* out);
+  /// The point form of query_aabbs.
   Status query_points(const PointQueries& queries, QueryHits* out);
 
   // --- settings ------------------------------------------------------------------
+  /// The settings in force (creation's, as changed by the setters below).
   const WorldDesc& desc() const;
-  /// The thread runtime in use (kDefault resolved) and how many threads it runs.
+  /// The thread runtime in use (kDefault resolved).
   Backend backend() const;
+  /// Worker threads the runtime runs.
   uint32_t threads() const;
   /// Switches the thread runtime; kUnsupported if it was not built in.
   Status set_backend(Backend backend, uint32_t threads);
+  /// Switches the broad-phase structure; the next step builds it afresh.
   Status set_broad_phase(BroadPhaseKind kind);
+  /// Replaces the solver knobs (validated as in create()).
   Status set_solver(const SolverDesc& solver);
+  /// Sets gravity, m/s^2 (finite).
   Status set_gravity(const Eigen::Vector3f& gravity);
 
  private:
