@@ -101,8 +101,11 @@ struct host::NarrowRunner::State {
   std::vector<LeafPair> records;
   std::vector<size_t> chunk_offsets;
   std::vector<uint64_t> keys;
-  std::vector<uint32_t> order;     // sorted position -> record
-  std::vector<uint32_t> position;  // record -> sorted position
+  std::vector<uint32_t> order;     // sorted position -> record (unless sorted)
+  std::vector<uint32_t> position;  // record -> sorted position (unless sorted)
+  bool sorted = false;             // the records were in bucket order: both maps are the identity
+  uint32_t record_at(uint32_t s) const { return sorted ? s : order[s]; }
+  uint32_t position_of(uint32_t record) const { return sorted ? record : position[record]; }
   std::vector<Block> blocks;
   host::ManifoldArrays manifold;
   std::vector<uint32_t> chunk_hits, chunk_points;
@@ -120,7 +123,8 @@ struct host::NarrowRunner::State {
   const ShapeRecord& shape(uint32_t obj) const { return *rec[obj]; }
 
   Status run(const host::Executor& exec, const host::NarrowObjects& objects, const host::PairList& pairs_in,
-             const kernels::NarrowConfig& cfg_in, host::ContactManifolds* out, size_t* bad_pair);
+             const kernels::NarrowConfig& cfg_in, host::ContactManifolds* out, size_t* bad_pair,
+             const host::ManifoldHook* hook);
   Status run_spheres(const host::Executor& exec, const host::SphereObjects& objects,
                      const host::PairList& pairs_in, host::ContactManifolds* out);
 
@@ -130,6 +134,18 @@ struct host::NarrowRunner::State {
                   std::vector<uint32_t>* tris) const;
   void mesh_below_plane(const MeshData& m, const Posed& pose, const Eigen::Vector3f& n, float d,
                         std::vector<uint32_t>* tris) const;
+  /// The one leaf pair of a pair of two plain shapes.
+  LeafPair plain_record(uint32_t pair_index) const {
+    const ShapeType ta = types[pairs[pair_index].a], tb = types[pairs[pair_index].b];
+    LeafPair lp;
+    lp.pair = pair_index;
+    lp.child_a = kNoChild;
+    lp.child_b = kNoChild;
+    lp.type_a = leaf_of(ta);
+    lp.type_b = leaf_of(tb);
+    lp.swapped = lp.type_a > lp.type_b ? 1 : 0;
+    return lp;
+  }
   void expand(uint32_t pair_index, std::vector<LeafPair>* out, std::vector<uint32_t>* scratch_a,
               std::vector<uint32_t>* scratch_b) const;
   void child_list(uint32_t obj, const Box3& other, std::vector<uint32_t>* out) const;
@@ -253,14 +269,7 @@ void host::NarrowRunner::State::expand(uint32_t pair_index, std::vector<LeafPair
   const bool a_plain = ta != ShapeType::kCompound && ta != ShapeType::kMesh;
   const bool b_plain = tb != ShapeType::kCompound && tb != ShapeType::kMesh;
   if (a_plain && b_plain) {
-    LeafPair lp;
-    lp.pair = pair_index;
-    lp.child_a = kNoChild;
-    lp.child_b = kNoChild;
-    lp.type_a = leaf_of(ta);
-    lp.type_b = leaf_of(tb);
-    lp.swapped = lp.type_a > lp.type_b ? 1 : 0;
-    out->push_back(lp);
+    out->push_back(plain_record(pair_index));
     return;
   }
   const ShapeRecord& ra = shape(a);
@@ -434,7 +443,8 @@ void host::NarrowRunner::State::fill_general(LeafArrays& s, size_t k, uint32_t o
 
 Status host::NarrowRunner::State::run(const host::Executor& exec, const host::NarrowObjects& objects,
                                       const host::PairList& pairs_in, const kernels::NarrowConfig& cfg_in,
-                                      host::ContactManifolds* out, size_t* bad_pair) {
+                                      host::ContactManifolds* out, size_t* bad_pair,
+                                      const host::ManifoldHook* hook) {
   store = objects.store;
   rec = objects.rec.data();
   types = objects.types.data();
@@ -447,29 +457,53 @@ Status host::NarrowRunner::State::run(const host::Executor& exec, const host::Na
     return Status(StatusCode::kCapacityExceeded, "narrow phase: more than 2^32 - 2 pairs");
   }
 
-  // Expansion into leaf-pair records, per chunk, concatenated in chunk order. A checked
-  // run checks each pair first and stops its chunk at the first bad one.
+  // Expansion into leaf-pair records. With meshes or compounds among the objects, per
+  // chunk, concatenated in chunk order; without, every pair is one record, written in
+  // place. A checked run checks each pair first and stops its chunk at the first bad one.
   const auto np = static_cast<uint32_t>(pairs_in.size());
   const auto object_count = static_cast<uint32_t>(objects.rec.size());
   const uint32_t chunks = host::chunk_count(np, kExpandGrain);
-  chunk_records.resize(chunks);
   chunk_bad.assign(chunks, 0xffffffffu);
-  exec.for_each_chunk(np, kExpandGrain, [&](uint32_t b, uint32_t e, uint32_t chunk) {
-    std::vector<LeafPair>& list = chunk_records[chunk];
-    list.clear();
-    std::vector<uint32_t> ca, cb;
-    for (uint32_t k = b; k < e; ++k) {
-      if (bad_pair != nullptr) {
-        const kernels::Pair& pr = pairs[k];
-        if (pr.a >= object_count || pr.b >= object_count || pr.a == pr.b ||
-            (types[pr.a] == ShapeType::kHalfSpace && types[pr.b] == ShapeType::kHalfSpace)) {
+  const uint32_t object_chunks = host::chunk_count(object_count, kLaneGrain * 16);
+  chunk_hits.assign(object_chunks, 0);
+  exec.for_each_chunk(object_count, kLaneGrain * 16, [&](uint32_t b, uint32_t e, uint32_t chunk) {
+    uint32_t complex = 0;
+    for (uint32_t i = b; i < e; ++i) complex |= (types[i] == ShapeType::kMesh) | (types[i] == ShapeType::kCompound);
+    chunk_hits[chunk] = complex;
+  });
+  bool plain = true;
+  for (uint32_t c = 0; c < object_chunks; ++c) plain = plain && chunk_hits[c] == 0;
+  auto bad = [&](uint32_t k) {
+    const kernels::Pair& pr = pairs[k];
+    return pr.a >= object_count || pr.b >= object_count || pr.a == pr.b ||
+           (types[pr.a] == ShapeType::kHalfSpace && types[pr.b] == ShapeType::kHalfSpace);
+  };
+  if (plain) {
+    records.resize(np);
+    exec.for_each_chunk(np, kExpandGrain, [&](uint32_t b, uint32_t e, uint32_t chunk) {
+      for (uint32_t k = b; k < e; ++k) {
+        if (bad_pair != nullptr && bad(k)) {
           chunk_bad[chunk] = k;
           return;
         }
+        records[k] = plain_record(k);
       }
-      expand(k, &list, &ca, &cb);
-    }
-  });
+    });
+  } else {
+    chunk_records.resize(chunks);
+    exec.for_each_chunk(np, kExpandGrain, [&](uint32_t b, uint32_t e, uint32_t chunk) {
+      std::vector<LeafPair>& list = chunk_records[chunk];
+      list.clear();
+      std::vector<uint32_t> ca, cb;
+      for (uint32_t k = b; k < e; ++k) {
+        if (bad_pair != nullptr && bad(k)) {
+          chunk_bad[chunk] = k;
+          return;
+        }
+        expand(k, &list, &ca, &cb);
+      }
+    });
+  }
   if (bad_pair != nullptr) {
     for (uint32_t c = 0; c < chunks; ++c) {
       if (chunk_bad[c] != 0xffffffffu) {
@@ -478,42 +512,58 @@ Status host::NarrowRunner::State::run(const host::Executor& exec, const host::Na
       }
     }
   }
-  size_t total = 0;
-  for (uint32_t c = 0; c < chunks; ++c) total += chunk_records[c].size();
-  if (total >= 0xffffffffu) {
-    out->clear();
-    return Status(StatusCode::kCapacityExceeded,
-                  "narrow phase: more than 2^32 - 2 leaf pairs after expanding meshes and compounds");
+  size_t total = np;
+  if (!plain) {
+    total = 0;
+    for (uint32_t c = 0; c < chunks; ++c) total += chunk_records[c].size();
+    if (total >= 0xffffffffu) {
+      out->clear();
+      return Status(StatusCode::kCapacityExceeded,
+                    "narrow phase: more than 2^32 - 2 leaf pairs after expanding meshes and compounds");
+    }
+    records.resize(total);
+    chunk_offsets.resize(static_cast<size_t>(chunks) + 1);
+    chunk_offsets[0] = 0;
+    for (uint32_t c = 0; c < chunks; ++c) chunk_offsets[c + 1] = chunk_offsets[c] + chunk_records[c].size();
+    exec.for_each_chunk(np, kExpandGrain, [&](uint32_t, uint32_t, uint32_t chunk) {
+      std::copy(chunk_records[chunk].begin(), chunk_records[chunk].end(),
+                records.begin() + static_cast<ptrdiff_t>(chunk_offsets[chunk]));
+    });
   }
-  records.resize(total);
-  chunk_offsets.resize(static_cast<size_t>(chunks) + 1);
-  chunk_offsets[0] = 0;
-  for (uint32_t c = 0; c < chunks; ++c) chunk_offsets[c + 1] = chunk_offsets[c] + chunk_records[c].size();
-  exec.for_each_chunk(np, kExpandGrain, [&](uint32_t, uint32_t, uint32_t chunk) {
-    std::copy(chunk_records[chunk].begin(), chunk_records[chunk].end(),
-              records.begin() + static_cast<ptrdiff_t>(chunk_offsets[chunk]));
-  });
   const auto nr = static_cast<uint32_t>(total);
 
-  // Buckets: stable sort of (type pair, record).
+  // Buckets: stable sort of (type pair, record). Keys already in bucket order (one
+  // bucket, or pairs listed by type) skip the sort, and the order is the identity.
   keys.resize(nr);
-  exec.for_each_chunk(nr, kLaneGrain * 16, [&](uint32_t b, uint32_t e, uint32_t) {
+  const uint32_t key_chunks = host::chunk_count(nr, kLaneGrain * 16);
+  chunk_points.assign(key_chunks, 0);  // per chunk: 1 when its keys descend somewhere
+  exec.for_each_chunk(nr, kLaneGrain * 16, [&](uint32_t b, uint32_t e, uint32_t chunk) {
+    uint32_t descends = 0;
     for (uint32_t i = b; i < e; ++i) {
       const LeafPair& lp = records[i];
       const uint32_t lo = std::min(lp.type_a, lp.type_b), hi = std::max(lp.type_a, lp.type_b);
       keys[i] = (static_cast<uint64_t>(lo * kernels::kLeafTypeCount + hi) << 32) | i;
+      descends |= i > b && keys[i] < keys[i - 1] ? 1u : 0u;
     }
+    chunk_points[chunk] = descends;
   });
-  if (nr > 0) sorter.sort(exec, keys.data(), nr, 32, 32 + 6);
-  order.resize(nr);
-  position.resize(nr);
-  exec.for_each_chunk(nr, kLaneGrain * 16, [&](uint32_t b, uint32_t e, uint32_t) {
-    for (uint32_t s = b; s < e; ++s) {
-      const auto record = static_cast<uint32_t>(keys[s]);
-      order[s] = record;
-      position[record] = s;
-    }
-  });
+  sorted = true;
+  for (uint32_t c = 0; c < key_chunks && sorted; ++c) {
+    const uint32_t first = c * kLaneGrain * 16;
+    sorted = chunk_points[c] == 0 && (c == 0 || keys[first] > keys[first - 1]);
+  }
+  if (!sorted) {
+    sorter.sort(exec, keys.data(), nr, 32, 32 + 6);
+    order.resize(nr);
+    position.resize(nr);
+    exec.for_each_chunk(nr, kLaneGrain * 16, [&](uint32_t b, uint32_t e, uint32_t) {
+      for (uint32_t s = b; s < e; ++s) {
+        const auto record = static_cast<uint32_t>(keys[s]);
+        order[s] = record;
+        position[record] = s;
+      }
+    });
+  }
 
   // Gather and kernels, fused per block: a block is up to kLaneBlock consecutive
   // sorted positions of one bucket (blocks depend on the buckets alone, so the bytes
@@ -544,7 +594,7 @@ Status host::NarrowRunner::State::run(const host::Executor& exec, const host::Na
       scratch[1].resize(kLaneBlock, host::LeafArrays::kPhaseB);
     }
     for (uint32_t s = blk.begin; s < blk.end; ++s) {
-      const LeafPair& lp = records[order[s]];
+      const LeafPair& lp = records[record_at(s)];
       const kernels::Pair& pr = pairs[lp.pair];
       const uint32_t k = s - blk.begin;
       if (lp.swapped) {
@@ -568,7 +618,7 @@ Status host::NarrowRunner::State::run(const host::Executor& exec, const host::Na
   exec.for_each_chunk(nr, out_grain, [&](uint32_t b, uint32_t e, uint32_t chunk) {
     uint32_t hits = 0, points = 0;
     for (uint32_t i = b; i < e; ++i) {
-      const uint32_t count = std::min<uint32_t>(manifold.count[position[i]], kernels::kMaxManifoldPoints);
+      const uint32_t count = std::min<uint32_t>(manifold.count[position_of(i)], kernels::kMaxManifoldPoints);
       hits += count > 0 ? 1u : 0u;
       points += count;
     }
@@ -581,11 +631,12 @@ Status host::NarrowRunner::State::run(const host::Executor& exec, const host::Na
   }
   const uint32_t total_hits = chunk_hits[out_chunks], total_points = chunk_points[out_chunks];
   out->resize(total_hits, total_points, total_points == total_hits, false);
+  if (hook != nullptr) hook->sized(total_hits);
   const kernels::ContactManifoldArrays c = out->view();
   exec.for_each_chunk(nr, out_grain, [&](uint32_t b, uint32_t e, uint32_t chunk) {
     uint32_t m = chunk_hits[chunk], p = chunk_points[chunk];
     for (uint32_t i = b; i < e; ++i) {
-      const uint32_t s = position[i];
+      const uint32_t s = position_of(i);
       const uint32_t count = std::min<uint32_t>(manifold.count[s], kernels::kMaxManifoldPoints);
       if (count == 0) continue;
       const LeafPair& lp = records[i];
@@ -609,6 +660,7 @@ Status host::NarrowRunner::State::run(const host::Executor& exec, const host::Na
       }
       ++m;
     }
+    if (hook != nullptr) hook->written(chunk_hits[chunk], m);
   });
   return {};
 }
@@ -645,41 +697,36 @@ Status host::NarrowRunner::State::run_spheres(const host::Executor& exec, const 
   return {};
 }
 
-void host::to_manifolds(const Executor& exec, const ContactManifolds& cm, std::vector<Manifold>* out) {
-  const auto nm = static_cast<uint32_t>(cm.manifolds);
-  // Every field of every manifold is written below: a result vector kept from an
-  // earlier call is only resized (no construction of the elements it already has).
-  out->resize(nm);
+void host::to_manifolds(const ContactManifolds& cm, uint32_t begin, uint32_t end, Manifold* out) {
   const kernels::ContactManifoldArrays c = cm.view();
-  exec.for_each_chunk(nm, kLaneGrain * 4, [&](uint32_t b, uint32_t e, uint32_t) {
-    for (uint32_t i = b; i < e; ++i) {
-      Manifold& m = (*out)[i];
-      m.pair = c.pair[i];
-      m.child_a = kernels::child_a_of(c, i);
-      m.child_b = kernels::child_b_of(c, i);
-      m.normal = Eigen::Vector3f(c.normal[0][i], c.normal[1][i], c.normal[2][i]);
-      m.depth = c.depth[i];
-      m.point_count = c.count[i];
-      const uint32_t p = kernels::first_point_of(c, i);
-      for (uint32_t k = 0; k < 4; ++k) {
-        if (k < m.point_count) {
-          m.points[k] = Eigen::Vector3f(c.point[0][p + k], c.point[1][p + k], c.point[2][p + k]);
-          m.point_depth[k] = c.point_depth[p + k];
-        } else {
-          m.points[k].setZero();
-          m.point_depth[k] = 0.0f;
-        }
+  for (uint32_t i = begin; i < end; ++i) {
+    Manifold& m = out[i];
+    m.pair = c.pair[i];
+    m.child_a = kernels::child_a_of(c, i);
+    m.child_b = kernels::child_b_of(c, i);
+    m.normal = Eigen::Vector3f(c.normal[0][i], c.normal[1][i], c.normal[2][i]);
+    m.depth = c.depth[i];
+    m.point_count = c.count[i];
+    const uint32_t p = kernels::first_point_of(c, i);
+    for (uint32_t k = 0; k < 4; ++k) {
+      if (k < m.point_count) {
+        m.points[k] = Eigen::Vector3f(c.point[0][p + k], c.point[1][p + k], c.point[2][p + k]);
+        m.point_depth[k] = c.point_depth[p + k];
+      } else {
+        m.points[k].setZero();
+        m.point_depth[k] = 0.0f;
       }
     }
-  });
+  }
 }
 
 host::NarrowRunner::NarrowRunner() : s_(std::make_unique<State>()) {}
 host::NarrowRunner::~NarrowRunner() = default;
 
 Status host::NarrowRunner::run(const Executor& exec, const NarrowObjects& objects, const PairList& pairs,
-                               const kernels::NarrowConfig& cfg, ContactManifolds* out, size_t* bad_pair) {
-  return s_->run(exec, objects, pairs, cfg, out, bad_pair);
+                               const kernels::NarrowConfig& cfg, ContactManifolds* out, size_t* bad_pair,
+                               const ManifoldHook* hook) {
+  return s_->run(exec, objects, pairs, cfg, out, bad_pair, hook);
 }
 
 Status host::NarrowRunner::run_spheres(const Executor& exec, const SphereObjects& objects, const PairList& pairs,
@@ -771,7 +818,13 @@ Status NarrowPhase::Impl::collide(const ShapeSet& shapes, std::span<const ShapeI
   objects.rec = rec;
   objects.types = types;
   objects.poses = posed;
-  const Status st = runner.run(exec, objects, list, host::config_of(options), &contacts, &bad_pair);
+  // The public Manifold structs are filled chunk by chunk as the runner writes the
+  // manifolds, while they are in cache. Every field of every manifold is written: a
+  // result vector kept from an earlier call is only resized.
+  auto sized = [&](size_t m) { result->resize(m); };
+  auto written = [&](uint32_t b, uint32_t e) { host::to_manifolds(contacts, b, e, result->data()); };
+  const host::ManifoldHook hook{sized, written};
+  const Status st = runner.run(exec, objects, list, host::config_of(options), &contacts, &bad_pair, &hook);
   if (bad_pair < pairs_in.size()) {
     const size_t k = bad_pair;
     const ShapePair& pr = pairs_in[k];
@@ -786,11 +839,7 @@ Status NarrowPhase::Impl::collide(const ShapeSet& shapes, std::span<const ShapeI
     return Status(StatusCode::kInvalidArgument,
                   "pair " + std::to_string(k) + ": two half-spaces have no finite collision data");
   }
-  if (!st.ok()) {
-    result->clear();
-    return st;
-  }
-  host::to_manifolds(exec, contacts, result);
+  if (!st.ok()) result->clear();
   return st;
 }
 

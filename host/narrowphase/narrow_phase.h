@@ -88,6 +88,15 @@ struct SphereObjects {
   uint32_t first_plane = 0;
 };
 
+/// Lets a caller consume a run's manifolds while they are in cache: sized(m) once the
+/// run knows it writes m manifolds (before it writes any), then written(begin, end) for
+/// each output chunk's manifolds [begin, end), right after the chunk wrote them, on
+/// that chunk's thread (so written() must only touch its own range).
+struct ManifoldHook {
+  FunctionRef<void(size_t manifolds)> sized;
+  FunctionRef<void(uint32_t begin, uint32_t end)> written;
+};
+
 /// The narrow phase of host/narrowphase/narrow_phase.cpp: expansion, bucketing by
 /// leaf-type pair, gather, the pair kernels, and the ordered output into the one
 /// contact layout (host::ContactManifolds). Keeps its scratch between calls.
@@ -107,7 +116,8 @@ class NarrowRunner {
   /// The check rides on the expansion, which reads the same records, instead of
   /// costing a pass of its own.
   Status run(const Executor& exec, const NarrowObjects& objects, const PairList& pairs,
-             const kernels::NarrowConfig& cfg, ContactManifolds* out, size_t* bad_pair = nullptr);
+             const kernels::NarrowConfig& cfg, ContactManifolds* out, size_t* bad_pair = nullptr,
+             const ManifoldHook* hook = nullptr);
 
   /// The sphere buckets of a World without shapes: pairs.first are sphere-sphere
   /// pairs (the sphere_sphere kernels), pairs.second (body, first_plane + j) pairs from
@@ -120,8 +130,8 @@ class NarrowRunner {
   std::unique_ptr<State> s_;
 };
 
-/// The public Manifold of every manifold of c (pair, children, normal, depth and
-/// points), in c's order; *out is resized to c.manifolds.
-void to_manifolds(const Executor& exec, const ContactManifolds& c, std::vector<Manifold>* out);
+/// The public Manifold of manifolds [begin, end) of c (pair, children, normal, depth
+/// and points) into out[begin, end).
+void to_manifolds(const ContactManifolds& c, uint32_t begin, uint32_t end, Manifold* out);
 
 }  // namespace impact::host
