@@ -75,11 +75,9 @@ using Buffer = std::vector<T, AlignedAllocator<T>>;
 /// and different 4 KiB page offsets: arrays at one offset (page-aligned ones, all of a
 /// kind) share the L1 set of lane k (8 ways, ~20 streams), and arrays 16 bytes apart
 /// (back-to-back heap blocks of a power-of-two size) make a load wait for an unrelated
-/// store whose address matches in bits 11:0 (4K aliasing). Measured on
-/// BM_Kernel/sphere-sphere/simd/4096 (AMD Zen 4): 0.67-0.75 ns a pair this way against
-/// 2.1-2.5 ns with std::vector arrays and 1.3 ns with page-aligned ones. Give the inputs
-/// and the outputs of one kernel different phases (e.g. 0, 22, 44). Contents are not kept
-/// when resize grows the storage.
+/// store whose address matches in bits 11:0 (4K aliasing); docs/narrowphase.md has the
+/// measurements. Give the inputs and the outputs of one kernel different phases (e.g. 0,
+/// 22, 44). Contents are not kept when resize grows the storage.
 class SoaArrays {
  public:
   void resize(uint32_t arrays, std::size_t n, uint32_t phase) {

@@ -5,9 +5,10 @@
 //
 // Passes of a rebuild: bounds summary -> Morton keys (30 or 63 bit) -> radix sort ->
 // hierarchy and bounds in one bottom-up pass (lbvh_build_fused.h: Apetrei 2014 in
-// leaf order per chunk, then the chunk seams; exact min/max unions) -> per-leaf self traversal into per-chunk
-// buffers concatenated in chunk order (chunked_output). A refit reuses the sorted
-// order and the hierarchy and only reruns the last two passes.
+// leaf order per chunk, then the chunk seams; exact min/max unions) -> self traversal by
+// leaf clusters (lbvh_traverse.h) into per-chunk buffers concatenated in chunk order
+// (chunked_output). A refit reuses the sorted order and the hierarchy and only reruns
+// the bounds (lbvh_refit.h) and the traversal.
 // See docs/lbvh.md for the rules (code width, refit policy) and the pair order.
 #pragma once
 
@@ -64,8 +65,9 @@ struct LbvhInfo {
 
 /// The 30/63-bit rule: 63-bit codes when n > 2^24, or when a 30-bit cell (largest
 /// scene extent / 1024) is wider than 4 largest box edges (a sparse world whose boxes
-/// would crowd into few cells and get index-ordered subtrees); else 30-bit (4 radix
-/// passes instead of 8). Zero-extent scenes use 30-bit.
+/// would crowd into few cells and get index-ordered subtrees); else 30-bit (3 radix
+/// passes instead of 6 from 2^15 boxes, 4 instead of 8 below). Zero-extent scenes use
+/// 30-bit.
 uint32_t choose_morton_bits(const kernels::BoundsSummary& s, uint32_t n);
 
 class LbvhBroadPhase {

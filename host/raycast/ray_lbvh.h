@@ -1,8 +1,8 @@
 // An LBVH over primitive boxes for ray queries: the broad phase's LbvhBroadPhase
 // (kernels/bvh/ build and refit, docs/lbvh.md: Morton codes 30/63-bit, radix sort,
-// Karras hierarchy, bottom-up refit) used without its pair pass, traversed by
-// kernels/raycast/ray_bvh.h. build() and refit() only bring the nodes and sorted
-// leaves up to date. All passes chunk by n and a fixed grain, so the tree bytes are
+// one-pass bottom-up build of the Karras tree, bottom-up refit) without its pair
+// pass, traversed by kernels/raycast/ray_bvh.h. build() and refit() only bring the
+// nodes and sorted leaves up to date. All passes chunk by n and a fixed grain, so the tree bytes are
 // the same for any thread count.
 #pragma once
 

@@ -1,9 +1,10 @@
 // RayScene (include/impact/raycast.h): validation at the API, host-owned SoA copies
 // of the geometry (host/raycast/scene_data.h), and the batched query driver shared by
 // both backends: per chunk of kRayGrain rays, validate and normalise -> backend trace
-// -> half-spaces (kernels/raycast/ray_bvh.h) -> hit record (point and normal from the
-// stored primitives, in double). Chunks depend only on the ray count, and each ray is
-// traced by exactly one call, so the output does not depend on the thread count.
+// -> half-spaces (kernels/raycast/ray_bvh.h) -> hit record (point and normal in double:
+// a triangle's normal from the backend's Ng when it gives one, else from the stored
+// primitive). Chunks depend only on the ray count, and each ray is traced by exactly
+// one call, so the output does not depend on the thread count.
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -183,8 +184,9 @@ class RaySceneImpl {
   bool pending() const { return changes.any(); }
   static const RaySceneImpl* of(const RayScene& s) { return s.impl_.get(); }
 
-  // Finalises best into a RayHit (point, normal from the stored primitives). ng: the
-  // backend's unnormalised geometric normal of a triangle hit, or null.
+  // Finalises best into a RayHit (point, normal from the stored primitives, or for a
+  // triangle from ng when finite and non-zero). ng: the backend's unnormalised
+  // geometric normal of a triangle hit, or null.
   void finish(const kernels::RayQuery& q, const kernels::RayBest& b, const float* ng, RayHit* out) const {
     RayHit h;
     if (b.kind == kernels::kRayHitNone || q.tmax == 0.0f) {

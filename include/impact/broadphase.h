@@ -23,21 +23,29 @@ namespace impact {
 /// (dx, dy, dz)[i], so fast bodies that meet within the step pair up (the input of
 /// continuous collision).
 struct AabbInput {
+  /// Box corners, m: finite, min <= max on every axis.
   std::span<const float> min_x, min_y, min_z, max_x, max_y, max_z;
+  /// Layer bits each box belongs to / collides with: with is_static, all three empty
+  /// (no filter) or all three of length n.
   std::span<const uint32_t> layer = {}, mask = {};
+  /// Non-zero for a static box (two static boxes never pair).
   std::span<const uint8_t> is_static = {};
+  /// Swept mode: each box's motion over the step, m (all three empty: off).
   std::span<const float> dx = {}, dy = {}, dz = {};
+  /// Number of boxes (n).
   size_t size() const { return min_x.size(); }
 };
 
 /// Where passes run. Results are identical for every value.
 struct ExecConfig {
+  /// Thread runtime (kDefault: the build's)
   Backend backend = Backend::kDefault;
   uint32_t threads = 0;  ///< 0 = all hardware threads
 };
 
 /// Structure and update policy of a BroadPhase.
 struct BroadPhaseOptions {
+  /// The structure (kAuto: grid or LBVH per build)
   BroadPhaseKind kind = BroadPhaseKind::kGrid;
   /// LBVH only: what update() does when the box count is unchanged
   /// (docs/lbvh.md has the measured cost of each policy).
@@ -71,22 +79,31 @@ struct BroadPhaseOptions {
 
 /// n box queries: SoA spans of equal length; mask empty or one per query.
 struct AabbQueries {
+  /// Query box corners, m: finite, |v| <= 1e18, min <= max.
   std::span<const float> min_x, min_y, min_z, max_x, max_y, max_z;
+  /// Layers each query sees; empty: all.
   std::span<const uint32_t> mask = {};
+  /// Number of queries (n).
   size_t size() const { return min_x.size(); }
 };
 
 /// n sphere queries: centres (x, y, z) and radii (>= 0), m.
 struct SphereQueries {
+  /// Centre and radius of each query, m.
   std::span<const float> x, y, z, radius;
+  /// Layers each query sees; empty: all.
   std::span<const uint32_t> mask = {};
+  /// Number of queries (n).
   size_t size() const { return x.size(); }
 };
 
 /// n point queries.
 struct PointQueries {
+  /// The points, m.
   std::span<const float> x, y, z;
+  /// Layers each query sees; empty: all.
   std::span<const uint32_t> mask = {};
+  /// Number of queries (n).
   size_t size() const { return x.size(); }
 };
 
@@ -94,8 +111,11 @@ struct PointQueries {
 /// indices of the last build/update, ascending). offsets has n + 1 entries. The bytes
 /// are the same for every structure, backend and thread count.
 struct QueryHits {
+  /// N + 1 entries: where each query's hits start.
   std::vector<uint32_t> offsets;
+  /// Box indices, ascending within each query.
   std::vector<uint32_t> hits;
+  /// Number of queries answered (n).
   size_t size() const { return offsets.empty() ? 0 : offsets.size() - 1; }
   /// The hits of query i (i < size()).
   std::span<const uint32_t> of(size_t i) const {
@@ -103,6 +123,7 @@ struct QueryHits {
   }
 };
 
+/// The state behind a BroadPhase (host/broadphase/broadphase_api.cpp).
 class BroadPhaseImpl;
 
 /// Reusable broad phase: keeps its structure and scratch buffers between calls, so
@@ -117,12 +138,16 @@ class BroadPhaseImpl;
 /// The boxes are copied into the structure: the spans need not outlive a call.
 class BroadPhase {
  public:
+  /// A broad phase of the given structure with default options.
   explicit BroadPhase(BroadPhaseKind kind = BroadPhaseKind::kGrid);
   /// Invalid options (unknown enum, limit < 1, max_refits 0) make every call fail
   /// with kInvalidArgument naming the field.
   explicit BroadPhase(const BroadPhaseOptions& options);
+  /// Frees the structure and its scratch.
   ~BroadPhase();
+  /// Moves the structure; the source is left empty.
   BroadPhase(BroadPhase&&) noexcept;
+  /// Moves the structure; the source is left empty.
   BroadPhase& operator=(BroadPhase&&) noexcept;
 
   /// Finds every overlapping pair (a < b, box indices), replacing *out. Boxes must
@@ -139,9 +164,11 @@ class BroadPhase {
   /// The pairs of the structure as last built or updated (none before a build).
   Status pairs(std::vector<BodyPair>* out, const ExecConfig& exec = {});
 
+  /// The structure asked for (BroadPhaseOptions::kind).
   BroadPhaseKind kind() const;
   /// The structure in use: kind(), or for kAuto the last build's choice.
   BroadPhaseKind active_kind() const;
+  /// The options given at construction.
   const BroadPhaseOptions& options() const;
   /// Boxes in the structure (0 before the first build).
   size_t size() const;
@@ -154,7 +181,9 @@ class BroadPhase {
   /// one batch is kCapacityExceeded (split the batch). On error *out is unchanged.
   /// Cost per structure: docs/broadphase.md.
   Status query_aabbs(const AabbQueries& queries, QueryHits* out, const ExecConfig& exec = {});
+  /// Sphere queries, with the rules and errors of query_aabbs.
   Status query_spheres(const SphereQueries& queries, QueryHits* out, const ExecConfig& exec = {});
+  /// Point queries, with the rules and errors of query_aabbs.
   Status query_points(const PointQueries& queries, QueryHits* out, const ExecConfig& exec = {});
 
  private:

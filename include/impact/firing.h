@@ -16,8 +16,11 @@ namespace impact {
 
 /// One aiming problem. Units: m, m/s, m/s^2.
 struct FiringQuery {
+  /// Launch point, m (finite).
   Eigen::Vector3f origin = Eigen::Vector3f::Zero();
+  /// Point to hit, m (finite).
   Eigen::Vector3f target = Eigen::Vector3f::Zero();
+  /// Constant acceleration, m/s^2 (finite; zero allowed: a straight shot).
   Eigen::Vector3f gravity{0.0f, -9.81f, 0.0f};
   float speed = 10.0f;  ///< launch speed, finite and > 0
 };
@@ -35,7 +38,9 @@ struct FiringShot {
 /// The analytic trajectory of each shot passes within 1e-5 * max(1 m, |target - origin|,
 /// speed * time) of the target (tests/kernels/kinematics/firing_test.cpp).
 struct FiringSolution {
+  /// Valid entries of shots: 0, 1 or 2.
   uint32_t count = 0;
+  /// The shots, low arc first.
   FiringShot shots[2];
 };
 
@@ -49,13 +54,15 @@ Eigen::Vector3f trajectory_point(const FiringQuery& query, const FiringShot& sho
 
 /// How an arc is checked against a scene.
 struct ArcCheckDesc {
-  /// Chords per arc. A chord deviates from the parabola by at most
+  /// Chords per arc, in [1, 4096]. A chord deviates from the parabola by at most
   /// |g| (time / segments)^2 / 8 m: the check's geometric tolerance.
   uint32_t segments = 16;
   uint32_t mask = 0xffffffffu;  ///< layers the projectile sees
   /// Fractions of the flight time skipped at the start and the end (e.g. to leave out
-  /// the shooter and the target, if they are in the scene and in the mask), in [0, 1).
+  /// the shooter and the target, if they are in the scene and in the mask): each >= 0,
+  /// their sum < 1.
   float skip_start = 0.0f;
+  /// Fraction of the flight time skipped at the end (see skip_start).
   float skip_end = 0.0f;
 };
 

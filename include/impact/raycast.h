@@ -37,6 +37,7 @@
 
 namespace impact {
 
+/// Declared in impact/world.h (RayScene::sync_spheres, sync_world).
 class World;
 
 /// Which engine traces the rays.
@@ -45,9 +46,10 @@ enum class RayBackend : int {
   kLbvh = 1,    ///< impact's LBVH (docs/lbvh.md; ordered traversal); bit-identical across threads
 };
 
-/// How dynamic geometry (spheres, capsules) is brought up to date by commit() when only
-/// its positions changed (same counts). Embree: the geometry's build quality; LBVH:
-/// refit keeps the tree topology and recomputes bounds, rebuild re-sorts.
+/// How dynamic geometry (spheres, capsules, posed shapes) is brought up to date by
+/// commit() when only its positions changed (same counts). Embree: the geometry's
+/// build quality; LBVH: refit keeps the tree topology and recomputes bounds, rebuild
+/// re-sorts.
 enum class DynamicUpdate : int {
   kRefit = 0,          ///< Embree RTC_BUILD_QUALITY_REFIT; LBVH refit
   kRebuildLow = 1,     ///< Embree RTC_BUILD_QUALITY_LOW; LBVH rebuild
@@ -75,8 +77,11 @@ enum class EmbreeStreams : int {
 
 /// Settings of a RayScene.
 struct RaySceneDesc {
+  /// The engine that traces the rays.
   RayBackend backend = RayBackend::kEmbree;
+  /// How commit() updates moved spheres, capsules and posed shapes.
   DynamicUpdate dynamic_update = DynamicUpdate::kRefit;
+  /// Embree: how spheres are represented.
   EmbreeSpheres embree_spheres = EmbreeSpheres::kUserGeometry;
   /// Embree: rays per rtcIntersectN/rtcOccludedN call: 1, 4, 8 or 16 (packets help
   /// coherent rays such as a camera grid; measured in docs/raycast.md).
@@ -92,13 +97,17 @@ struct RaySceneDesc {
 
 /// Refers to a static triangle mesh of a RayScene.
 struct MeshHandle {
+  /// Mesh id, as RayHit::id reports it; 0xffffffff: null.
   uint32_t id = 0xffffffffu;
+  /// True for the null handle.
   bool is_null() const { return id == 0xffffffffu; }
 };
 
 /// One ray. direction must be finite and non-zero; origin finite; tmax >= 0 (may be +inf).
 struct Ray {
+  /// Start point, m.
   Eigen::Vector3f origin = Eigen::Vector3f::Zero();
+  /// Direction (any length; normalised by the call).
   Eigen::Vector3f direction = Eigen::Vector3f::UnitZ();
   float tmax = std::numeric_limits<float>::infinity();  ///< m along the normalised direction
   uint32_t mask = 0xffffffffu;                           ///< layers the ray sees
@@ -106,16 +115,21 @@ struct Ray {
 
 /// A closed segment for line-of-sight queries (any hit). from == to never hits.
 struct Segment {
+  /// First end point, m (finite).
   Eigen::Vector3f from = Eigen::Vector3f::Zero();
+  /// Second end point, m (finite).
   Eigen::Vector3f to = Eigen::Vector3f::Zero();
+  /// Layers the segment sees.
   uint32_t mask = 0xffffffffu;
 };
 
-/// What a ray hit.
+/// What a ray hit: nothing, a mesh triangle, a sphere, a capsule, a half-space
+/// (set_planes) or a posed shape (set_shapes).
 enum class HitKind : uint8_t { kNone = 0, kTriangle, kSphere, kCapsule, kPlane, kShape };
 
 /// The closest hit of one ray.
 struct RayHit {
+  /// What was hit; kNone on a miss (the other fields then keep their defaults).
   HitKind kind = HitKind::kNone;
   /// Mesh id (kTriangle), sphere index, capsule index, plane index or shape object
   /// index (kShape: the index into set_shapes' shape_of / poses).
@@ -130,14 +144,18 @@ struct RayHit {
   float t = std::numeric_limits<float>::infinity();  ///< m along the normalised direction
   Eigen::Vector3f point = Eigen::Vector3f::Zero();    ///< origin + t * unit direction
   Eigen::Vector3f normal = Eigen::Vector3f::Zero();   ///< unit, facing the ray
+  /// True unless the ray missed.
   bool hit() const { return kind != HitKind::kNone; }
 };
 
 /// A pinhole camera. forward and up need not be unit or orthogonal (up is
 /// re-orthogonalised against forward) but must not be parallel.
 struct Camera {
+  /// Eye point, m: every ray's origin.
   Eigen::Vector3f position = Eigen::Vector3f::Zero();
+  /// Viewing direction (the screen centre's ray).
   Eigen::Vector3f forward = -Eigen::Vector3f::UnitZ();
+  /// Screen up (y = 0 is the top edge).
   Eigen::Vector3f up = Eigen::Vector3f::UnitY();
   float vertical_fov = 1.0471976f;  ///< radians, in (0, pi)
   float aspect = 16.0f / 9.0f;      ///< width / height, > 0
@@ -145,19 +163,26 @@ struct Camera {
 
 /// Counters of the last commit() (for benchmarks).
 struct RaySceneInfo {
+  /// What the scene held at the last commit.
   uint32_t meshes = 0, triangles = 0, spheres = 0, capsules = 0, planes = 0, shapes = 0;
   bool dynamic_rebuilt = false;  ///< the last commit rebuilt (not refitted) dynamic geometry
   double commit_ms = 0.0;        ///< wall time of the last commit()
 };
 
+/// The state behind a RayScene (host/raycast/ray_scene.cpp).
 class RaySceneImpl;
 
+/// Geometry that rays are traced against, and the batched queries (rules at the top of
+/// this file). Set geometry, commit(), then query.
 class RayScene {
  public:
   /// Validates desc and makes an empty scene. kUnsupported if the backend is not built in.
   [[nodiscard]] static Status create(const RaySceneDesc& desc, std::unique_ptr<RayScene>* out);
+  /// Releases the scene and its backend's structures.
   ~RayScene();
+  /// Not copyable (it owns backend structures).
   RayScene(const RayScene&) = delete;
+  /// Not copyable.
   RayScene& operator=(const RayScene&) = delete;
 
   // --- geometry (takes effect at commit()) ----------------------------------------
@@ -218,7 +243,9 @@ class RayScene {
 
   /// Switches the thread runtime of the queries (results do not depend on it).
   Status set_threads(Backend backend, uint32_t threads);
+  /// The settings the scene was created with.
   const RaySceneDesc& desc() const;
+  /// Counters of the last commit().
   const RaySceneInfo& info() const;
 
  private:

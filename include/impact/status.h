@@ -9,6 +9,7 @@ namespace impact {
 
 /// What went wrong, as a code a program can branch on.
 enum class StatusCode : int {
+  /// Success.
   kOk = 0,
   kInvalidArgument,   ///< a value is out of its domain (NaN, negative radius, zero normal, ...)
   kSizeMismatch,      ///< two spans that must have equal length do not
@@ -21,11 +22,14 @@ enum class StatusCode : int {
 /// offending element and field (for example "body 17: radius must be > 0, got -1").
 class [[nodiscard]] Status {
  public:
+  /// Success (kOk, empty message).
   Status() = default;
+  /// An outcome with its code and message.
   Status(StatusCode code, std::string message) : code_(code), message_(std::move(message)) {}
 
   /// True when the call succeeded.
   bool ok() const { return code_ == StatusCode::kOk; }
+  /// The code, for branching on the kind of failure.
   StatusCode code() const { return code_; }
   /// Empty on success.
   const std::string& message() const { return message_; }

@@ -14,17 +14,25 @@ namespace impact {
 /// A handle goes stale when its body is destroyed; using it then is reported as
 /// StatusCode::kStaleHandle, never dereferenced.
 struct BodyHandle {
+  /// Slot in the world's handle table (not the body's storage slot).
   uint32_t index = 0;
+  /// Generation of that slot when the handle was issued; 0: null.
   uint32_t generation = 0;
+  /// True for the null handle.
   bool is_null() const { return generation == 0; }
+  /// Same index and generation.
   friend bool operator==(const BodyHandle&, const BodyHandle&) = default;
 };
 
 /// Refers to a static plane collider. Same rules as BodyHandle.
 struct PlaneHandle {
+  /// Slot in the world's plane handle table.
   uint32_t index = 0;
+  /// Generation of that slot when the handle was issued; 0: null.
   uint32_t generation = 0;
+  /// True for the null handle.
   bool is_null() const { return generation == 0; }
+  /// Same index and generation.
   friend bool operator==(const PlaneHandle&, const PlaneHandle&) = default;
 };
 
@@ -43,7 +51,7 @@ struct BodyDesc {
   /// a mesh body must be static (inv_mass 0).
   ShapeId shape{};
   /// Orientation of the shape, a unit quaternion (within 1e-3). Bodies do not rotate
-  /// yet (rigid-body dynamics is a later issue): the orientation stays as given.
+  /// yet (no angular dynamics): the orientation stays as given.
   Eigen::Quaternionf orientation = Eigen::Quaternionf::Identity();
 };
 
@@ -51,10 +59,13 @@ struct BodyDesc {
 /// the solid into free space; it need not be unit length (it is normalised) but
 /// must be finite and non-zero.
 struct PlaneDesc {
+  /// Outward normal (finite, non-zero; normalised on creation).
   Eigen::Vector3f normal = Eigen::Vector3f::UnitY();
   float offset = 0.0f;        ///< m, signed distance of the surface from the origin along normal
   float restitution = 0.0f;   ///< in [0, 1]
+  /// Layer bits the plane belongs to.
   uint32_t layer = 1u;
+  /// Layer bits the plane collides with.
   uint32_t mask = 0xffffffffu;
 };
 
@@ -88,21 +99,28 @@ enum class LbvhUpdate : int {
   kAuto = 2,
   /// Tree over fat (margin-grown) boxes plus a cache of the fat-overlapping pairs:
   /// an update re-queries only the boxes that left their fat box and filters the
-  /// cache by the exact boxes. Pairs come sorted by (a, b). Rebuilds when more
-  /// than a quarter of the boxes moved out in one update, once the movers since the
-  /// build add up to n, after max_refits updates, or when the filter changes.
+  /// cache by the exact boxes. Pairs come sorted by (a, b). Rebuilds once the movers
+  /// since the build add up to n, after max_refits updates, or when the filter
+  /// changes. When more than a quarter of the boxes move out in one update, that update
+  /// and the next 1 (2, 4, ... 64 as it recurs) refit instead, pairs by traversal.
   kPairCache = 3,
 };
 
 /// A broad-phase candidate pair of body slots (or box indices), a < b.
 struct BodyPair {
+  /// The lower slot / index.
   uint32_t a;
+  /// The higher slot / index.
   uint32_t b;
+  /// Same a and b.
   friend bool operator==(const BodyPair&, const BodyPair&) = default;
 };
 
+/// Name of a backend, for messages and logs.
 const char* to_string(Backend backend);
+/// Name of a broad-phase structure, for messages and logs.
 const char* to_string(BroadPhaseKind kind);
+/// Name of an LBVH update policy, for messages and logs.
 const char* to_string(LbvhUpdate update);
 
 }  // namespace impact

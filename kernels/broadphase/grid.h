@@ -21,10 +21,9 @@
 //                  its own output buffer, then concatenates them in chunk order
 //                  at exclusive-scanned offsets.
 // The sorted order is (bucket, input position), the order a stable sort of keys
-// bucket << 32 | i gives, for any chunking of the passes. Compared with a radix
-// sort of 64-bit keys followed by a gather of the packed boxes, this moves each
-// box twice in sequence instead of reading it once at random, and needs no
-// separate segment-starts pass (docs/broadphase.md has the timings).
+// bucket << 32 | i gives, for any chunking of the passes. Each box moves twice in
+// sequence, never once at random, and no separate segment-starts pass is needed
+// (the radix sort + gather it replaced: docs/broadphase.md).
 // Build cost: O(n + bucket_count + chunks * blocks), three streaming reads of the
 // boxes' data and two writes of the 32-byte records.
 //

@@ -26,8 +26,9 @@
 // Layout: sorted SoA rather than 32-byte SortedBox records, so the candidate test
 // runs 16 slots at a time over contiguous floats (the scan visits many candidates
 // per real pair: about n * extent / world size).
-// Cost: keys, gather O(n); radix sort O(n) per 8 bits; sweep O(n + candidates);
-// insertion sort O(n + shifts) serial.
+// Cost: keys, gather O(n); radix sort O(n) per pass (3 passes for the 32-bit mapped
+// min from 2^15 boxes, 4 below); sweep O(n + candidates); insertion sort O(n + shifts)
+// serial.
 // Method: sort and sweep, Baraff 1992 ("Dynamic Simulation of Non-penetrating
 // Rigid Bodies", ch. 6: coherence + insertion sort) and Cohen et al. 1995
 // (I-COLLIDE); the single-axis parallel sweep of Liu et al. 2010 ("Real-time

@@ -63,7 +63,7 @@ uint32_t lbvh_cache_check(AabbSoA boxes, LbvhFatMargin margin, SortedBox* IMPACT
 
 /// Writes the movers among the sorted leaves s in r, i = leaf_index[s] with moved[i]
 /// != 0, to out in leaf (Morton) order, and returns their count: consecutive queries
-/// then walk through the same cached nodes (1M boxes: ~2x faster than index order).
+/// then walk through the same cached nodes.
 uint32_t lbvh_cache_movers(const uint8_t* IMPACT_RESTRICT moved, const uint32_t* IMPACT_RESTRICT leaf_index,
                            uint32_t* IMPACT_RESTRICT out, Range r);
 

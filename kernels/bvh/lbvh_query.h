@@ -26,12 +26,9 @@
 
 namespace impact::kernels {
 
-/// Largest subtree a query scans leaf by leaf instead of descending into. Measured
-/// (BM_QueryLbvh{Aabb,Sphere,Point}/1000000/1, ms for 16,384 queries, 2026-11-24):
-/// descending to single leaves 21.6 / 28.4 / 14.4; scanning subtrees of up to 8
-/// leaves 19.0 / 24.9 / 14.4, 16: 15.6 / 20.0 / 11.7, 32: 13.4 / 17.7 / 10.5,
-/// 64: 12.6 / 15.6 / 9.76, 128: 11.6 / 14.0 / 9.09 (but point queries at 10k boxes
-/// 3.20 against 2.87 ms at 64).
+/// Largest subtree a query scans leaf by leaf instead of descending into: the
+/// contiguous leaf scan is cheaper than the dependent node loads it replaces (the
+/// sweep of sizes behind 64: docs/history.md, "From code comments").
 inline constexpr uint32_t kLbvhQueryRun = 64;
 
 /// Queries r against tree t (t.n >= 0; filtered iff t.layer is set).

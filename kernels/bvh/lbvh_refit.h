@@ -31,9 +31,8 @@
 //   chunk but the first, in increasing order, on one thread. n >= 1 (n == 1: just the
 //   leaf).
 // Cost: O(n): one gather per leaf plus one union per internal node, climbs in leaf
-//   order (the nodes a chunk writes are its own, mostly cache-resident). The former
-//   version climbed with an atomic visit counter per node (Karras 2012): each
-//   lock-prefixed fetch_add also serialised the gather's cache misses.
+//   order (the nodes a chunk writes are its own, mostly cache-resident); no atomic
+//   visit counters, whose lock-prefixed updates would serialise the gather's misses.
 // Method: Karras 2012, section 4 ("Bounding boxes"; there with atomic flags); the
 //   sequential right-child rule is that of an in-order (post-order) tree walk.
 #pragma once

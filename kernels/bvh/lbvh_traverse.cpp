@@ -135,9 +135,7 @@ struct QueryCluster {
 template <bool kFiltered>
 IMPACT_INLINE void emit(const LbvhView& t, const QueryCluster& q, uint32_t u, Bits m, PairSink& sink) {
   // A hit reads the 4-byte id (t.ids), not the leaf's 32-byte record, which the lane
-  // tests did not bring into cache (2026-11-29: the record's read was a quarter of the
-  // walk at 1M boxes; the ids instead: 65.7 -> 57.2 ms per frame,
-  // BM_LbvhTraverse/1000000/1, AMD EPYC).
+  // tests did not bring into cache.
   IMPACT_ASSERT(m != 0);
   const uint32_t b = t.ids[u];
   while (m != 0) {
@@ -155,9 +153,7 @@ IMPACT_INLINE void emit(const LbvhView& t, const QueryCluster& q, uint32_t u, Bi
 // A tested leaf u with hits m (not zero), listed until its loop is done: the loop stores
 // every leaf's entry and advances past a hit only, so whether a leaf hit is no branch
 // (about half of the tested leaves do, unpredictably), and the pairs are emitted after
-// the tests, in the same order. 2026-11-29 (AMD EPYC, alternated, medians of 4):
-// BM_LbvhTraverse/1000000/1 55.0 -> 44.7 ms, /2 28.2 -> 22.2; 10k unchanged (0.232 /
-// 0.235 ms).
+// the tests, in the same order.
 struct Pending {
   uint32_t u;
   Bits m;
@@ -175,8 +171,6 @@ IMPACT_INLINE void test_target(const LbvhView& t, const QueryCluster& q, uint32_
   const uint32_t size = last - first + 1;
   // The survivors of all vectors first, compacted (simd::compact_store: one
   // unpredictable loop exit per target instead of one per vector), then their tests.
-  // 2026-11-29 (AMD EPYC, alternated, medians of 4): BM_LbvhTraverse/1000000/1 44.1 ->
-  // 40.0 ms, /100000/1 3.47 -> 3.08.
   int32_t surv[kLbvhTarget + kW];
   uint32_t ns = 0;
   const I lanes = simd::lane_ids<I>(static_cast<int32_t>(first));
@@ -243,8 +237,8 @@ IMPACT_INLINE void explore(const LbvhView& t, const QueryCluster& q, uint32_t no
     top += static_cast<uint32_t>(left_waits);
     IMPACT_ASSERT(top <= kLbvhMaxDepth + 1);
     // The children of every internal child pushed, at once (not only the stack's top,
-    // popped next: a right sibling popped later had its children's records fetched
-    // only then; 2026-11-29, BM_LbvhTraverse/1000000/1 38.9 -> 37.7 ms, medians of 4).
+    // popped next: a right sibling popped later would have its children's records
+    // fetched only then).
     if (ro && !rc) prefetch_children(t, t.nodes[h + 1]);
     if (left_waits) prefetch_children(t, t.nodes[h]);
   }

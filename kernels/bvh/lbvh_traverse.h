@@ -19,14 +19,8 @@
 //   are compares only: any width gives the same pairs, in the same order).
 // Why clusters: a per-leaf query walks ~5 nodes per leaf with a dependent load and an
 //   unpredictable branch each; a cluster walks its neighbourhood once for all of its
-//   leaves, and the leaf tests it adds are SIMD and branch-free. 1M uniform boxes,
-//   one thread (2-core Intel Xeon, AVX-512): per-leaf queries with shared groups 171
-//   ms; clusters of 32 leaves, targets of 32, leaf records tested one by one against
-//   B: 77 ms (on an earlier machine) and 92 ms today; the lane arrays, 16 lanes and
-//   the triangle of in-cluster tests: 85 ms; targets of 64: 79 ms; clusters of 64
-//   with targets of 64 / 128 / 256: 76 / 70 / 70 ms (the tests that a larger target
-//   adds are cheaper than the node visits they replace; the visits are dependent
-//   cache misses).
+//   leaves, and the leaf tests it adds are SIMD and branch-free (the sizes
+//   kLbvhCluster and kLbvhTarget were chosen by measurement: docs/lbvh.md).
 // Candidate stack: those right siblings are kept, with a copy of their bounds, in a
 //   stack (root side at the bottom) carried from one cluster to the next along a
 //   chunk: the top is the subtree that starts right after the cluster; the next
@@ -36,9 +30,9 @@
 // Branches: the tests are branch-free, and so is whether a tested leaf hit: a target's
 //   survivors of the bounds test are compacted over all its vectors first, then each
 //   tested against the cluster's leaves with its hits listed branch-free (the in-cluster
-//   tests likewise), and the pairs emitted after the loop, in the same order. The
-//   per-leaf branch (about half the tested leaves hit, unpredictably) and the per-vector
-//   survivor loop cost ~30% of the walk at 1M boxes (docs/lbvh.md).
+//   tests likewise), and the pairs emitted after the loop, in the same order: about
+//   half the tested leaves hit, unpredictably, so a branch per leaf (or per vector of
+//   survivors) would mispredict often.
 // Order (independent of the thread count and of the chunks): by cluster (leaf order);
 //   within a cluster, by the later leaf's sorted position t, then by the earlier
 //   leaf's s. That is, the pairs (s < t) sorted by (cluster of s, t, s). The walk

@@ -6,11 +6,12 @@
 //   (x in the lowest bit of each triple) into a 3b-bit Morton code:
 //     30-bit codes (b = 10): morton_keys30 writes key = code << 32 | i, the layout of
 //       every sort key here (primary key high, original index low), sorted on bits
-//       [32, 62) by host::RadixSorter::sort (4 digit passes);
+//       [32, 62) by host::RadixSorter::sort (3 passes of 10 bits; 4 of 8 below 2^15 keys);
 //     63-bit codes (b = 21): morton_keys63 writes key = code and value = i, sorted on
-//       bits [0, 63) by RadixSorter::sort_kv (8 passes). The keys enter in index
-//       order and the sort is stable, so equal codes keep index order and the
-//       (code, index) order is the same total order as in the 30-bit layout.
+//       bits [0, 63) by RadixSorter::sort_kv (6 passes of up to 11 bits; 8 of 8 below
+//       2^15 keys). The keys enter in index order and the sort is stable, so equal
+//       codes keep index order and the (code, index) order is the same total order as
+//       in the 30-bit layout.
 //   morton_split_keys turns sorted 30-bit keys back into the leaf-index array.
 // Inputs: boxes (SoA, finite), MortonParams from morton_params (scene bounds).
 // Outputs: out_keys[i] (and out_values[i]) for i in the range.
@@ -19,7 +20,8 @@
 //   as one at the origin: the offset c - lo is exact to ~1e-10 relative.
 // Preconditions: finite boxes; lo <= every min (the union of the boxes). An axis of
 //   zero extent maps every box to cell 0 on that axis. Inf is not accepted.
-// Cost: O(1) per box; streaming reads of six floats, one (or two) streaming writes.
+// Cost: O(1) per box; streaming reads of six floats, one (or two) streaming writes
+//   (the *_packed variants also write each box as a 32-byte record).
 // Method: Morton (Z-order) codes as used by Lauterbach et al. 2009 ("Fast BVH
 //   Construction on GPUs") and Karras 2012; the bit spreading is the usual
 //   "magic number" part-by-2 sequence (Baert, "Morton encoding/decoding through

@@ -17,7 +17,7 @@
 //   gives shots straight up/down (two when the target is within reach).
 // Precision: all arithmetic in double from float inputs; the returned direction is
 //   unit to float rounding, and the analytic trajectory passes the target within
-//   ~1e-6 relative to max(|d|, s t) (tests/kernels/kinematics/firing_test.cpp).
+//   1e-5 * max(1 m, |d|, s t), the bound tests/kernels/kinematics/firing_test.cpp checks.
 // Method: the quadratic in t^2 of the kinematic equation d = u t + g t^2 / 2, as in
 //   Millington, "Game Physics Engine Development" (firing solution), rewritten in the
 //   stable forms above.

@@ -417,9 +417,9 @@ IMPACT_INLINE FloatN<N> gather_lanes(const FloatN<N>* arr, IntN<N> idx) {
 /// (AVX2: vgatherdps merges into its destination register, so the destination's old
 /// value is an input. With _mm256_i32gather_ps, or a constant all-ones mask, GCC gathers
 /// into whatever register it picks, at times one that holds the previous loop
-/// iteration's last result, and the iterations then run one after the other (measured:
-/// capsule-hull's edge pass at half speed). So the mask is hidden from the optimiser and
-/// the source is a fresh zero, which breaks that dependency.)
+/// iteration's last result, and the iterations then run one after the other. So the
+/// mask is hidden from the optimiser and the source is a fresh zero, which breaks that
+/// dependency.)
 template <uint32_t N>
 IMPACT_INLINE FloatN<N> gather(const float* base, IntN<N> idx) {
 #if defined(__AVX512F__)
@@ -564,8 +564,7 @@ IMPACT_INLINE void gather4(const float* base, int32_t stride, const int32_t* idx
 }
 
 /// Lane i of x, y, z = xyzw[4 idx[i] + 0, 1, 2]: records of 4 floats (x, y, z and one
-/// unused), by gather4 (hull-half-space's vertex slots: 21.5 -> 19.3 ns per pair, where
-/// they took three gathers).
+/// unused), by gather4 instead of three gathers.
 template <uint32_t N>
 IMPACT_INLINE void gather_xyz(const float* xyzw, const int32_t* idx, FloatN<N>* x, FloatN<N>* y,
                               FloatN<N>* z) {
@@ -824,8 +823,8 @@ IMPACT_INLINE float max_lowest_index(F s, F idx, float none, float* out_idx) {
 /// Lanes i .. i + W of p[0 .. n) (i < n), an index past n - 1 reading p[n - 1]: a pass
 /// over n items in whole blocks (a repeated item changes no minimum or maximum). The
 /// last block of n >= W items is the load of p[n - W ..] with its lanes moved into place
-/// (GCC: one permute; building it from W scalar stores and a vector load stalls on store
-/// forwarding, ~5% of hull-hull's time before 2026-11-29).
+/// (GCC: one permute; building it from W scalar stores and a vector load would stall on
+/// store forwarding).
 template <class F>
 IMPACT_INLINE F load_clamped(const float* p, uint32_t i, uint32_t n) {
   constexpr uint32_t W = F::kWidth;
@@ -862,9 +861,8 @@ inline constexpr uint32_t kWideWidth = kSimdWidth;
 /// hull's vertices a vector at a time): kWideWidth unless IMPACT_PAIR_LANES8 is defined,
 /// else kSimdWidth. Kernels that walk one hull's features a vector at a time keep
 /// kSimdWidth (their walks take a per-item path below one vector's worth of features,
-/// which 16 lanes would send most small hulls to; and on 24-vertex hulls with the edges
-/// padded to 16 they measured 0.79-1.02x: docs/narrowphase.md). Every verb is
-/// lane-wise, so a pair's bytes do not depend on the width.
+/// which 16 lanes would send most small hulls to; measured in docs/narrowphase.md).
+/// Every verb is lane-wise, so a pair's bytes do not depend on the width.
 #if defined(IMPACT_PAIR_LANES8)
 inline constexpr uint32_t kPairWidth = kSimdWidth;
 #else

@@ -3,7 +3,7 @@
 // A pass over n keys split into chunks (fixed by n and a grain, never by the
 // thread count) is:
 //   1. radix_histogram  per chunk: count of each digit value in the chunk;
-//   2. radix_offsets    once (serial, 256 x chunks): exclusive scan in
+//   2. radix_offsets    once (serial, (mask + 1) x chunks): exclusive scan in
 //      digit-major, chunk-minor order -> where each chunk writes each digit;
 //   3. radix_scatter    per chunk: stable scatter of the chunk's keys.
 // Because chunk c's keys with digit d land after those of chunks < c, the sort
