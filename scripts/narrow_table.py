@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""The README's narrow-phase table from one impact_narrowbench JSON run.
+"""The narrow-phase table of docs/results.md from one impact_narrowbench JSON run.
 
 usage: build/bench/impact_narrowbench \
          --benchmark_filter='BM_(Kernel/[a-z-]+/(scalar|simd)/(512|4096)|Fcl/.*|Collide/[a-z-]+/65536/[12]/|StreamCopy.*)' \

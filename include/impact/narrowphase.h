@@ -37,7 +37,7 @@ struct NarrowPhaseOptions {
   /// around a deep core a hull's support function has a local minimum at every face
   /// holding the core's projection, so a capped EPA could end on a wrong face. Those
   /// expand until the tolerance is met or the polytope (512 vertices) is full
-  /// (docs/narrowphase.md, "EPA"). Every pair without a hull side has a lane kernel of
+  /// (docs/narrowphase.md, "Accuracy knobs"). Every pair without a hull side has a lane kernel of
   /// its own, so today the cap reaches no pair of the step or of NarrowPhase::collide;
   /// it still bounds the general path, which takes any shape pair without a kernel. The
   /// tolerance reaches the pairs that still take GJK/EPA: box-hull and hull-hull pairs

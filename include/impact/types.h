@@ -81,7 +81,7 @@ enum class Backend : int {
 enum class BroadPhaseKind : int {
   kGrid = 0,        ///< parallel radix-sorted uniform grid, hierarchical levels for mixed sizes
   kBruteForce = 1,  ///< all pairs, O(n^2): the reference oracle
-  kLbvh = 2,        ///< linear BVH: Morton sort + Karras build (docs/lbvh.md)
+  kLbvh = 2,        ///< linear BVH: Morton sort + one-pass bottom-up build (docs/lbvh.md)
   /// Sweep-and-prune on the axis of greatest variance, incremental across calls
   /// (docs/sap.md). Suits scenes spread along one axis; slow for dense 3D crowds.
   kSweepAndPrune = 3,
