@@ -4,8 +4,12 @@
 // new field is one line of it and one member.
 //
 // Field sets: an array is either as long as the store (its set is on) or empty. kCore
-// fields are always on; kInterpolation ones with WorldDesc::interpolation; kShaped ones
-// from the first body with a shape on (a world of plain spheres never touches them).
+// fields are always on; kInterpolation ones with WorldDesc::interpolation; kShaped
+// (the shape index) from the first body with a shape; kRigid (angular velocity,
+// inertia, centre of mass) from the first body that can rotate; kOriented (the
+// orientation) with either of those two; kDamping from the first body with damping or
+// a gravity scale; kForces (the accumulators of World::apply_forces) from its first
+// call. A world of frictionless plain spheres never touches the optional sets.
 // Cost: every table walk is one pass per array; nothing else is per field.
 #pragma once
 
@@ -23,7 +27,7 @@ namespace impact::host {
 /// Shape index of a plain sphere body (BodyArrays::kSphereBody).
 inline constexpr uint32_t kNoShape = 0xffffffffu;
 
-enum class FieldSet : uint8_t { kCore, kInterpolation, kShaped, kCount };
+enum class FieldSet : uint8_t { kCore, kInterpolation, kShaped, kOriented, kRigid, kDamping, kForces, kCount };
 
 /// One body's value of every field: what append() stores, and the defaults a field set
 /// fills in for the bodies that exist when it is switched on.
@@ -33,9 +37,17 @@ struct BodyRow {
   float inv_mass = 0, radius = 0, restitution = 0;
   uint32_t layer = 0, mask = 0;
   uint8_t is_static = 0;
+  uint8_t fixed_rotation = 0;
   float prev_x = 0, prev_y = 0, prev_z = 0;
   uint32_t shape = kNoShape;
   float qx = 0, qy = 0, qz = 0, qw = 1;
+  float friction = 0, rolling = 0;
+  float wx = 0, wy = 0, wz = 0;
+  float iix = 0, iiy = 0, iiz = 0;
+  float pqx = 0, pqy = 0, pqz = 0, pqw = 1;
+  float cx = 0, cy = 0, cz = 0;
+  float linear_damping = 0, angular_damping = 0, gravity_scale = 1;
+  float fx = 0, fy = 0, fz = 0, tx = 0, ty = 0, tz = 0;
   BodyHandle handle;
 };
 
@@ -45,9 +57,18 @@ struct BodyStore {
   Buffer<float> inv_mass, radius, restitution;
   Buffer<uint32_t> layer, mask;
   Buffer<uint8_t> is_static;
+  Buffer<uint8_t> fixed_rotation;        ///< 1: never rotated by contacts or torques
   Buffer<float> prev_x, prev_y, prev_z;  ///< positions at the last step's start (kInterpolation)
   Buffer<uint32_t> shape;                ///< World::shapes() index, or kNoShape (kShaped)
-  Buffer<float> qx, qy, qz, qw;          ///< unit orientation (kShaped)
+  Buffer<float> qx, qy, qz, qw;          ///< unit orientation of the shape frame (kOriented)
+  Buffer<float> friction;                ///< Coulomb coefficient
+  Buffer<float> rolling;                 ///< rolling resistance
+  Buffer<float> wx, wy, wz;              ///< angular velocity, rad/s, world (kRigid)
+  Buffer<float> iix, iiy, iiz;           ///< inverse principal inertia, 1/(kg m^2) (kRigid)
+  Buffer<float> pqx, pqy, pqz, pqw;      ///< principal axes in the shape frame (kRigid)
+  Buffer<float> cx, cy, cz;              ///< centre of mass in the shape frame, m (kRigid)
+  Buffer<float> linear_damping, angular_damping, gravity_scale;  ///< (kDamping)
+  Buffer<float> fx, fy, fz, tx, ty, tz;  ///< force (N) and torque (N m) for the next step (kForces)
   Buffer<BodyHandle> handle;             ///< slot -> handle
 
   size_t size() const { return handle.size(); }
@@ -61,7 +82,7 @@ struct BodyStore {
   void reserve(size_t n);
 
  private:
-  bool on_[static_cast<int>(FieldSet::kCount)] = {true, false, false};
+  bool on_[static_cast<int>(FieldSet::kCount)] = {true, false, false, false, false, false, false};
 };
 
 /// One row of the body field table: its name, array, value in BodyRow, span in the
@@ -90,14 +111,44 @@ inline constexpr auto kBodyFields = std::tuple{
     BodyField<uint32_t>{"layer", &BodyStore::layer, &BodyRow::layer, &BodyArrays::layer, FieldSet::kCore},
     BodyField<uint32_t>{"mask", &BodyStore::mask, &BodyRow::mask, &BodyArrays::mask, FieldSet::kCore},
     BodyField<uint8_t>{"is_static", &BodyStore::is_static, &BodyRow::is_static, nullptr, FieldSet::kCore},
+    BodyField<uint8_t>{"fixed_rotation", &BodyStore::fixed_rotation, &BodyRow::fixed_rotation, nullptr,
+                       FieldSet::kCore},
     BodyField<float>{"prev_x", &BodyStore::prev_x, &BodyRow::prev_x, nullptr, FieldSet::kInterpolation},
     BodyField<float>{"prev_y", &BodyStore::prev_y, &BodyRow::prev_y, nullptr, FieldSet::kInterpolation},
     BodyField<float>{"prev_z", &BodyStore::prev_z, &BodyRow::prev_z, nullptr, FieldSet::kInterpolation},
     BodyField<uint32_t>{"shape", &BodyStore::shape, &BodyRow::shape, &BodyArrays::shape, FieldSet::kShaped},
-    BodyField<float>{"qx", &BodyStore::qx, &BodyRow::qx, &BodyArrays::qx, FieldSet::kShaped},
-    BodyField<float>{"qy", &BodyStore::qy, &BodyRow::qy, &BodyArrays::qy, FieldSet::kShaped},
-    BodyField<float>{"qz", &BodyStore::qz, &BodyRow::qz, &BodyArrays::qz, FieldSet::kShaped},
-    BodyField<float>{"qw", &BodyStore::qw, &BodyRow::qw, &BodyArrays::qw, FieldSet::kShaped},
+    BodyField<float>{"qx", &BodyStore::qx, &BodyRow::qx, &BodyArrays::qx, FieldSet::kOriented},
+    BodyField<float>{"qy", &BodyStore::qy, &BodyRow::qy, &BodyArrays::qy, FieldSet::kOriented},
+    BodyField<float>{"qz", &BodyStore::qz, &BodyRow::qz, &BodyArrays::qz, FieldSet::kOriented},
+    BodyField<float>{"qw", &BodyStore::qw, &BodyRow::qw, &BodyArrays::qw, FieldSet::kOriented},
+    BodyField<float>{"friction", &BodyStore::friction, &BodyRow::friction, &BodyArrays::friction, FieldSet::kCore},
+    BodyField<float>{"rolling", &BodyStore::rolling, &BodyRow::rolling, &BodyArrays::rolling_resistance,
+                     FieldSet::kCore},
+    BodyField<float>{"wx", &BodyStore::wx, &BodyRow::wx, &BodyArrays::wx, FieldSet::kRigid},
+    BodyField<float>{"wy", &BodyStore::wy, &BodyRow::wy, &BodyArrays::wy, FieldSet::kRigid},
+    BodyField<float>{"wz", &BodyStore::wz, &BodyRow::wz, &BodyArrays::wz, FieldSet::kRigid},
+    BodyField<float>{"iix", &BodyStore::iix, &BodyRow::iix, nullptr, FieldSet::kRigid},
+    BodyField<float>{"iiy", &BodyStore::iiy, &BodyRow::iiy, nullptr, FieldSet::kRigid},
+    BodyField<float>{"iiz", &BodyStore::iiz, &BodyRow::iiz, nullptr, FieldSet::kRigid},
+    BodyField<float>{"pqx", &BodyStore::pqx, &BodyRow::pqx, nullptr, FieldSet::kRigid},
+    BodyField<float>{"pqy", &BodyStore::pqy, &BodyRow::pqy, nullptr, FieldSet::kRigid},
+    BodyField<float>{"pqz", &BodyStore::pqz, &BodyRow::pqz, nullptr, FieldSet::kRigid},
+    BodyField<float>{"pqw", &BodyStore::pqw, &BodyRow::pqw, nullptr, FieldSet::kRigid},
+    BodyField<float>{"cx", &BodyStore::cx, &BodyRow::cx, nullptr, FieldSet::kRigid},
+    BodyField<float>{"cy", &BodyStore::cy, &BodyRow::cy, nullptr, FieldSet::kRigid},
+    BodyField<float>{"cz", &BodyStore::cz, &BodyRow::cz, nullptr, FieldSet::kRigid},
+    BodyField<float>{"linear_damping", &BodyStore::linear_damping, &BodyRow::linear_damping, nullptr,
+                     FieldSet::kDamping},
+    BodyField<float>{"angular_damping", &BodyStore::angular_damping, &BodyRow::angular_damping, nullptr,
+                     FieldSet::kDamping},
+    BodyField<float>{"gravity_scale", &BodyStore::gravity_scale, &BodyRow::gravity_scale, nullptr,
+                     FieldSet::kDamping},
+    BodyField<float>{"fx", &BodyStore::fx, &BodyRow::fx, nullptr, FieldSet::kForces},
+    BodyField<float>{"fy", &BodyStore::fy, &BodyRow::fy, nullptr, FieldSet::kForces},
+    BodyField<float>{"fz", &BodyStore::fz, &BodyRow::fz, nullptr, FieldSet::kForces},
+    BodyField<float>{"tx", &BodyStore::tx, &BodyRow::tx, nullptr, FieldSet::kForces},
+    BodyField<float>{"ty", &BodyStore::ty, &BodyRow::ty, nullptr, FieldSet::kForces},
+    BodyField<float>{"tz", &BodyStore::tz, &BodyRow::tz, nullptr, FieldSet::kForces},
     BodyField<BodyHandle>{"handle", &BodyStore::handle, &BodyRow::handle, &BodyArrays::handles, FieldSet::kCore},
 };
 
@@ -117,6 +168,7 @@ void for_each_body_array(Store& s, Fn&& fn) {
 
 inline void BodyStore::enable(FieldSet set) {
   if (on(set)) return;
+  if (set == FieldSet::kShaped || set == FieldSet::kRigid) enable(FieldSet::kOriented);
   const BodyRow defaults;
   const size_t n = size();
   for_each_body_field([&](const auto& f) {

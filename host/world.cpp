@@ -8,50 +8,29 @@
 #include <vector>
 
 #include "host/world_impl.h"
+#include "host/world_checks.h"
 #include "host/broadphase/query.h"
 #include "impact/broadphase.h"
 #include "impact/world.h"
+#include "host/body_inertia.h"
 #include "host/narrowphase/pose.h"
 
 namespace impact {
+using host::fmt_float;
+using host::invalid;
+using host::finite3;
+using host::vec_str;
+using host::kMaxCoordinate;
+using host::check_position;
+using host::check_velocity;
+using host::handle_str;
+using host::resolve_bodies;
+
 namespace {
 
 // Kernels use index n as a sentinel, and the solver's contact keys hold a body slot
 // plus a plane bit and a 2-bit manifold point index in 32 bits.
 constexpr uint64_t kMaxBodies = (1ull << 29) - 16;
-
-std::string fmt_float(float v) {
-  char buf[48];
-  std::snprintf(buf, sizeof buf, "%.9g", static_cast<double>(v));
-  return buf;
-}
-
-Status invalid(const std::string& where, const std::string& what) {
-  return Status(StatusCode::kInvalidArgument, where + ": " + what);
-}
-
-bool finite3(const Eigen::Vector3f& v) {
-  return std::isfinite(v.x()) && std::isfinite(v.y()) && std::isfinite(v.z());
-}
-
-std::string vec_str(const Eigen::Vector3f& v) {
-  return "(" + fmt_float(v.x()) + ", " + fmt_float(v.y()) + ", " + fmt_float(v.z()) + ")";
-}
-
-// Position magnitudes beyond this overflow box arithmetic (p +- r, extents) in float.
-constexpr float kMaxCoordinate = 1e18f;
-
-Status check_position(const std::string& who, const Eigen::Vector3f& p) {
-  if (!finite3(p)) return invalid(who, "position must be finite, got " + vec_str(p));
-  if (p.cwiseAbs().maxCoeff() > kMaxCoordinate)
-    return invalid(who, "position magnitude must be <= 1e18 m, got " + vec_str(p));
-  return Status();
-}
-
-Status check_velocity(const std::string& who, const Eigen::Vector3f& v) {
-  if (!finite3(v)) return invalid(who, "velocity must be finite, got " + vec_str(v));
-  return Status();
-}
 
 Status check_body(const std::string& who, const Eigen::Vector3f& pos, const Eigen::Vector3f& vel,
                   float inv_mass, float radius, float restitution) {
@@ -66,9 +45,32 @@ Status check_body(const std::string& who, const Eigen::Vector3f& pos, const Eige
   return Status();
 }
 
-// A body's shape and orientation: a shape of the world's set that can be a body, a
-// unit quaternion. *bounding_radius: the shape's local bounds' farthest corner (the
-// radius stored for shaped bodies), or `radius` for spheres.
+// The motion and material fields of a body: its orientation a unit quaternion (a plain
+// sphere's too), finite angular velocity, friction, rolling resistance and damping
+// finite and >= 0, a finite gravity scale.
+Status check_motion(const std::string& who, const BodyDesc& d) {
+  Pose pose;
+  pose.orientation = d.orientation;
+  if (!host::pose_ok(pose)) return host::check_pose(pose, who.c_str());
+  if (!finite3(d.angular_velocity))
+    return invalid(who, "angular_velocity must be finite, got " + vec_str(d.angular_velocity));
+  auto non_negative = [&](const char* field, float v) {
+    return std::isfinite(v) && v >= 0.0f
+               ? Status()
+               : invalid(who, std::string(field) + " must be finite and >= 0, got " + fmt_float(v));
+  };
+  if (Status st = non_negative("friction", d.friction); !st.ok()) return st;
+  if (Status st = non_negative("rolling_resistance", d.rolling_resistance); !st.ok()) return st;
+  if (Status st = non_negative("linear_damping", d.linear_damping); !st.ok()) return st;
+  if (Status st = non_negative("angular_damping", d.angular_damping); !st.ok()) return st;
+  if (!std::isfinite(d.gravity_scale))
+    return invalid(who, "gravity_scale must be finite, got " + fmt_float(d.gravity_scale));
+  return Status();
+}
+
+// A body's shape: a shape of the world's set that can be a body. *bounding_radius: the
+// shape's local bounds' farthest corner (the radius stored for shaped bodies), or
+// `radius` for spheres.
 Status check_shape(const std::string& who, const WorldImpl& w, const BodyDesc& d, float* bounding_radius) {
   *bounding_radius = d.radius;
   if (!d.shape.valid()) return Status();
@@ -81,19 +83,12 @@ Status check_shape(const std::string& who, const WorldImpl& w, const BodyDesc& d
     return invalid(who, "a half-space shape cannot be a body (use create_planes)");
   if (r.type == ShapeType::kMesh && d.inv_mass != 0.0f)
     return invalid(who, "a mesh body must be static (inv_mass 0), got inv_mass " + fmt_float(d.inv_mass));
-  Pose pose;
-  pose.orientation = d.orientation;
-  if (!host::pose_ok(pose)) return host::check_pose(pose, who.c_str());
   // The farthest corner of the local box: per axis the larger magnitude (hulls and
   // compounds need not be centred on the body's origin).
   const float rr = r.local_min.cwiseAbs().cwiseMax(r.local_max.cwiseAbs()).norm();
   *bounding_radius = rr;
   if (!(rr > 0.0f && rr <= kMaxCoordinate)) return invalid(who, "shape bounds out of range");
   return Status();
-}
-
-std::string handle_str(BodyHandle h) {
-  return "{index " + std::to_string(h.index) + ", generation " + std::to_string(h.generation) + "}";
 }
 
 Status check_desc(const WorldDesc& d) {
@@ -162,6 +157,20 @@ void WorldImpl::slots_changed(bool bodies_moved) {
   solver.clear_impulses();
 }
 
+void WorldImpl::enable_rigid() {
+  host::BodyStore& s = bodies;
+  if (s.on(host::FieldSet::kRigid)) return;
+  s.enable(host::FieldSet::kRigid);
+  // The bodies that exist get their inertia now (until here nothing could turn them).
+  for (uint32_t i = 0; i < s.size(); ++i) {
+    if (!(s.inv_mass[i] > 0.0f) || s.fixed_rotation[i]) continue;
+    const bool shaped = s.on(host::FieldSet::kShaped) && s.shape[i] != host::kNoShape;
+    host::BodyRow row;
+    host::body_inertia(shapes, shaped ? ShapeId{s.shape[i]} : ShapeId{}, s.radius[i], s.inv_mass[i], &row);
+    host::set_rigid_fields(s, i, row);
+  }
+}
+
 void WorldImpl::swap_remove_body(uint32_t slot) {
   host::BodyStore& s = bodies;
   const auto last_slot = static_cast<uint32_t>(s.size() - 1);
@@ -187,39 +196,57 @@ Status World::create(const WorldDesc& desc, std::unique_ptr<World>* out) {
 
 namespace {
 
-// Appends one validated body; returns its handle.
-BodyHandle append_body(WorldImpl& w, const Eigen::Vector3f& p, const Eigen::Vector3f& v,
-                       float inv_mass, float radius, float restitution, uint32_t layer,
-                       uint32_t mask, ShapeId shape = {},
-                       const Eigen::Quaternionf& q = Eigen::Quaternionf::Identity()) {
+// Appends one validated body; returns its handle. The first body that can rotate
+// switches the rigid field set on, the first with damping or a gravity scale the
+// damping set (host/body_store.h).
+BodyHandle append_body(WorldImpl& w, const BodyDesc& d, float radius) {
   host::BodyStore& s = w.bodies;
   const auto slot = static_cast<uint32_t>(s.size());
-  if (shape.valid()) s.enable(host::FieldSet::kShaped);  // the first shaped body: every body gets the fields
+  const bool shaped = d.shape.valid();
+  const bool spins = d.angular_velocity != Eigen::Vector3f::Zero();
+  const bool rubs = d.friction > 0.0f || d.rolling_resistance > 0.0f;
+  const bool rotates = spins || (d.inv_mass > 0.0f && !d.fixed_rotation && (shaped || rubs));
+  if (shaped) s.enable(host::FieldSet::kShaped);  // the first shaped body: every body gets the fields
+  if (d.orientation.coeffs() != Eigen::Quaternionf::Identity().coeffs())
+    s.enable(host::FieldSet::kOriented);  // kept even where nothing turns the body
+  const bool damped = d.linear_damping != 0.0f || d.angular_damping != 0.0f || d.gravity_scale != 1.0f;
+  if (rotates || damped) w.enable_rigid();
+  if (damped) s.enable(host::FieldSet::kDamping);
   host::BodyRow row;
-  row.pos_x = p.x();
-  row.pos_y = p.y();
-  row.pos_z = p.z();
-  row.vel_x = v.x();
-  row.vel_y = v.y();
-  row.vel_z = v.z();
-  row.inv_mass = inv_mass;
+  row.pos_x = d.position.x();
+  row.pos_y = d.position.y();
+  row.pos_z = d.position.z();
+  row.vel_x = d.velocity.x();
+  row.vel_y = d.velocity.y();
+  row.vel_z = d.velocity.z();
+  row.inv_mass = d.inv_mass;
   row.radius = radius;
-  row.restitution = restitution;
-  row.layer = layer;
-  row.mask = mask;
-  row.is_static = static_cast<uint8_t>(inv_mass == 0.0f);
-  row.prev_x = p.x();
-  row.prev_y = p.y();
-  row.prev_z = p.z();
-  row.shape = shape.valid() ? shape.index : host::kNoShape;
-  const Eigen::Quaternionf n = q.normalized();
+  row.restitution = d.restitution;
+  row.layer = d.layer;
+  row.mask = d.mask;
+  row.is_static = static_cast<uint8_t>(d.inv_mass == 0.0f);
+  row.fixed_rotation = d.fixed_rotation ? 1 : 0;
+  row.prev_x = d.position.x();
+  row.prev_y = d.position.y();
+  row.prev_z = d.position.z();
+  row.shape = shaped ? d.shape.index : host::kNoShape;
+  const Eigen::Quaternionf n = d.orientation.normalized();
   row.qx = n.x();
   row.qy = n.y();
   row.qz = n.z();
   row.qw = n.w();
+  row.friction = d.friction;
+  row.rolling = d.rolling_resistance;
+  row.wx = d.angular_velocity.x();
+  row.wy = d.angular_velocity.y();
+  row.wz = d.angular_velocity.z();
+  row.linear_damping = d.linear_damping;
+  row.angular_damping = d.angular_damping;
+  row.gravity_scale = d.gravity_scale;
+  if (d.inv_mass > 0.0f && !d.fixed_rotation) host::body_inertia(w.shapes, d.shape, radius, d.inv_mass, &row);
   w.body_handles.acquire(slot, &row.handle.index, &row.handle.generation);
   s.append(row);
-  if (shape.valid()) ++w.shaped_count;
+  if (shaped) ++w.shaped_count;
   w.broad_phase.invalidate();
   w.positions_changed();
   return row.handle;
@@ -248,13 +275,10 @@ Status World::create_bodies(std::span<const BodyDesc> descs, std::span<BodyHandl
     if (Status s = check_shape(who, *impl_, d, &radius[i]); !s.ok()) return s;
     if (Status s = check_body(who, d.position, d.velocity, d.inv_mass, radius[i], d.restitution); !s.ok())
       return s;
+    if (Status s = check_motion(who, d); !s.ok()) return s;
   }
   reserve_bodies(*impl_, descs.size());
-  for (size_t i = 0; i < descs.size(); ++i) {
-    const BodyDesc& d = descs[i];
-    out[i] = append_body(*impl_, d.position, d.velocity, d.inv_mass, radius[i], d.restitution, d.layer,
-                         d.mask, d.shape, d.orientation);
-  }
+  for (size_t i = 0; i < descs.size(); ++i) out[i] = append_body(*impl_, descs[i], radius[i]);
   return Status();
 }
 
@@ -278,6 +302,7 @@ Status World::create_bodies(const Eigen::Ref<const Eigen::Matrix3Xf>& positions,
   if (Status s = check_capacity(*impl_, n, "create_bodies"); !s.ok()) return s;
   if (common.shape.valid())
     return invalid("create_bodies", "the Eigen bulk import creates spheres; give shaped bodies as BodyDesc");
+  if (Status s = check_motion("create_bodies: common", common); !s.ok()) return s;
   const bool has_vel = velocities.cols() != 0;
   auto vel = [&](size_t i) -> Eigen::Vector3f {
     return has_vel ? Eigen::Vector3f(velocities.col(static_cast<Eigen::Index>(i))) : Eigen::Vector3f::Zero();
@@ -292,34 +317,20 @@ Status World::create_bodies(const Eigen::Ref<const Eigen::Matrix3Xf>& positions,
   reserve_bodies(*impl_, n);
   for (size_t i = 0; i < n; ++i) {
     const auto c = static_cast<Eigen::Index>(i);
-    out[i] = append_body(*impl_, positions.col(c), vel(i), inv_masses[c], radii[c], common.restitution,
-                         common.layer, common.mask);
+    BodyDesc d = common;
+    d.position = positions.col(c);
+    d.velocity = vel(i);
+    d.inv_mass = inv_masses[c];
+    d.radius = radii[c];
+    out[i] = append_body(*impl_, d, radii[c]);
   }
   return Status();
 }
 
-namespace {
-
-// Resolves every handle to a slot, or reports the first bad one.
-Status resolve(const WorldImpl& w, std::span<const BodyHandle> handles, const char* where,
-               std::vector<uint32_t>* slots) {
-  slots->resize(handles.size());
-  for (size_t i = 0; i < handles.size(); ++i) {
-    const uint32_t slot = w.body_handles.lookup(handles[i].index, handles[i].generation);
-    if (slot == host::HandleTable::kNoSlot)
-      return Status(StatusCode::kStaleHandle, std::string(where) + ": body " + std::to_string(i) +
-                                                  " handle " + handle_str(handles[i]) +
-                                                  (handles[i].is_null() ? " is null" : " is stale or invalid"));
-    (*slots)[i] = slot;
-  }
-  return Status();
-}
-
-}  // namespace
 
 Status World::destroy_bodies(std::span<const BodyHandle> handles) {
   std::vector<uint32_t> slots;
-  if (Status s = resolve(*impl_, handles, "destroy_bodies", &slots); !s.ok()) return s;
+  if (Status s = resolve_bodies(*impl_, handles, "destroy_bodies", &slots); !s.ok()) return s;
   std::vector<uint32_t> sorted(slots);
   std::sort(sorted.begin(), sorted.end());  // validation only; does not shape results
   if (std::adjacent_find(sorted.begin(), sorted.end()) != sorted.end())
@@ -336,7 +347,7 @@ Status World::set_positions(std::span<const BodyHandle> handles, std::span<const
   if (handles.size() != values.size())
     return Status(StatusCode::kSizeMismatch, "set_positions: handles and values differ in length");
   std::vector<uint32_t> slots;
-  if (Status s = resolve(*impl_, handles, "set_positions", &slots); !s.ok()) return s;
+  if (Status s = resolve_bodies(*impl_, handles, "set_positions", &slots); !s.ok()) return s;
   for (size_t i = 0; i < values.size(); ++i)
     if (Status s = check_position("set_positions: body " + std::to_string(i), values[i]); !s.ok()) return s;
   host::BodyStore& b = impl_->bodies;
@@ -359,7 +370,7 @@ Status World::set_velocities(std::span<const BodyHandle> handles, std::span<cons
   if (handles.size() != values.size())
     return Status(StatusCode::kSizeMismatch, "set_velocities: handles and values differ in length");
   std::vector<uint32_t> slots;
-  if (Status s = resolve(*impl_, handles, "set_velocities", &slots); !s.ok()) return s;
+  if (Status s = resolve_bodies(*impl_, handles, "set_velocities", &slots); !s.ok()) return s;
   for (size_t i = 0; i < values.size(); ++i)
     if (Status s = check_velocity("set_velocities: body " + std::to_string(i), values[i]); !s.ok()) return s;
   host::BodyStore& b = impl_->bodies;
@@ -375,7 +386,7 @@ Status World::get_positions(std::span<const BodyHandle> handles, std::span<Eigen
   if (handles.size() != out.size())
     return Status(StatusCode::kSizeMismatch, "get_positions: handles and out differ in length");
   std::vector<uint32_t> slots;
-  if (Status s = resolve(*impl_, handles, "get_positions", &slots); !s.ok()) return s;
+  if (Status s = resolve_bodies(*impl_, handles, "get_positions", &slots); !s.ok()) return s;
   const host::BodyStore& b = impl_->bodies;
   for (size_t i = 0; i < out.size(); ++i) out[i] = {b.pos_x[slots[i]], b.pos_y[slots[i]], b.pos_z[slots[i]]};
   return Status();
@@ -385,7 +396,7 @@ Status World::get_velocities(std::span<const BodyHandle> handles, std::span<Eige
   if (handles.size() != out.size())
     return Status(StatusCode::kSizeMismatch, "get_velocities: handles and out differ in length");
   std::vector<uint32_t> slots;
-  if (Status s = resolve(*impl_, handles, "get_velocities", &slots); !s.ok()) return s;
+  if (Status s = resolve_bodies(*impl_, handles, "get_velocities", &slots); !s.ok()) return s;
   const host::BodyStore& b = impl_->bodies;
   for (size_t i = 0; i < out.size(); ++i) out[i] = {b.vel_x[slots[i]], b.vel_y[slots[i]], b.vel_z[slots[i]]};
   return Status();
@@ -393,7 +404,7 @@ Status World::get_velocities(std::span<const BodyHandle> handles, std::span<Eige
 
 Status World::slot_of(BodyHandle handle, uint32_t* out_slot) const {
   std::vector<uint32_t> slots;
-  if (Status s = resolve(*impl_, std::span<const BodyHandle>(&handle, 1), "slot_of", &slots); !s.ok()) return s;
+  if (Status s = resolve_bodies(*impl_, std::span<const BodyHandle>(&handle, 1), "slot_of", &slots); !s.ok()) return s;
   *out_slot = slots[0];
   return Status();
 }

@@ -38,6 +38,9 @@ class WorldImpl {
   /// builds afresh and last step's pairs are gone too.
   void slots_changed(bool bodies_moved);
   void swap_remove_body(uint32_t slot);
+  /// Switches the rigid field set on (angular velocity, inertia, centre of mass),
+  /// giving the dynamic bodies that exist their inertia.
+  void enable_rigid();
 
   WorldDesc desc;
   host::Executor exec;

@@ -1,13 +1,13 @@
 #!/usr/bin/env bash
 # Installs the Debian packages impact needs, only those that are missing.
 # Non-interactive and idempotent; prints nothing when everything is present.
-#   --peers   also the peer libraries the micro-benchmarks compare against when found
-#             (bench/peers_bench.cpp): Bullet (libbullet-dev), FCL (libfcl-dev, libccd-dev)
+#   --peers   also the peer libraries the benchmarks compare against when found
+#             (bench/): Bullet (libbullet-dev), FCL (libfcl-dev, libccd-dev), ODE (libode-dev)
 set -euo pipefail
 packages=(cmake g++ make libtbb-dev libeigen3-dev libembree-dev libgtest-dev libbenchmark-dev)
 for arg in "$@"; do
   case "$arg" in
-    --peers) packages+=(pkg-config libbullet-dev libfcl-dev libccd-dev) ;;
+    --peers) packages+=(pkg-config libbullet-dev libfcl-dev libccd-dev libode-dev) ;;
     -h|--help) sed -n '2,5s/^# \{0,1\}//p' "$0"; exit 0 ;;
     *) echo "install_deps: unknown option '$arg' (known: --peers)" >&2; exit 2 ;;
   esac

@@ -53,6 +53,7 @@ BodyDesc random_sphere(Rng& rng, const Eigen::Vector3f& position, const Eigen::V
   d.radius = rng.uniform(kMinRadius, kMaxRadius);
   d.inv_mass = inv_mass_of(d.radius);
   d.restitution = rng.uniform(0.0f, 0.5f);
+  d.friction = 0.0f;  // frictionless: the scenes' spheres never rotate
   return d;
 }
 

@@ -63,7 +63,7 @@ std::span<const std::string_view> scene_names();
 std::string_view scene_summary(std::string_view name);
 
 /// Builds a scene:
-///  - "box":     spheres (r in [0.25, 0.5] m, restitution in [0, 0.5]) on a jittered grid
+///  - "box":     frictionless spheres (r in [0.25, 0.5] m, restitution in [0, 0.5]) on a jittered grid
 ///               above the floor of an open box (5 static planes), falling under gravity.
 ///  - "rain":    the same box; spheres start higher and sparser, already moving down
 ///               at 4..12 m/s with some sideways drift.

@@ -21,6 +21,7 @@
 #include "impact/world.h"
 #include "kernels/broadphase/bounds.h"
 #include "kernels/broadphase/grid.h"
+#include "kernels/integrate/rigid_euler.h"
 
 namespace impact::host {
 
@@ -80,6 +81,9 @@ Status narrow_phase_stage(StepContext& ctx);
 Status solve_velocities_stage(StepContext& ctx);
 Status integrate_positions_stage(StepContext& ctx);
 Status correct_positions_stage(StepContext& ctx);
+
+/// The kernels' view of a store's rigid fields (kRigid must be on).
+kernels::RigidBodies rigid_view(BodyStore& s);
 
 /// Permutes body storage into the broad phase's spatial order of the last step (the
 /// reorder stage; also what WorldDesc::reorder_interval triggers).

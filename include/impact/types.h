@@ -50,9 +50,27 @@ struct BodyDesc {
   /// stored in its place (BodyArrays::radius). Half-spaces are not bodies (use planes);
   /// a mesh body must be static (inv_mass 0).
   ShapeId shape{};
-  /// Orientation of the shape, a unit quaternion (within 1e-3). Bodies do not rotate
-  /// yet (no angular dynamics): the orientation stays as given.
+  /// Orientation of the shape (a plain sphere's too), a unit quaternion (within 1e-3).
   Eigen::Quaternionf orientation = Eigen::Quaternionf::Identity();
+  /// rad/s, world frame. A body with inv_mass 0 is kinematic when it moves: its
+  /// velocity and angular velocity carry it, contacts never change them.
+  Eigen::Vector3f angular_velocity = Eigen::Vector3f::Zero();
+  /// Coulomb friction coefficient, >= 0. A pair uses sqrt(friction_a * friction_b).
+  float friction = 0.6f;
+  /// Rolling resistance, >= 0 (dimensionless, like friction): the torque that
+  /// opposes rolling is at most rolling_resistance * normal force * 1 m. A pair uses
+  /// the larger of the two.
+  float rolling_resistance = 0.0f;
+  /// Velocity damping, 1/s, >= 0: v *= 1 / (1 + dt * damping) every step.
+  float linear_damping = 0.0f;
+  /// Angular velocity damping, 1/s, >= 0.
+  float angular_damping = 0.0f;
+  /// Multiplies the world's gravity for this body (finite; 0 = floats, -1 = falls up).
+  float gravity_scale = 1.0f;
+  /// No rotation: contacts and torques never change the angular velocity (infinite
+  /// inertia). Otherwise the inertia is the shape's (uniform density) scaled to the
+  /// body's mass; a plain sphere's is that of a solid ball, 2/5 m r^2.
+  bool fixed_rotation = false;
 };
 
 /// A static half-space { x : dot(normal, x) <= offset }. The normal points out of

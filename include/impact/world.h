@@ -50,6 +50,11 @@ struct WorldDesc {
   uint32_t reorder_interval = 32;
   /// Keep last step's positions so interpolated_positions() can blend (costs 12 B/body).
   bool interpolation = false;
+  /// Bodies that rotate take the gyroscopic torque -w x (I w) by an implicit step
+  /// (stable at any spin; a T-handle spun about its middle axis flips as it should).
+  /// false: angular velocity changes only by contacts and torques (cheaper, but a
+  /// torque-free body's angular momentum then drifts as it turns).
+  bool gyroscopic = true;
   BroadPhaseKind broad_phase = BroadPhaseKind::kGrid;
   /// What an LBVH broad phase does from step to step (docs/lbvh.md): rebuild,
   /// refit, refit until its SAH cost grows by lbvh_refit_sah_limit (> 1), or keep a
@@ -110,11 +115,16 @@ struct BodyArrays {
   std::span<const uint32_t> layer, mask;              ///< collision filter
   std::span<const BodyHandle> handles;                ///< slot -> handle
   /// Per body: the index of its shape in World::shapes() (ShapeId::index), or
-  /// kSphereBody for a plain sphere of `radius`; and its orientation, a unit
-  /// quaternion (qx, qy, qz, qw). All five are empty while no body has a shape (every
-  /// body is then a sphere at the identity orientation).
+  /// kSphereBody for a plain sphere of `radius`; empty while no body has a shape.
   std::span<const uint32_t> shape;
+  /// Orientation, a unit quaternion (qx, qy, qz, qw); empty while no body has a shape
+  /// or can rotate (every body is then at the identity orientation).
   std::span<const float> qx, qy, qz, qw;
+  /// Angular velocity, rad/s, world frame; empty while no body can rotate (every
+  /// body's is then zero).
+  std::span<const float> wx, wy, wz;
+  std::span<const float> friction;            ///< Coulomb coefficient
+  std::span<const float> rolling_resistance;  ///< see BodyDesc::rolling_resistance
   /// The shape index of a plain sphere body.
   static constexpr uint32_t kSphereBody = 0xffffffffu;
   /// Bodies.
@@ -186,7 +196,7 @@ class World {
   Status create_bodies(std::span<const BodyDesc> descs, std::span<BodyHandle> out);
   /// Bulk import from column-major Eigen arrays (3 x n), read in place.
   /// velocities may have 0 columns (all zero); radii and inv_masses have n entries;
-  /// restitution, layer and mask come from `common`.
+  /// every other field (restitution, filters, friction, damping, ...) comes from `common`.
   Status create_bodies(const Eigen::Ref<const Eigen::Matrix3Xf>& positions,
                        const Eigen::Ref<const Eigen::Matrix3Xf>& velocities,
                        const Eigen::Ref<const Eigen::VectorXf>& radii,
@@ -202,6 +212,31 @@ class World {
   Status get_positions(std::span<const BodyHandle> handles, std::span<Eigen::Vector3f> out) const;
   /// Velocities of the given bodies, out[i] for handles[i].
   Status get_velocities(std::span<const BodyHandle> handles, std::span<Eigen::Vector3f> out) const;
+  /// Sets angular velocities (rad/s, world frame, finite); a body with
+  /// BodyDesc::fixed_rotation accepts only zero. A static body that spins is a
+  /// kinematic one (it turns, contacts never change it). All-or-nothing.
+  Status set_angular_velocities(std::span<const BodyHandle> handles, std::span<const Eigen::Vector3f> values);
+  /// Angular velocities, out[i] for handles[i] (zero for every body while none rotates).
+  Status get_angular_velocities(std::span<const BodyHandle> handles, std::span<Eigen::Vector3f> out) const;
+  /// Sets orientations (unit quaternions within 1e-3, stored normalised; a teleport).
+  /// All-or-nothing.
+  Status set_orientations(std::span<const BodyHandle> handles, std::span<const Eigen::Quaternionf> values);
+  /// Orientations, out[i] for handles[i].
+  Status get_orientations(std::span<const BodyHandle> handles, std::span<Eigen::Quaternionf> out) const;
+  /// Adds forces (N, finite) at the bodies' centres of mass for the next step only
+  /// (the accumulators are cleared once it has used them). Static and kinematic bodies
+  /// ignore forces, torques and impulses. All-or-nothing.
+  Status apply_forces(std::span<const BodyHandle> handles, std::span<const Eigen::Vector3f> forces);
+  /// Adds forces (N) applied at world points (m) for the next step: the force, and
+  /// the torque (point - centre of mass) x force. All-or-nothing.
+  Status apply_forces_at(std::span<const BodyHandle> handles, std::span<const Eigen::Vector3f> forces,
+                         std::span<const Eigen::Vector3f> points);
+  /// Adds torques (N m, world frame) for the next step. All-or-nothing.
+  Status apply_torques(std::span<const BodyHandle> handles, std::span<const Eigen::Vector3f> torques);
+  /// Applies impulses (N s) at world points (m) now: v += J / m,
+  /// w += I_world^-1 ((point - centre of mass) x J). All-or-nothing.
+  Status apply_impulses(std::span<const BodyHandle> handles, std::span<const Eigen::Vector3f> impulses,
+                        std::span<const Eigen::Vector3f> points);
   /// Dense slot of a live handle, or an error.
   Status slot_of(BodyHandle handle, uint32_t* out_slot) const;
   /// Live bodies.

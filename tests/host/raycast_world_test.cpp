@@ -443,6 +443,7 @@ TEST(WorldViews, BodyShapesOrientationsAndPlanes) {
   IMPACT_ASSERT_OK(World::create(WorldDesc{}, &w));
   BodyDesc s;
   s.position = Vector3f(1, 2, 3);
+  s.friction = 0.0f;  // a frictionless sphere never rotates: no orientation fields yet
   BodyHandle hs;
   IMPACT_ASSERT_OK(w->create_bodies({&s, 1}, {&hs, 1}));
   EXPECT_TRUE(w->bodies().shape.empty());

@@ -188,6 +188,16 @@ TEST(Determinism, StateHashCoversEveryBodyField) {
     EXPECT_NE(hash_of([](BodyDesc& b, ShapeId) { b.restitution = 0.25f; }, shaped), base) << "restitution";
     EXPECT_NE(hash_of([](BodyDesc& b, ShapeId) { b.layer = 2; }, shaped), base) << "layer";
     EXPECT_NE(hash_of([](BodyDesc& b, ShapeId) { b.mask = 5; }, shaped), base) << "mask";
+    EXPECT_NE(hash_of([](BodyDesc& b, ShapeId) { b.friction = 0.3f; }, shaped), base) << "friction";
+    EXPECT_NE(hash_of([](BodyDesc& b, ShapeId) { b.rolling_resistance = 0.1f; }, shaped), base) << "rolling";
+    EXPECT_NE(hash_of([](BodyDesc& b, ShapeId) { b.fixed_rotation = true; }, shaped), base) << "fixed_rotation";
+    EXPECT_NE(hash_of([](BodyDesc& b, ShapeId) { b.angular_velocity.y() = 1.0f; }, shaped), base) << "spin";
+    EXPECT_NE(hash_of([](BodyDesc& b, ShapeId) { b.linear_damping = 0.5f; }, shaped),
+              hash_of([](BodyDesc& b, ShapeId) { b.angular_damping = 0.5f; }, shaped))
+        << "damping";
+    EXPECT_NE(hash_of([](BodyDesc& b, ShapeId) { b.gravity_scale = 0.5f; }, shaped),
+              hash_of([](BodyDesc& b, ShapeId) { b.gravity_scale = 0.25f; }, shaped))
+        << "gravity_scale";
   }
   const uint64_t shaped = hash_of(none, true);
   EXPECT_NE(hash_of([](BodyDesc& b, ShapeId box) { b.shape = box; }, true), shaped) << "shape";
