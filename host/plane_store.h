@@ -13,7 +13,7 @@
 namespace impact::host {
 
 struct PlaneStore {
-  std::vector<float> normal_x, normal_y, normal_z, offset, restitution;
+  std::vector<float> normal_x, normal_y, normal_z, offset, restitution, friction;
   std::vector<uint32_t> layer, mask;
   std::vector<PlaneHandle> handle;
   size_t size() const { return handle.size(); }

@@ -98,6 +98,15 @@ Status check_desc(const WorldDesc& d) {
     return invalid(w, "fixed_dt must be finite and > 0, got " + fmt_float(d.fixed_dt));
   if (d.max_steps_per_frame == 0) return invalid(w, "max_steps_per_frame must be >= 1");
   const SolverDesc& s = d.solver;
+  if (s.kind != SolverKind::kSoftStep && s.kind != SolverKind::kJacobi)
+    return invalid(w, "solver.kind is not a known SolverKind");
+  if (s.substeps == 0 || s.substeps > 64) return invalid(w, "solver.substeps must be in [1, 64], got " + std::to_string(s.substeps));
+  if (!(std::isfinite(s.contact_hertz) && s.contact_hertz > 0.0f))
+    return invalid(w, "solver.contact_hertz must be finite and > 0, got " + fmt_float(s.contact_hertz));
+  if (!(std::isfinite(s.contact_damping_ratio) && s.contact_damping_ratio >= 0.0f))
+    return invalid(w, "solver.contact_damping_ratio must be finite and >= 0, got " + fmt_float(s.contact_damping_ratio));
+  if (!(std::isfinite(s.max_push_speed) && s.max_push_speed > 0.0f))
+    return invalid(w, "solver.max_push_speed must be finite and > 0, got " + fmt_float(s.max_push_speed));
   if (!(s.position_correction >= 0.0f && s.position_correction <= 1.0f))
     return invalid(w, "solver.position_correction must be in [0, 1], got " + fmt_float(s.position_correction));
   if (!(std::isfinite(s.penetration_slop) && s.penetration_slop >= 0.0f))
@@ -155,6 +164,8 @@ void WorldImpl::slots_changed(bool bodies_moved) {
   contacts.clear();
   solver.forget();
   solver.clear_impulses();
+  soft_solver.forget();
+  soft_solver.clear_impulses();
 }
 
 void WorldImpl::enable_rigid() {
@@ -430,6 +441,8 @@ Status World::create_planes(std::span<const PlaneDesc> descs, std::span<PlaneHan
       return invalid(who, "offset / |normal| must be <= 1e18 m, got " + std::to_string(d.offset / len));
     if (!(d.restitution >= 0.0f && d.restitution <= 1.0f))
       return invalid(who, "restitution must be in [0, 1], got " + fmt_float(d.restitution));
+    if (!(std::isfinite(d.friction) && d.friction >= 0.0f))
+      return invalid(who, "friction must be finite and >= 0, got " + fmt_float(d.friction));
   }
   host::PlaneStore& p = impl_->planes;
   for (size_t i = 0; i < descs.size(); ++i) {
@@ -442,6 +455,7 @@ Status World::create_planes(std::span<const PlaneDesc> descs, std::span<PlaneHan
     p.normal_z.push_back(n.z());
     p.offset.push_back(static_cast<float>(d.offset / len));  // n.x <= offset scales with the normal
     p.restitution.push_back(d.restitution);
+    p.friction.push_back(d.friction);
     p.layer.push_back(d.layer);
     p.mask.push_back(d.mask);
     PlaneHandle h;
@@ -476,7 +490,7 @@ Status World::destroy_planes(std::span<const PlaneHandle> handles) {
       v[slot] = v[last];
       v.pop_back();
     };
-    for (auto* v : {&p.normal_x, &p.normal_y, &p.normal_z, &p.offset, &p.restitution}) move(*v);
+    for (auto* v : {&p.normal_x, &p.normal_y, &p.normal_z, &p.offset, &p.restitution, &p.friction}) move(*v);
     move(p.layer);
     move(p.mask);
     if (slot != last) impl_->plane_handles.rebind(p.handle[last].index, slot);
@@ -490,7 +504,7 @@ size_t World::plane_count() const { return impl_->planes.size(); }
 
 PlaneArrays World::planes() const {
   const host::PlaneStore& p = impl_->planes;
-  return PlaneArrays{p.normal_x, p.normal_y, p.normal_z, p.offset, p.restitution, p.layer, p.mask, p.handle};
+  return PlaneArrays{p.normal_x, p.normal_y, p.normal_z, p.offset, p.restitution, p.friction, p.layer, p.mask, p.handle};
 }
 
 // --- time -------------------------------------------------------------------------------
@@ -547,7 +561,9 @@ const StepStats& World::last_step() const { return impl_->last; }
 ContactArrays World::contacts() const {
   const host::ContactManifolds& c = impl_->contacts;
   const size_t m = c.manifolds, p = c.points;
-  const std::span<const float> impulse = impl_->solver.impulses();
+  const std::span<const float> impulse = impl_->desc.solver.kind == SolverKind::kSoftStep
+                                             ? impl_->soft_solver.impulses()
+                                             : impl_->solver.impulses();
   ContactArrays out;
   out.a = {c.a.data(), m};
   out.b = {c.b.data(), m};

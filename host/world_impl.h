@@ -62,7 +62,8 @@ class WorldImpl {
   host::Buffer<kernels::Pair> pairs;  // the last step's broad-phase pairs
   host::NarrowStage narrow;
   host::ContactManifolds contacts;    // the last step's manifolds
-  host::ContactSolver solver;
+  host::ContactSolver solver;          // SolverKind::kJacobi
+  host::SoftStepSolver soft_solver;    // SolverKind::kSoftStep
   host::StepScratch scratch;
 };
 

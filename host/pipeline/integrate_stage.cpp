@@ -5,7 +5,9 @@
 // (World::interpolated_positions). Bodies that can rotate (the kRigid field set) take
 // kernels/integrate/rigid_euler.h instead, with the force accumulators of
 // World::apply_forces (cleared once used), damping and gravity scales when those
-// field sets are on. Cost: one streaming pass per half.
+// field sets are on. Cost: one streaming pass per half. With SolverKind::kSoftStep
+// both halves are the solver's (it integrates by substeps) and only the interpolation
+// copy runs here.
 #include <cstring>
 
 #include "host/pipeline/step_context.h"
@@ -37,6 +39,7 @@ Status integrate_velocities_stage(StepContext& ctx) {
       std::memcpy(s.prev_z.data() + b, s.pos_z.data() + b, bytes);
     });
   }
+  if (ctx.desc.solver.kind == SolverKind::kSoftStep) return Status();  // the solver integrates, by substeps
   const bool forces = s.on(FieldSet::kForces), damping = s.on(FieldSet::kDamping);
   if (!s.on(FieldSet::kRigid) && !forces && !damping) {
     const kernels::Vec3f g{ctx.desc.gravity.x(), ctx.desc.gravity.y(), ctx.desc.gravity.z()};
@@ -55,17 +58,21 @@ Status integrate_velocities_stage(StepContext& ctx) {
     kernels::integrate_rigid_velocities(ctx.dt, g, ctx.desc.gyroscopic, rb, forces ? &fv : nullptr,
                                         damping ? &dv : nullptr, {b, e});
   });
-  if (forces) {  // consumed: the accumulators hold the next step's forces from here on
-    ctx.exec.for_each_chunk(n, kBodyGrain, [&](uint32_t b, uint32_t e, uint32_t) {
-      for (auto* v : {&s.fx, &s.fy, &s.fz, &s.tx, &s.ty, &s.tz}) std::memset(v->data() + b, 0, sizeof(float) * (e - b));
-    });
-  }
+  if (forces) clear_forces(ctx);
   return Status();
+}
+
+void clear_forces(StepContext& ctx) {
+  BodyStore& s = ctx.bodies;
+  ctx.exec.for_each_chunk(s.size(), kBodyGrain, [&](uint32_t b, uint32_t e, uint32_t) {
+    for (auto* v : {&s.fx, &s.fy, &s.fz, &s.tx, &s.ty, &s.tz}) std::memset(v->data() + b, 0, sizeof(float) * (e - b));
+  });
 }
 
 Status integrate_positions_stage(StepContext& ctx) {
   BodyStore& s = ctx.bodies;
   const auto n = static_cast<uint32_t>(s.size());
+  if (ctx.desc.solver.kind == SolverKind::kSoftStep) return Status();  // moved by the solver's substeps
   if (s.on(FieldSet::kRigid)) {
     const kernels::RigidBodies rb = rigid_view(s);
     ctx.exec.for_each_chunk(n, kBodyGrain, [&](uint32_t b, uint32_t e, uint32_t) {

@@ -53,6 +53,7 @@ void reorder_bodies(StepContext& ctx) {
   for (uint32_t i = 0; i < n; ++i) ctx.body_handles.rebind(handles[i].index, i);
   // Last step's contact keys name slots: renumber them.
   ctx.solver.remap_bodies(ctx.exec, inv, n);
+  ctx.soft_solver.remap_bodies(ctx.exec, inv, n);
   // Results of the last step name old slots; so does a coherent structure's state.
   ctx.broad_phase.invalidate();
   ctx.pairs.clear();

@@ -49,7 +49,7 @@ constexpr Stage kStages[] = {
 
 host::StepContext WorldImpl::context() {
   return host::StepContext{desc,    exec,        desc.fixed_dt, bodies, body_handles, planes,  shapes,
-                           shaped_count, broad_phase, pairs,  narrow, contacts,     solver,  scratch,
+                           shaped_count, broad_phase, pairs,  narrow, contacts,     solver,  soft_solver, scratch,
                            last,    steps_since_reorder};
 }
 
@@ -68,6 +68,7 @@ Status WorldImpl::step() {
     if (!status.ok()) {
       contacts.clear();
       solver.clear_impulses();
+      soft_solver.clear_impulses();
       break;
     }
   }

@@ -17,6 +17,7 @@
 #include "host/parallel.h"
 #include "host/plane_store.h"
 #include "host/solver/contact_solver.h"
+#include "host/solver/soft_step_solver.h"
 #include "impact/shapes.h"
 #include "impact/world.h"
 #include "kernels/broadphase/bounds.h"
@@ -62,7 +63,8 @@ struct StepContext {
   Buffer<kernels::Pair>& pairs;   // body pairs of the broad phase
   NarrowStage& narrow;
   ContactManifolds& contacts;     // the narrow phase's output, the solver's input
-  ContactSolver& solver;
+  ContactSolver& solver;          // SolverKind::kJacobi
+  SoftStepSolver& soft_solver;    // SolverKind::kSoftStep
   StepScratch& scratch;
   StepStats& stats;
   uint64_t& steps_since_reorder;
@@ -81,6 +83,9 @@ Status narrow_phase_stage(StepContext& ctx);
 Status solve_velocities_stage(StepContext& ctx);
 Status integrate_positions_stage(StepContext& ctx);
 Status correct_positions_stage(StepContext& ctx);
+
+/// Zeroes the force and torque accumulators (World::apply_forces) once a step used them.
+void clear_forces(StepContext& ctx);
 
 /// The kernels' view of a store's rigid fields (kRigid must be on).
 kernels::RigidBodies rigid_view(BodyStore& s);

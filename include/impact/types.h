@@ -81,6 +81,7 @@ struct PlaneDesc {
   Eigen::Vector3f normal = Eigen::Vector3f::UnitY();
   float offset = 0.0f;        ///< m, signed distance of the surface from the origin along normal
   float restitution = 0.0f;   ///< in [0, 1]
+  float friction = 0.6f;      ///< Coulomb coefficient, >= 0 (combined with a body's as sqrt(f_a f_b))
   /// Layer bits the plane belongs to.
   uint32_t layer = 1u;
   /// Layer bits the plane collides with.

@@ -18,16 +18,41 @@
 
 namespace impact {
 
+/// The contact solver's method (docs/solver.md compares them on the same scenes).
+enum class SolverKind : uint8_t {
+  /// Rigid bodies: per step `substeps` substeps, each integrate velocities, warm start,
+  /// solve with a soft bias, integrate positions, relax without bias; then one
+  /// restitution pass. Gauss-Seidel over a deterministic graph colouring of the
+  /// contacts; angular terms, Coulomb friction at a central anchor per manifold,
+  /// twist and rolling resistance (Box2D v3 / Box3D's scheme).
+  kSoftStep,
+  /// Normal impulses only, no rotation or friction: Jacobi iteration with mass
+  /// splitting, then position correction (the solver before rigid bodies).
+  kJacobi,
+};
+
 /// Accuracy knobs of the contact solver (docs/solver.md has their measured cost and error).
 struct SolverDesc {
-  /// Velocity iterations (Jacobi with mass splitting). 1 is exact for an isolated
-  /// pair; stacks and piles need more, or warm starting to spread work over steps.
+  /// kJacobi stays the default until the soft step handles deep pile-ups (docs/solver.md).
+  SolverKind kind = SolverKind::kJacobi;
+  /// kSoftStep: substeps per step, >= 1. More = stiffer stacks and smaller errors.
+  uint32_t substeps = 4;
+  /// kSoftStep: stiffness of contacts, Hz (> 0; capped at a quarter of the substep
+  /// rate), and their damping ratio (>= 0).
+  float contact_hertz = 30.0f;
+  float contact_damping_ratio = 10.0f;
+  /// kSoftStep: the fastest a contact pushes overlapping bodies apart, m/s (> 0).
+  float max_push_speed = 3.0f;
+  /// kJacobi: velocity iterations. 1 is exact for an isolated pair; stacks and piles
+  /// need more, or warm starting to spread work over steps.
   uint32_t velocity_iterations = 8;
-  /// Position-correction iterations; 0 turns position correction off.
+  /// kJacobi: position-correction iterations; 0 turns position correction off.
   uint32_t position_iterations = 4;
-  /// Fraction of the penetration beyond slop removed per step, in [0, 1].
+  /// kJacobi: fraction of the penetration beyond slop removed per step, in [0, 1].
   float position_correction = 0.8f;
-  /// Penetration left uncorrected, m, >= 0; keeps resting contacts persistent.
+  /// Penetration left uncorrected, m, >= 0; keeps resting contacts persistent (the
+  /// narrow phase reports overlaps only, so a contact pushed to zero depth would be
+  /// lost the next step).
   float penetration_slop = 0.001f;
   /// Approach speeds below this (m/s, >= 0) get no bounce, so resting bodies settle.
   float restitution_threshold = 0.5f;
@@ -138,6 +163,7 @@ struct PlaneArrays {
   std::span<const float> normal_x, normal_y, normal_z;  ///< unit outward normal
   std::span<const float> offset;                        ///< m, along the normal
   std::span<const float> restitution;                   ///< in [0, 1]
+  std::span<const float> friction;                      ///< Coulomb coefficient
   std::span<const uint32_t> layer, mask;                ///< collision filter
   std::span<const PlaneHandle> handles;                 ///< slot -> handle
   /// Planes.

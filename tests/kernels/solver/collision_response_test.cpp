@@ -1,5 +1,6 @@
-// Collision response (kernels/solver/contact_solver.*) through World: two spheres
-// (or a sphere and a plane) without gravity, solver defaults, just overlapping
+// Collision response through World, for each SolverKind (the soft step,
+// kernels/solver/soft_contact.*, and Jacobi, kernels/solver/contact_solver.*): two
+// frictionless spheres (or a sphere and a plane) without gravity, solver defaults, just overlapping
 // and approaching faster than solver.restitution_threshold; one step; read the
 // velocities. A step detects contacts on the positions it starts from (after
 // the gravity update of velocities), so bodies start at the overlapping pose.
@@ -25,6 +26,14 @@ namespace {
 
 constexpr uint32_t kUlps = 4;
 
+// The solver the running test uses (set by the fixture).
+SolverKind g_kind = SolverKind::kSoftStep;
+
+class CollisionResponse : public ::testing::TestWithParam<SolverKind> {
+ protected:
+  void SetUp() override { g_kind = GetParam(); }
+};
+
 struct Outcome {
   Eigen::Vector3f va, vb;
   Eigen::Vector3f normal;  // of the single contact, a -> b
@@ -37,11 +46,14 @@ Outcome collide(BodyDesc a, BodyDesc b, const std::vector<PlaneDesc>& planes = {
                 const SolverDesc& solver = SolverDesc{}) {
   WorldDesc d = test::zero_gravity_desc();
   d.solver = solver;
+  d.solver.kind = g_kind;
   auto world = test::make_world(d);
   Outcome o;
   if (!world) return o;
   std::vector<PlaneHandle> ph(planes.size());
-  EXPECT_TRUE(test::IsOk(world->create_planes(planes, ph)));
+  std::vector<PlaneDesc> frictionless = planes;
+  for (PlaneDesc& p : frictionless) p.friction = 0.0f;
+  EXPECT_TRUE(test::IsOk(world->create_planes(frictionless, ph)));
   std::vector<BodyDesc> descs{a};
   if (planes.empty()) descs.push_back(b);
   std::vector<BodyHandle> h(descs.size());
@@ -84,6 +96,7 @@ BodyDesc sphere(Eigen::Vector3f p, Eigen::Vector3f v, float restitution, float i
   d.restitution = restitution;
   d.inv_mass = inv_mass;
   d.radius = 0.5f;
+  d.friction = 0.0f;  // the seeds' frictionless impulse
   return d;
 }
 
@@ -94,7 +107,7 @@ Eigen::Vector3f axis(int k, float s) {
   return v;
 }
 
-TEST(CollisionResponse, ElasticEqualMassesSwapVelocities) {
+TEST_P(CollisionResponse, ElasticEqualMassesSwapVelocities) {
   for (int k = 0; k < 3; ++k) {
     SCOPED_TRACE(k);
     const Outcome o =
@@ -107,7 +120,7 @@ TEST(CollisionResponse, ElasticEqualMassesSwapVelocities) {
   }
 }
 
-TEST(CollisionResponse, ElasticAgainstStaticFlipsVelocity) {
+TEST_P(CollisionResponse, ElasticAgainstStaticFlipsVelocity) {
   // Dynamic first (slot 0) and static first: both orders of the pair.
   Outcome o = collide(sphere({-0.495f, 0, 0}, {3.0f, 0.0f, 0.75f}, 1.0f),
                       sphere({0.495f, 0, 0}, {0, 0, 0}, 1.0f, 0.0f));
@@ -120,7 +133,7 @@ TEST(CollisionResponse, ElasticAgainstStaticFlipsVelocity) {
   expect_vec(o.va, {0, 0, 0}, 2.0, "static va");
 }
 
-TEST(CollisionResponse, InelasticEqualMassesTakeTheAverage) {
+TEST_P(CollisionResponse, InelasticEqualMassesTakeTheAverage) {
   for (int k = 0; k < 3; ++k) {
     SCOPED_TRACE(k);
     const Outcome o =
@@ -131,14 +144,14 @@ TEST(CollisionResponse, InelasticEqualMassesTakeTheAverage) {
   }
 }
 
-TEST(CollisionResponse, InelasticAgainstStaticStopsNormalComponent) {
+TEST_P(CollisionResponse, InelasticAgainstStaticStopsNormalComponent) {
   const Outcome o = collide(sphere({-0.495f, 0, 0}, {3.0f, -0.25f, 1.5f}, 0.0f),
                             sphere({0.495f, 0, 0}, {0, 0, 0}, 0.0f, 0.0f));
   ASSERT_EQ(o.contacts, 1u);
   expect_vec(o.va, {0.0, -0.25, 1.5}, 3.0, "va");  // tangential part unchanged
 }
 
-TEST(CollisionResponse, RestitutionIsTheMaximumOfTheTwo) {
+TEST_P(CollisionResponse, RestitutionIsTheMaximumOfTheTwo) {
   // e_a = 0, e_b = 1 -> elastic.
   const Outcome o =
       collide(sphere({-0.495f, 0, 0}, {5.0f, 0, 0}, 0.0f), sphere({0.495f, 0, 0}, {-2.0f, 0, 0}, 1.0f));
@@ -146,7 +159,7 @@ TEST(CollisionResponse, RestitutionIsTheMaximumOfTheTwo) {
   expect_vec(o.vb, {5.0, 0, 0}, 5.0, "vb");
 }
 
-TEST(CollisionResponse, UnequalMasses1D) {
+TEST_P(CollisionResponse, UnequalMasses1D) {
   // Textbook 1D collision with coefficient e (double-precision reference).
   std::mt19937 rng(1);
   std::uniform_real_distribution<float> inv_mass(0.1f, 5.0f), speed(1.0f, 8.0f);
@@ -168,7 +181,7 @@ TEST(CollisionResponse, UnequalMasses1D) {
   }
 }
 
-TEST(CollisionResponse, Random3DElasticConservesMomentumAndEnergy) {
+TEST_P(CollisionResponse, Random3DElasticConservesMomentumAndEnergy) {
   std::mt19937 rng(2);
   std::uniform_real_distribution<float> u(-1.0f, 1.0f), inv_mass(0.2f, 5.0f), rad(0.2f, 1.0f);
   for (int trial = 0; trial < 100; ++trial) {
@@ -212,7 +225,7 @@ TEST(CollisionResponse, Random3DElasticConservesMomentumAndEnergy) {
   }
 }
 
-TEST(CollisionResponse, BelowRestitutionThresholdNoBounce) {
+TEST_P(CollisionResponse, BelowRestitutionThresholdNoBounce) {
   SolverDesc s;
   ASSERT_GT(s.restitution_threshold, 0.4f);
   // Approach speed 0.4 < threshold: treated as inelastic even with e = 1.
@@ -223,7 +236,7 @@ TEST(CollisionResponse, BelowRestitutionThresholdNoBounce) {
   expect_vec(o.vb, {0, 0, 0}, 0.2, "vb");
 }
 
-TEST(CollisionResponse, SeparatingBodiesAreNotPulled) {
+TEST_P(CollisionResponse, SeparatingBodiesAreNotPulled) {
   // Overlapping but already moving apart: contacts push, never pull.
   const Outcome o =
       collide(sphere({-0.45f, 0, 0}, {-1.0f, 0.5f, 0}, 1.0f), sphere({0.45f, 0, 0}, {2.0f, 0, 0}, 1.0f));
@@ -233,7 +246,7 @@ TEST(CollisionResponse, SeparatingBodiesAreNotPulled) {
   EXPECT_EQ(o.impulse, 0.0f);
 }
 
-TEST(CollisionResponse, ElasticBallOnFloorFlipsNormalVelocity) {
+TEST_P(CollisionResponse, ElasticBallOnFloorFlipsNormalVelocity) {
   std::vector<PlaneDesc> floor(1);  // y = 0, normal +y
   const Outcome o = collide(sphere({0.3f, 0.49f, -0.2f}, {1.0f, -4.0f, 0.5f}, 1.0f), {}, floor);
   ASSERT_EQ(o.contacts, 1u);
@@ -244,14 +257,14 @@ TEST(CollisionResponse, ElasticBallOnFloorFlipsNormalVelocity) {
   expect_vec(p.va, {0.0, 3.0, 0.0}, 3.0, "va on elastic floor");
 }
 
-TEST(CollisionResponse, InelasticBallOnFloorStopsNormalVelocity) {
+TEST_P(CollisionResponse, InelasticBallOnFloorStopsNormalVelocity) {
   std::vector<PlaneDesc> floor(1);
   const Outcome o = collide(sphere({0, 0.49f, 0}, {2.0f, -4.0f, -1.0f}, 0.0f), {}, floor);
   ASSERT_EQ(o.contacts, 1u);
   expect_vec(o.va, {2.0, 0.0, -1.0}, 4.0, "va");
 }
 
-TEST(CollisionResponse, ElasticBallOnTiltedPlane) {
+TEST_P(CollisionResponse, ElasticBallOnTiltedPlane) {
   std::mt19937 rng(3);
   std::uniform_real_distribution<float> u(-1.0f, 1.0f);
   for (int trial = 0; trial < 30; ++trial) {
@@ -270,6 +283,12 @@ TEST(CollisionResponse, ElasticBallOnTiltedPlane) {
     EXPECT_LE((o.va.cast<double>() - want).norm(), 1e-5 * vd.norm()) << "trial " << trial;
   }
 }
+
+INSTANTIATE_TEST_SUITE_P(Solvers, CollisionResponse,
+                         ::testing::Values(SolverKind::kSoftStep, SolverKind::kJacobi),
+                         [](const ::testing::TestParamInfo<SolverKind>& i) {
+                           return i.param == SolverKind::kSoftStep ? "SoftStep" : "Jacobi";
+                         });
 
 }  // namespace
 }  // namespace impact

@@ -1,0 +1,212 @@
+// The passes of host::SoftStepSolver (see soft_step_solver.h): per-body passes by
+// chunks of bodies, per-constraint passes by chunks of one colour's constraints, the
+// colouring and the overflow colour on the calling thread. Every output element is
+// written by one index, so the bytes do not depend on the thread count.
+#include "host/solver/soft_step_solver.h"
+
+#include <cstring>
+
+#include "kernels/common/permute.h"
+#include "kernels/solver/contact_solver.h"
+#include "kernels/sort/segments.h"
+
+namespace impact::host {
+namespace {
+
+constexpr uint32_t kBodyGrain = 1u << 13;       // bodies per chunk
+constexpr uint32_t kConstraintGrain = 1u << 9;  // constraints per chunk of a colour
+constexpr uint32_t kPointGrain = 1u << 13;      // points or keys per chunk
+
+kernels::SoftBodyInput body_input(BodyStore& s, const WorldDesc& desc, kernels::BodyForces* forces,
+                                  kernels::BodyDamping* damping) {
+  kernels::SoftBodyInput in{};
+  kernels::RigidBodies& r = in.rigid;
+  r.vx = s.vel_x.data();
+  r.vy = s.vel_y.data();
+  r.vz = s.vel_z.data();
+  r.px = s.pos_x.data();
+  r.py = s.pos_y.data();
+  r.pz = s.pos_z.data();
+  r.inv_mass = s.inv_mass.data();
+  in.rotating = s.on(FieldSet::kRigid);
+  if (in.rotating) {
+    r.wx = s.wx.data();
+    r.wy = s.wy.data();
+    r.wz = s.wz.data();
+    r.qx = s.qx.data();
+    r.qy = s.qy.data();
+    r.qz = s.qz.data();
+    r.qw = s.qw.data();
+    r.iix = s.iix.data();
+    r.iiy = s.iiy.data();
+    r.iiz = s.iiz.data();
+    r.pqx = s.pqx.data();
+    r.pqy = s.pqy.data();
+    r.pqz = s.pqz.data();
+    r.pqw = s.pqw.data();
+    r.cx = s.cx.data();
+    r.cy = s.cy.data();
+    r.cz = s.cz.data();
+  }
+  in.gyroscopic = desc.gyroscopic;
+  if (s.on(FieldSet::kForces)) {
+    *forces = {s.fx.data(), s.fy.data(), s.fz.data(), s.tx.data(), s.ty.data(), s.tz.data()};
+    in.forces = forces;
+  }
+  if (s.on(FieldSet::kDamping)) {
+    *damping = {s.linear_damping.data(), s.angular_damping.data(), s.gravity_scale.data()};
+    in.damping = damping;
+  }
+  return in;
+}
+
+}  // namespace
+
+template <class Fn>
+void SoftStepSolver::for_each_colour(const Executor& exec, Fn&& fn) const {
+  for (uint32_t k = 0; k < kernels::kColourCount; ++k) {
+    const uint32_t b = colour_start_[k], e = colour_start_[k + 1];
+    if (b == e) continue;
+    exec.for_each_chunk(e - b, kConstraintGrain, [&](uint32_t cb, uint32_t ce, uint32_t) {
+      fn(kernels::Range{b + cb, b + ce});
+    });
+  }
+  const uint32_t ob = colour_start_[kernels::kOverflowColour], oe = colour_start_[kernels::kOverflowColour + 1];
+  if (ob != oe) fn(kernels::Range{ob, oe});  // in order, on this thread
+}
+
+void SoftStepSolver::step(const Executor& exec, const WorldDesc& desc, const ContactManifolds& contacts, BodyStore& s,
+                          const PlaneStore& planes, float dt) {
+  const SolverDesc& sd = desc.solver;
+  const auto n = static_cast<uint32_t>(s.size());
+  const auto nm = static_cast<uint32_t>(contacts.manifolds);
+  const auto np = static_cast<uint32_t>(contacts.points);
+  kernels::SoftParams p = kernels::soft_params(dt, sd.substeps, sd.contact_hertz, sd.contact_damping_ratio);
+  p.slop = sd.penetration_slop;
+  p.max_push_speed = sd.max_push_speed;
+  p.restitution_threshold = sd.restitution_threshold;
+  p.warm_start = sd.warm_start;
+
+  kernels::BodyForces forces{};
+  kernels::BodyDamping damping{};
+  const kernels::SoftBodyInput in = body_input(s, desc, &forces, &damping);
+  kernels::SolverBody* bodies = scratch(bodies_, static_cast<size_t>(n) + 1);
+  kernels::BodyDrive* drive = scratch(drive_, n);
+  kernels::Sym3* ii = scratch(inv_inertia_, n);
+  kernels::Vec3* com = scratch(com_, n);
+  const kernels::Vec3 g{desc.gravity.x(), desc.gravity.y(), desc.gravity.z()};
+  exec.for_each_chunk(n, kBodyGrain, [&](uint32_t b, uint32_t e, uint32_t) {
+    kernels::prepare_bodies(p, g, in, bodies, drive, ii, com, {b, e});
+  });
+  bodies[n] = kernels::SolverBody{};
+  bodies[n].dq = {0.0f, 0.0f, 0.0f, 1.0f};
+
+  kernels::ContactConstraint* cons = nullptr;
+  kernels::ContactPoint* pts = nullptr;
+  const kernels::ContactManifoldArrays c = contacts.view();
+  if (nm > 0) {
+    // Colour, then order the constraints by colour (stable: manifold order within one).
+    uint32_t* masks = scratch(body_masks_, n);
+    std::memset(masks, 0, sizeof(uint32_t) * n);
+    uint8_t* colour = scratch(colour_, nm);
+    uint32_t counts[kernels::kColourCount + 1];
+    kernels::colour_manifolds(c, s.inv_mass.data(), nm, masks, colour, counts);
+    uint32_t next[kernels::kColourCount + 1];
+    colour_start_[0] = 0;
+    for (uint32_t k = 0; k <= kernels::kColourCount; ++k) {
+      next[k] = colour_start_[k];
+      colour_start_[k + 1] = colour_start_[k] + counts[k];
+    }
+    uint32_t* order = scratch(order_, nm);
+    for (uint32_t m = 0; m < nm; ++m) order[next[colour[m]]++] = m;
+    uint32_t* first = scratch(first_, nm);
+    uint32_t run = 0;
+    for (uint32_t i = 0; i < nm; ++i) {
+      first[i] = run;
+      run += c.count[order[i]];
+    }
+
+    // Last step's impulses of the same contacts (a, b, plane, feature).
+    uint64_t* keys = scratch(keys_, np);
+    exec.for_each_chunk(nm, kPointGrain, [&](uint32_t b, uint32_t e, uint32_t) {
+      kernels::contact_pair_keys(c, keys, {b, e});
+    });
+    const kernels::WarmPoint* warm = nullptr;
+    if (sd.warm_start > 0.0f && prev_count_ > 0) {
+      kernels::WarmPoint* w = scratch(warm_, np);
+      const kernels::WarmTable table{prev_keys_.data(), prev_index_.data(), prev_start_.data(), prev_values_.data(),
+                                     prev_body_count_};
+      exec.for_each_chunk(np, kPointGrain, [&](uint32_t b, uint32_t e, uint32_t) {
+        kernels::match_warm_points(keys, table, w, {b, e});
+      });
+      warm = w;
+    }
+    const kernels::ContactMaterials mat{s.friction.data(), s.restitution.data(), s.rolling.data(),
+                                        planes.friction.data(), planes.restitution.data()};
+    cons = scratch(cons_, nm);
+    pts = scratch(points_, np);
+    exec.for_each_chunk(nm, kConstraintGrain, [&](uint32_t b, uint32_t e, uint32_t) {
+      kernels::prepare_contacts(p, c, order, first, bodies, ii, com, n, mat, warm, cons, pts, {b, e});
+    });
+  }
+
+  for (uint32_t sub = 0; sub < sd.substeps; ++sub) {
+    exec.for_each_chunk(n, kBodyGrain, [&](uint32_t b, uint32_t e, uint32_t) {
+      kernels::integrate_substep_velocities(drive, bodies, {b, e});
+    });
+    if (nm > 0) {
+      for_each_colour(exec, [&](kernels::Range r) { kernels::warm_start_contacts(cons, pts, bodies, r); });
+      for_each_colour(exec, [&](kernels::Range r) { kernels::solve_contacts(p, true, cons, pts, bodies, r); });
+    }
+    exec.for_each_chunk(n, kBodyGrain, [&](uint32_t b, uint32_t e, uint32_t) {
+      kernels::integrate_substep_positions(p.h, bodies, {b, e});
+    });
+    if (nm > 0)
+      for_each_colour(exec, [&](kernels::Range r) { kernels::solve_contacts(p, false, cons, pts, bodies, r); });
+  }
+
+  if (nm > 0) {
+    for_each_colour(exec, [&](kernels::Range r) { kernels::restitute_contacts(p, cons, pts, bodies, r); });
+    // Keep (key, values) for the next step's warm start; the public impulses.
+    kernels::WarmPoint* stored = scratch(stored_, np);
+    float* out = scratch(impulse_out_, np);
+    const uint32_t* order = order_.data();
+    exec.for_each_chunk(nm, kConstraintGrain, [&](uint32_t b, uint32_t e, uint32_t) {
+      kernels::store_contacts(c, order, cons, pts, stored, out, {b, e});
+    });
+    uint64_t* pk = scratch(prev_keys_, np);
+    uint32_t* pi = scratch(prev_index_, np);
+    std::memcpy(pk, keys_.data(), sizeof(uint64_t) * np);
+    for (uint32_t k = 0; k < np; ++k) pi[k] = k;
+    sorter_.sort_kv(exec, pk, pi, np, 0, 32 + bits_for(n));
+    std::swap(prev_values_, stored_);
+    uint32_t* ps = scratch(prev_start_, static_cast<size_t>(n) + 1);
+    exec.for_each_chunk(np, kPointGrain, [&](uint32_t b, uint32_t e, uint32_t) {
+      kernels::segment_starts(pk, np, 32, n, ps, {b, e});
+    });
+    prev_count_ = np;
+    prev_body_count_ = n;
+  } else {
+    prev_count_ = 0;
+    impulse_out_.clear();
+  }
+
+  exec.for_each_chunk(n, kBodyGrain, [&](uint32_t b, uint32_t e, uint32_t) {
+    kernels::finish_bodies(in, bodies, com, {b, e});
+  });
+}
+
+void SoftStepSolver::remap_bodies(const Executor& exec, const uint32_t* inv_perm, uint32_t n) {
+  impulse_out_.clear();
+  if (prev_count_ == 0) return;
+  exec.for_each_chunk(prev_count_, kPointGrain, [&](uint32_t b, uint32_t e, uint32_t) {
+    kernels::remap_pair_keys(inv_perm, prev_keys_.data(), {b, e});
+  });
+  sorter_.sort_kv(exec, prev_keys_.data(), prev_index_.data(), prev_count_, 0, 32 + bits_for(n));
+  uint32_t* ps = scratch(prev_start_, static_cast<size_t>(n) + 1);
+  exec.for_each_chunk(prev_count_, kPointGrain, [&](uint32_t b, uint32_t e, uint32_t) {
+    kernels::segment_starts(prev_keys_.data(), prev_count_, 32, n, ps, {b, e});
+  });
+}
+
+}  // namespace impact::host

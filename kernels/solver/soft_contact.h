@@ -1,0 +1,187 @@
+// The soft-step contact solver's kernels: rigid contacts with angular terms, Coulomb
+// friction at one central anchor per manifold, twist friction, rolling resistance and
+// restitution, solved by Gauss-Seidel over the colours of a contact graph colouring
+// (kernels/solver/graph_colouring.h), with soft constraints and substeps.
+//
+// One step (host/solver/soft_step_solver.cpp drives it):
+//   prepare_bodies        per body: the solver state (v, w, dp = 0, dq = 1), the world
+//                         inverse inertia I_w^-1 = R diag(ii) R^T, the centre of mass,
+//                         the per-substep velocity increments (gravity, forces), and,
+//                         once per step, damping and the implicit gyroscopic step
+//   prepare_contacts      per manifold: anchors relative to the centres of mass, the
+//                         normal mass of each point, the friction anchor, the 2x2
+//                         tangent mass, twist and rolling masses, warm-start impulses
+//   per substep h = dt / substeps:
+//     integrate_substep_velocities  v += dv, w += dw
+//     warm_start_contacts           apply the accumulated impulses
+//     solve_contacts(bias)          normal impulses toward separation -slop, soft
+//     integrate_substep_positions   dp += h v, dq = integrate(dq, w, h)
+//     solve_contacts(no bias)       relax: normal impulses rigid, then friction
+//   restitute_contacts    normal impulses toward -e * (approach speed) where the
+//                         approach was faster than the threshold
+//   finish_bodies         v, w back; p = com0 + dp - R(dq q0) c, q = dq q0
+//
+// The separation of a point during the step follows the bodies without a new narrow
+// phase: s = s0 + dot(dp_b - dp_a + rot(dq_b) r_b - rot(dq_a) r_a - (r_b - r_a), n),
+// with r the anchors (point - centre of mass) at the step's start and n fixed.
+// Solve, per point: s > -slop is speculative (the impulse only stops the bodies
+// closing more than s + slop this substep); deeper points get the soft bias
+//   bias = max(bias_rate * mass_scale * (s + slop), -max_push_speed)
+//   dλ = -m_n (mass_scale * v_n + bias) - impulse_scale * λ,   λ = max(λ + dλ, 0)
+// with (Catto, "Solver2D: soft step", 2024; Box2D v3 b2MakeSoft)
+//   ω = 2π hertz, a1 = 2ζ + h ω, a2 = h ω a1, a3 = 1 / (1 + a2),
+//   bias_rate = ω / a1, mass_scale = a2 a3, impulse_scale = a3;
+// the relax pass is rigid (bias 0, mass_scale 1, impulse_scale 0). Friction runs in
+// the relax pass only, at the manifold's anchor: tangent impulse clamped to a disc of
+// radius μ Σλ, twist to μ Σ λ_i |r_i - r_centre|, rolling (3D angular) to ρ Σλ.
+//
+// Each constraint reads and writes only its two bodies; the host runs one colour's
+// constraints in parallel (no two share a dynamic body) and colours in order, so the
+// result is the same bytes for any thread count. Bodies with inv_mass 0 (static,
+// kinematic, planes: index body_count, a zero body) are read, never written.
+// Cost per constraint and pass: ~40 flops per point plus ~120 for the friction anchor.
+#pragma once
+
+#include "kernels/common/contact_manifolds.h"
+#include "kernels/common/kernel.h"
+#include "kernels/common/math3.h"
+#include "kernels/integrate/rigid_euler.h"
+
+namespace impact::kernels {
+
+/// Per-body solver state, one cache line: velocity, angular velocity, displacement
+/// of the centre of mass and rotation since the step's start.
+struct alignas(64) SolverBody {
+  Vec3 v;
+  float inv_mass;
+  Vec3 w;
+  float pad0;
+  Vec3 dp;
+  float pad1;
+  Quat dq;
+};
+static_assert(sizeof(SolverBody) == 64);
+
+/// Per-body increments of one substep (gravity, forces, torques).
+struct BodyDrive {
+  Vec3 dv;
+  Vec3 dw;
+};
+
+/// What prepare_bodies reads: the body store's arrays. Angular arrays (and the
+/// orientation) may be null when no body can rotate; forces / damping null when off.
+struct SoftBodyInput {
+  RigidBodies rigid;  ///< vx..vz, px..pz, inv_mass always; the rest null when !rotating
+  bool rotating;
+  bool gyroscopic;
+  const BodyForces* forces;
+  const BodyDamping* damping;
+};
+
+struct SoftParams {
+  float dt;              ///< s, the step
+  float h;               ///< s, a substep
+  float bias_rate, mass_scale, impulse_scale;
+  float slop;            ///< m
+  float max_push_speed;  ///< m/s
+  float restitution_threshold;
+  float warm_start;      ///< factor on last step's impulses
+};
+
+/// Soft constraint coefficients for stiffness hertz, damping ratio zeta, substep h.
+SoftParams soft_params(float dt, uint32_t substeps, float hertz, float zeta);
+
+/// One manifold point of a constraint.
+struct ContactPoint {
+  Vec3 ra, rb;       ///< anchors: point - centre of mass, world, at the step's start
+  float base;        ///< s0 - dot(rb - ra, n)
+  float normal_mass;
+  float impulse;     ///< accumulated normal impulse of a substep, N s (warm starts the next)
+  float total;       ///< impulse the step applied: the sum over substeps, plus restitution's
+  float max_impulse; ///< largest accumulated impulse of the step (restitution's "touched")
+  float approach;    ///< relative normal velocity at the step's start (restitution)
+  float lever;       ///< |ra - centre_a| (twist friction's arm)
+};
+
+/// One manifold's constraint.
+struct ContactConstraint {
+  uint32_t a, b;            ///< SolverBody indices; b == body_count for a plane
+  uint32_t first, count;    ///< its points in the point array
+  float ma, mb;             ///< inverse masses
+  Sym3 ia, ib;              ///< world inverse inertias
+  Vec3 n, t1, t2;           ///< normal (a -> b) and tangents
+  Vec3 ca, cb;              ///< friction anchor relative to each centre of mass
+  float friction, restitution, rolling;
+  float k11, k12, k22;      ///< inverse 2x2 tangent mass
+  float twist_mass;
+  Sym3 rolling_mass;        ///< (I_a^-1 + I_b^-1)^-1
+  float f1, f2, twist;      ///< accumulated friction impulses
+  Vec3 roll;                ///< accumulated rolling impulse
+};
+
+/// Warm-start values of one point of last step: its normal impulse, and its
+/// manifold's friction impulse (world), twist and rolling impulses.
+struct WarmPoint {
+  float normal;
+  float fx, fy, fz;
+  float twist;
+  float rx, ry, rz;
+};
+
+/// Per-body material tables the constraints combine: friction sqrt(f_a f_b),
+/// restitution max(e_a, e_b), rolling max(ρ_a, ρ_b). Plane entries by plane index.
+struct ContactMaterials {
+  const float* friction;
+  const float* restitution;
+  const float* rolling;
+  const float* plane_friction;
+  const float* plane_restitution;
+};
+
+void prepare_bodies(const SoftParams& p, Vec3 gravity, const SoftBodyInput& in, SolverBody* IMPACT_RESTRICT out,
+                    BodyDrive* IMPACT_RESTRICT drive, Sym3* IMPACT_RESTRICT inv_inertia, Vec3* IMPACT_RESTRICT com,
+                    Range r);
+
+/// Constraints order[i] for i in r: manifold order[i] of c becomes constraint i with
+/// points first_point[i] ...; warm[k] (null: cold) is point k's value from last step
+/// (normal < 0: no match).
+void prepare_contacts(const SoftParams& p, const ContactManifoldArrays& c, const uint32_t* order,
+                      const uint32_t* first_point, const SolverBody* bodies, const Sym3* inv_inertia,
+                      const Vec3* com, uint32_t body_count, const ContactMaterials& mat, const WarmPoint* warm,
+                      ContactConstraint* IMPACT_RESTRICT out, ContactPoint* IMPACT_RESTRICT points, Range r);
+
+void integrate_substep_velocities(const BodyDrive* IMPACT_RESTRICT drive, SolverBody* IMPACT_RESTRICT b, Range r);
+void integrate_substep_positions(float h, SolverBody* IMPACT_RESTRICT b, Range r);
+
+void warm_start_contacts(const ContactConstraint* cons, const ContactPoint* points, SolverBody* bodies, Range r);
+void solve_contacts(const SoftParams& p, bool use_bias, ContactConstraint* cons, ContactPoint* points,
+                    SolverBody* bodies, Range r);
+void restitute_contacts(const SoftParams& p, const ContactConstraint* cons, ContactPoint* points,
+                        SolverBody* bodies, Range r);
+
+/// Warm-start values of constraints r, written at their manifolds' point rows
+/// (order / first_point as in prepare_contacts; c's first_point for the rows), and
+/// each point's total impulse of the step (ContactArrays::impulse).
+void store_contacts(const ContactManifoldArrays& c, const uint32_t* order, const ContactConstraint* cons,
+                    const ContactPoint* points, WarmPoint* IMPACT_RESTRICT out, float* IMPACT_RESTRICT impulse_out,
+                    Range r);
+
+/// Last step's stored values, keys sorted ascending with the rows of their values
+/// and start[a] over body a = key >> 32 (a < body_count).
+struct WarmTable {
+  const uint64_t* keys;
+  const uint32_t* index;
+  const uint32_t* start;
+  const WarmPoint* values;
+  uint32_t body_count;
+};
+
+/// Per point k in r: out[k] = the value stored under keys[k] last step, or normal = -1.
+void match_warm_points(const uint64_t* IMPACT_RESTRICT keys, const WarmTable& prev, WarmPoint* IMPACT_RESTRICT out,
+                       Range r);
+
+/// Velocities, positions and orientations back into the store.
+void finish_bodies(const SoftBodyInput& in, const SolverBody* IMPACT_RESTRICT b, const Vec3* IMPACT_RESTRICT com,
+                   Range r);
+
+}  // namespace impact::kernels
