@@ -42,6 +42,7 @@ struct Options {
   impact::Backend backend = impact::Backend::kDefault;
   impact::BroadPhaseKind broad_phase = impact::BroadPhaseKind::kGrid;
   std::optional<uint32_t> iterations;  // unset: the library default
+  std::optional<impact::SolverKind> solver;  // unset: the library default
   uint64_t seed = impact::bench::kDefaultSeed;
   std::string json_path;
   std::optional<uint64_t> expect_hash;
@@ -64,6 +65,7 @@ void print_usage(std::FILE* f) {
                "  --backend NAME       default | tbb | openmp | serial (default: the build's)\n"
                "  --broadphase NAME    grid | lbvh | sap | brute (default grid)\n"
                "  --iterations N       solver velocity iterations (default: library default)\n"
+               "  --solver NAME        jacobi | soft (default: library default, jacobi)\n"
                "  --seed N             scene seed (default %" PRIu64
                ")\n"
                "  --json FILE          also write every figure as JSON to FILE\n"
@@ -135,6 +137,15 @@ int parse_args(int argc, char** argv, Options* o) {
       uint32_t it = 0;
       if (int r = number(&it, 0)) return r;
       o->iterations = it;
+    } else if (arg == "--solver") {
+      if (!need_value()) return fail("--solver needs a value");
+      if (value == "jacobi") {
+        o->solver = impact::SolverKind::kJacobi;
+      } else if (value == "soft") {
+        o->solver = impact::SolverKind::kSoftStep;
+      } else {
+        return fail("--solver must be jacobi or soft, got '" + std::string(value) + "'");
+      }
     } else if (arg == "--seed") {
       if (!need_value()) return fail("--seed needs a value");
       if (!parse_unsigned(value, &o->seed))
@@ -293,6 +304,7 @@ int main(int argc, char** argv) {
   desc.threads = opt.threads;
   desc.broad_phase = opt.broad_phase;
   if (opt.iterations) desc.solver.velocity_iterations = *opt.iterations;
+  if (opt.solver) desc.solver.kind = *opt.solver;
   std::unique_ptr<impact::World> world;
   if (impact::Status s = impact::bench::load_scene(scene, desc, &world); !s.ok())
     return library_error("world setup", s);
@@ -339,8 +351,10 @@ int main(int argc, char** argv) {
   std::printf("impact_bench %d.%d.%d: scene %s, %u bodies, %zu planes, %u steps of %.6g s\n",
               IMPACT_VERSION_MAJOR, IMPACT_VERSION_MINOR, IMPACT_VERSION_PATCH, opt.scene.c_str(), opt.bodies,
               scene.planes.size(), opt.steps, static_cast<double>(desc.fixed_dt));
-  std::printf("  backend %s, threads %u (hardware %u), broad phase %s, velocity iterations %u\n", backend,
-              threads, impact::hardware_threads(), broad_name, iterations);
+  const bool soft = world->desc().solver.kind == impact::SolverKind::kSoftStep;
+  std::printf("  backend %s, threads %u (hardware %u), broad phase %s, solver %s, %s %u\n", backend, threads,
+              impact::hardware_threads(), broad_name, soft ? "soft step" : "jacobi",
+              soft ? "substeps" : "velocity iterations", soft ? world->desc().solver.substeps : iterations);
   std::printf("  setup            %10.2f ms\n", setup_ms);
   std::printf("  ms per step      %10.3f median  (mean %.3f, min %.3f, max %.3f)\n", med, mean(step_ms),
               *std::min_element(step_ms.begin(), step_ms.end()),

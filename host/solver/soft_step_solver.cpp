@@ -6,6 +6,7 @@
 
 #include <cstring>
 
+#include "host/pipeline/step_context.h"
 #include "kernels/common/permute.h"
 #include "kernels/solver/contact_solver.h"
 #include "kernels/sort/segments.h"
@@ -20,33 +21,17 @@ constexpr uint32_t kPointGrain = 1u << 13;      // points or keys per chunk
 kernels::SoftBodyInput body_input(BodyStore& s, const WorldDesc& desc, kernels::BodyForces* forces,
                                   kernels::BodyDamping* damping) {
   kernels::SoftBodyInput in{};
-  kernels::RigidBodies& r = in.rigid;
-  r.vx = s.vel_x.data();
-  r.vy = s.vel_y.data();
-  r.vz = s.vel_z.data();
-  r.px = s.pos_x.data();
-  r.py = s.pos_y.data();
-  r.pz = s.pos_z.data();
-  r.inv_mass = s.inv_mass.data();
   in.rotating = s.on(FieldSet::kRigid);
   if (in.rotating) {
-    r.wx = s.wx.data();
-    r.wy = s.wy.data();
-    r.wz = s.wz.data();
-    r.qx = s.qx.data();
-    r.qy = s.qy.data();
-    r.qz = s.qz.data();
-    r.qw = s.qw.data();
-    r.iix = s.iix.data();
-    r.iiy = s.iiy.data();
-    r.iiz = s.iiz.data();
-    r.pqx = s.pqx.data();
-    r.pqy = s.pqy.data();
-    r.pqz = s.pqz.data();
-    r.pqw = s.pqw.data();
-    r.cx = s.cx.data();
-    r.cy = s.cy.data();
-    r.cz = s.cz.data();
+    in.rigid = rigid_view(s);
+  } else {  // the linear fields only
+    in.rigid.vx = s.vel_x.data();
+    in.rigid.vy = s.vel_y.data();
+    in.rigid.vz = s.vel_z.data();
+    in.rigid.px = s.pos_x.data();
+    in.rigid.py = s.pos_y.data();
+    in.rigid.pz = s.pos_z.data();
+    in.rigid.inv_mass = s.inv_mass.data();
   }
   in.gyroscopic = desc.gyroscopic;
   if (s.on(FieldSet::kForces)) {

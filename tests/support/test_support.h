@@ -107,6 +107,14 @@ inline std::vector<ExecCase> exec_cases() {
   return out;
 }
 
+/// run(ExecCase) -> a state hash: the same value for every case of exec_cases().
+template <class Run>
+void expect_same_for_every_exec_case(Run&& run) {
+  const std::vector<ExecCase> cases = exec_cases();
+  const auto want = run(cases.front());
+  for (const ExecCase& c : cases) EXPECT_EQ(run(c), want) << to_string(c);
+}
+
 inline ::testing::AssertionResult IsOk(const Status& s) {
   if (s.ok()) return ::testing::AssertionSuccess();
   return ::testing::AssertionFailure() << "status " << impact::to_string(s.code()) << ": " << s.message();
