@@ -2,10 +2,10 @@
 // signature of kernels/narrowphase/leaf/leaf.h (A's type <= B's type). pair_kernel() in
 // pair_kernels.cpp maps each bucket to one of them.
 //
-// Specialised, vectorised across pairs (kernels/narrowphase/primitives_*.cpp): the
+// Specialised, vectorised across pairs (kernels/narrowphase/pairs/): the
 // sphere / capsule / box / cylinder / triangle / half-space pairs below, with the
 // closed-form cylinder, ellipsoid and triangle against half-space kernels
-// (primitives_halfspace.cpp) and triangle-triangle (primitives_triangle_triangle.cpp).
+// (cylinder_halfspace.cpp, ...) and triangle-triangle (triangle_triangle.cpp).
 // Sphere-hull, capsule-hull and hull-triangle have their own exact per-lane kernels
 // (kernels/narrowphase/pairs/sphere/sphere_convex.cpp, capsule_convex.cpp, convex_triangle.cpp: a
 // separating axis test with Gauss-map pruned edge axes); sphere-ellipsoid,

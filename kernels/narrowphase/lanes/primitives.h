@@ -1,5 +1,5 @@
 // Shared lane helpers of the specialised narrow-phase kernels
-// (kernels/narrowphase/primitives_{sphere,capsule,box}.cpp): the block driver that
+// (kernels/narrowphase/pairs/): the block driver that
 // walks a Range kSimdWidth pairs at a time, LeafSoA loads, the manifold store, and the
 // geometric queries the kernels share (closest point on a segment, closest points of
 // two segments robust for parallel ones, closest point on a triangle, a deterministic
@@ -106,6 +106,19 @@ IMPACT_INLINE void store(const ManifoldSoA& out, uint32_t k, const Lanes<F, P>& 
 template <class F>
 IMPACT_INLINE void store_no_contact(const ManifoldSoA& out, uint32_t k) {
   std::memset(out.count + k, 0, F::kWidth);
+}
+
+/// A one-point result from the normal, the depth and the two surface points (the point
+/// midway between them, count 1 where depth > 0; the sphere (A) kernels).
+template <class F>
+IMPACT_INLINE Lanes<F, 1> one_point(const V3<F>& n, F depth, const V3<F>& on_a, const V3<F>& on_b) {
+  Lanes<F, 1> m;
+  m.count = simd::to_int(depth > F(0.0f));
+  m.n = n;
+  m.depth = depth;
+  m.point[0] = (on_a + on_b) * F(0.5f);
+  m.pdepth[0] = depth;
+  return m;
 }
 
 // ---------------------------------------------------------------------------------------

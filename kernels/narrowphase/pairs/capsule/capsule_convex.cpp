@@ -48,7 +48,7 @@
 //     so its separation is (u x e).(c - v0)/|u x e|. One pass, kSimdWidth edges per step.
 //     Least overlap wins; an edge axis only if it beats the best face by 1e-5 of the
 //     overlap plus 1e-6 of the size plus its own rounding (as capsule-box,
-//     primitives_capsule.cpp), so resting contacts keep their face normal.
+//     capsule_box.cpp), so resting contacts keep their face normal.
 //  5. Points as capsule-box does: where n is within 0.26 degrees of a face normal g and
 //     the core lies within 2.9 degrees of parallel to g (or the core meets the hull by a
 //     face axis), the core moved along n onto g's plane is clipped to g's polygon and
@@ -522,7 +522,7 @@ IMPACT_INLINE EdgeAxis sat_edges(const HullView& h, uint32_t ab, uint32_t ae, V3
 
 /// Distance from the core point at axial parameter t (|t| <= hl) along unit n (s =
 /// n.u) to the capsule's surface: through the cylinder, or an end cap where the
-/// cylinder exit lies beyond the core (primitives_capsule.cpp capsule_exit).
+/// cylinder exit lies beyond the core (prim::capsule_exit, lanes/primitives.h).
 IMPACT_INLINE float capsule_exit(float t, float s, float r, float hl) {
   const float c2 = simd::fmax_nn(1.0f - s * s, 1e-12f);
   const float lc = r / std::sqrt(c2);

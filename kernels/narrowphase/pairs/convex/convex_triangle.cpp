@@ -106,7 +106,7 @@ using cvx::cross;
 using cvx::dot;
 using cvx::V3;
 
-/// Tie rule (as box-triangle, primitives_box_triangle.cpp): the triangle's normal beats
+/// Tie rule (as box-triangle, box_triangle.cpp): the triangle's normal beats
 /// the best hull face, and an edge axis the best face, only when it separates more by
 /// kTieRel * |separation| + kTieSize * size; an edge axis also by its own rounding,
 /// kEdgeRound * (size + |coordinates|) / sin(angle of the two edges).

@@ -1,34 +1,29 @@
-// Cylinder, ellipsoid and triangle (A) against a half-space (B): closed-form lane
-// kernels, vectorised across pairs (one lane = one pair).
+// Cylinder (A) against half-space (B): a closed-form lane kernel of up to 4 points,
+// vectorised across pairs (one lane = one pair).
+// Method: s = nh.u, and the unit radial direction rad = the part of -nh across the axis,
+// from its coordinates on R's columns 0 and 1 (dx, dy; |.| = rl; rad = column 0 when rl
+// <= 1e-6: an upright cylinder, whose cap rim is all equally deep). The lower cap's
+// centre c = -sign(s) h u lies off + h|s| below the plane; its rim point along rad is the
+// deepest point, r rl deeper. The manifold is the deepest point and the other points of
+// the feature most parallel to the plane (the box rule, box_halfspace.cpp):
+//   the cap when |s| >= rl (its normal within 45 degrees of nh): the rim points at 90, 270
+//   and 180 degrees from rad, depths off + h|s|, the same, and r rl less;
+//   the side otherwise: the other cap's rim point along rad, 2 h|s| less deep.
+// Depths fall along that order, so the points below the plane are a prefix: an upright
+// cylinder sunk into the plane gives 4 rim points, one lying on its side 2, one tilted
+// onto its rim 1. Depths are the closed forms (the geometric ones up to rounding: nh.rad
+// = -rl, nh.(u x rad) = 0).
 //
-// Inputs: LeafSoA lanes per leaf.h (A a cylinder, an ellipsoid or a triangle; B a half-space
-// { x : nh.(x - pB) <= 0 }, unit nh), Range r of the bucket.
-// Outputs: ManifoldSoA lanes r.begin .. r.end: count, n = -nh (B moves down, away from
-// A, to separate), depth = the deepest point's (exact), points midway between A's point
-// and the plane, pdepth = each point's own depth. depth <= 0: count 0.
-// Method (all relative to A's centre, so poses far from the origin keep precision):
-//   ellipsoid: the support along -nh in closed form. With m = R^T nh and w = e o m
-//     (radii times m, per axis), the deepest point is -R (e o w) / |w| and its depth
-//     off + |w| (off = nh.(pB - pA)). One point.
-//   cylinder (axis u = R column 2, radius r, half length h): s = nh.u, and the unit
-//     radial direction rad = the part of -nh across the axis, from its coordinates on R's
-//     columns 0 and 1 (dx, dy; |.| = rl; rad = column 0 when rl <= 1e-6: an upright
-//     cylinder, whose cap rim is all equally deep). The lower cap's centre c = -sign(s)
-//     h u lies off + h|s| below the plane; its rim point along rad is the deepest point,
-//     r rl deeper. The manifold is the deepest point and the other points of the feature
-//     most parallel to the plane (the box rule, primitives_box.cpp):
-//       the cap when |s| >= rl (its normal within 45 degrees of nh): the rim points at 90,
-//         270 and 180 degrees from rad, depths off + h|s|, the same, and r rl less;
-//       the side otherwise: the other cap's rim point along rad, 2 h|s| less deep.
-//     Depths fall along that order, so the points below the plane are a prefix: an
-//     upright cylinder sunk into the plane gives 4 rim points, one lying on its side 2,
-//     one tilted onto its rim 1. Depths are the closed forms (the geometric ones up to
-//     rounding: nh.rad = -rl, nh.(u x rad) = 0).
-//   triangle: its vertices below the plane, deepest first (a 3-element sorting network;
-//     equal depths keep vertex order), up to 3 points.
+// Inputs: LeafSoA lanes per leaf.h (A a cylinder: p, R column 2 = axis u, e0 = radius r,
+// e1 = half length h; B a half-space { x : nh.(x - pB) <= 0 }, unit nh), Range r of the
+// bucket.
+// Outputs: ManifoldSoA lanes r.begin .. r.end: count, n = -nh (B moves down, away from A,
+// to separate), depth = the deepest point's (exact), points midway between A's point and
+// the plane, pdepth = each point's own depth. depth <= 0: count 0.
+// All arithmetic relative to A's centre (poses far from the origin keep precision).
 // Preconditions: finite inputs, positive sizes, orthonormal R, unit nh (host-validated).
-// Cost: ~40 (triangle) to ~150 (cylinder) flops per pair, no branches on lane data; both
-// paths (kScalar: one lane, kSimd: kSimdWidth lanes) run the same template.
+// Cost: ~150 flops per pair, no branches on lane data; both paths (kScalar: one lane,
+// kSimd: kPairWidth lanes) run the same template.
 #include <cstdint>
 
 #include "kernels/narrowphase/pair_kernels.h"
@@ -92,75 +87,8 @@ IMPACT_INLINE void cylinder_halfspace_block(const LeafSoA& a, const LeafSoA& b, 
   store(out, k, m, pa);
 }
 
-template <class F>
-IMPACT_INLINE void ellipsoid_halfspace_block(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out,
-                                             uint32_t k) {
-  const F zero(0.0f), half(0.5f);
-  const V3<F> pa = load_p<F>(a, k);
-  const V3<F> nh = load_e<F>(b, k);
-  const F off = dot(nh, load_p<F>(b, k) - pa);
-  const M3<F> ra = load_r<F>(a, k);
-  const V3<F> e = load_e<F>(a, k);
-  const V3<F> w{e.x * dot(nh, ra.c[0]), e.y * dot(nh, ra.c[1]), e.z * dot(nh, ra.c[2])};
-  const F len = simd::sqrt(dot(w, w));
-  const F d0 = off + len;
-  if (simd::none(d0 > zero)) {
-    store_no_contact<F>(out, k);
-    return;
-  }
-  // len >= the smallest radius > 0 for a unit nh
-  const F inv = F(-1.0f) / len;
-  const V3<F> x = (ra.c[0] * (e.x * w.x) + ra.c[1] * (e.y * w.y) + ra.c[2] * (e.z * w.z)) * inv;
-  Lanes<F, 1> m;
-  m.count = simd::to_int(d0 > zero);
-  m.n = -nh;
-  m.depth = d0;
-  m.point[0] = madd(x, half * d0, nh);
-  m.pdepth[0] = d0;
-  store(out, k, m, pa);
-}
-
-template <class F>
-IMPACT_INLINE void triangle_halfspace_block(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out,
-                                            uint32_t k) {
-  const F zero(0.0f), half(0.5f);
-  const V3<F> pa = load_p<F>(a, k);  // v0, the origin of the arithmetic
-  const V3<F> nh = load_e<F>(b, k);
-  const F off = dot(nh, load_p<F>(b, k) - pa);
-  V3<F> v[3] = {V3<F>{zero, zero, zero}, load_w<F>(a, k, 0) - pa, load_w<F>(a, k, 3) - pa};
-  F d[3] = {off, off - dot(nh, v[1]), off - dot(nh, v[2])};
-  if (simd::none((d[0] > zero) | (d[1] > zero) | (d[2] > zero))) {
-    store_no_contact<F>(out, k);
-    return;
-  }
-  // deepest first: swap a later vertex forward only when strictly deeper
-  auto order = [&](int i, int j) {
-    const auto sw = d[j] > d[i];
-    const F di = d[i];
-    const V3<F> vi = v[i];
-    d[i] = select(sw, d[j], di);
-    d[j] = select(sw, di, d[j]);
-    v[i] = select(sw, v[j], vi);
-    v[j] = select(sw, vi, v[j]);
-  };
-  order(0, 1);
-  order(1, 2);
-  order(0, 1);
-  Lanes<F, 3> m;
-  m.count = simd::to_int(d[0] > zero) + simd::to_int(d[1] > zero) + simd::to_int(d[2] > zero);
-  m.n = -nh;
-  m.depth = d[0];
-  for (int i = 0; i < 3; ++i) {
-    m.point[i] = madd(v[i], half * d[i], nh);
-    m.pdepth[i] = d[i];
-  }
-  store(out, k, m, pa);
-}
-
 }  // namespace
 
 IMPACT_LANE_KERNEL(collide_cylinder_halfspace, cylinder_halfspace_block, 4)
-IMPACT_LANE_KERNEL(collide_ellipsoid_halfspace, ellipsoid_halfspace_block, 1)
-IMPACT_LANE_KERNEL(collide_triangle_halfspace, triangle_halfspace_block, 3)
 
 }  // namespace impact::kernels

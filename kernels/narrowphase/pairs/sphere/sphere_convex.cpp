@@ -55,7 +55,7 @@
 // through GJK / EPA and ~1820 ns for FCL in the same run (18x).
 // Method citations: the Voronoi-region view of the closest point on a convex
 // polyhedron, Ericson, Real-Time Collision Detection (2005), ch. 5.1; the
-// minimum-translation rule for an interior point as in sphere-box (primitives_sphere.cpp).
+// minimum-translation rule for an interior point as in sphere-box (sphere_box.cpp).
 #include <cfloat>
 #include <cmath>
 #include <cstdint>
