@@ -66,7 +66,7 @@
 #include "host/narrowphase/shape_store.h"
 #include "impact/narrowphase.h"
 #include "impact/shapes.h"
-#include "kernels/narrowphase/leaf.h"
+#include "kernels/narrowphase/leaf/leaf.h"
 
 namespace impact::bench::narrow {
 

@@ -43,7 +43,7 @@ enum Kind : uint8_t {
   kHalfSpace = 7,
 };
 
-/// One posed leaf, in the kernels' LeafSoA convention (kernels/narrowphase/leaf.h).
+/// One posed leaf, in the kernels' LeafSoA convention (kernels/narrowphase/leaf/leaf.h).
 struct Body {
   uint8_t kind = kSphere;
   float p[3] = {0, 0, 0};                    ///< centre; triangle: v0; half-space: a point on the plane

@@ -9,7 +9,7 @@ namespace impact {
 
 namespace {
 
-constexpr size_t kEdgePad = kernels::kHullEdgePad;  // kernels/narrowphase/leaf.h
+constexpr size_t kEdgePad = kernels::kHullEdgePad;  // kernels/narrowphase/leaf/leaf.h
 
 /// Undirected edges of h's faces, each with its two faces (ev0 -> ev1 runs
 /// counter-clockwise in ef0), in order of first appearance. Empty when some edge does

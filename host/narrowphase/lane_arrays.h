@@ -1,4 +1,4 @@
-// The SoA blocks the narrow phase hands its pair kernels (kernels/narrowphase/leaf.h):
+// The SoA blocks the narrow phase hands its pair kernels (kernels/narrowphase/leaf/leaf.h):
 // one side's LeafSoA and the ManifoldSoA results, each in one host::SoaArrays, so every
 // array sits at its own 64-byte slot modulo 4096 (docs/narrowphase.md, "Array layout").
 // NarrowRunner's per-thread scratch and results and the kernel benchmark share them, so
@@ -9,7 +9,7 @@
 #include <cstdint>
 
 #include "host/buffer.h"
-#include "kernels/narrowphase/leaf.h"
+#include "kernels/narrowphase/leaf/leaf.h"
 
 namespace impact::host {
 

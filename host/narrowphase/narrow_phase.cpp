@@ -31,9 +31,9 @@
 #include "host/parallel.h"
 #include "host/radix_sort.h"
 #include "impact/narrowphase.h"
-#include "kernels/narrowphase/leaf.h"
-#include "kernels/narrowphase/sphere_plane.h"
-#include "kernels/narrowphase/sphere_sphere.h"
+#include "kernels/narrowphase/leaf/leaf.h"
+#include "kernels/narrowphase/plain/sphere_plane.h"
+#include "kernels/narrowphase/plain/sphere_sphere.h"
 
 namespace impact {
 

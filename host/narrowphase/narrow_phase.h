@@ -15,7 +15,7 @@
 #include "impact/status.h"
 #include "kernels/broadphase/grid.h"
 #include "kernels/common/body_views.h"
-#include "kernels/narrowphase/leaf.h"
+#include "kernels/narrowphase/leaf/leaf.h"
 
 namespace impact::host {
 

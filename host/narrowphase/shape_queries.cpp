@@ -3,7 +3,7 @@
 //
 // Each query is moved into the shape's local frame as R^T (x - position) in float: the
 // difference is taken first, so a pose far from the world origin costs no precision
-// relative to the shape. Leaf shapes are answered by kernels/narrowphase/leaf_queries.h.
+// relative to the shape. Leaf shapes are answered by kernels/narrowphase/leaf/leaf_queries.h.
 // Meshes walk their BVH (host/narrowphase/shape_store.h) near child first, pruning by
 // the best hit / distance so far; a node is pruned only when it is strictly worse,
 // and hits are ordered by (t or distance, triangle index), so the result equals a
@@ -25,7 +25,7 @@
 #include "host/narrowphase/shape_ray.h"
 #include "host/narrowphase/shape_store.h"
 #include "host/parallel.h"
-#include "kernels/narrowphase/leaf_queries.h"
+#include "kernels/narrowphase/leaf/leaf_queries.h"
 #include "kernels/raycast/ray_primitives.h"
 
 namespace impact {

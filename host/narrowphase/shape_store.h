@@ -7,7 +7,7 @@
 #include <Eigen/Core>
 
 #include "impact/shapes.h"
-#include "kernels/narrowphase/leaf.h"
+#include "kernels/narrowphase/leaf/leaf.h"
 
 namespace impact {
 

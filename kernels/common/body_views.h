@@ -1,7 +1,7 @@
 // Read-only views of a World's plain spheres and static planes, shared by the kernels
 // that read them straight from the body store: the plane filter
 // (kernels/broadphase/plane_pairs.h) and the sphere buckets of the narrow phase
-// (kernels/narrowphase/sphere_sphere.h, sphere_plane.h).
+// (kernels/narrowphase/plain/sphere_sphere.h, sphere_plane.h).
 #pragma once
 
 #include "kernels/common/kernel.h"

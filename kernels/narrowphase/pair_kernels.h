@@ -1,13 +1,13 @@
 // Every narrow-phase kernel of the (leaf type, leaf type) matrix, with the PairKernel
-// signature of kernels/narrowphase/leaf.h (A's type <= B's type). pair_kernel() in
+// signature of kernels/narrowphase/leaf/leaf.h (A's type <= B's type). pair_kernel() in
 // pair_kernels.cpp maps each bucket to one of them.
 //
-// Specialised, vectorised across pairs (kernels/narrowphase/primitives_*.cpp): the
+// Specialised, vectorised across pairs (kernels/narrowphase/pairs/): the
 // sphere / capsule / box / cylinder / triangle / half-space pairs below, with the
 // closed-form cylinder, ellipsoid and triangle against half-space kernels
-// (primitives_halfspace.cpp) and triangle-triangle (primitives_triangle_triangle.cpp).
+// (cylinder_halfspace.cpp, ...) and triangle-triangle (triangle_triangle.cpp).
 // Sphere-hull, capsule-hull and hull-triangle have their own exact per-lane kernels
-// (kernels/narrowphase/sphere_convex.cpp, capsule_convex.cpp, convex_triangle.cpp: a
+// (kernels/narrowphase/pairs/sphere/sphere_convex.cpp, capsule_convex.cpp, convex_triangle.cpp: a
 // separating axis test with Gauss-map pruned edge axes); sphere-ellipsoid,
 // capsule-ellipsoid, box-ellipsoid and ellipsoid-triangle exact lane kernels
 // (sphere_ellipsoid.cpp, capsule_ellipsoid.cpp, box_ellipsoid.cpp, ellipsoid_triangle.cpp:
@@ -21,12 +21,12 @@
 // over 64 vertices per pair by the support-function routine); ellipsoid-ellipsoid a lane
 // kernel (ellipsoid_ellipsoid.cpp: multi-start trust-region Newton on the support overlap
 // over the sphere). Everything else goes through the general convex path
-// (kernels/narrowphase/gjk_epa.cpp): GJK + EPA on the leaves' support functions, with
+// (kernels/narrowphase/general/gjk_epa.cpp): GJK + EPA on the leaves' support functions, with
 // face clipping for polytope manifolds, and a support-function kernel against
 // half-spaces.
 #pragma once
 
-#include "kernels/narrowphase/leaf.h"
+#include "kernels/narrowphase/leaf/leaf.h"
 
 namespace impact::kernels {
 

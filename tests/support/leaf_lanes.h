@@ -9,7 +9,7 @@
 
 #include <Eigen/Core>
 
-#include "kernels/narrowphase/leaf.h"
+#include "kernels/narrowphase/leaf/leaf.h"
 
 namespace impact::test {
 

@@ -1,6 +1,6 @@
 // An independent double-precision reference for the narrow phase's collision data.
 //
-// Every leaf type of kernels/narrowphase/leaf.h is described by its support function
+// Every leaf type of kernels/narrowphase/leaf/leaf.h is described by its support function
 // h(d) = max over the shape of d.x (exact, closed form per type), and where it is
 // cheap by an exact signed distance (sphere, capsule, box, half-space; the triangle's
 // unsigned distance, zero thickness).
@@ -44,7 +44,7 @@
 #include <utility>
 #include <vector>
 
-#include "kernels/narrowphase/leaf.h"
+#include "kernels/narrowphase/leaf/leaf.h"
 
 namespace impact::test::nref {
 

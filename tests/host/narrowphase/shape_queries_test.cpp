@@ -34,7 +34,7 @@
 #include "host/narrowphase/shape_store.h"
 #include "impact/shape_queries.h"
 #include "impact/shapes.h"
-#include "kernels/narrowphase/leaf_queries.h"
+#include "kernels/narrowphase/leaf/leaf_queries.h"
 #include "kernels/raycast/ray_primitives.h"
 #include "tests/support/test_support.h"
 

@@ -608,7 +608,7 @@ TEST(Extremes, CoincidentCentresSeparate) {
 // BUG (fails today): for separations 1e-21, 1e-22 and 3e-23 m the squared
 // distance is subnormal (> 0 but < FLT_MIN), so sqrt and 1/dist lose precision
 // and |n| = 0.99974, 1.0097 and 0.80. Taking the +y branch of
-// kernels/narrowphase/sphere_sphere.cpp when d2 < FLT_MIN (instead of d2 == 0)
+// kernels/narrowphase/plain/sphere_sphere.cpp when d2 < FLT_MIN (instead of d2 == 0)
 // makes this pass.
 TEST(Extremes, NearlyCoincidentCentresGiveUnitNormal) {
   for (float eps : {1e-19f, 1e-20f, 1e-21f, 1e-22f, 3e-23f, 1e-25f, 1e-38f, 1e-44f}) {

@@ -1,4 +1,4 @@
-// collide_box_cylinder (kernels/narrowphase/box_cylinder.cpp) on both paths against
+// collide_box_cylinder (kernels/narrowphase/pairs/box/box_cylinder.cpp) on both paths against
 // independent double-precision references, and against the general GJK / EPA path
 // (collide_gjk_epa) on the same lanes.
 //

@@ -1,4 +1,4 @@
-// collide_box_ellipsoid (kernels/narrowphase/box_ellipsoid.cpp) on both paths against
+// collide_box_ellipsoid (kernels/narrowphase/pairs/box/box_ellipsoid.cpp) on both paths against
 // independent double-precision references, the sphere-box kernel where the ellipsoid is
 // round, and the general GJK / EPA path (collide_gjk_epa) on the same lanes.
 //

@@ -1,4 +1,4 @@
-// Capsule against convex hull (kernels/narrowphase/capsule_convex.cpp, collide_capsule_convex)
+// Capsule against convex hull (kernels/narrowphase/pairs/capsule/capsule_convex.cpp, collide_capsule_convex)
 // against an independent double-precision reference: the hull's polygons (HullData from
 // build_convex_hull) posed in double relative to the hull position, face planes by
 // Newell's method from the polygon vertices (not the kernel's float planes):

@@ -1,4 +1,4 @@
-// collide_capsule_ellipsoid (kernels/narrowphase/capsule_ellipsoid.cpp) on both paths
+// collide_capsule_ellipsoid (kernels/narrowphase/pairs/capsule/capsule_ellipsoid.cpp) on both paths
 // against independent double-precision references, and against the general GJK / EPA
 // path (collide_gjk_epa) on the same lanes.
 //

@@ -1,4 +1,4 @@
-// collide_convex_cylinder (kernels/narrowphase/convex_cylinder.cpp) on both paths against an
+// collide_convex_cylinder (kernels/narrowphase/pairs/convex/convex_cylinder.cpp) on both paths against an
 // independent double-precision reference, and against the general GJK / EPA route
 // (collide_gjk_epa, which ran the hull-cylinder bucket before) on the same lanes.
 //
@@ -57,7 +57,7 @@
 #include <random>
 #include <vector>
 
-#include "kernels/narrowphase/gjk_epa.h"
+#include "kernels/narrowphase/general/gjk_epa.h"
 #include "kernels/narrowphase/pair_kernels.h"
 #include "support/hull_input.h"
 #include "support/leaf_lanes.h"

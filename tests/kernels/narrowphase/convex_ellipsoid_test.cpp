@@ -1,4 +1,4 @@
-// collide_convex_ellipsoid (kernels/narrowphase/convex_ellipsoid.cpp) on both paths against
+// collide_convex_ellipsoid (kernels/narrowphase/pairs/convex/convex_ellipsoid.cpp) on both paths against
 // an independent double-precision reference, the sphere-hull kernel where the ellipsoid is
 // round, the box-ellipsoid kernel where the hull is a box, and GJK / EPA on the same lanes.
 //

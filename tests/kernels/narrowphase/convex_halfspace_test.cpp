@@ -1,4 +1,4 @@
-// collide_convex_halfspace (kernels/narrowphase/convex_halfspace.cpp) against an
+// collide_convex_halfspace (kernels/narrowphase/pairs/convex/convex_halfspace.cpp) against an
 // independent brute force in double: every hull vertex posed in double, its depth below
 // the plane; the deepest gives the depth, and the picks are checked by what they must
 // maximise (the farthest vertex below from point 0, the largest area about the normal,

@@ -1,4 +1,4 @@
-// Convex hull against triangle (kernels/narrowphase/convex_triangle.cpp,
+// Convex hull against triangle (kernels/narrowphase/pairs/convex/convex_triangle.cpp,
 // collide_convex_triangle) against independent double-precision references:
 //  - a brute-force separating axis test in double over ALL axes, no pruning: every face
 //    normal of the hull (Newell normals of the HullData polygons, posed in double

@@ -1,4 +1,4 @@
-// collide_cylinder_cylinder (kernels/narrowphase/cylinder_cylinder.cpp) on both paths
+// collide_cylinder_cylinder (kernels/narrowphase/pairs/cylinder/cylinder_cylinder.cpp) on both paths
 // against independent double-precision references, and against the general GJK / EPA
 // path (collide_gjk_epa) on the same lanes.
 //

@@ -1,4 +1,4 @@
-// collide_cylinder_ellipsoid (kernels/narrowphase/cylinder_ellipsoid.cpp) on both paths
+// collide_cylinder_ellipsoid (kernels/narrowphase/pairs/cylinder/cylinder_ellipsoid.cpp) on both paths
 // against independent double-precision references, and against the general GJK / EPA
 // path (collide_gjk_epa) on the same lanes.
 //

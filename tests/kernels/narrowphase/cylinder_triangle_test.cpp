@@ -1,4 +1,4 @@
-// collide_cylinder_triangle (kernels/narrowphase/cylinder_triangle.cpp) on both paths
+// collide_cylinder_triangle (kernels/narrowphase/pairs/cylinder/cylinder_triangle.cpp) on both paths
 // against independent double-precision references, and against the general GJK / EPA
 // path (collide_gjk_epa) and the capsule-cylinder kernel on the same lanes.
 //

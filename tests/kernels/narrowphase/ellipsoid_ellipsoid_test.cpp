@@ -1,4 +1,4 @@
-// collide_ellipsoid_ellipsoid (kernels/narrowphase/ellipsoid_ellipsoid.cpp) on both paths
+// collide_ellipsoid_ellipsoid (kernels/narrowphase/pairs/ellipsoid/ellipsoid_ellipsoid.cpp) on both paths
 // against an independent double-precision reference, and against the general GJK / EPA
 // path (collide_gjk_epa) on the same lanes.
 //

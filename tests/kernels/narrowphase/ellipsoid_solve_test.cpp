@@ -1,4 +1,4 @@
-// The point-ellipsoid solvers of kernels/narrowphase/ellipsoid_solve.h on both lane
+// The point-ellipsoid solvers of kernels/narrowphase/solvers/ellipsoid_solve.h on both lane
 // types (FloatW, Float1) against double-precision roots found by bisection:
 //  - the far local minimum (far_on_ellipsoid, 3-D and 2-D): the right root of the
 //    secular equation Q(s) = 1 in (-d_p, 0), found in double by golden-section search
@@ -22,7 +22,7 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
-#include "kernels/narrowphase/ellipsoid_solve.h"
+#include "kernels/narrowphase/solvers/ellipsoid_solve.h"
 #include "support/ellipsoid_reference.h"
 #include "support/test_support.h"
 

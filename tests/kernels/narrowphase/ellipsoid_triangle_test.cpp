@@ -1,4 +1,4 @@
-// collide_ellipsoid_triangle (kernels/narrowphase/ellipsoid_triangle.cpp) on both paths
+// collide_ellipsoid_triangle (kernels/narrowphase/pairs/ellipsoid/ellipsoid_triangle.cpp) on both paths
 // against independent double-precision references, and against the general GJK / EPA
 // path (collide_gjk_epa) on the same lanes.
 //

@@ -1,4 +1,4 @@
-// The general convex path (kernels/narrowphase/gjk_epa.cpp) against independent answers:
+// The general convex path (kernels/narrowphase/general/gjk_epa.cpp) against independent answers:
 // closed forms (sphere-sphere, axis-aligned boxes, sphere-capsule, coaxial cylinders),
 // a separating-axis brute force in double over face normals and edge-pair crosses for
 // box-box and hull-hull, and the "safe displacement" property for every type pair
@@ -21,9 +21,9 @@
 
 #include "host/narrowphase/convex_hull.h"
 #include "host/narrowphase/shape_store.h"
-#include "kernels/narrowphase/gjk_epa.h"
+#include "kernels/narrowphase/general/gjk_epa.h"
 #include "kernels/narrowphase/pair_kernels.h"
-#include "kernels/narrowphase/sat.h"
+#include "kernels/narrowphase/general/sat.h"
 #include "support/leaf_lanes.h"
 #include "support/narrow_reference.h"
 #include "support/random_input.h"

@@ -1,4 +1,4 @@
-// The separating axis test for polytope pairs (kernels/narrowphase/sat.cpp) against
+// The separating axis test for polytope pairs (kernels/narrowphase/general/sat.cpp) against
 // (1) a brute-force SAT in double over every face normal and every edge-pair cross
 // product (no Gauss map pruning, no bounds), (2) GJK/EPA (the same kernel with
 // NarrowConfig::sat_max_vertices = 0), (3) the specialised box-box kernel; on random
@@ -22,9 +22,9 @@
 
 #include "host/narrowphase/convex_hull.h"
 #include "host/narrowphase/shape_store.h"
-#include "kernels/narrowphase/gjk_epa.h"
+#include "kernels/narrowphase/general/gjk_epa.h"
 #include "kernels/narrowphase/pair_kernels.h"
-#include "kernels/narrowphase/sat.h"
+#include "kernels/narrowphase/general/sat.h"
 #include "support/leaf_lanes.h"
 #include "support/random_input.h"
 #include "support/test_support.h"

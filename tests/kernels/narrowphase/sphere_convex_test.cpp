@@ -1,4 +1,4 @@
-// Sphere against convex hull (kernels/narrowphase/sphere_convex.cpp, collide_sphere_convex)
+// Sphere against convex hull (kernels/narrowphase/pairs/sphere/sphere_convex.cpp, collide_sphere_convex)
 // against an independent double-precision reference: the hull's polygons (HullData from
 // build_convex_hull) posed in double, face planes by Newell's method from the polygon
 // vertices (not the kernel's float planes); outside: the least point-to-polygon

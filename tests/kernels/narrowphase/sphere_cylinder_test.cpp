@@ -1,4 +1,4 @@
-// collide_sphere_cylinder (kernels/narrowphase/primitives_sphere.cpp) on both paths
+// collide_sphere_cylinder (kernels/narrowphase/pairs/sphere/sphere_cylinder.cpp) on both paths
 // against an independent double-precision reference: the distance from the sphere's
 // centre to the solid cylinder by dense sampling of the cylinder's surface (outside),
 // and the minimum translation out of it (inside: through the side or a cap), on random

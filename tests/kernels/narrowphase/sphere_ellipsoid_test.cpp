@@ -1,4 +1,4 @@
-// collide_sphere_ellipsoid (kernels/narrowphase/sphere_ellipsoid.cpp) on both paths
+// collide_sphere_ellipsoid (kernels/narrowphase/pairs/sphere/sphere_ellipsoid.cpp) on both paths
 // against an independent double-precision reference, and against the general GJK / EPA
 // path (collide_gjk_epa) on the same lanes.
 //

@@ -1,4 +1,4 @@
-// collide_triangle_triangle (kernels/narrowphase/primitives_triangle_triangle.cpp) on both
+// collide_triangle_triangle (kernels/narrowphase/pairs/triangle/triangle_triangle.cpp) on both
 // paths against independent double-precision references, and against the general
 // GJK / EPA path (collide_gjk_epa) on the same lanes.
 //
