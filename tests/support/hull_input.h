@@ -33,12 +33,10 @@ inline D3 unit(D3 a) { return (1.0 / norm(a)) * a; }
 
 using Rng = std::mt19937;
 inline double uni(Rng& g, double a, double b) { return std::uniform_real_distribution<double>(a, b)(g); }
+/// test::random_normal_draws, normalised as a D3.
 inline D3 random_unit(Rng& g) {
-  std::normal_distribution<double> d(0.0, 1.0);
-  for (;;) {
-    const D3 v{d(g), d(g), d(g)};
-    if (norm(v) > 1e-3) return unit(v);
-  }
+  const Eigen::Vector3d v = random_normal_draws(g);
+  return unit(D3{v.x(), v.y(), v.z()});
 }
 /// Row-major rotation (test::random_rotation_rows) in float.
 inline void random_rotation(Rng& g, float m[9]) {

@@ -218,31 +218,6 @@ nref::Options dense_options() {
   return o;
 }
 
-/// The least rise of the overlap over its minimum s along the ring 3e-3 rad around n:
-/// 64 samples, the best 4 refined by golden-section search on the ring's angle (a
-/// needle's flat valley is ~1e-4 of the ring wide and slips between samples).
-double ring_rise(const nref::Shape& a, const nref::Shape& b, nref::V3 n) {
-  nref::V3 t1, t2;
-  nref::detail::tangent_basis(n, t1, t2);
-  const double th = std::tan(3e-3), s = nref::overlap(a, b, n);
-  auto f = [&](double ang) {
-    return nref::overlap(a, b, nref::normalized(n + th * std::cos(ang) * t1 + th * std::sin(ang) * t2)) - s;
-  };
-  std::vector<std::pair<double, double>> samples;
-  for (int i = 0; i < 64; ++i) samples.push_back({f(2 * M_PI * i / 64), 2 * M_PI * i / 64});
-  std::partial_sort(samples.begin(), samples.begin() + 4, samples.end());
-  double best = samples[0].first;
-  for (int k = 0; k < 4; ++k) {
-    double lo = samples[k].second - 2 * M_PI / 64, hi = samples[k].second + 2 * M_PI / 64;
-    for (int it = 0; it < 40; ++it) {
-      const double m1 = lo + 0.381966 * (hi - lo), m2 = lo + 0.618034 * (hi - lo);
-      (f(m1) < f(m2) ? hi : lo) = f(m1) < f(m2) ? m2 : m1;
-    }
-    best = std::min(best, f(0.5 * (lo + hi)));
-  }
-  return best;
-}
-
 struct Ref {
   double s;  // depth (> 0 overlapping)
   Vec3d n;   // A to B
@@ -282,7 +257,7 @@ Ref reference(const Query& q) {
   f.n = to_eigen(r.n);
   f.through = true;
   f.conditioned = r.unique(kRel * L);
-  if (f.conditioned) f.conditioned = ring_rise(a, b, r.n) >= 1e-6 * L;
+  if (f.conditioned) f.conditioned = nref::ring_rise(a, b, r.n) >= 1e-6 * L;
   return f;
 }
 
