@@ -98,6 +98,22 @@ struct PairResult {
   double pd[4] = {0, 0, 0, 0};
 };
 
+/// Whether two lanes read back hold the same bytes: count, and for a contact the depth,
+/// normal and the points and point depths of its count slots (at most 4).
+inline bool same_bytes(const PairResult& x, const PairResult& y) {
+  auto eq = [](double a, double b) { return std::bit_cast<uint64_t>(a) == std::bit_cast<uint64_t>(b); };
+  bool same = x.count == y.count;
+  if (same && x.count > 0) {
+    same = eq(x.depth, y.depth);
+    for (int i = 0; i < 3; ++i) same = same && eq(x.n[i], y.n[i]);
+    for (uint32_t j = 0; j < x.count && j < 4; ++j) {
+      same = same && eq(x.pd[j], y.pd[j]);
+      for (int i = 0; i < 3; ++i) same = same && eq(x.pt[j][i], y.pt[j][i]);
+    }
+  }
+  return same;
+}
+
 /// Owning output lanes for n pairs (kernels::ManifoldSoA), every value poisoned (count
 /// kPoisonCount, floats the NaN kPoisonBits) so a kernel that leaves a lane or a slot
 /// unwritten shows; result(k) reads lane k back as a PairResult (the points and depths

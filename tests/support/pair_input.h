@@ -11,6 +11,7 @@
 //   degenerate  one or both leaves flattened or thinned to 1e-4 of their size (needle and
 //               pancake boxes, cylinders and ellipsoids, coins, zero-length and hair-thin
 //               capsules, flat hulls, sliver triangles; tiny spheres)
+//   many-vertex hulls  72-point hulls (the kernels' big-hull routes)
 //   needle/pancake  boxes only (matrix_test's set)
 // Every lane carries its double reference (tests/support/narrow_reference.h).
 // The specialised kernels of kernels/narrowphase/pair_kernels.h are listed once here
@@ -385,6 +386,24 @@ inline Leaf degenerate_leaf(const Leaf& in, Rng& g, HullBank& w) {
   return l;
 }
 
+/// A hull leaf given a hull of 72 points on an ellipsoid of its size: more vertices than
+/// hull-half-space's lane kernel takes (64: convex_halfspace.cpp), and two of them more
+/// than NarrowConfig::sat_max_vertices (the big-hull routes); other leaves unchanged.
+inline Leaf many_vertex_hull(const Leaf& in, Rng& g, HullBank& w) {
+  if (in.t != kernels::kLeafConvex) return in;
+  Leaf l = in;
+  double r = 0;
+  for (const auto& p : w.hull_points[l.ref]) r = std::max(r, static_cast<double>(p.norm()));
+  const double ax[3] = {uni(g, 0.5, 1.0), uni(g, 0.5, 1.0), uni(g, 0.5, 1.0)};
+  std::vector<Eigen::Vector3f> pts;
+  for (int i = 0; i < 72; ++i) {
+    const V3 u = random_unit_v3(g);
+    pts.emplace_back(f32(r * ax[0] * u.x), f32(r * ax[1] * u.y), f32(r * ax[2] * u.z));
+  }
+  l.ref = w.add_hull(pts);
+  return l;
+}
+
 /// Box leaves made needles or pancakes (1 x 1e-4 x 1e-4 or 1 x 1 x 1e-4, 1.5x the
 /// largest extent); other leaves unchanged.
 inline Leaf thin_box(const Leaf& box, Rng& g, HullBank&) {
@@ -485,11 +504,11 @@ struct LaneSet {
 
 /// The standard sets of bucket (ta, tb), each `count` lanes times `per` (random: 8 per,
 /// the others 1-1.3 per): random, tiny 1e-4, huge 1e4, far 1e5, deep, coincident,
-/// touching, and for box pairs needle/pancake boxes; with `degenerate`, one more set of
-/// degenerate leaves of every type. The sets are made first and in this order: HullStore
+/// touching, and for box pairs needle/pancake boxes; with `extended`, a set of
+/// degenerate leaves of every type and, for hull pairs, one of many-vertex hulls. The sets are made first and in this order: HullStore
 /// may reallocate while hulls are added (views are taken after).
 inline std::vector<LaneSet> standard_lane_sets(LeafType ta, LeafType tb, double per, Rng& g, HullBank& w,
-                                               bool degenerate = false) {
+                                               bool extended = false) {
   const std::string name = pair_name(ta, tb);
   auto count = [&](double base) { return scaled(static_cast<uint32_t>(std::lround(base * per)), 1); };
   std::vector<LaneSet> sets;
@@ -520,9 +539,13 @@ inline std::vector<LaneSet> standard_lane_sets(LeafType ta, LeafType tb, double 
   }
   if (ta == kernels::kLeafBox || tb == kernels::kLeafBox)
     sets.push_back({name + " needle/pancake", random_lanes(ta, tb, count(16), 1.0, 0.0, 0.0, 1.1, g, w, &thin_box)});
-  if (degenerate)
+  if (extended) {
     sets.push_back(
         {name + " degenerate", random_lanes(ta, tb, count(24), 1.0, 0.0, 0.0, 1.1, g, w, &degenerate_leaf, false)});
+    if (ta == kernels::kLeafConvex || tb == kernels::kLeafConvex)
+      sets.push_back({name + " many-vertex hulls",
+                      random_lanes(ta, tb, count(12), 1.0, 0.0, 0.0, 1.1, g, w, &many_vertex_hull, false)});
+  }
   return sets;
 }
 

@@ -1,6 +1,5 @@
 // collide_box_cylinder (kernels/narrowphase/box_cylinder.cpp) on both paths against
-// independent double-precision references, and against the general GJK / EPA path
-// (collide_gjk_epa) on the same lanes.
+// independent double-precision references.
 //
 // References (double, the inputs rounded to float as the kernel sees them; no candidate
 // enumeration, no root solve by steps):
@@ -53,8 +52,9 @@
 // (rim points), lying on it (the side line's 2 ends, clipped to the face); near-parallel
 // tilts (0..1e-2 rad) of those; exactly touching (count 0); needle and pancake boxes and
 // cylinders (1e-4); symmetries (a rotation and translation of the whole pair, the
-// cylinder's axis reversed, the box's axes relabelled); range partitions and shuffled
-// buckets (same bytes, nothing written outside the range); agreement with GJK / EPA.
+// cylinder's axis reversed, the box's axes relabelled).
+// Registration, range partitions, shuffled buckets and the agreement with GJK / EPA:
+// contract_test.cpp (every bucket of the table).
 #include <gtest/gtest.h>
 
 #include <Eigen/Core>
@@ -162,11 +162,6 @@ std::vector<test::PairResult> run(const std::vector<Query>& qs, KernelPath path,
   for (uint32_t k = begin; k < end; ++k) out[k] = o.result(k);
   if (keep != nullptr) *keep = o;
   return out;
-}
-
-void gjk_kernel(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out, Range r,
-                const NarrowConfig& cfg) {
-  collide_gjk_epa(a, b, out, r, cfg, kLeafBox, kLeafCylinder);
 }
 
 // --- references -------------------------------------------------------------------------------
@@ -344,17 +339,6 @@ struct Stats {
   double worst_depth = 0, worst_angle = 0;
 };
 
-bool same_bytes(const test::PairResult& x, const test::PairResult& y) {
-  bool same = x.count == y.count;
-  if (same && x.count > 0) {
-    same = std::memcmp(&x.depth, &y.depth, sizeof x.depth) == 0 && std::memcmp(&x.n, &y.n, sizeof x.n) == 0;
-    for (uint32_t i = 0; i < x.count; ++i)
-      same = same && std::memcmp(&x.pt[i], &y.pt[i], sizeof x.pt[i]) == 0 &&
-             std::memcmp(&x.pd[i], &y.pd[i], sizeof x.pd[i]) == 0;
-  }
-  return same;
-}
-
 /// Checks a lane's points: on both surfaces, 0 < pdepth <= depth, one point carries it.
 void check_points(const Query& q, const test::PairResult& h, double ptol, const char* what, size_t k,
                   const char* path) {
@@ -411,7 +395,7 @@ void check_all(const std::vector<Query>& qs, const char* what, Stats* out_stats 
       check_points(q, h, ptol, what, k, path);
     }
     // (e) the paths give the same bytes (the same IEEE operations, no contraction)
-    EXPECT_TRUE(same_bytes(simd[k], scal[k])) << what << " lane " << k << ": the SIMD and scalar paths differ";
+    EXPECT_TRUE(test::same_bytes(simd[k], scal[k])) << what << " lane " << k << ": the SIMD and scalar paths differ";
     // the translation check, by the gap alone
     const test::PairResult& h = simd[k];
     if (h.count > 0 && h.depth > 20 * tol) {
@@ -553,10 +537,6 @@ double spread(const test::PairResult& r) {
 }
 
 // ---------------------------------------------------------------------------------------------
-
-TEST(BoxCylinder, RegisteredForTheBucket) {
-  EXPECT_EQ(pair_kernel(kLeafBox, kLeafCylinder), &collide_box_cylinder);
-}
 
 /// The references against closed forms: point distances; a box beside the side, on the
 /// cap, an edge and a vertex off a rim (apart), an edge across a rim, a level box through
@@ -1241,73 +1221,6 @@ TEST(BoxCylinder, Symmetries) {
     }
   }
   EXPECT_GT(compared, static_cast<int>(base.size()) / 4);
-}
-
-/// Any partition of a bucket's range gives the same bytes, nothing outside the range is
-/// written (the output lanes start poisoned), and a lane's bytes do not depend on which
-/// lanes share its block (a shuffled bucket).
-TEST(BoxCylinder, RangePartitionsAndTail) {
-  std::mt19937 g(61);
-  const std::vector<Query> qs = random_queries(g, 37, 1.0, 0.0);
-  for (KernelPath path : {KernelPath::kSimd, KernelPath::kScalar}) {
-    test::ManifoldLanes all(37);
-    const auto whole = run(qs, path, nullptr, 0, 37, &all);
-    int hits = 0;
-    for (uint32_t k = 0; k < 37; ++k) hits += all.count[k] > 0 && all.count[k] <= 4;
-    EXPECT_GT(hits, 5);
-    for (uint32_t cut : {1u, 3u, 8u, 11u, 36u}) {
-      test::ManifoldLanes lo(37), hi(37);
-      run(qs, path, nullptr, 0, cut, &lo);
-      run(qs, path, nullptr, cut, 37, &hi);
-      for (uint32_t k = 0; k < 37; ++k) {
-        const test::ManifoldLanes& m = k < cut ? lo : hi;
-        const test::ManifoldLanes& other = k < cut ? hi : lo;
-        EXPECT_EQ(other.count[k], 0xff) << "lane " << k << " written outside its range";
-        EXPECT_TRUE(std::isnan(other.depth[k])) << "lane " << k << " written outside its range";
-        for (int i = 0; i < 3; ++i) EXPECT_TRUE(std::isnan(other.n[i][k])) << "lane " << k;
-        for (int j = 0; j < 4; ++j) EXPECT_TRUE(std::isnan(other.pd[j][k])) << "lane " << k;
-        ASSERT_EQ(m.count[k], all.count[k]) << cut << " " << k;
-        if (m.count[k] == 0) continue;
-        EXPECT_EQ(std::memcmp(&m.depth[k], &all.depth[k], 4), 0) << k;
-        for (int i = 0; i < 3; ++i) EXPECT_EQ(std::memcmp(&m.n[i][k], &all.n[i][k], 4), 0) << k;
-        for (uint32_t j = 0; j < m.count[k]; ++j) {
-          EXPECT_EQ(std::memcmp(&m.pd[j][k], &all.pd[j][k], 4), 0) << k;
-          for (int i = 0; i < 3; ++i) EXPECT_EQ(std::memcmp(&m.pt[j][i][k], &all.pt[j][i][k], 4), 0) << k;
-        }
-      }
-    }
-    // shuffled: every lane in other company
-    std::vector<uint32_t> perm(qs.size());
-    std::iota(perm.begin(), perm.end(), 0u);
-    std::shuffle(perm.begin(), perm.end(), g);
-    std::vector<Query> sh;
-    for (uint32_t i : perm) sh.push_back(qs[i]);
-    const auto shuffled = run(sh, path);
-    for (size_t i = 0; i < perm.size(); ++i)
-      EXPECT_TRUE(same_bytes(shuffled[i], whole[perm[i]])) << "lane " << perm[i] << " moved to " << i;
-  }
-}
-
-/// The general GJK / EPA path on the same lanes: same hits away from touching (1e-3 L),
-/// depth within 1e-3 L, normal within 0.02 rad where unique.
-TEST(BoxCylinder, AgreesWithGjkEpa) {
-  std::mt19937 g(67);
-  const std::vector<Query> qs = random_queries(g, static_cast<int>(test::scaled(240)), 1.0, 0.0);
-  const auto mine = run(qs, KernelPath::kSimd), gjk = run(qs, KernelPath::kSimd, &gjk_kernel);
-  int compared = 0;
-  for (size_t k = 0; k < qs.size(); ++k) {
-    const Ref f = reference(qs[k]);
-    const double L = size_of(qs[k]);
-    if (std::fabs(f.depth) < 1e-3 * L) continue;
-    ASSERT_EQ(mine[k].count > 0, gjk[k].count > 0) << k << " depth_ref " << f.depth;
-    if (mine[k].count == 0) continue;
-    ++compared;
-    EXPECT_NEAR(mine[k].depth, gjk[k].depth, 1e-3 * L) << k;
-    if (f.unique) {
-      EXPECT_LT(angle(mine[k].n, gjk[k].n), 0.02) << k;
-    }
-  }
-  EXPECT_GT(compared, static_cast<int>(qs.size()) / 5);
 }
 
 }  // namespace

@@ -1,6 +1,6 @@
 // collide_box_ellipsoid (kernels/narrowphase/box_ellipsoid.cpp) on both paths against
 // independent double-precision references, the sphere-box kernel where the ellipsoid is
-// round, and the general GJK / EPA path (collide_gjk_epa) on the same lanes.
+// round.
 //
 // References (double, no piece enumeration, no secular-equation solve by steps):
 //  - the support overlap h_A(n) + h_B(-n) minimised over densely sampled directions and
@@ -30,8 +30,9 @@
 // needles and pancakes (ratios 1e-3, 1e-4) through boxes, lying on them, inside them,
 // poking out at a vertex or an edge; flat, needle and point boxes (extents 1e-4 .. 0);
 // large boxes against small ellipsoids; coincident centres; analytic cases (dyadic);
-// a round ellipsoid against sphere-box; relabelled box axes (symmetry); range partitions
-// and block composition; GJK / EPA.
+// a round ellipsoid against sphere-box; relabelled box axes (symmetry).
+// Registration, range partitions, shuffled buckets and the agreement with GJK / EPA:
+// contract_test.cpp (every bucket of the table).
 #include <gtest/gtest.h>
 
 #include <Eigen/Core>
@@ -145,11 +146,6 @@ std::vector<Hit> run(const std::vector<Query>& qs, KernelPath path) {
   const PairKernel k = pair_kernel(kLeafBox, kLeafEllipsoid);
   EXPECT_EQ(k, &collide_box_ellipsoid);
   return run(qs, path, k);
-}
-
-void gjk_kernel(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out, Range r,
-                const NarrowConfig& cfg) {
-  collide_gjk_epa(a, b, out, r, cfg, kLeafBox, kLeafEllipsoid);
 }
 
 // ---------------------------------------------------------------------------------------
@@ -721,45 +717,6 @@ TEST(BoxEllipsoidCases, RelabelledBoxAxes) {
       EXPECT_LT(angle(h0[k].n, h1[k].n), kAngleTol) << k;
     }
   }
-}
-
-TEST(BoxEllipsoidCases, RangePartitionsAndBlockComposition) {
-  std::mt19937 g(41);
-  std::vector<Query> qs = random_queries(g, 57, 1.0, 0.0);
-  const std::vector<Query> thin = thin_queries(g, 40);
-  qs.insert(qs.end(), thin.begin(), thin.end());
-  const PairKernel kern = pair_kernel(kLeafBox, kLeafEllipsoid);
-  auto same = [](const Hit& x, const Hit& y) {
-    return x.count == y.count && (x.count == 0 || (x.depth == y.depth && x.n == y.n && x.pt == y.pt));
-  };
-  for (KernelPath path : {KernelPath::kSimd, KernelPath::kScalar}) {
-    const auto run_path = [&](const std::vector<Query>& q, uint32_t begin, uint32_t end) {
-      return run(q, path, kern, begin, end);
-    };
-    test::expect_partition_invariant(qs, {1u, 5u, 8u, 13u, 36u, 61u, 90u}, run_path, same, g);
-  }
-}
-
-/// The general GJK / EPA path on the same lanes (overlaps of at least 1e-3 L): same
-/// hits, depth within 1e-3 L, normal within 0.02 rad where well conditioned.
-TEST(BoxEllipsoidCases, AgreesWithGjkEpa) {
-  std::mt19937 g(23);
-  std::vector<Query> qs = random_queries(g, static_cast<int>(test::scaled(150)), 1.0, 0.0);
-  const std::vector<Hit> mine = run(qs, KernelPath::kSimd), gjk = run(qs, KernelPath::kSimd, &gjk_kernel);
-  int compared = 0;
-  for (size_t k = 0; k < qs.size(); ++k) {
-    const double L = size_of(qs[k]);
-    const Ref f = reference(qs[k]);
-    if (std::fabs(f.s) < 1e-3 * L) continue;
-    ASSERT_EQ(mine[k].count, gjk[k].count) << k << " depth " << f.s;
-    if (mine[k].count == 0) continue;
-    ++compared;
-    EXPECT_NEAR(mine[k].depth, gjk[k].depth, 1e-3 * L) << k;
-    if (f.conditioned) {
-      EXPECT_LT(angle(mine[k].n, gjk[k].n), 0.02) << k;
-    }
-  }
-  EXPECT_GT(compared, static_cast<int>(qs.size()) / 5);
 }
 
 }  // namespace

@@ -30,8 +30,8 @@
 // direction where a face axis and edge axes tie exactly: the face wins), the capsule-box
 // kernel's points for capsules lying on a box hull's face, nearly coplanar faces (plane
 // distances tied up to float rounding), zero-length cores (sphere-hull's answers), a
-// hull view without edge adjacency (the GJK / EPA fallback, same bytes as that path),
-// range partitions.
+// hull view without edge adjacency (the GJK / EPA fallback, same bytes as that path).
+// Registration and range partitions: contract_test.cpp.
 #include <gtest/gtest.h>
 
 #include <Eigen/Core>
@@ -397,10 +397,6 @@ std::vector<Pair> random_pairs(Rng& g, const Hulls& hulls, uint32_t h0, uint32_t
 
 // --- tests ------------------------------------------------------------------------------------
 
-TEST(CapsuleConvex, RegisteredForTheBucket) {
-  EXPECT_EQ(k::pair_kernel(k::kLeafCapsule, k::kLeafConvex), &k::collide_capsule_convex);
-}
-
 TEST(CapsuleConvex, RandomPosesAgreeWithReference) {
   Rng g(12345);
   Hulls hulls;
@@ -693,32 +689,6 @@ TEST(CapsuleConvex, WithoutEdgeAdjacencyTakesTheGeneralPath) {
     hits += o.count[i] > 0 ? 1 : 0;
   }
   EXPECT_GT(hits, 50u);
-}
-
-TEST(CapsuleConvex, RangePartitionAndPadding) {
-  Rng g(5);
-  Hulls hulls;
-  add_random_hulls(g, &hulls, 6, 1.0);
-  const auto pairs = random_pairs(g, hulls, 0, 6, 200, 1.0, 0.0);
-  const Bucket bk(pairs);
-  const k::HullView hv = hulls.store.view();
-  const ManifoldLanes whole = run(&k::collide_capsule_convex, bk, hv, k::KernelPath::kSimd);
-  ManifoldLanes part(bk.n);
-  k::NarrowConfig cfg;
-  cfg.hulls = hv;
-  const k::LeafSoA a = bk.a(), b = bk.b();
-  const uint32_t cuts[] = {0, 1, 7, 8, 50, 133, 199, 200};
-  for (size_t i = 0; i + 1 < std::size(cuts); ++i) {
-    if (i == 3) continue;  // [8, 50) left out: must stay untouched
-    k::collide_capsule_convex(a, b, part.view(), k::Range{cuts[i], cuts[i + 1]}, cfg);
-  }
-  for (uint32_t i = 0; i < bk.n; ++i) {
-    if (i >= 8 && i < 50) {
-      EXPECT_EQ(part.count[i], 0xff) << i;
-    } else {
-      EXPECT_EQ(lane_bits(whole, i), lane_bits(part, i)) << i;
-    }
-  }
 }
 
 }  // namespace

@@ -1,6 +1,5 @@
 // collide_capsule_cylinder (kernels/narrowphase/capsule_cylinder.cpp) on both paths
-// against independent double-precision references, and against the general GJK / EPA
-// path (collide_gjk_epa) on the same lanes.
+// against independent double-precision references.
 //
 // References (double, the inputs rounded to float as the kernel sees them):
 //  - the signed distance of a point to the solid cylinder in closed form (its frame:
@@ -34,8 +33,9 @@
 // across the cap inside the cylinder (the rims' far-side minima); short cores off a rim; near-parallel cores
 // (0..1e-2 rad) beside the side and on the cap: two points at the analytic ends; exactly touching (count 0);
 // zero-length cores (sphere-cylinder's answers); needle and pancake proportions (1e-4); symmetries (the flip
-// that maps the cylinder onto itself, the core's axis reversed, a rotation of the whole pair); range
-// partitions (same bytes, nothing written outside the range); agreement with GJK / EPA.
+// that maps the cylinder onto itself, the core's axis reversed, a rotation of the whole pair).
+// Registration, range partitions, shuffled buckets and the agreement with GJK / EPA:
+// contract_test.cpp (every bucket of the table).
 #include <gtest/gtest.h>
 
 #include <Eigen/Core>
@@ -137,11 +137,6 @@ std::vector<test::PairResult> run(const std::vector<Query>& qs, KernelPath path,
   for (uint32_t k = begin; k < end; ++k) out[k] = o.result(k);
   if (keep != nullptr) *keep = o;
   return out;
-}
-
-void gjk_kernel(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out, Range r,
-                const NarrowConfig& cfg) {
-  collide_gjk_epa(a, b, out, r, cfg, kLeafCapsule, kLeafCylinder);
 }
 
 // --- references -------------------------------------------------------------------------------
@@ -405,10 +400,6 @@ Query posed(std::mt19937& g, const Vec3d& c, const Vec3d& u, double r, double hs
 }
 
 // ---------------------------------------------------------------------------------------------
-
-TEST(CapsuleCylinder, RegisteredForTheBucket) {
-  EXPECT_EQ(pair_kernel(kLeafCapsule, kLeafCylinder), &collide_capsule_cylinder);
-}
 
 /// The references against closed forms: point distances, a core beside the side / above
 /// the cap / at a rim (apart: r - distance), a core through the middle, along the axis
@@ -822,57 +813,6 @@ TEST(CapsuleCylinder, Symmetries) {
     }
   }
   EXPECT_GT(compared, static_cast<int>(base.size()) / 4);
-}
-
-/// Any partition of a bucket's range gives the same bytes, and nothing outside the range
-/// is written (the output lanes start poisoned).
-TEST(CapsuleCylinder, RangePartitionsAndTail) {
-  std::mt19937 g(61);
-  const std::vector<Query> qs = random_queries(g, 37, 1.0, 0.0);
-  for (KernelPath path : {KernelPath::kSimd, KernelPath::kScalar}) {
-    test::ManifoldLanes all(37);
-    run(qs, path, nullptr, 0, 37, &all);
-    for (uint32_t cut : {1u, 3u, 8u, 11u, 36u}) {
-      test::ManifoldLanes lo(37), hi(37);
-      run(qs, path, nullptr, 0, cut, &lo);
-      run(qs, path, nullptr, cut, 37, &hi);
-      for (uint32_t k = 0; k < 37; ++k) {
-        const test::ManifoldLanes& m = k < cut ? lo : hi;
-        const test::ManifoldLanes& other = k < cut ? hi : lo;
-        EXPECT_EQ(other.count[k], 0xff) << "lane " << k << " written outside its range";
-        ASSERT_EQ(m.count[k], all.count[k]) << cut << " " << k;
-        if (m.count[k] == 0) continue;
-        EXPECT_EQ(std::memcmp(&m.depth[k], &all.depth[k], 4), 0) << k;
-        for (int i = 0; i < 3; ++i) EXPECT_EQ(std::memcmp(&m.n[i][k], &all.n[i][k], 4), 0) << k;
-        for (uint32_t j = 0; j < m.count[k]; ++j) {
-          EXPECT_EQ(std::memcmp(&m.pd[j][k], &all.pd[j][k], 4), 0) << k;
-          for (int i = 0; i < 3; ++i) EXPECT_EQ(std::memcmp(&m.pt[j][i][k], &all.pt[j][i][k], 4), 0) << k;
-        }
-      }
-    }
-  }
-}
-
-/// The general GJK / EPA path on the same lanes: same hits away from touching (1e-3 L),
-/// depth within 1e-3 L, normal within 0.02 rad where unique.
-TEST(CapsuleCylinder, AgreesWithGjkEpa) {
-  std::mt19937 g(67);
-  const std::vector<Query> qs = random_queries(g, static_cast<int>(test::scaled(300)), 1.0, 0.0);
-  const auto mine = run(qs, KernelPath::kSimd), gjk = run(qs, KernelPath::kSimd, &gjk_kernel);
-  int compared = 0;
-  for (size_t k = 0; k < qs.size(); ++k) {
-    const Ref f = reference(qs[k]);
-    const double L = size_of(qs[k]);
-    if (std::fabs(f.depth) < 1e-3 * L) continue;
-    ASSERT_EQ(mine[k].count > 0, gjk[k].count > 0) << k << " depth_ref " << f.depth;
-    if (mine[k].count == 0) continue;
-    ++compared;
-    EXPECT_NEAR(mine[k].depth, gjk[k].depth, 1e-3 * L) << k;
-    if (f.unique) {
-      EXPECT_LT(angle(mine[k].n, gjk[k].n), 0.02) << k;
-    }
-  }
-  EXPECT_GT(compared, static_cast<int>(qs.size()) / 5);
 }
 
 }  // namespace

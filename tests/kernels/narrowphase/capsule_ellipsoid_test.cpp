@@ -1,6 +1,5 @@
 // collide_capsule_ellipsoid (kernels/narrowphase/capsule_ellipsoid.cpp) on both paths
-// against independent double-precision references, and against the general GJK / EPA
-// path (collide_gjk_epa) on the same lanes.
+// against independent double-precision references.
 //
 // References (double, no candidate enumeration, no secular-equation solve by steps):
 //  - core outside the ellipsoid: the signed distance of a point to the ellipsoid
@@ -40,8 +39,9 @@
 // ellipsoid's centre (coincident centres: finite unit normal); analytic cases (a
 // pancake pierced along its normal, axis-aligned sides and ends); a round ellipsoid
 // against sphere-capsule; a zero-length core against sphere-ellipsoid; the core's two
-// directions (u, -u: same answer); range partitions and block composition (each lane's
-// bytes whatever its neighbours); GJK / EPA.
+// directions (u, -u: same answer).
+// Registration, range partitions, shuffled buckets and the agreement with GJK / EPA:
+// contract_test.cpp (every bucket of the table).
 #include <gtest/gtest.h>
 
 #include <Eigen/Core>
@@ -173,11 +173,6 @@ std::vector<Hit> run(const std::vector<Query>& qs, KernelPath path) {
   const PairKernel k = pair_kernel(kLeafCapsule, kLeafEllipsoid);
   EXPECT_EQ(k, &collide_capsule_ellipsoid);
   return run(qs, path, k);
-}
-
-void gjk_kernel(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out, Range r,
-                const NarrowConfig& cfg) {
-  collide_gjk_epa(a, b, out, r, cfg, kLeafCapsule, kLeafEllipsoid);
 }
 
 // ---------------------------------------------------------------------------------------
@@ -764,47 +759,6 @@ TEST(CapsuleEllipsoidCases, AxisDirectionDoesNotMatter) {
       EXPECT_LT(angle(h0[k].n, h1[k].n), kAngleTol) << k;
     }
   }
-}
-
-TEST(CapsuleEllipsoidCases, RangePartitionsAndBlockComposition) {
-  std::mt19937 g(41);
-  std::vector<Query> qs = random_queries(g, 37, 1.0, 0.0);
-  const std::vector<Query> thin = thin_queries(g, 40);
-  qs.insert(qs.end(), thin.begin(), thin.end());
-  const PairKernel kern = pair_kernel(kLeafCapsule, kLeafEllipsoid);
-  auto same = [](const Hit& x, const Hit& y) {
-    return x.count == y.count && (x.count == 0 || (x.depth == y.depth && x.n == y.n && x.pt == y.pt));
-  };
-  for (KernelPath path : {KernelPath::kSimd, KernelPath::kScalar}) {
-    const auto run_path = [&](const std::vector<Query>& q, uint32_t begin, uint32_t end) {
-      return run(q, path, kern, begin, end);
-    };
-    // The solves stop when a whole block has converged and far minima are solved packed:
-    // a lane's bytes must not depend on its neighbours.
-    test::expect_partition_invariant(qs, {1u, 5u, 8u, 13u, 36u, 61u}, run_path, same, g);
-  }
-}
-
-/// The general GJK / EPA path on the same lanes (overlaps of at least 1e-3 L): same
-/// hits, depth within 1e-3 L, normal within 0.02 rad where well conditioned.
-TEST(CapsuleEllipsoidCases, AgreesWithGjkEpa) {
-  std::mt19937 g(23);
-  std::vector<Query> qs = random_queries(g, static_cast<int>(test::scaled(300)), 1.0, 0.0);
-  const std::vector<Hit> mine = run(qs, KernelPath::kSimd), gjk = run(qs, KernelPath::kSimd, &gjk_kernel);
-  int compared = 0;
-  for (size_t k = 0; k < qs.size(); ++k) {
-    const double L = size_of(qs[k]);
-    const Ref f = reference(qs[k]);
-    if (std::fabs(f.s) < 1e-3 * L) continue;
-    ASSERT_EQ(mine[k].count, gjk[k].count) << k << " depth " << f.s;
-    if (mine[k].count == 0) continue;
-    ++compared;
-    EXPECT_NEAR(mine[k].depth, gjk[k].depth, 1e-3 * L) << k;
-    if (f.conditioned) {
-      EXPECT_LT(angle(mine[k].n, gjk[k].n), 0.02) << k;
-    }
-  }
-  EXPECT_GT(compared, static_cast<int>(qs.size()) / 5);
 }
 
 }  // namespace

@@ -12,11 +12,14 @@
 //                     reference's minimum is unique (else a reversed normal as good as
 //                     the reference's).
 //  SimdMatchesScalar  the two KernelPaths: the same bytes where the kernel promises
-//                     them (kSameBytesBuckets below), else the same hit away from
-//                     touching, depth within the pair's tolerance, and normals within
-//                     kAngleTol of each other where the minimum is unique (each as good a
-//                     direction as the reference's everywhere).
-//  PartitionAndShuffle  both paths: every split of the lane range gives each lane the same
+//                     them (same_bytes_buckets() below), else away from touching the same
+//                     hit and point count, depths within 1e-6 L, normals within 1e-5 rad of
+//                     each other where the minimum is unique (each as good a direction as
+//                     the reference's everywhere), the same points in any order within
+//                     1e-5 L (plus their slide with the normal and the coordinates'
+//                     rounding).
+//  PartitionAndShuffle  both paths: every split of the lane range, random partitions into
+//                     chunks of 1..13 lanes and lane-by-lane runs give each lane the same
 //                     bytes, nothing is written outside the range (or in the padding past
 //                     the bucket), and a shuffled bucket gives every lane its own bytes.
 //  AgreesWithGjkEpa   the general route on the same lanes (GJK + EPA with SAT off, or the
@@ -29,7 +32,7 @@
 // for the exact kernels, 1e-3 for the general route (test::kernel_rel_tolerance, the
 // matrix test's); kAngleTol = 0.02 rad. Inputs: test::standard_lane_sets (random at
 // sizes 1, 1e-4, 1e4 and 1e5 from the origin, deep, coincident, touching, needle and
-// pancake boxes, degenerate leaves of every type), a seed per bucket.
+// pancake boxes, degenerate leaves of every type, many-vertex hulls), a seed per bucket.
 // The per-kernel files keep what is special to their pair; the reference itself is
 // matrix_test's (every lane against the double reference, both paths).
 #include <gtest/gtest.h>
@@ -59,6 +62,11 @@ namespace k = kernels;
 using kernels::KernelPath;
 
 constexpr double kAngleTol = 0.02;   // rad, where the reference's minimum is unique
+// The two paths of a kernel without the same-bytes promise: the same formulas, fused
+// multiply-adds contracted differently (measured: depth 2.2e-7 L, normals 4.9e-7 rad).
+constexpr double kPathDepthRel = 1e-6;  // of L
+constexpr double kPathAngleTol = 1e-5;  // rad, where the reference's minimum is unique
+constexpr double kPointRel = 1e-5;      // of L: points and point depths
 constexpr double kGeneralRel = 1e-3;  // the general route's depth tolerance, of L
 
 /// Buckets whose kernels promise the same bytes on both paths: those running the same
@@ -106,7 +114,7 @@ class PairContract : public ::testing::TestWithParam<Bucket> {
   std::vector<LaneSet> sets(uint32_t salt, double per = 1.0) {
     const Bucket c = GetParam();
     Rng g(7000u + 97u * salt + 16u * c.a + c.b);
-    return standard_lane_sets(c.a, c.b, per, g, bank_, /*degenerate=*/true);
+    return standard_lane_sets(c.a, c.b, per, g, bank_, /*extended=*/true);
   }
 
   double tol(const Lane& l) const { return rel_ * lane_size(l); }
@@ -125,6 +133,25 @@ std::string describe(const PairResult& r) {
 }
 
 V3 v3_of(const Eigen::Vector3d& v) { return {v.x(), v.y(), v.z()}; }
+
+/// Every point of r lies within depth/2 + 2 tol (+ 2 ulps) of both surfaces, with
+/// -tol <= pdepth <= depth + tol (matrix_test's (d)).
+bool points_on_surfaces(const Lane& l, const PairResult& r, double tol) {
+  nref::Options light;
+  light.samples = 1000;
+  light.starts = 3;
+  const double lim = 0.5 * std::max(r.depth, 0.0) + 2 * tol + 2 * std::max(coord_magnitude(l.sa), coord_magnitude(l.sb)) * std::ldexp(1.0, -23);
+  for (uint32_t q = 0; q < r.count && q < 4; ++q) {
+    const V3 x{r.pt[q].x(), r.pt[q].y(), r.pt[q].z()};
+    if (r.pd[q] < -tol || r.pd[q] > r.depth + tol) return false;
+    if (std::fabs(nref::signed_distance(l.sa, x, light)) > lim || std::fabs(nref::signed_distance(l.sb, x, light)) > lim)
+      return false;
+  }
+  return true;
+}
+
+/// One float ulp of the lane's largest world coordinate.
+double point_ulp(const Lane& l) { return std::max(coord_magnitude(l.sa), coord_magnitude(l.sb)) * std::ldexp(1.0, -23); }
 
 // ---------------------------------------------------------------------------------------
 
@@ -212,7 +239,7 @@ TEST_P(SameTypeContract, BothOrders) {
 TEST_P(PairContract, SimdMatchesScalar) {
   const Bucket c = GetParam();
   const bool bytes = same_bytes_buckets().count({c.a, c.b}) > 0;
-  int compared = 0, same = 0, lanes = 0;
+  int compared = 0, same = 0, lanes = 0, alternative = 0;
   double worst_depth = 0, worst_angle = 0;
   for (const LaneSet& s : sets(3)) {
     const ManifoldLanes simd = run_lanes(kern_, s.lanes, bank_, KernelPath::kSimd);
@@ -234,25 +261,50 @@ TEST_P(PairContract, SimdMatchesScalar) {
         if (std::fabs(l.ref.s) > t) why = " hit differs";
       } else if (x.count > 0) {
         ++compared;
-        const double dd = std::fabs(x.depth - y.depth), ang = nref::angle(v3_of(x.n), v3_of(y.n));
-        worst_depth = std::max(worst_depth, dd / lane_size(l));
-        if (dd > t) why += " depths differ by more than tol";
+        const double L = lane_size(l), dd = std::fabs(x.depth - y.depth), ang = nref::angle(v3_of(x.n), v3_of(y.n));
+        worst_depth = std::max(worst_depth, dd / L);
+        if (dd > kPathDepthRel * L) why += " depths differ by more than 1e-6 L";
         if (l.ref.unique(2 * t)) {
           worst_angle = std::max(worst_angle, ang);
-          if (ang > kAngleTol) why += " normals differ where the minimum is unique";
+          if (ang > kPathAngleTol) why += " normals differ by more than 1e-5 rad where the minimum is unique";
         }
         for (const PairResult* r : {&x, &y})
           if (nref::overlap(l.sa, l.sb, nref::normalized(v3_of(r->n))) > l.ref.s + t)
             why += std::string(" the ") + (r == &x ? "simd" : "scalar") + " normal is not a minimum direction";
+        if (x.count != y.count && std::fabs(l.ref.s) > t) {
+          why += " point counts differ";
+        } else if (x.count == y.count) {
+          // Points are built along the normal: they move with it by up to the size times
+          // the normals' difference, plus the world coordinates' rounding. The same set
+          // of points, in any order (a tie in the reduction's order may fall either way).
+          const double slack = kPointRel * L + L * ang + 2 * point_ulp(l);
+          bool used[4] = {false, false, false, false}, found_all = true;
+          for (uint32_t q = 0; q < x.count; ++q) {
+            bool found = false;
+            for (uint32_t r = 0; r < y.count && !found; ++r)
+              if (!used[r] && (x.pt[q] - y.pt[r]).norm() <= slack && std::fabs(x.pd[q] - y.pd[r]) <= kPointRel * L)
+                found = used[r] = true;
+            found_all = found_all && found;
+          }
+          // Else another choice among near ties (box vertices scoring alike): both
+          // manifolds valid, on a few lanes (primitives_test's bound: 1 in 50).
+          if (!found_all) {
+            ++alternative;
+            if (!points_on_surfaces(l, x, t) || !points_on_surfaces(l, y, t))
+              why += " the paths chose different points, not both on the surfaces";
+          }
+        }
       }
       if (!why.empty() && printed++ < 3)
         ADD_FAILURE() << s.what << " lane " << i << ":" << why << "\n"
                       << literal(l, bank_) << "\n    simd:   " << describe(x) << "\n    scalar: " << describe(y);
     }
   }
-  std::printf("  %-22s lanes %4d same bytes %4d%s | compared %4d worst |depth diff| %.2g L, angle %.2g\n",
-              pair_name(c.a, c.b).c_str(), lanes, same, bytes ? " (promised)" : "", compared, worst_depth,
-              worst_angle);
+  EXPECT_LE(alternative, std::max(1, lanes / 50)) << "lanes whose paths chose different points";
+  std::printf(
+      "  %-22s lanes %4d same bytes %4d%s | compared %4d worst |depth diff| %.2g L, angle %.2g; other points %d\n",
+      pair_name(c.a, c.b).c_str(), lanes, same, bytes ? " (promised)" : "", compared, worst_depth, worst_angle,
+      alternative);
 }
 
 TEST_P(PairContract, PartitionAndShuffle) {
@@ -281,6 +333,7 @@ TEST_P(PairContract, PartitionAndShuffle) {
     };
     const auto same = [](const std::vector<uint32_t>& x, const std::vector<uint32_t>& y) { return x == y; };
     expect_partition_invariant(all, {1u, 3u, 5u, 8u, 11u, 13u, 16u, 36u, 61u, n / 2, n - 1}, run, same, g);
+    expect_chunk_invariant(all, run, same, g);
   }
 }
 
@@ -330,6 +383,37 @@ TEST_P(PairContract, AgreesWithGjkEpa) {
   std::printf("  %-22s lanes %4d compared %4d | worst |depth diff| %.2g L, angle %.2g\n", pair_name(c.a, c.b).c_str(),
               lanes, compared, worst_depth, worst_angle);
   EXPECT_GT(compared, lanes / 8);
+}
+
+/// Found by SimdMatchesScalar's reference clause (cylinder_ellipsoid, random set, lane 13,
+/// before the bucket was marked same-bytes): a cylinder through a flat ellipsoid where
+/// collide_cylinder_ellipsoid's multi-start solve misses the global minimum of the support
+/// overlap: depth 0.536486 along (-0.440, -0.653, -0.616) against the least overlap
+/// 0.519370 along (0.177, 0.566, 0.805) (confirmed by 2e5 random directions in double).
+/// Disabled until the kernel is fixed (kernels/narrowphase/cylinder_ellipsoid.cpp;
+/// --gtest_also_run_disabled_tests runs it).
+TEST(KnownMisses, DISABLED_CylinderEllipsoidTakesTheGlobalMinimum) {
+  Leaf a, b;
+  a.t = k::kLeafCylinder;
+  b.t = k::kLeafEllipsoid;
+  const float ap[3] = {-0.304256618f, 0.561342537f, 0.626860738f};
+  const float ar[9] = {-0.0957207084f, -0.961459756f, -0.257745475f, -0.0016461882f, 0.259086996f,
+                       -0.965852559f,  0.995406866f,  -0.0920277983f, -0.026382735f};
+  const float ae[3] = {0.1232327f, 0.297027081f, 0.0f};
+  const float bp[3] = {-0.478819937f, 0.47155115f, 0.7963202f};
+  const float br[9] = {0.944330752f, -0.0341334678f, 0.327222198f, -0.202874303f, 0.722578883f,
+                       0.660849273f, -0.259000927f,  -0.690445304f, 0.675428629f};
+  const float be[3] = {0.693425834f, 0.840815246f, 0.247810468f};
+  std::copy(ap, ap + 3, a.p), std::copy(ar, ar + 9, a.r), std::copy(ae, ae + 3, a.e);
+  std::copy(bp, bp + 3, b.p), std::copy(br, br + 9, b.r), std::copy(be, be + 3, b.e);
+  HullBank w;
+  const Lane l = make_lane(a, b, w);
+  ASSERT_NEAR(l.ref.s, 0.519369643, 1e-6);
+  for (KernelPath path : {KernelPath::kSimd, KernelPath::kScalar}) {
+    const PairResult r = run_lanes(k::pair_kernel(a.t, b.t), {l}, w, path).result(0);
+    ASSERT_EQ(r.count, 1u) << path_name(path);
+    EXPECT_NEAR(r.depth, l.ref.s, 1e-4 * lane_size(l)) << path_name(path);
+  }
 }
 
 INSTANTIATE_TEST_SUITE_P(Table, PairContract, ::testing::ValuesIn(buckets()), bucket_name);

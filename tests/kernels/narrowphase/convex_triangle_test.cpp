@@ -35,8 +35,8 @@
 // vertices, slivers of height 1e-3 .. 1e-7): their answers are the segment's or the
 // point's (GJK / EPA's and the brute force's without the normal axes); needle and
 // pancake hulls (1 x 1e-4); a hull with 80-gon faces (no clip: one point); the winding
-// of the triangle (same answer); range partitions (same bytes); a hull view without
-// edge adjacency (the GJK / EPA fallback, same bytes as that path).
+// of the triangle (same answer); a hull view without edge adjacency (the GJK / EPA
+// fallback, same bytes as that path). Registration and range partitions: contract_test.cpp.
 #include <gtest/gtest.h>
 
 #include <Eigen/Core>
@@ -477,10 +477,6 @@ constexpr uint32_t kHullsRandom = 24, kTetra = 24;
 
 // --- tests ------------------------------------------------------------------------------------
 
-TEST(ConvexTriangle, RegisteredForTheBucket) {
-  EXPECT_EQ(k::pair_kernel(k::kLeafConvex, k::kLeafTriangle), &k::collide_convex_triangle);
-}
-
 TEST(ConvexTriangle, RandomPosesAgreeWithReference) {
   Rng g(2024);
   const Hulls& hulls = shared_hulls();
@@ -839,34 +835,6 @@ TEST(ConvexTriangle, WindingDoesNotMatter) {
     }
     EXPECT_NEAR(a.depth, b.depth, tol) << "lane " << i;
     EXPECT_NEAR(separation(H, T, D3{b.n.x(), b.n.y(), b.n.z()}), -a.depth, tol) << "lane " << i;
-  }
-}
-
-TEST(ConvexTriangle, RangePartitionsGiveTheSameBytes) {
-  Rng g(39);
-  const Hulls& hulls = shared_hulls();
-  const auto pairs = random_pairs(g, hulls, 0, kHullsRandom + 1, 301, 1.0, 0.0);
-  const Bucket bk(pairs);
-  k::NarrowConfig cfg;
-  cfg.hulls = hulls.store.view();
-  for (const k::KernelPath path : {k::KernelPath::kSimd, k::KernelPath::kScalar}) {
-    cfg.path = path;
-    ManifoldLanes whole(bk.n), parts(bk.n);
-    k::collide_convex_triangle(bk.a(), bk.b(), whole.view(), k::Range{0, bk.n}, cfg);
-    for (uint32_t b = 0; b < bk.n;) {
-      const uint32_t e = std::min(bk.n, b + 1 + (b * 7) % 9);
-      k::collide_convex_triangle(bk.a(), bk.b(), parts.view(), k::Range{b, e}, cfg);
-      b = e;
-    }
-    for (uint32_t i = 0; i < bk.n; ++i) EXPECT_EQ(lane_bits(whole, i), lane_bits(parts, i)) << "lane " << i;
-    // Nothing outside the range is written.
-    ManifoldLanes some(bk.n);
-    k::collide_convex_triangle(bk.a(), bk.b(), some.view(), k::Range{10, 20}, cfg);
-    for (uint32_t i = 0; i < bk.n; ++i) {
-      if (i < 10 || i >= 20) {
-        EXPECT_EQ(some.count[i], 0xff) << "lane " << i;
-      }
-    }
   }
 }
 

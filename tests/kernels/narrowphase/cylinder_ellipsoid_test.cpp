@@ -1,6 +1,5 @@
 // collide_cylinder_ellipsoid (kernels/narrowphase/cylinder_ellipsoid.cpp) on both paths
-// against independent double-precision references, and against the general GJK / EPA
-// path (collide_gjk_epa) on the same lanes.
+// against independent double-precision references.
 //
 // References (double, the inputs rounded to float as the kernel sees them; nothing of
 // the kernel's candidate scheme):
@@ -70,9 +69,9 @@
 // ellipsoid: several local minima along the rim); spheres (equal radii) against the
 // closed form rho - sd_A(centre); symmetries (a rigid motion of the whole pair, the
 // cylinder's axis reversed, the ellipsoid's axes permuted / negated with its radii);
-// range partitions and shuffled buckets (same bytes, nothing written outside the
-// range); NaN-free outputs on degenerate but valid inputs; agreement with GJK / EPA
-// (1e-3 L). A failing lane prints itself as a C++ literal (lane(...), below). Lane
+// range partitions and shuffled buckets of ring and thin lanes (same bytes);
+// NaN-free outputs on degenerate but valid inputs. Registration, the general
+// partitions and the agreement with GJK / EPA: contract_test.cpp. A failing lane prints itself as a C++ literal (lane(...), below). Lane
 // counts scale with IMPACT_TEST_INTENSITY; a sanitizer build runs a quarter of them.
 #include <gtest/gtest.h>
 
@@ -93,6 +92,7 @@
 
 #include "kernels/narrowphase/pair_kernels.h"
 #include "support/ellipsoid_reference.h"
+#include "support/lane_checks.h"
 #include "support/leaf_lanes.h"
 #include "support/narrow_reference.h"
 #include "support/random_input.h"
@@ -240,11 +240,6 @@ std::vector<test::PairResult> run(const std::vector<Query>& qs, KernelPath path,
   for (uint32_t k = begin; k < end; ++k) out[k] = o.result(k);
   if (keep != nullptr) *keep = o;
   return out;
-}
-
-void gjk_kernel(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out, Range r,
-                const NarrowConfig& cfg) {
-  collide_gjk_epa(a, b, out, r, cfg, kLeafCylinder, kLeafEllipsoid);
 }
 
 // --- references -------------------------------------------------------------------------------
@@ -522,17 +517,6 @@ struct Stats {
   size_t worst_depth_lane = 0, worst_angle_lane = 0;
 };
 
-bool same_bytes(const test::PairResult& x, const test::PairResult& y) {
-  bool same = x.count == y.count;
-  if (same && x.count > 0) {
-    same = std::memcmp(&x.depth, &y.depth, sizeof x.depth) == 0 && std::memcmp(&x.n, &y.n, sizeof x.n) == 0;
-    for (uint32_t i = 0; i < x.count && i < kMaxManifoldPoints; ++i)
-      same = same && std::memcmp(&x.pt[i], &y.pt[i], sizeof x.pt[i]) == 0 &&
-             std::memcmp(&x.pd[i], &y.pd[i], sizeof x.pd[i]) == 0;
-  }
-  return same;
-}
-
 /// A lane's output, for failure messages (%.9g: the floats exactly).
 std::string describe(const test::PairResult& r) {
   char buf[256];
@@ -613,7 +597,7 @@ void check_all(const std::vector<Query>& qs, const char* what, Stats* out_stats 
     check_path(simd[k], true);
     check_path(scal[k], false);
     // (e) the paths give the same bytes
-    EXPECT_TRUE(same_bytes(simd[k], scal[k]))
+    EXPECT_TRUE(test::same_bytes(simd[k], scal[k]))
         << what << " lane " << k << ": the SIMD and scalar paths differ\n simd   " << describe(simd[k])
         << "\n scalar " << describe(scal[k]);
     // the translation check, by the solid minimum alone
@@ -1076,10 +1060,6 @@ std::vector<Query> near_parallel_queries(std::mt19937& g, int reps) {
 
 // ---------------------------------------------------------------------------------------------
 
-TEST(CylinderEllipsoid, RegisteredForTheBucket) {
-  EXPECT_EQ(pair_kernel(kLeafCylinder, kLeafEllipsoid), &collide_cylinder_ellipsoid);
-}
-
 /// The references against closed forms: point distances to the cylinder and the
 /// ellipsoid; the analytic lanes (solid minimum of the apart ones, the full reference of
 /// all, both the depth and the normal, unique); spheres (rho - sd_A(centre)); a cigar
@@ -1468,52 +1448,31 @@ TEST(CylinderEllipsoid, Symmetries) {
 /// Any partition of a bucket's range gives the same bytes, nothing outside the range is
 /// written (the output lanes start poisoned: count 0xff, NaN floats), and a lane's bytes
 /// do not depend on which lanes share its block (a shuffled bucket).
-TEST(CylinderEllipsoid, RangePartitionsAndTail) {
+/// The ring and thin lanes (the solve's rim pieces and its flattest valleys) among random
+/// ones: every split of the range and a shuffled bucket give each lane its bytes, and
+/// nothing is written outside the range (the table-wide check, contract_test.cpp, draws
+/// no rings).
+TEST(CylinderEllipsoid, RingAndThinLanesPartitionsAndShuffle) {
   std::mt19937 g(71);
   std::vector<Query> qs = random_queries(g, 25, 1.0, 0.0);
   for (const Query& q : thin_queries(g, 8)) qs.push_back(q);
   for (const Query& q : ring_queries(g, 8)) qs.push_back(q);
   const uint32_t n = static_cast<uint32_t>(qs.size());
   for (KernelPath path : {KernelPath::kSimd, KernelPath::kScalar}) {
-    test::ManifoldLanes all(n);
-    const auto whole = run(qs, path, nullptr, 0, n, &all);
     int hits = 0;
-    for (uint32_t k = 0; k < n; ++k) hits += all.count[k] == 1;
+    for (const test::PairResult& r : run(qs, path)) hits += r.count == 1;
     EXPECT_GT(hits, 5);
-    for (uint32_t cut : {1u, 3u, 8u, 11u, 16u, 23u, n - 1}) {
-      test::ManifoldLanes lo(n), hi(n);
-      run(qs, path, nullptr, 0, cut, &lo);
-      run(qs, path, nullptr, cut, n, &hi);
+    const auto run_range = [&](const std::vector<Query>& q, uint32_t begin, uint32_t end) {
+      test::ManifoldLanes o(n);
+      const auto r = run(q, path, nullptr, begin, end, &o);
       for (uint32_t k = 0; k < n; ++k) {
-        const test::ManifoldLanes& m = k < cut ? lo : hi;
-        const test::ManifoldLanes& other = k < cut ? hi : lo;
-        EXPECT_EQ(other.count[k], 0xff) << "lane " << k << " written outside its range";
-        EXPECT_TRUE(std::isnan(other.depth[k])) << "lane " << k << " written outside its range";
-        for (int i = 0; i < 3; ++i) EXPECT_TRUE(std::isnan(other.n[i][k])) << "lane " << k;
-        for (int j = 0; j < 4; ++j) {
-          EXPECT_TRUE(std::isnan(other.pd[j][k])) << "lane " << k;
-          for (int i = 0; i < 3; ++i) EXPECT_TRUE(std::isnan(other.pt[j][i][k])) << "lane " << k;
-        }
-        ASSERT_EQ(m.count[k], all.count[k]) << cut << " " << k << " as C++: " << literal(qs[k]);
-        if (m.count[k] == 0) continue;
-        EXPECT_EQ(std::memcmp(&m.depth[k], &all.depth[k], 4), 0) << k;
-        for (int i = 0; i < 3; ++i) EXPECT_EQ(std::memcmp(&m.n[i][k], &all.n[i][k], 4), 0) << k;
-        for (uint32_t j = 0; j < m.count[k] && j < 4; ++j) {
-          EXPECT_EQ(std::memcmp(&m.pd[j][k], &all.pd[j][k], 4), 0) << k;
-          for (int i = 0; i < 3; ++i) EXPECT_EQ(std::memcmp(&m.pt[j][i][k], &all.pt[j][i][k], 4), 0) << k;
+        if (k < begin || k >= end) {
+          EXPECT_TRUE(o.untouched(k)) << "lane " << k << " written outside its range";
         }
       }
-    }
-    // shuffled: every lane in other company
-    std::vector<uint32_t> perm(qs.size());
-    std::iota(perm.begin(), perm.end(), 0u);
-    std::shuffle(perm.begin(), perm.end(), g);
-    std::vector<Query> sh;
-    for (uint32_t i : perm) sh.push_back(qs[i]);
-    const auto shuffled = run(sh, path);
-    for (size_t i = 0; i < perm.size(); ++i)
-      EXPECT_TRUE(same_bytes(shuffled[i], whole[perm[i]]))
-          << "lane " << perm[i] << " moved to " << i << " as C++: " << literal(qs[perm[i]]);
+      return r;
+    };
+    test::expect_partition_invariant(qs, {1u, 3u, 8u, 11u, 16u, 23u, n - 1}, run_range, test::same_bytes, g);
   }
 }
 
@@ -1582,33 +1541,10 @@ TEST(CylinderEllipsoid, FiniteOutputsOnDegenerateInputs) {
       EXPECT_GT(r->depth, 0.0) << k;
       EXPECT_EQ(r->pd[0], r->depth) << k;
     }
-    EXPECT_TRUE(same_bytes(simd[k], scal[k])) << k << ": the SIMD and scalar paths differ\n simd   "
+    EXPECT_TRUE(test::same_bytes(simd[k], scal[k])) << k << ": the SIMD and scalar paths differ\n simd   "
                                               << describe(simd[k]) << "\n scalar " << describe(scal[k]);
   }
   EXPECT_GT(hits, static_cast<int>(qs.size()) / 2);
-}
-
-/// The general GJK / EPA path on the same lanes: same hits away from touching (1e-3 L),
-/// depth within 1e-3 L, normal within 0.02 rad where unique.
-TEST(CylinderEllipsoid, AgreesWithGjkEpa) {
-  std::mt19937 g(79);
-  const std::vector<Query> qs = random_queries(g, lanes(240), 1.0, 0.0);
-  const auto mine = run(qs, KernelPath::kSimd), gjk = run(qs, KernelPath::kSimd, &gjk_kernel);
-  int compared = 0;
-  for (size_t k = 0; k < qs.size(); ++k) {
-    SCOPED_TRACE("lane " + std::to_string(k) + " as C++: " + literal(qs[k]));
-    const Ref f = reference(qs[k]);
-    const double L = size_of(qs[k]);
-    if (std::fabs(f.depth) < 1e-3 * L) continue;
-    ASSERT_EQ(mine[k].count > 0, gjk[k].count > 0) << k << " depth_ref " << f.depth;
-    if (mine[k].count == 0) continue;
-    ++compared;
-    EXPECT_NEAR(mine[k].depth, gjk[k].depth, 1e-3 * L) << k;
-    if (f.unique) {
-      EXPECT_LT(angle(mine[k].n, gjk[k].n), 0.02) << k;
-    }
-  }
-  EXPECT_GT(compared, static_cast<int>(qs.size()) / 5);
 }
 
 }  // namespace

@@ -1,6 +1,5 @@
 // collide_ellipsoid_triangle (kernels/narrowphase/ellipsoid_triangle.cpp) on both paths
-// against independent double-precision references, and against the general GJK / EPA
-// path (collide_gjk_epa) on the same lanes.
+// against independent double-precision references.
 //
 // References (double, no candidate enumeration, no secular-equation solve by steps):
 //  - triangle outside the ellipsoid: the signed distance of a point to the ellipsoid
@@ -37,8 +36,9 @@
 // and point triangles; small triangles grazing the surface (their vertices' candidates
 // 1e-4 rad apart, scoring alike); analytic cases (a pancake on a flat triangle, tips
 // and rims);
-// a round ellipsoid against sphere-triangle; vertex order and orientation; range
-// partitions and block composition; GJK / EPA.
+// a round ellipsoid against sphere-triangle; vertex order and orientation.
+// Registration, range partitions, shuffled buckets and the agreement with GJK / EPA:
+// contract_test.cpp (every bucket of the table).
 #include <gtest/gtest.h>
 
 #include <Eigen/Core>
@@ -153,11 +153,6 @@ std::vector<Hit> run(const std::vector<Query>& qs, KernelPath path) {
   const PairKernel k = pair_kernel(kLeafEllipsoid, kLeafTriangle);
   EXPECT_EQ(k, &collide_ellipsoid_triangle);
   return run(qs, path, k);
-}
-
-void gjk_kernel(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out, Range r,
-                const NarrowConfig& cfg) {
-  collide_gjk_epa(a, b, out, r, cfg, kLeafEllipsoid, kLeafTriangle);
 }
 
 // ---------------------------------------------------------------------------------------
@@ -759,45 +754,6 @@ TEST(EllipsoidTriangleCases, VertexOrderAndOrientation) {
       }
     }
   }
-}
-
-TEST(EllipsoidTriangleCases, RangePartitionsAndBlockComposition) {
-  std::mt19937 g(41);
-  std::vector<Query> qs = random_queries(g, 37, 1.0, 0.0);
-  const std::vector<Query> thin = thin_queries(g, 40);
-  qs.insert(qs.end(), thin.begin(), thin.end());
-  const PairKernel kern = pair_kernel(kLeafEllipsoid, kLeafTriangle);
-  auto same = [](const Hit& x, const Hit& y) {
-    return x.count == y.count && (x.count == 0 || (x.depth == y.depth && x.n == y.n && x.pt == y.pt));
-  };
-  for (KernelPath path : {KernelPath::kSimd, KernelPath::kScalar}) {
-    const auto run_path = [&](const std::vector<Query>& q, uint32_t begin, uint32_t end) {
-      return run(q, path, kern, begin, end);
-    };
-    test::expect_partition_invariant(qs, {1u, 5u, 8u, 13u, 36u, 61u}, run_path, same, g);
-  }
-}
-
-/// The general GJK / EPA path on the same lanes (overlaps of at least 1e-3 L): same
-/// hits, depth within 1e-3 L, normal within 0.02 rad where well conditioned.
-TEST(EllipsoidTriangleCases, AgreesWithGjkEpa) {
-  std::mt19937 g(23);
-  std::vector<Query> qs = random_queries(g, static_cast<int>(test::scaled(150)), 1.0, 0.0);
-  const std::vector<Hit> mine = run(qs, KernelPath::kSimd), gjk = run(qs, KernelPath::kSimd, &gjk_kernel);
-  int compared = 0;
-  for (size_t k = 0; k < qs.size(); ++k) {
-    const double L = size_of(qs[k]);
-    const Ref f = reference(qs[k]);
-    if (std::fabs(f.s) < 1e-3 * L) continue;
-    ASSERT_EQ(mine[k].count, gjk[k].count) << k << " depth " << f.s;
-    if (mine[k].count == 0) continue;
-    ++compared;
-    EXPECT_NEAR(mine[k].depth, gjk[k].depth, 1e-3 * L) << k;
-    if (f.conditioned) {
-      EXPECT_LT(angle(mine[k].n, gjk[k].n), 0.02) << k;
-    }
-  }
-  EXPECT_GT(compared, static_cast<int>(qs.size()) / 5);
 }
 
 }  // namespace

@@ -378,10 +378,6 @@ std::vector<Pair> random_pairs(Rng& g, const Hulls& hulls, uint32_t h0, uint32_t
 
 // --- tests ------------------------------------------------------------------------------------
 
-TEST(SphereConvex, RegisteredForTheBucket) {
-  EXPECT_EQ(k::pair_kernel(k::kLeafSphere, k::kLeafConvex), &k::collide_sphere_convex);
-}
-
 TEST(SphereConvex, RandomPosesAgreeWithReference) {
   Rng g(12345);
   Hulls hulls;
@@ -592,34 +588,6 @@ TEST(SphereConvex, NearlyCoplanarFaces) {
   }
   const Stats st = check_pairs("nearly coplanar", pairs, hulls);
   EXPECT_GT(st.hits, 200u);
-}
-
-TEST(SphereConvex, RangePartitionAndPadding) {
-  // Any partition of the bucket gives the same bytes, and nothing outside the range
-  // is written.
-  Rng g(5);
-  Hulls hulls;
-  add_random_hulls(g, &hulls, 6, 1.0);
-  const auto pairs = random_pairs(g, hulls, 0, 6, 200, 1.0, 0.0);
-  const Bucket bk(pairs);
-  const k::HullView hv = hulls.store.view();
-  const Out whole = run_kernel(&k::collide_sphere_convex, bk, hv, k::KernelPath::kSimd);
-  Out part(bk.n);
-  k::NarrowConfig cfg;
-  cfg.hulls = hv;
-  const k::LeafSoA a = bk.a(), b = bk.b();
-  const uint32_t cuts[] = {0, 1, 7, 8, 50, 133, 199, 200};
-  for (size_t i = 0; i + 1 < std::size(cuts); ++i) {
-    if (i == 3) continue;  // [8, 50) left out: must stay untouched
-    k::collide_sphere_convex(a, b, part.view(), k::Range{cuts[i], cuts[i + 1]}, cfg);
-  }
-  for (uint32_t i = 0; i < bk.n; ++i) {
-    if (i >= 8 && i < 50) {
-      EXPECT_EQ(part.count[i], 0xee) << i;
-    } else {
-      EXPECT_EQ(whole.bits(i), part.bits(i)) << i;
-    }
-  }
 }
 
 }  // namespace

@@ -1,6 +1,5 @@
 // collide_sphere_ellipsoid (kernels/narrowphase/sphere_ellipsoid.cpp) on both paths
-// against an independent double-precision reference, and against the general GJK / EPA
-// path (collide_gjk_epa) on the same lanes.
+// against an independent double-precision reference.
 //
 // Reference (double, in the ellipsoid's frame, radii sorted;
 // tests/support/ellipsoid_reference.h): the closest surface point
@@ -26,8 +25,8 @@
 // centres near their thin parts, rims and tips; centres exactly on principal planes and
 // axes, and within 1e-7 .. 1e-20 of them; the centre at the ellipsoid's centre (depth r +
 // the smallest radius along that axis; ties: the lowest axis index); exactly touching
-// (count 0); a round ellipsoid against sphere-sphere; a block of lanes with every
-// partition of its range.
+// (count 0); a round ellipsoid against sphere-sphere. Range partitions and the agreement
+// with GJK / EPA: contract_test.cpp.
 #include <gtest/gtest.h>
 
 #include <Eigen/Core>
@@ -136,11 +135,6 @@ std::vector<Hit> run(const std::vector<Query>& qs, KernelPath path) {
   const PairKernel k = pair_kernel(kLeafSphere, kLeafEllipsoid);
   EXPECT_EQ(k, &collide_sphere_ellipsoid);
   return run(qs, path, k);
-}
-
-void gjk_kernel(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out, Range r,
-                const NarrowConfig& cfg) {
-  collide_gjk_epa(a, b, out, r, cfg, kLeafSphere, kLeafEllipsoid);
 }
 
 // ---------------------------------------------------------------------------------------
@@ -569,48 +563,6 @@ TEST(SphereEllipsoidCases, AnalyticAxesRoundAndTouching) {
       EXPECT_LT((h.n - (q.b.p - q.c) / dist).norm(), 1e-5);
     }
   }
-}
-
-TEST(SphereEllipsoidCases, RangePartitionsAndTail) {
-  std::mt19937 g(41);
-  const std::vector<Query> qs = random_queries(g, 37, 1.0, 0.0);
-  const PairKernel kern = pair_kernel(kLeafSphere, kLeafEllipsoid);
-  const std::vector<Hit> all = run(qs, KernelPath::kSimd, kern);
-  for (uint32_t cut : {1u, 5u, 8u, 13u, 36u}) {
-    const std::vector<Hit> lo = run(qs, KernelPath::kSimd, kern, 0, cut);
-    const std::vector<Hit> hi = run(qs, KernelPath::kSimd, kern, cut, 37);
-    for (uint32_t k = 0; k < 37; ++k) {
-      const Hit& h = k < cut ? lo[k] : hi[k];
-      ASSERT_EQ(h.count, all[k].count) << cut << " " << k;
-      if (h.count == 0) continue;
-      EXPECT_EQ(h.depth, all[k].depth);
-      EXPECT_EQ(h.n, all[k].n);
-      EXPECT_EQ(h.pt, all[k].pt);
-    }
-  }
-}
-
-/// The general GJK / EPA path on the same lanes (non-degenerate shapes, overlaps of at
-/// least 1e-3 L): same hits, depth within 1e-3 L, normal within 0.02 rad where the
-/// nearest point is well conditioned.
-TEST(SphereEllipsoidCases, AgreesWithGjkEpa) {
-  std::mt19937 g(23);
-  std::vector<Query> qs = random_queries(g, static_cast<int>(test::scaled(400)), 1.0, 0.0);
-  const std::vector<Hit> mine = run(qs, KernelPath::kSimd), gjk = run(qs, KernelPath::kSimd, &gjk_kernel);
-  int compared = 0;
-  for (size_t k = 0; k < qs.size(); ++k) {
-    const Ref f = reference(qs[k]);
-    const double L = largest(qs[k]);
-    if (std::fabs(f.depth) < 1e-3 * L) continue;
-    ASSERT_EQ(mine[k].count, gjk[k].count) << k << " depth_ref " << f.depth;
-    if (mine[k].count == 0) continue;
-    ++compared;
-    EXPECT_NEAR(mine[k].depth, gjk[k].depth, 1e-3 * L) << k;
-    if (normal_sensitivity(qs[k], f.n) < 1e-2) {
-      EXPECT_LT(angle(mine[k].n, gjk[k].n), 0.02) << k;
-    }
-  }
-  EXPECT_GT(compared, static_cast<int>(qs.size()) / 5);
 }
 
 }  // namespace
