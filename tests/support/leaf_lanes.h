@@ -6,12 +6,15 @@
 //   LeafLanes     owning SoA lanes, filled from Leafs or from a test's own shape struct
 //   ManifoldLanes owning, poisoned output lanes; result(k), lane_bits(k), untouched(k)
 //   run_bucket    a kernel over lanes [begin, end) of two Leaf lists, padded past n
+//   run_queries   the same over a test's own pair structs, read back as PairResults
+//   *_leaf        Leafs from double shapes (rounded to float as the host stores them)
 #pragma once
 
 #include <algorithm>
 #include <bit>
 #include <cmath>
 #include <cstdint>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Core>
@@ -30,6 +33,46 @@ struct Leaf {
   float w[6] = {0, 0, 0, 0, 0, 0};  ///< triangle: v1 then v2
   uint32_t ref = 0;                 ///< convex: hull index
 };
+
+/// A posed leaf (box, ellipsoid, capsule or cylinder: e = radius, half length, 0; a hull:
+/// ref) at p with rotation R (columns: its axes).
+inline Leaf posed_leaf(kernels::LeafType t, const Eigen::Vector3d& p, const Eigen::Matrix3d& R,
+                       const Eigen::Vector3d& e, uint32_t ref = 0) {
+  Leaf l;
+  l.t = t;
+  for (int i = 0; i < 3; ++i) l.p[i] = static_cast<float>(p[i]), l.e[i] = static_cast<float>(e[i]);
+  for (int i = 0; i < 9; ++i) l.r[i] = static_cast<float>(R(i / 3, i % 3));
+  l.ref = ref;
+  return l;
+}
+
+/// A sphere of radius r at c.
+inline Leaf sphere_leaf(const Eigen::Vector3d& c, double r) {
+  return posed_leaf(kernels::kLeafSphere, c, Eigen::Matrix3d::Identity(), Eigen::Vector3d(r, 0, 0));
+}
+
+/// A capsule (or cylinder) along the axis u, stored as R's column 2 exactly as given (the
+/// float-rounded axis the references use); the other columns complete a frame.
+inline Leaf axial_leaf(kernels::LeafType t, const Eigen::Vector3d& p, const Eigen::Vector3d& u, double r, double h) {
+  const Eigen::Vector3d w = u.normalized();
+  const Eigen::Vector3d a = std::fabs(w.x()) < 0.6 ? Eigen::Vector3d(1, 0, 0) : Eigen::Vector3d(0, 1, 0);
+  const Eigen::Vector3d x = a.cross(w).normalized();
+  Eigen::Matrix3d R;
+  R.col(0) = x, R.col(1) = w.cross(x), R.col(2) = u;
+  return posed_leaf(t, p, R, Eigen::Vector3d(r, h, 0));
+}
+
+/// A triangle v0, v1, v2.
+inline Leaf triangle_leaf(const Eigen::Vector3d& v0, const Eigen::Vector3d& v1, const Eigen::Vector3d& v2) {
+  Leaf l;
+  l.t = kernels::kLeafTriangle;
+  for (int i = 0; i < 3; ++i) {
+    l.p[i] = static_cast<float>(v0[i]);
+    l.w[i] = static_cast<float>(v1[i]);
+    l.w[3 + i] = static_cast<float>(v2[i]);
+  }
+  return l;
+}
 
 /// Lanes filled from a test shape with fields p, R (3x3, row-major into LeafSoA::r),
 /// e and hull, and the triangle corners v1, v2 (LeafSoA::w) when its type has them.
@@ -206,6 +249,31 @@ inline ManifoldLanes run_bucket(kernels::PairKernel kern, const std::vector<Leaf
   const LeafLanes la(a, cap), lb(b, cap);
   ManifoldLanes out(cap);
   kern(la.soa(), lb.soa(), out.view(), kernels::Range{begin, std::min(end, n)}, cfg);
+  return out;
+}
+
+/// kern (path, hulls) over lanes [begin, end) of a test's own pair structs, each made
+/// into its two Leafs by leaves(q) (a std::pair); lane k read back as a PairResult (lanes
+/// outside the range left empty); `keep`, if given, receives the output lanes.
+template <class Q, class Leaves>
+std::vector<PairResult> run_queries(kernels::PairKernel kern, const std::vector<Q>& qs, kernels::KernelPath path,
+                                    Leaves leaves, uint32_t begin = 0, uint32_t end = ~0u,
+                                    ManifoldLanes* keep = nullptr, const kernels::HullView* hulls = nullptr) {
+  std::vector<Leaf> a, b;
+  for (const Q& q : qs) {
+    const auto [la, lb] = leaves(q);
+    a.push_back(la);
+    b.push_back(lb);
+  }
+  kernels::NarrowConfig cfg;
+  cfg.path = path;
+  if (hulls != nullptr) cfg.hulls = *hulls;
+  const uint32_t n = static_cast<uint32_t>(qs.size());
+  end = std::min(end, n);
+  ManifoldLanes o = run_bucket(kern, a, b, cfg, begin, end);
+  std::vector<PairResult> out(n);
+  for (uint32_t k = begin; k < end; ++k) out[k] = o.result(k);
+  if (keep != nullptr) *keep = std::move(o);
   return out;
 }
 
