@@ -4,6 +4,8 @@
 //   Built<Q>       a test's pair struct with its built depth and normal
 //   expect_built   a kernel's answers against the built ones (hit, depth, normal)
 //   kernel_scales  (size, offset from the origin): 1, 1e-4, 1e4, and 1 at 1e5
+//   check_lanes    every lane of a bucket on both paths against the test's reference
+//                  (PairModel: its reference, surfaces, support overlap and distance)
 #pragma once
 
 #include <gtest/gtest.h>
@@ -11,6 +13,9 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <functional>
+#include <limits>
+#include <string>
 #include <tuple>
 #include <vector>
 
@@ -75,6 +80,163 @@ int expect_built(const std::vector<Built<Q>>& ts, const std::vector<PairResult>&
 inline std::vector<std::tuple<double, double>> kernel_scales() {
   return {std::make_tuple(1.0, 0.0), std::make_tuple(1e-4, 0.0), std::make_tuple(1e4, 0.0),
           std::make_tuple(1.0, 1e5)};
+}
+
+/// A lane's reference, the test's own: depth (> 0 overlapping, else minus the distance),
+/// the normal from A to B, whether it is the unique minimum (normals are held to it
+/// there, within angle_tol), and a test-defined class of the lane (counted, printed).
+struct LaneRef {
+  double depth = 0;
+  Eigen::Vector3d n = Eigen::Vector3d::UnitZ();
+  bool unique = false;
+  double angle_tol = 0;
+  bool flag = false;
+};
+
+/// What check_lanes saw: lanes, contacts (SIMD path), lanes by point count, flagged
+/// contacts, normals held to the reference, references refined, the worst errors.
+struct LaneStats {
+  int lanes = 0, hits = 0, flagged = 0, normals_checked = 0, improved = 0;
+  int counts[5] = {0, 0, 0, 0, 0};
+  double worst_depth = 0, worst_angle = 0;  // of L; rad
+  size_t worst_depth_lane = 0, worst_angle_lane = 0;
+};
+
+/// How a contact's points must carry the depth: a single point exactly, the deepest
+/// within tol of it, or no rule (a degenerate triangle's point may lie shallower).
+enum class Carries { kSinglePointExact, kDeepestWithinTol, kNoRule };
+
+/// What a per-kernel test knows of its pairs Q (rounded to float already), for
+/// check_lanes. The functions taking a point or a shift are in the world frame.
+template <class Q>
+struct PairModel {
+  double rel = 1e-5;          ///< depth tolerance, of L
+  uint32_t max_points = 4;    ///< the kernel's most contact points
+  const char* flag_name = nullptr;  ///< printed name of LaneRef::flag ("core inside")
+  Carries carries = Carries::kSinglePointExact;
+  std::function<LaneRef(const Q&)> reference;
+  std::function<double(const Q&)> size;       ///< L: the larger bounding radius
+  std::function<double(const Q&)> coord_ulp;  ///< one ulp of the largest coordinate
+  /// The support overlap h_A(n) + h_B(-n) along n (any length).
+  std::function<double(const Q&, const Eigen::Vector3d&)> overlap;
+  /// Signed distances to A's and B's surfaces (< 0 inside).
+  std::function<double(const Q&, const Eigen::Vector3d&)> sd_a, sd_b;
+  /// > 0: the distance between A and B moved by shift; <= 0: they meet (the translation check).
+  std::function<double(const Q&, const Eigen::Vector3d&)> apart;
+  /// Optional: a check of a contact's points replacing the default (points_on_surfaces).
+  std::function<void(const Q&, const PairResult&, double tol, double ptol, const std::string& where)> points;
+  /// Optional: refines the reference from a kernel answer (a basin its sampling missed).
+  std::function<void(const Q&, LaneRef&, const PairResult&, LaneStats&)> improve;
+  /// Optional: the lane as C++ literals, for failure messages.
+  std::function<std::string(const Q&)> literal;
+  bool apart_at_most_d = false;  ///< the translation check also bounds the distance above
+};
+
+/// The default point check: each point finite, 0 < pdepth <= depth (+ tol for
+/// kDeepestWithinTol), point +- n pdepth/2 on A's / B's surface within ptol; the depth
+/// carried as `carries` says.
+template <class Q>
+void points_on_surfaces(const PairModel<Q>& m, const Q& q, const PairResult& h, double tol, double ptol,
+                        const std::string& where) {
+  const double slack = m.carries == Carries::kDeepestWithinTol ? tol : 0.0;
+  double deepest = -std::numeric_limits<double>::infinity();
+  for (uint32_t i = 0; i < h.count; ++i) {
+    ASSERT_TRUE(h.pt[i].allFinite()) << where;
+    EXPECT_GT(h.pd[i], 0.0) << where << " point " << i;
+    EXPECT_LE(h.pd[i], h.depth + slack) << where << " point " << i;
+    deepest = std::max(deepest, h.pd[i]);
+    const Eigen::Vector3d on_a = h.pt[i] + 0.5 * h.pd[i] * h.n, on_b = h.pt[i] - 0.5 * h.pd[i] * h.n;
+    EXPECT_LE(std::fabs(m.sd_a(q, on_a)), ptol) << where << " point " << i << " off A";
+    EXPECT_LE(std::fabs(m.sd_b(q, on_b)), ptol) << where << " point " << i << " off B";
+  }
+  if (m.carries == Carries::kDeepestWithinTol) {
+    EXPECT_GE(deepest, h.depth - tol) << where << ": no point carries the depth";
+  } else if (m.carries == Carries::kSinglePointExact && h.count == 1) {
+    EXPECT_EQ(h.pd[0], h.depth) << where;
+  }
+}
+
+/// Every lane of qs on both paths (simd, scal: the kernel's answers), L = m.size(q),
+/// tol = m.rel L, ptol = tol + 4 ulps of the coordinates:
+///  (a) count <= m.max_points; away from touching (|depth_ref| > tol) a contact iff
+///      depth_ref > 0;
+///  (b) |depth - depth_ref| <= tol;
+///  (c) n finite and unit, as good a direction as the reference's (overlap along n <=
+///      depth_ref + tol), within angle_tol of n_ref where the reference is unique;
+///  (d) the points (m.points, or points_on_surfaces);
+///  (e) the two paths give the same bytes;
+///  and the translation check, by m.apart alone: B moved by n (depth + d), d = depth / 20,
+///  is apart by at least d - 2 tol (and at most d + 2 tol with m.apart_at_most_d), moved
+///  by n (depth - d) still meets A (contacts deeper than 20 tol).
+/// Prints one line of statistics under `what`.
+template <class Q>
+LaneStats check_lanes(const PairModel<Q>& m, const std::vector<Q>& qs, const std::vector<PairResult>& simd,
+                      const std::vector<PairResult>& scal, const char* what) {
+  SCOPED_TRACE(what);
+  LaneStats st;
+  for (size_t k = 0; k < qs.size(); ++k) {
+    const Q& q = qs[k];
+    const std::string lane = std::string(what) + " lane " + std::to_string(k);
+    SCOPED_TRACE(m.literal ? "lane " + std::to_string(k) + " as C++: " + m.literal(q) : std::string());
+    LaneRef f = m.reference(q);
+    const double L = m.size(q), tol = m.rel * L, ptol = tol + 4 * m.coord_ulp(q);
+    ++st.lanes;
+    if (m.improve)
+      for (const PairResult* h : {&simd[k], &scal[k]}) m.improve(q, f, *h, st);
+    // (a)-(d) on one path; an ASSERT ends that path's checks of the lane
+    auto check_path = [&](const PairResult& h, bool is_simd) {
+      const std::string where = lane + (is_simd ? " simd" : " scalar");
+      ASSERT_LE(h.count, m.max_points) << where;
+      if (std::fabs(f.depth) <= tol) return;
+      ASSERT_EQ(h.count > 0, f.depth > 0) << where << " depth_ref " << f.depth << " got "
+                                          << (h.count > 0 ? h.depth : 0.0);
+      if (f.depth <= 0) return;
+      if (is_simd) {
+        ++st.hits;
+        st.flagged += f.flag;
+        ++st.counts[h.count];
+      }
+      const double dd = std::fabs(h.depth - f.depth);
+      if (dd / L > st.worst_depth) st.worst_depth = dd / L, st.worst_depth_lane = k;
+      EXPECT_LE(dd, tol) << where << " depth " << h.depth << " ref " << f.depth << " (" << (h.depth - f.depth) / L
+                         << " L)";
+      ASSERT_TRUE(h.n.allFinite()) << where;
+      EXPECT_NEAR(h.n.norm(), 1.0, 1e-6) << where;
+      EXPECT_LE(m.overlap(q, h.n), f.depth + tol) << where << ": n is not a minimum direction";
+      if (f.unique) {
+        const double ang = angle(h.n, f.n);
+        if (is_simd) ++st.normals_checked;
+        if (ang > st.worst_angle) st.worst_angle = ang, st.worst_angle_lane = k;
+        EXPECT_LE(ang, f.angle_tol) << where << " n " << h.n.transpose() << " ref " << f.n.transpose();
+      }
+      if (m.points)
+        m.points(q, h, tol, ptol, where);
+      else
+        points_on_surfaces(m, q, h, tol, ptol, where);
+    };
+    check_path(simd[k], true);
+    check_path(scal[k], false);
+    EXPECT_TRUE(same_bytes(simd[k], scal[k])) << lane << ": the SIMD and scalar paths differ";
+    const PairResult& h = simd[k];
+    if (h.count > 0 && h.count <= m.max_points && h.depth > 20 * tol && h.n.allFinite()) {
+      const double d = 0.05 * h.depth;
+      const Eigen::Vector3d n = h.n.normalized();
+      const double apart = m.apart(q, (h.depth + d) * n);
+      EXPECT_GE(apart, d - 2 * tol) << lane << ": moved by n (depth + d) not apart by d";
+      if (m.apart_at_most_d) {
+        EXPECT_LE(apart, d + 2 * tol) << lane << ": moved by n (depth + d) apart by more than d";
+      }
+      EXPECT_LT(m.apart(q, (h.depth - d) * n), 0.0) << lane << ": moved by n (depth - d) already apart";
+    }
+  }
+  std::printf("  %-28s lanes %4d hits %4d", what, st.lanes, st.hits);
+  if (m.flag_name != nullptr) std::printf(" %s %4d", m.flag_name, st.flagged);
+  std::printf(" points 1/2/3/4 %d/%d/%d/%d normals %4d", st.counts[1], st.counts[2], st.counts[3], st.counts[4],
+              st.normals_checked);
+  if (m.improve) std::printf(" ref improved %d", st.improved);
+  std::printf(" | worst |depth-ref| %.2g L (lane %zu), angle %.2g rad (lane %zu)\n", st.worst_depth,
+              st.worst_depth_lane, st.worst_angle, st.worst_angle_lane);
+  return st;
 }
 
 }  // namespace impact::test

@@ -70,7 +70,9 @@
 #include <vector>
 
 #include "kernels/narrowphase/pair_kernels.h"
+#include "support/kernel_checks.h"
 #include "support/leaf_lanes.h"
+#include "support/shape_geometry.h"
 #include "support/narrow_reference.h"
 #include "support/random_input.h"
 #include "support/test_support.h"
@@ -81,16 +83,20 @@ namespace {
 using Vec3d = Eigen::Vector3d;
 using Mat3d = Eigen::Matrix3d;
 namespace nref = test::nref;
+using test::angle;
+using test::columns;
+using test::rot;
+using test::turn_to;
+using test::radial;
+using test::tangential;
+using test::v3;
+using test::ev;
 
 constexpr double kRel = 1e-5;       // depth tolerance, of L
 constexpr double kAngleTol = 1e-4;  // rad, where the minimum is unique and conditioned
 constexpr double kValleyNoise = 4e-7;  // of L: twice the worst depth error measured
 /// Golden-section steps per coordinate of the gap: brackets of 0.618^48 ~ 1e-10 of a face.
 constexpr int kGoldenIters = 48;
-
-double angle(const Vec3d& a, const Vec3d& b) {
-  return std::atan2(a.cross(b).norm(), a.dot(b));
-}
 
 struct Query {
   Vec3d c;       // box centre
@@ -124,70 +130,24 @@ double coord_ulp(const Query& q) {
 
 // --- running the kernel -----------------------------------------------------------------------
 
-struct Lanes {
-  std::vector<float> ap[3], ar[9], ae[3], bp[3], br[9], be[3];
-  LeafSoA a{}, b{};
-  explicit Lanes(const std::vector<Query>& qs) {
-    for (const Query& q : qs) {
-      for (int i = 0; i < 3; ++i) {
-        ap[i].push_back(float(q.c[i]));
-        ae[i].push_back(float(q.e[i]));
-        bp[i].push_back(float(q.p[i]));
-      }
-      for (int i = 0; i < 9; ++i) {
-        ar[i].push_back(float(q.Q(i / 3, i % 3)));
-        br[i].push_back(float(q.R(i / 3, i % 3)));
-      }
-      be[0].push_back(float(q.rc)), be[1].push_back(float(q.h)), be[2].push_back(0.0f);
-    }
-    for (int i = 0; i < 3; ++i)
-      a.p[i] = ap[i].data(), a.e[i] = ae[i].data(), b.p[i] = bp[i].data(), b.e[i] = be[i].data();
-    for (int i = 0; i < 9; ++i) a.r[i] = ar[i].data(), b.r[i] = br[i].data();
-  }
-};
-
 /// Runs `kern` (the kernel under test unless given) on lanes [begin, end) of one bucket.
 std::vector<test::PairResult> run(const std::vector<Query>& qs, KernelPath path, PairKernel kern = nullptr,
-                                  uint32_t begin = 0, uint32_t end = ~0u,
-                                  test::ManifoldLanes* keep = nullptr) {
-  if (kern == nullptr) kern = &collide_box_cylinder;
-  const uint32_t n = static_cast<uint32_t>(qs.size());
-  end = std::min(end, n);
-  Lanes l(qs);
-  test::ManifoldLanes o(n);
-  NarrowConfig cfg;
-  cfg.path = path;
-  kern(l.a, l.b, o.view(), Range{begin, end}, cfg);
-  std::vector<test::PairResult> out(n);
-  for (uint32_t k = begin; k < end; ++k) out[k] = o.result(k);
-  if (keep != nullptr) *keep = o;
-  return out;
+                                  uint32_t begin = 0, uint32_t end = ~0u) {
+  return test::run_queries(kern != nullptr ? kern : &collide_box_cylinder, qs, path, [](const Query& q) {
+    return std::pair{test::posed_leaf(kLeafBox, q.c, q.Q, q.e), test::posed_leaf(kLeafCylinder, q.p, q.R, Vec3d(q.rc, q.h, 0))};
+  }, begin, end);
 }
 
 // --- references -------------------------------------------------------------------------------
 
-/// Signed distance of x to the solid box of q (< 0 inside).
-double box_sd(const Query& q, const Vec3d& x) {
-  const Vec3d l = (q.Q.transpose() * (x - q.c)).cwiseAbs() - q.e;
-  const double inside = l.maxCoeff();
-  return inside > 0 ? l.cwiseMax(0.0).norm() : inside;
-}
+double box_sd(const Query& q, const Vec3d& x) { return test::box_sd(q.c, q.Q, q.e, x); }
 
 /// Signed distance of x to the solid cylinder of q moved by `shift` (< 0 inside).
 double cyl_sd(const Query& q, const Vec3d& x, const Vec3d& shift = Vec3d::Zero()) {
-  const Vec3d l = q.R.transpose() * (x - q.p - shift);
-  const double dr = std::hypot(l.x(), l.y()) - q.rc, dz = std::fabs(l.z()) - q.h;
-  if (dr <= 0 && dz <= 0) return std::max(dr, dz);
-  return std::hypot(std::max(dr, 0.0), std::max(dz, 0.0));
+  return test::cylinder_sd(q.p + shift, q.R, q.rc, q.h, x);
 }
 
-/// The closest point of the solid cylinder to an outside point x.
-Vec3d cyl_closest(const Query& q, const Vec3d& x) {
-  const Vec3d l = q.R.transpose() * (x - q.p);
-  const double rho = std::hypot(l.x(), l.y());
-  const double s = rho > q.rc ? q.rc / rho : 1.0;
-  return q.p + q.R * Vec3d(l.x() * s, l.y() * s, std::clamp(l.z(), -q.h, q.h));
-}
+Vec3d cyl_closest(const Query& q, const Vec3d& x) { return test::cylinder_closest(q.p, q.R, q.rc, q.h, x); }
 
 /// The least signed distance to the cylinder (moved by `shift`) over the box's surface:
 /// per face, nested golden-section search over its two coordinates; where = the point.
@@ -230,40 +190,12 @@ double gap(const Query& q, const Vec3d& shift = Vec3d::Zero(), Vec3d* where = nu
   return m;
 }
 
-nref::V3 v3(const Vec3d& v) {
-  return {v.x(), v.y(), v.z()};
-}
-Vec3d ev(const nref::V3& v) {
-  return {v.x, v.y, v.z};
-}
-nref::Shape box_shape(const Query& q) {
-  nref::Shape s;
-  s.type = kLeafBox;
-  s.p = v3(q.c);
-  for (int i = 0; i < 9; ++i) s.r[i] = q.Q(i / 3, i % 3);
-  for (int i = 0; i < 3; ++i) s.e[i] = q.e[i];
-  return s;
-}
-nref::Shape cylinder_shape(const Query& q) {
-  nref::Shape s;
-  s.type = kLeafCylinder;
-  s.p = v3(q.p);
-  for (int i = 0; i < 9; ++i) s.r[i] = q.R(i / 3, i % 3);
-  s.e[0] = q.rc;
-  s.e[1] = q.h;
-  return s;
-}
+nref::Shape box_shape(const Query& q) { return test::posed_shape(kLeafBox, q.c, q.Q, q.e); }
+nref::Shape cylinder_shape(const Query& q) { return test::posed_shape(kLeafCylinder, q.p, q.R, Vec3d(q.rc, q.h, 0)); }
 
 /// The support overlap of A and B along n.
 double overlap_along(const Query& q, const Vec3d& n) {
   return nref::overlap(box_shape(q), cylinder_shape(q), v3(n.normalized()));
-}
-
-nref::Options dense_options() {
-  nref::Options o;
-  o.samples = 6000;
-  o.starts = 8;
-  return o;
 }
 
 /// Whether n_ref is the only minimiser within 0.02 rad: every direction outside that
@@ -322,7 +254,7 @@ Ref reference(const Query& q) {
     f.unique = m > 1e-3 * size_of(q);
     return f;
   }
-  const nref::PairResult s = nref::solve_pair(box_shape(q), cylinder_shape(q), {}, dense_options());
+  const nref::PairResult s = nref::solve_pair(box_shape(q), cylinder_shape(q), {}, nref::dense_options());
   f.depth = s.s;
   f.n = ev(s.n);
   double rise = 0;
@@ -333,112 +265,36 @@ Ref reference(const Query& q) {
 
 // --- the per-lane check -----------------------------------------------------------------------
 
-struct Stats {
-  int lanes = 0, hits = 0, multi = 0, normals_checked = 0;
-  int counts[5] = {0, 0, 0, 0, 0};
-  double worst_depth = 0, worst_angle = 0;
-};
+using Stats = test::LaneStats;
 
-/// Checks a lane's points: on both surfaces, 0 < pdepth <= depth, one point carries it.
-void check_points(const Query& q, const test::PairResult& h, double ptol, const char* what, size_t k,
-                  const char* path) {
-  for (uint32_t i = 0; i < h.count; ++i) {
-    ASSERT_TRUE(h.pt[i].allFinite()) << what << " lane " << k;
-    EXPECT_GT(h.pd[i], 0.0) << what << " lane " << k << " point " << i << path;
-    EXPECT_LE(h.pd[i], h.depth) << what << " lane " << k << " point " << i << path;
-    const Vec3d on_a = h.pt[i] + 0.5 * h.pd[i] * h.n, on_b = h.pt[i] - 0.5 * h.pd[i] * h.n;
-    EXPECT_LE(std::fabs(box_sd(q, on_a)), ptol) << what << " lane " << k << " point " << i << path;
-    EXPECT_LE(std::fabs(cyl_sd(q, on_b)), ptol) << what << " lane " << k << " point " << i << path;
-  }
-  if (h.count == 1) {
-    EXPECT_EQ(h.pd[0], h.depth) << what << " lane " << k << path;
-  }
+/// The pair for test::check_lanes: the references above, the gap for the translation check.
+const test::PairModel<Query>& model() {
+  static const test::PairModel<Query> instance = [] {
+    test::PairModel<Query> m;
+    m.rel = kRel;
+    m.reference = [](const Query& q) {
+      const Ref f = reference(q);
+      return test::LaneRef{f.depth, f.n, f.unique, f.angle_tol, false};
+    };
+    m.size = size_of;
+    m.coord_ulp = coord_ulp;
+    m.overlap = overlap_along;
+    m.sd_a = box_sd;
+    m.sd_b = [](const Query& q, const Vec3d& x) { return cyl_sd(q, x); };
+    m.apart = [](const Query& q, const Vec3d& shift) { return gap(q, shift); };
+    return m;
+  }();
+  return instance;
 }
 
-/// Checks (a)-(e) and the translation check for every lane of qs (already rounded).
+/// Checks (a)-(e) and the translation check (test::check_lanes) for every lane of qs
+/// (already rounded).
 void check_all(const std::vector<Query>& qs, const char* what, Stats* out_stats = nullptr) {
-  SCOPED_TRACE(what);
-  const auto simd = run(qs, KernelPath::kSimd), scal = run(qs, KernelPath::kScalar);
-  Stats st;
-  for (size_t k = 0; k < qs.size(); ++k) {
-    const Query& q = qs[k];
-    const Ref f = reference(q);
-    const double L = size_of(q), tol = kRel * L, ptol = tol + 4 * coord_ulp(q);
-    ++st.lanes;
-    for (const test::PairResult* hp : {&simd[k], &scal[k]}) {
-      const test::PairResult& h = *hp;
-      const bool is_simd = hp == &simd[k];
-      const char* path = is_simd ? " simd" : " scalar";
-      ASSERT_LE(h.count, 4u) << what << " lane " << k;
-      if (std::fabs(f.depth) <= tol) continue;
-      ASSERT_EQ(h.count > 0, f.depth > 0) << what << " lane " << k << " depth_ref " << f.depth << " got "
-                                          << (h.count > 0 ? h.depth : 0.0) << path;
-      if (f.depth <= 0) continue;
-      if (is_simd) {
-        ++st.hits;
-        st.multi += h.count > 1;
-        ++st.counts[h.count];
-      }
-      const double dd = std::fabs(h.depth - f.depth);
-      st.worst_depth = std::max(st.worst_depth, dd / L);
-      EXPECT_LE(dd, tol) << what << " lane " << k << " depth " << h.depth << " ref " << f.depth << path;
-      ASSERT_TRUE(h.n.allFinite()) << what << " lane " << k;
-      EXPECT_NEAR(h.n.norm(), 1.0, 1e-6) << what << " lane " << k;
-      // (c) as good a separating direction as the reference's, and the same where unique
-      EXPECT_LE(overlap_along(q, h.n), f.depth + tol) << what << " lane " << k << path;
-      if (f.unique) {
-        const double ang = angle(h.n, f.n);
-        if (is_simd) ++st.normals_checked, st.worst_angle = std::max(st.worst_angle, ang);
-        EXPECT_LE(ang, f.angle_tol) << what << " lane " << k << " n " << h.n.transpose() << " ref "
-                                    << f.n.transpose() << path;
-      }
-      check_points(q, h, ptol, what, k, path);
-    }
-    // (e) the paths give the same bytes (the same IEEE operations, no contraction)
-    EXPECT_TRUE(test::same_bytes(simd[k], scal[k])) << what << " lane " << k << ": the SIMD and scalar paths differ";
-    // the translation check, by the gap alone
-    const test::PairResult& h = simd[k];
-    if (h.count > 0 && h.depth > 20 * tol) {
-      const double d = 0.05 * h.depth;
-      const double apart = gap(q, (h.depth + d) * h.n);
-      EXPECT_GE(apart, d - 2 * tol) << what << " lane " << k << ": moved by n (depth + d) not apart by d";
-      const double meets = gap(q, (h.depth - d) * h.n);
-      EXPECT_LT(meets, 0.0) << what << " lane " << k << ": moved by n (depth - d) already apart";
-    }
-  }
+  const Stats st = test::check_lanes(model(), qs, run(qs, KernelPath::kSimd), run(qs, KernelPath::kScalar), what);
   if (out_stats != nullptr) *out_stats = st;
-  std::printf(
-      "  %-28s lanes %4d hits %4d points 1/2/3/4 %d/%d/%d/%d normals %4d | worst |depth-ref| %.2g L, "
-      "angle %.2g rad\n",
-      what, st.lanes, st.hits, st.counts[1], st.counts[2], st.counts[3], st.counts[4],
-      st.normals_checked, st.worst_depth, st.worst_angle);
 }
 
 // --- inputs -----------------------------------------------------------------------------------
-
-Vec3d random_unit(std::mt19937& g) {
-  std::normal_distribution<double> d;
-  for (;;) {
-    const Vec3d v(d(g), d(g), d(g));
-    if (v.norm() > 1e-3) return v.normalized();
-  }
-}
-
-Mat3d columns(const Vec3d& a, const Vec3d& b, const Vec3d& c) {
-  Mat3d m;
-  m.col(0) = a, m.col(1) = b, m.col(2) = c;
-  return m;
-}
-
-Mat3d rot(double a, const Vec3d& axis) {
-  return Eigen::AngleAxisd(a, axis.normalized()).toRotationMatrix();
-}
-
-/// The rotation about from x to (not opposite) that turns `from` onto `to`.
-Mat3d turn_to(const Vec3d& from, const Vec3d& to) {
-  const Vec3d a = from.normalized(), b = to.normalized();
-  return rot(angle(a, b), a.cross(b));
-}
 
 /// A random pair at size `size`, `offset` from the origin, the box centre within
 /// `spread` (of the pair's reach) of the cylinder's.
@@ -452,7 +308,7 @@ Query random_query(std::mt19937& g, double size, double offset, double spread) {
   q.Q = test::random_rotation(g);
   q.e = size * Vec3d(0.1 + 0.9 * uni(g), 0.1 + 0.9 * uni(g), 0.1 + 0.9 * uni(g));
   const double reach = q.e.norm() + std::hypot(q.rc, q.h);
-  q.c = q.p + spread * reach * uni(g) * random_unit(g);
+  q.c = q.p + spread * reach * uni(g) * test::random_unit_vector(g);
   return rounded(q);
 }
 
@@ -507,13 +363,6 @@ void vertex_box(std::mt19937& g, const Vec3d& v, const Vec3d& n, const Vec3d& ha
   } while (l.cwiseAbs().minCoeff() < 0.25);
   const Vec3d s(l.x() > 0 ? 1 : -1, l.y() > 0 ? 1 : -1, l.z() > 0 ? 1 : -1);
   *c = v - *Qb * s.cwiseProduct(half);
-}
-
-Vec3d radial(double a) {
-  return {std::cos(a), std::sin(a), 0.0};
-}
-Vec3d tangential(double a) {
-  return {-std::sin(a), std::cos(a), 0.0};
 }
 
 /// Whether x lies (across the cylinder's axis) at a corner of the box's face across that
@@ -616,7 +465,7 @@ TEST(BoxCylinder, ReferenceMatchesClosedForms) {
     Vec3d x;
     const double d = gap(w, Vec3d::Zero(), &x);
     if (d <= 1e-3) continue;
-    const nref::PairResult s = nref::solve_pair(box_shape(w), cylinder_shape(w), {}, dense_options());
+    const nref::PairResult s = nref::solve_pair(box_shape(w), cylinder_shape(w), {}, nref::dense_options());
     // (the float-rounded rotations are orthonormal to ~1e-8: the point distances read
     // all of R and Q, nref's cylinder only the axis)
     EXPECT_NEAR(s.s, -d, 1e-7) << i;
@@ -1165,7 +1014,7 @@ TEST(BoxCylinder, NeedlesAndPancakes) {
         break;  // pancake cylinder (a disk)
     }
     const double reach = q.e.norm() + std::hypot(q.rc, q.h);
-    q.c = q.p + 0.3 * reach * random_unit(g);
+    q.c = q.p + 0.3 * reach * test::random_unit_vector(g);
     qs.push_back(rounded(q));
   }
   Stats st;
@@ -1184,7 +1033,7 @@ TEST(BoxCylinder, Symmetries) {
     const Query q = random_query(g, 1.0, 0.0, 0.7);
     base.push_back(q);
     const Mat3d turn = test::random_rotation(g);
-    const Vec3d move = random_unit(g);
+    const Vec3d move = test::random_unit_vector(g);
     Query t = q;
     t.c = test::round_to_float(Vec3d(turn * q.c + move));
     t.p = test::round_to_float(Vec3d(turn * q.p + move));

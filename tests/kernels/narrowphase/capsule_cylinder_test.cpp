@@ -49,7 +49,9 @@
 #include <vector>
 
 #include "kernels/narrowphase/pair_kernels.h"
+#include "support/kernel_checks.h"
 #include "support/leaf_lanes.h"
+#include "support/shape_geometry.h"
 #include "support/narrow_reference.h"
 #include "support/random_input.h"
 #include "support/test_support.h"
@@ -59,13 +61,13 @@ namespace {
 
 using Vec3d = Eigen::Vector3d;
 using Mat3d = Eigen::Matrix3d;
+namespace nref = test::nref;
+using test::angle;
+using test::v3;
+using test::ev;
 
 constexpr double kRel = 1e-5;       // depth tolerance, of L
 constexpr double kAngleTol = 1e-4;  // rad, where the normal is unique
-
-double angle(const Vec3d& a, const Vec3d& b) {
-  return std::atan2(a.cross(b).norm(), a.dot(b));
-}
 
 struct Query {
   Vec3d c, u;    // capsule centre and axis
@@ -99,63 +101,26 @@ double coord_ulp(const Query& q) {
 
 // --- running the kernel -----------------------------------------------------------------------
 
-struct Lanes {
-  std::vector<float> ap[3], ar[9], ae[3], bp[3], br[9], be[3];
-  LeafSoA a{}, b{};
-  explicit Lanes(const std::vector<Query>& qs) {
-    for (const Query& q : qs) {
-      for (int i = 0; i < 3; ++i) {
-        ap[i].push_back(float(q.c[i]));
-        bp[i].push_back(float(q.p[i]));
-      }
-      for (int i = 0; i < 9; ++i) {
-        // the capsule's R: only column 2 (the axis) is read
-        ar[i].push_back(i % 3 == 2 ? float(q.u[i / 3]) : 0.0f);
-        br[i].push_back(float(q.R(i / 3, i % 3)));
-      }
-      ae[0].push_back(float(q.r)), ae[1].push_back(float(q.hs)), ae[2].push_back(0.0f);
-      be[0].push_back(float(q.rc)), be[1].push_back(float(q.h)), be[2].push_back(0.0f);
-    }
-    for (int i = 0; i < 3; ++i)
-      a.p[i] = ap[i].data(), a.e[i] = ae[i].data(), b.p[i] = bp[i].data(), b.e[i] = be[i].data();
-    for (int i = 0; i < 9; ++i) a.r[i] = ar[i].data(), b.r[i] = br[i].data();
-  }
-};
-
+/// Runs `kern` (the kernel under test unless given) on lanes [begin, end) of one bucket
+/// (the capsule's R: column 2, the axis, as rounded).
 std::vector<test::PairResult> run(const std::vector<Query>& qs, KernelPath path, PairKernel kern = nullptr,
-                                  uint32_t begin = 0, uint32_t end = ~0u,
-                                  test::ManifoldLanes* keep = nullptr) {
-  if (kern == nullptr) kern = pair_kernel(kLeafCapsule, kLeafCylinder);
-  const uint32_t n = static_cast<uint32_t>(qs.size());
-  end = std::min(end, n);
-  Lanes l(qs);
-  test::ManifoldLanes o(n);
-  NarrowConfig cfg;
-  cfg.path = path;
-  kern(l.a, l.b, o.view(), Range{begin, end}, cfg);
-  std::vector<test::PairResult> out(n);
-  for (uint32_t k = begin; k < end; ++k) out[k] = o.result(k);
-  if (keep != nullptr) *keep = o;
-  return out;
+                                  uint32_t begin = 0, uint32_t end = ~0u) {
+  return test::run_queries(kern != nullptr ? kern : pair_kernel(kLeafCapsule, kLeafCylinder), qs, path,
+                           [](const Query& q) {
+                             return std::pair{test::axial_leaf(kLeafCapsule, q.c, q.u, q.r, q.hs),
+                                              test::posed_leaf(kLeafCylinder, q.p, q.R, Vec3d(q.rc, q.h, 0))};
+                           },
+                           begin, end);
 }
 
 // --- references -------------------------------------------------------------------------------
 
 /// Signed distance of x to the solid cylinder of q (< 0 inside), shifted by `shift`.
 double cyl_sd(const Query& q, const Vec3d& x, const Vec3d& shift = Vec3d::Zero()) {
-  const Vec3d l = q.R.transpose() * (x - q.p - shift);
-  const double dr = std::hypot(l.x(), l.y()) - q.rc, dz = std::fabs(l.z()) - q.h;
-  if (dr <= 0 && dz <= 0) return std::max(dr, dz);
-  return std::hypot(std::max(dr, 0.0), std::max(dz, 0.0));
+  return test::cylinder_sd(q.p + shift, q.R, q.rc, q.h, x);
 }
 
-/// The closest point of the solid cylinder to an outside point x.
-Vec3d cyl_closest(const Query& q, const Vec3d& x) {
-  const Vec3d l = q.R.transpose() * (x - q.p);
-  const double rho = std::hypot(l.x(), l.y());
-  const double s = rho > q.rc ? q.rc / rho : 1.0;
-  return q.p + q.R * Vec3d(l.x() * s, l.y() * s, std::clamp(l.z(), -q.h, q.h));
-}
+Vec3d cyl_closest(const Query& q, const Vec3d& x) { return test::cylinder_closest(q.p, q.R, q.rc, q.h, x); }
 
 /// Signed distance of x to the capsule (< 0 inside).
 double cap_sd(const Query& q, const Vec3d& x) {
@@ -183,8 +148,8 @@ double core_min(const Query& q, const Vec3d& shift = Vec3d::Zero(), double* t_ou
   return best;
 }
 
-test::nref::Shape capsule_shape(const Query& q) {
-  test::nref::Shape s;
+nref::Shape capsule_shape(const Query& q) {
+  nref::Shape s;
   s.type = kLeafCapsule;
   s.p = {q.c.x(), q.c.y(), q.c.z()};
   for (int i = 0; i < 9; ++i) s.r[i] = i % 3 == 2 ? q.u[i / 3] : 0.0;
@@ -192,25 +157,11 @@ test::nref::Shape capsule_shape(const Query& q) {
   s.e[1] = q.hs;
   return s;
 }
-test::nref::Shape cylinder_shape(const Query& q) {
-  test::nref::Shape s;
-  s.type = kLeafCylinder;
-  s.p = {q.p.x(), q.p.y(), q.p.z()};
-  for (int i = 0; i < 9; ++i) s.r[i] = q.R(i / 3, i % 3);
-  s.e[0] = q.rc;
-  s.e[1] = q.h;
-  return s;
-}
-test::nref::V3 v3(const Vec3d& v) {
-  return {v.x(), v.y(), v.z()};
-}
-Vec3d ev(const test::nref::V3& v) {
-  return {v.x, v.y, v.z};
-}
+nref::Shape cylinder_shape(const Query& q) { return test::posed_shape(kLeafCylinder, q.p, q.R, Vec3d(q.rc, q.h, 0)); }
 
 /// The support overlap of A and B along n (the reference's o(n), plus the capsule radius).
 double overlap_along(const Query& q, const Vec3d& n) {
-  return test::nref::overlap(capsule_shape(q), cylinder_shape(q), v3(n));
+  return nref::overlap(capsule_shape(q), cylinder_shape(q), v3(n));
 }
 
 struct Ref {
@@ -260,7 +211,7 @@ Ref reference(const Query& q) {
     f.unique = m > 1e-3 * size_of(q);
     return f;
   }
-  const test::nref::PairResult s = test::nref::solve_pair(capsule_shape(q), cylinder_shape(q));
+  const nref::PairResult s = nref::solve_pair(capsule_shape(q), cylinder_shape(q));
   f.depth = s.s;
   f.n = ev(s.n);
   f.unique = s.unique(2 * tol) && unique_minimum(q, f.n, s.s, s.second, tol);
@@ -269,99 +220,39 @@ Ref reference(const Query& q) {
 
 // --- the per-lane check -----------------------------------------------------------------------
 
-struct Stats {
-  int lanes = 0, hits = 0, core_inside = 0, two_points = 0, normals_checked = 0;
-  double worst_depth = 0, worst_angle = 0;
-};
+using Stats = test::LaneStats;
 
-/// Checks (a)-(e) for every lane of qs (already rounded).
+/// The pair for test::check_lanes: the references above and the distance of the moved pair
+/// for the translation check.
+const test::PairModel<Query>& model() {
+  static const test::PairModel<Query> instance = [] {
+    test::PairModel<Query> m;
+    m.rel = kRel;
+    m.max_points = 2;
+    m.flag_name = "core-inside";
+    m.reference = [](const Query& q) {
+      const Ref f = reference(q);
+      return test::LaneRef{f.depth, f.n, f.unique, kAngleTol, !f.core_outside};
+    };
+    m.size = size_of;
+    m.coord_ulp = coord_ulp;
+    m.overlap = overlap_along;
+    m.sd_a = cap_sd;
+    m.sd_b = [](const Query& q, const Vec3d& x) { return cyl_sd(q, x); };
+    m.apart = [](const Query& q, const Vec3d& shift) { return core_min(q, shift) - q.r; };
+    return m;
+  }();
+  return instance;
+}
+
+/// Checks (a)-(e) and the translation check (test::check_lanes) for every lane of qs
+/// (already rounded).
 void check_all(const std::vector<Query>& qs, const char* what, Stats* out_stats = nullptr) {
-  SCOPED_TRACE(what);
-  const auto simd = run(qs, KernelPath::kSimd), scal = run(qs, KernelPath::kScalar);
-  Stats st;
-  for (size_t k = 0; k < qs.size(); ++k) {
-    const Query& q = qs[k];
-    const Ref f = reference(q);
-    const double L = size_of(q), tol = kRel * L, ptol = tol + 4 * coord_ulp(q);
-    ++st.lanes;
-    for (const test::PairResult* hp : {&simd[k], &scal[k]}) {
-      const test::PairResult& h = *hp;
-      const bool is_simd = hp == &simd[k];
-      const char* path = is_simd ? " simd" : " scalar";
-      ASSERT_LE(h.count, 2u) << what << " lane " << k;
-      if (std::fabs(f.depth) <= tol) continue;
-      ASSERT_EQ(h.count > 0, f.depth > 0) << what << " lane " << k << " depth_ref " << f.depth << " got "
-                                          << (h.count > 0 ? h.depth : 0.0) << path;
-      if (f.depth <= 0) continue;
-      if (is_simd) {
-        ++st.hits;
-        st.core_inside += !f.core_outside;
-        st.two_points += h.count == 2;
-      }
-      const double dd = std::fabs(h.depth - f.depth);
-      st.worst_depth = std::max(st.worst_depth, dd / L);
-      EXPECT_LE(dd, tol) << what << " lane " << k << " depth " << h.depth << " ref " << f.depth
-                         << (f.core_outside ? " (core outside)" : " (core inside)") << path;
-      ASSERT_TRUE(h.n.allFinite()) << what << " lane " << k;
-      EXPECT_NEAR(h.n.norm(), 1.0, 1e-6) << what << " lane " << k;
-      // (c) as good a separating direction as the reference's, and the same where unique
-      EXPECT_LE(overlap_along(q, h.n), f.depth + tol) << what << " lane " << k << path;
-      if (f.unique) {
-        const double ang = angle(h.n, f.n);
-        if (is_simd) ++st.normals_checked, st.worst_angle = std::max(st.worst_angle, ang);
-        EXPECT_LE(ang, kAngleTol) << what << " lane " << k << " n " << h.n.transpose() << " ref "
-                                  << f.n.transpose() << path;
-      }
-      // (d) the points
-      for (uint32_t i = 0; i < h.count; ++i) {
-        ASSERT_TRUE(h.pt[i].allFinite()) << what << " lane " << k;
-        EXPECT_GT(h.pd[i], 0.0) << what << " lane " << k << " point " << i;
-        EXPECT_LE(h.pd[i], h.depth) << what << " lane " << k << " point " << i;
-        const Vec3d on_a = h.pt[i] + 0.5 * h.pd[i] * h.n, on_b = h.pt[i] - 0.5 * h.pd[i] * h.n;
-        EXPECT_LE(std::fabs(cap_sd(q, on_a)), ptol) << what << " lane " << k << " point " << i << path;
-        EXPECT_LE(std::fabs(cyl_sd(q, on_b)), ptol) << what << " lane " << k << " point " << i << path;
-      }
-      if (h.count == 1) {
-        EXPECT_EQ(h.pd[0], h.depth) << what << " lane " << k;
-      }
-    }
-    // (e) the paths give the same bytes (the same IEEE operations, no contraction)
-    {
-      const test::PairResult &x = simd[k], &y = scal[k];
-      bool same = x.count == y.count;
-      if (same && x.count > 0) {
-        same = x.depth == y.depth && x.n == y.n;
-        for (uint32_t i = 0; i < x.count; ++i) same = same && x.pt[i] == y.pt[i] && x.pd[i] == y.pd[i];
-      }
-      EXPECT_TRUE(same) << what << " lane " << k << ": the SIMD and scalar paths differ";
-    }
-    // the translation check, by the golden-section distance alone
-    const test::PairResult& h = simd[k];
-    if (h.count > 0 && h.depth > 20 * tol) {
-      const double d = 0.05 * h.depth;
-      const double apart = core_min(q, (h.depth + d) * h.n) - q.r;
-      EXPECT_GE(apart, d - 2 * tol) << what << " lane " << k << ": moved by n (depth + d) not apart by d";
-      const double meets = core_min(q, (h.depth - d) * h.n) - q.r;
-      EXPECT_LT(meets, 0.0) << what << " lane " << k << ": moved by n (depth - d) already apart";
-    }
-  }
+  const Stats st = test::check_lanes(model(), qs, run(qs, KernelPath::kSimd), run(qs, KernelPath::kScalar), what);
   if (out_stats != nullptr) *out_stats = st;
-  std::printf(
-      "  %-28s lanes %4d hits %4d core-inside %4d two-point %3d normals %4d | worst |depth-ref| %.2g L, "
-      "angle %.2g rad\n",
-      what, st.lanes, st.hits, st.core_inside, st.two_points, st.normals_checked, st.worst_depth,
-      st.worst_angle);
 }
 
 // --- inputs -----------------------------------------------------------------------------------
-
-Vec3d random_unit(std::mt19937& g) {
-  std::normal_distribution<double> d;
-  for (;;) {
-    const Vec3d v(d(g), d(g), d(g));
-    if (v.norm() > 1e-3) return v.normalized();
-  }
-}
 
 /// A random pair at size `size`, `offset` from the origin, the capsule centre within
 /// `spread` (of the pair's reach) of the cylinder's.
@@ -374,9 +265,9 @@ Query random_query(std::mt19937& g, double size, double offset, double spread) {
   q.h = size * (0.1 + 0.9 * uni(g));
   q.r = size * (0.05 + 0.55 * uni(g));
   q.hs = size * uni(g);
-  q.u = random_unit(g);
+  q.u = test::random_unit_vector(g);
   const double reach = q.r + q.hs + std::hypot(q.rc, q.h);
-  q.c = q.p + spread * reach * uni(g) * random_unit(g);
+  q.c = q.p + spread * reach * uni(g) * test::random_unit_vector(g);
   return rounded(q);
 }
 
@@ -456,7 +347,7 @@ TEST(CapsuleCylinder, ReferenceMatchesClosedForms) {
     double t;
     const double m = core_min(w, Vec3d::Zero(), &t);
     if (m <= 1e-3) continue;
-    const test::nref::PairResult s = test::nref::solve_pair(capsule_shape(w), cylinder_shape(w));
+    const nref::PairResult s = nref::solve_pair(capsule_shape(w), cylinder_shape(w));
     // (the float-rounded rotation is orthonormal to ~1e-8: cyl_sd reads all of R, nref
     // only the axis)
     EXPECT_NEAR(s.s, w.r - m, 1e-7) << i;
@@ -474,7 +365,7 @@ TEST_P(CapsuleCylinderScales, RandomPosesAgainstReference) {
   Stats st;
   check_all(random_queries(g, n, size, offset), "random", &st);
   EXPECT_GT(st.hits, n / 4);
-  EXPECT_GT(st.core_inside, n / 20);
+  EXPECT_GT(st.flagged, n / 20);
 }
 
 INSTANTIATE_TEST_SUITE_P(Scales, CapsuleCylinderScales,
@@ -490,7 +381,7 @@ TEST(CapsuleCylinder, DeepCores) {
     const double rc = 0.3 + 0.7 * std::fabs(uni(g)), h = 0.3 + 0.7 * std::fabs(uni(g));
     const double r = 0.05 + 0.3 * std::fabs(uni(g)), hs = 0.2 + 1.5 * std::fabs(uni(g));
     // through the middle, any direction
-    qs.push_back(posed(g, 0.05 * Vec3d(uni(g), uni(g), uni(g)), random_unit(g), r, hs, rc, h));
+    qs.push_back(posed(g, 0.05 * Vec3d(uni(g), uni(g), uni(g)), test::random_unit_vector(g), r, hs, rc, h));
     // level through the middle (the side or a cap, by rc vs h)
     qs.push_back(posed(g, Vec3d(0.1 * uni(g), 0.1 * uni(g), 0.5 * h * uni(g)),
                        Vec3d(uni(g), uni(g), 0).normalized(), r, hs, rc, h));
@@ -501,18 +392,18 @@ TEST(CapsuleCylinder, DeepCores) {
     // crossing a rim
     const double a = M_PI * uni(g);
     const Vec3d rim(rc * std::cos(a), rc * std::sin(a), h * (uni(g) > 0 ? 1 : -1));
-    qs.push_back(posed(g, rim + 0.1 * Vec3d(uni(g), uni(g), uni(g)), random_unit(g), r, hs, rc, h));
+    qs.push_back(posed(g, rim + 0.1 * Vec3d(uni(g), uni(g), uni(g)), test::random_unit_vector(g), r, hs, rc, h));
     // wholly inside, short core
-    qs.push_back(posed(g, Vec3d(0.3 * rc * uni(g), 0.3 * rc * uni(g), 0.3 * h * uni(g)), random_unit(g), 0.05,
+    qs.push_back(posed(g, Vec3d(0.3 * rc * uni(g), 0.3 * rc * uni(g), 0.3 * h * uni(g)), test::random_unit_vector(g), 0.05,
                        0.2 * std::min(rc, h), rc, h));
     // coincident centres
-    Query c = posed(g, Vec3d::Zero(), random_unit(g), r, hs, rc, h);
+    Query c = posed(g, Vec3d::Zero(), test::random_unit_vector(g), r, hs, rc, h);
     c.c = c.p;
     qs.push_back(c);
   }
   Stats st;
   check_all(qs, "deep", &st);
-  EXPECT_GT(st.core_inside, st.hits * 9 / 10);
+  EXPECT_GT(st.flagged, st.hits * 9 / 10);
   EXPECT_GT(st.hits, static_cast<int>(qs.size()) * 9 / 10);
 }
 
@@ -581,10 +472,10 @@ TEST(CapsuleCylinder, ShortCoresAtARim) {
       const Vec3d out =
           (Vec3d(std::cos(a), std::sin(a), 0) * (0.2 + std::fabs(uni(g))) + Vec3d(0, 0, side)).normalized();
       const double dist = 0.02 + 0.28 * std::fabs(uni(g));
-      qs.push_back(posed(g, rim + dist * out, random_unit(g), dist * (0.5 + std::fabs(uni(g))), hs, rc, h));
+      qs.push_back(posed(g, rim + dist * out, test::random_unit_vector(g), dist * (0.5 + std::fabs(uni(g))), hs, rc, h));
       // the core perpendicular to the offset, its nearest point to the rim just beyond an
       // end: the interior (rim) candidate's direction ties the end's within rounding
-      const Vec3d u = out.cross(random_unit(g)).normalized();
+      const Vec3d u = out.cross(test::random_unit_vector(g)).normalized();
       const double beyond = hs + dist * std::pow(10.0, -5 + 2 * std::fabs(uni(g)));
       qs.push_back(posed(g, rim + dist * out + (uni(g) > 0 ? beyond : -beyond) * u, u,
                          dist * (0.5 + std::fabs(uni(g))), hs, rc, h));
@@ -637,7 +528,7 @@ TEST(CapsuleCylinder, NearParallelTwoPoints) {
     }
   Stats st;
   check_all(qs, "near-parallel", &st);
-  EXPECT_EQ(st.two_points, st.hits);
+  EXPECT_EQ(st.counts[2], st.hits);
   EXPECT_GT(st.hits, static_cast<int>(qs.size()) * 3 / 4);
   // Exactly parallel, axis-aligned: the points' positions in closed form.
   for (KernelPath path : {KernelPath::kSimd, KernelPath::kScalar}) {
@@ -717,12 +608,9 @@ TEST(CapsuleCylinder, ZeroLengthCoreIsSphereCylinder) {
   for (Query& q : qs) q.hs = 0.0;
   check_all(qs, "zero-length core");
   // sphere lanes: A's p and e0 as the capsule's
-  const auto mine = run(qs, KernelPath::kSimd);
-  Lanes l(qs);
-  test::ManifoldLanes o(static_cast<uint32_t>(qs.size()));
-  collide_sphere_cylinder(l.a, l.b, o.view(), Range{0, static_cast<uint32_t>(qs.size())}, NarrowConfig{});
+  const auto mine = run(qs, KernelPath::kSimd), sphere = run(qs, KernelPath::kSimd, &collide_sphere_cylinder);
   for (uint32_t k = 0; k < qs.size(); ++k) {
-    const test::PairResult s = o.result(k);
+    const test::PairResult& s = sphere[k];
     const double tol = kRel * size_of(qs[k]);
     if (s.count == 0 || s.depth < tol) continue;
     ASSERT_EQ(mine[k].count, 1u) << k;
@@ -755,7 +643,7 @@ TEST(CapsuleCylinder, NeedlesAndPancakes) {
         break;
     }
     const double reach = q.r + q.hs + std::hypot(q.rc, q.h);
-    q.c = q.p + 0.3 * reach * random_unit(g);
+    q.c = q.p + 0.3 * reach * test::random_unit_vector(g);
     qs.push_back(rounded(q));
   }
   Stats st;

@@ -61,7 +61,9 @@
 #include <vector>
 
 #include "kernels/narrowphase/pair_kernels.h"
+#include "support/kernel_checks.h"
 #include "support/leaf_lanes.h"
+#include "support/shape_geometry.h"
 #include "support/narrow_reference.h"
 #include "support/random_input.h"
 #include "support/test_support.h"
@@ -72,14 +74,13 @@ namespace {
 using Vec3d = Eigen::Vector3d;
 using Mat3d = Eigen::Matrix3d;
 namespace nref = test::nref;
+using test::angle;
+using test::v3;
+using test::ev;
 
 constexpr double kRel = 1e-5;       // depth tolerance, of L
 constexpr double kAngleTol = 1e-4;  // rad, where the minimum is unique and conditioned
 constexpr double kValleyNoise = 4e-7;  // of L: twice the worst depth error measured
-
-double angle(const Vec3d& a, const Vec3d& b) {
-  return std::atan2(a.cross(b).norm(), a.dot(b));
-}
 
 struct Query {
   Vec3d p;       // cylinder centre
@@ -115,62 +116,24 @@ double coord_ulp(const Query& q) {
 
 // --- running the kernel -----------------------------------------------------------------------
 
-struct Lanes {
-  std::vector<float> ap[3], ar[9], ae[3], bp[3], bw[6], zero;
-  LeafSoA a{}, b{};
-  explicit Lanes(const std::vector<Query>& qs) {
-    for (const Query& q : qs) {
-      for (int i = 0; i < 3; ++i) {
-        ap[i].push_back(float(q.p[i]));
-        bp[i].push_back(float(q.v[0][i]));
-        bw[i].push_back(float(q.v[1][i]));
-        bw[3 + i].push_back(float(q.v[2][i]));
-      }
-      for (int i = 0; i < 9; ++i) ar[i].push_back(float(q.R(i / 3, i % 3)));
-      ae[0].push_back(float(q.rc)), ae[1].push_back(float(q.h)), ae[2].push_back(0.0f);
-      zero.push_back(0.0f);
-    }
-    for (int i = 0; i < 3; ++i) a.p[i] = ap[i].data(), a.e[i] = ae[i].data(), b.p[i] = bp[i].data();
-    for (int i = 0; i < 9; ++i) a.r[i] = ar[i].data();
-    for (int i = 0; i < 6; ++i) b.w[i] = bw[i].data();
-    // (a triangle has no R or e: left null, as the host gathers it)
-  }
-};
+/// The cylinder and the triangle of a query.
+test::Leaf cylinder_leaf(const Query& q) { return test::posed_leaf(kLeafCylinder, q.p, q.R, Vec3d(q.rc, q.h, 0)); }
 
+/// Runs `kern` (the kernel under test unless given) on lanes [begin, end) of one bucket.
 std::vector<test::PairResult> run(const std::vector<Query>& qs, KernelPath path, PairKernel kern = nullptr,
-                                  uint32_t begin = 0, uint32_t end = ~0u,
-                                  test::ManifoldLanes* keep = nullptr) {
-  if (kern == nullptr) kern = pair_kernel(kLeafCylinder, kLeafTriangle);
-  const uint32_t n = static_cast<uint32_t>(qs.size());
-  end = std::min(end, n);
-  Lanes l(qs);
-  test::ManifoldLanes o(n);
-  NarrowConfig cfg;
-  cfg.path = path;
-  kern(l.a, l.b, o.view(), Range{begin, end}, cfg);
-  std::vector<test::PairResult> out(n);
-  for (uint32_t k = begin; k < end; ++k) out[k] = o.result(k);
-  if (keep != nullptr) *keep = o;
-  return out;
+                                  uint32_t begin = 0, uint32_t end = ~0u) {
+  return test::run_queries(kern != nullptr ? kern : pair_kernel(kLeafCylinder, kLeafTriangle), qs, path,
+                           [](const Query& q) {
+                             return std::pair{cylinder_leaf(q), test::triangle_leaf(q.v[0], q.v[1], q.v[2])};
+                           },
+                           begin, end);
 }
 
 // --- references -------------------------------------------------------------------------------
 
-/// Signed distance of x to the solid cylinder of q (< 0 inside).
-double cyl_sd(const Query& q, const Vec3d& x) {
-  const Vec3d l = q.R.transpose() * (x - q.p);
-  const double dr = std::hypot(l.x(), l.y()) - q.rc, dz = std::fabs(l.z()) - q.h;
-  if (dr <= 0 && dz <= 0) return std::max(dr, dz);
-  return std::hypot(std::max(dr, 0.0), std::max(dz, 0.0));
-}
+double cyl_sd(const Query& q, const Vec3d& x) { return test::cylinder_sd(q.p, q.R, q.rc, q.h, x); }
 
-/// The closest point of the solid cylinder to an outside point x.
-Vec3d cyl_closest(const Query& q, const Vec3d& x) {
-  const Vec3d l = q.R.transpose() * (x - q.p);
-  const double rho = std::hypot(l.x(), l.y());
-  const double s = rho > q.rc ? q.rc / rho : 1.0;
-  return q.p + q.R * Vec3d(l.x() * s, l.y() * s, std::clamp(l.z(), -q.h, q.h));
-}
+Vec3d cyl_closest(const Query& q, const Vec3d& x) { return test::cylinder_closest(q.p, q.R, q.rc, q.h, x); }
 
 /// The least signed distance to the cylinder over the triangle moved by `shift` (convex:
 /// nested golden-section search over the barycentric coordinates); where = the point.
@@ -193,21 +156,7 @@ double triangle_minimum(const Query& q, const Vec3d& shift = Vec3d::Zero(), Vec3
   return best;
 }
 
-nref::V3 v3(const Vec3d& v) {
-  return {v.x(), v.y(), v.z()};
-}
-Vec3d ev(const nref::V3& v) {
-  return {v.x, v.y, v.z};
-}
-nref::Shape cylinder_shape(const Query& q) {
-  nref::Shape s;
-  s.type = kLeafCylinder;
-  s.p = v3(q.p);
-  for (int i = 0; i < 9; ++i) s.r[i] = q.R(i / 3, i % 3);
-  s.e[0] = q.rc;
-  s.e[1] = q.h;
-  return s;
-}
+nref::Shape cylinder_shape(const Query& q) { return test::posed_shape(kLeafCylinder, q.p, q.R, Vec3d(q.rc, q.h, 0)); }
 nref::Shape triangle_shape(const Query& q) {
   return nref::make_triangle(v3(q.v[0]), v3(q.v[1]), v3(q.v[2]));
 }
@@ -218,13 +167,6 @@ double tri_distance(const Query& q, const Vec3d& x) {
 /// The support overlap of A and B along n.
 double overlap_along(const Query& q, const Vec3d& n) {
   return nref::overlap(cylinder_shape(q), triangle_shape(q), v3(n.normalized()));
-}
-
-nref::Options dense_options() {
-  nref::Options o;
-  o.samples = 6000;
-  o.starts = 8;
-  return o;
 }
 
 /// Whether n_ref is the only minimiser within 0.02 rad: every direction outside that
@@ -287,7 +229,7 @@ Ref reference(const Query& q) {
     f.unique = m > 1e-3 * size_of(q);
     return f;
   }
-  const nref::PairResult s = nref::solve_pair(cylinder_shape(q), triangle_shape(q), {}, dense_options());
+  const nref::PairResult s = nref::solve_pair(cylinder_shape(q), triangle_shape(q), {}, nref::dense_options());
   f.depth = s.s;
   f.n = ev(s.n);
   double rise = 0;
@@ -298,109 +240,44 @@ Ref reference(const Query& q) {
 
 // --- the per-lane check -----------------------------------------------------------------------
 
-struct Stats {
-  int lanes = 0, hits = 0, meeting = 0, multi = 0, normals_checked = 0;
-  int counts[5] = {0, 0, 0, 0, 0};
-  double worst_depth = 0, worst_angle = 0;
-};
+using Stats = test::LaneStats;
 
-/// Checks a lane's points: on both surfaces, 0 < pdepth <= depth.
-void check_points(const Query& q, const test::PairResult& h, double ptol, const char* what, size_t k,
-                  const char* path) {
-  for (uint32_t i = 0; i < h.count; ++i) {
-    ASSERT_TRUE(h.pt[i].allFinite()) << what << " lane " << k;
-    EXPECT_GT(h.pd[i], 0.0) << what << " lane " << k << " point " << i << path;
-    EXPECT_LE(h.pd[i], h.depth) << what << " lane " << k << " point " << i << path;
-    const Vec3d on_a = h.pt[i] + 0.5 * h.pd[i] * h.n, on_b = h.pt[i] - 0.5 * h.pd[i] * h.n;
-    EXPECT_LE(std::fabs(cyl_sd(q, on_a)), ptol) << what << " lane " << k << " point " << i << path;
-    if (std::getenv("CYLTRI_DUMP") && (std::fabs(cyl_sd(q, on_a)) > ptol || tri_distance(q, on_b) > ptol)) {
-      std::printf("DUMP %.9g %.9g", q.rc, q.h);
-      for (const Vec3d& v : q.v) {
-        const Vec3d l = q.R.transpose() * (v - q.p);
-        std::printf(" %.9g %.9g %.9g", l.x(), l.y(), l.z());
-      }
-      std::printf("\n");
-    }
-    EXPECT_LE(tri_distance(q, on_b), ptol) << what << " lane " << k << " point " << i << path;
-  }
+/// The pair for test::check_lanes: the references above and the distance of the moved pair
+/// for the translation check.
+const test::PairModel<Query>& model() {
+  static const test::PairModel<Query> instance = [] {
+    test::PairModel<Query> m;
+    m.rel = kRel;
+    m.flag_name = "meeting";
+    m.carries = test::Carries::kNoRule;
+    m.reference = [](const Query& q) {
+      const Ref f = reference(q);
+      return test::LaneRef{f.depth, f.n, f.unique, f.angle_tol, !f.outside};
+    };
+    m.size = size_of;
+    m.coord_ulp = coord_ulp;
+    m.overlap = overlap_along;
+    m.sd_a = cyl_sd;
+    m.sd_b = tri_distance;  // unsigned: the triangle has no inside
+    m.apart = [](const Query& q, const Vec3d& shift) { return triangle_minimum(q, shift); };
+    return m;
+  }();
+  return instance;
 }
 
-/// Checks (a)-(e) for every lane of qs (already rounded).
+/// Checks (a)-(e) and the translation check (test::check_lanes) for every lane of qs
+/// (already rounded).
 void check_all(const std::vector<Query>& qs, const char* what, Stats* out_stats = nullptr) {
-  SCOPED_TRACE(what);
-  const auto simd = run(qs, KernelPath::kSimd), scal = run(qs, KernelPath::kScalar);
-  Stats st;
-  for (size_t k = 0; k < qs.size(); ++k) {
-    const Query& q = qs[k];
-    const Ref f = reference(q);
-    const double L = size_of(q), tol = kRel * L, ptol = tol + 4 * coord_ulp(q);
-    ++st.lanes;
-    for (const test::PairResult* hp : {&simd[k], &scal[k]}) {
-      const test::PairResult& h = *hp;
-      const bool is_simd = hp == &simd[k];
-      const char* path = is_simd ? " simd" : " scalar";
-      ASSERT_LE(h.count, 4u) << what << " lane " << k;
-      if (std::fabs(f.depth) <= tol) continue;
-      ASSERT_EQ(h.count > 0, f.depth > 0) << what << " lane " << k << " depth_ref " << f.depth << " got "
-                                          << (h.count > 0 ? h.depth : 0.0) << path;
-      if (f.depth <= 0) continue;
-      if (is_simd) {
-        ++st.hits;
-        st.meeting += !f.outside;
-        st.multi += h.count > 1;
-        ++st.counts[h.count];
-      }
-      const double dd = std::fabs(h.depth - f.depth);
-      st.worst_depth = std::max(st.worst_depth, dd / L);
-      EXPECT_LE(dd, tol) << what << " lane " << k << " depth " << h.depth << " ref " << f.depth
-                         << (f.outside ? " (outside)" : " (meeting)") << path;
-      ASSERT_TRUE(h.n.allFinite()) << what << " lane " << k;
-      EXPECT_NEAR(h.n.norm(), 1.0, 1e-6) << what << " lane " << k;
-      // (c) as good a separating direction as the reference's, and the same where unique
-      EXPECT_LE(overlap_along(q, h.n), f.depth + tol) << what << " lane " << k << path;
-      if (f.unique) {
-        const double ang = angle(h.n, f.n);
-        if (is_simd) ++st.normals_checked, st.worst_angle = std::max(st.worst_angle, ang);
-        EXPECT_LE(ang, f.angle_tol) << what << " lane " << k << " n " << h.n.transpose() << " ref "
-                                    << f.n.transpose() << path;
-      }
-      check_points(q, h, ptol, what, k, path);
-    }
-    // (e) the paths give the same bytes (the same IEEE operations, no contraction)
-    EXPECT_TRUE(test::same_bytes(simd[k], scal[k]))
-        << what << " lane " << k << ": the SIMD and scalar paths differ";
-    // the translation check, by the golden-section minimum alone
-    const test::PairResult& h = simd[k];
-    if (h.count > 0 && h.depth > 20 * tol) {
-      const double d = 0.05 * h.depth;
-      const double apart = triangle_minimum(q, (h.depth + d) * h.n);
-      EXPECT_GE(apart, d - 2 * tol) << what << " lane " << k << ": moved by n (depth + d) not apart by d";
-      const double meets = triangle_minimum(q, (h.depth - d) * h.n);
-      EXPECT_LT(meets, 0.0) << what << " lane " << k << ": moved by n (depth - d) already apart";
-    }
-  }
+  const Stats st = test::check_lanes(model(), qs, run(qs, KernelPath::kSimd), run(qs, KernelPath::kScalar), what);
   if (out_stats != nullptr) *out_stats = st;
-  std::printf(
-      "  %-28s lanes %4d hits %4d meeting %4d points 1/2/3/4 %d/%d/%d/%d normals %4d | worst |depth-ref| "
-      "%.2g L, angle %.2g rad\n",
-      what, st.lanes, st.hits, st.meeting, st.counts[1], st.counts[2], st.counts[3], st.counts[4],
-      st.normals_checked, st.worst_depth, st.worst_angle);
 }
 
 // --- inputs -----------------------------------------------------------------------------------
 
-Vec3d random_unit(std::mt19937& g) {
-  std::normal_distribution<double> d;
-  for (;;) {
-    const Vec3d v(d(g), d(g), d(g));
-    if (v.norm() > 1e-3) return v.normalized();
-  }
-}
-
 /// A triangle of circumradius ~r around c in a random plane, its angles spread.
 void random_triangle(std::mt19937& g, const Vec3d& c, double r, Vec3d (&v)[3]) {
   std::uniform_real_distribution<double> uni(0, 1);
-  const Vec3d n = random_unit(g), t = n.unitOrthogonal(), b = n.cross(t);
+  const Vec3d n = test::random_unit_vector(g), t = n.unitOrthogonal(), b = n.cross(t);
   const double a0 = 2 * M_PI * uni(g);
   for (int i = 0; i < 3; ++i) {
     const double ang = a0 + i * 2 * M_PI / 3 + (uni(g) - 0.5);
@@ -420,7 +297,7 @@ Query random_query(std::mt19937& g, double size, double offset, double spread) {
   q.h = size * (0.1 + 0.9 * uni(g));
   const double tr = size * (0.1 + 1.2 * uni(g));
   const double reach = std::hypot(q.rc, q.h) + tr;
-  random_triangle(g, q.p + spread * reach * uni(g) * random_unit(g), tr, q.v);
+  random_triangle(g, q.p + spread * reach * uni(g) * test::random_unit_vector(g), tr, q.v);
   return rounded(q);
 }
 
@@ -495,7 +372,7 @@ TEST(CylinderTriangle, ReferenceMatchesClosedForms) {
     const Query w = random_query(g, 1.0, 0.0, 1.2);
     const double m = triangle_minimum(w);
     if (m <= 1e-3) continue;
-    const nref::PairResult s = nref::solve_pair(cylinder_shape(w), triangle_shape(w), {}, dense_options());
+    const nref::PairResult s = nref::solve_pair(cylinder_shape(w), triangle_shape(w), {}, nref::dense_options());
     // (the float-rounded rotation is orthonormal to ~1e-8: cyl_sd reads all of R, nref
     // only the axis)
     EXPECT_NEAR(s.s, -m, 1e-7) << i;
@@ -513,7 +390,7 @@ TEST_P(CylinderTriangleScales, RandomPosesAgainstReference) {
   Stats st;
   check_all(random_queries(g, n, size, offset), "random", &st);
   EXPECT_GT(st.hits, n / 4);
-  EXPECT_GT(st.meeting, n / 8);
+  EXPECT_GT(st.flagged, n / 8);
 }
 
 INSTANTIATE_TEST_SUITE_P(Scales, CylinderTriangleScales,
@@ -532,7 +409,7 @@ TEST(CylinderTriangle, LargeTriangles) {
       // the triangle's plane through a point within the cylinder's reach, its centroid
       // up to half its size away along the plane
       const double reach = std::hypot(q.rc, q.h);
-      const Vec3d n = random_unit(g), t = n.unitOrthogonal(), b = n.cross(t);
+      const Vec3d n = test::random_unit_vector(g), t = n.unitOrthogonal(), b = n.cross(t);
       const Vec3d c = q.p + 1.2 * reach * uni(g) * n + 0.5 * sc * (uni(g) * t + uni(g) * b) * reach;
       random_triangle(g, c, sc * reach, q.v);
       // project the vertices onto the plane through c (random_triangle's plane is random)
@@ -577,7 +454,7 @@ TEST(CylinderTriangle, DeepTriangles) {
   }
   Stats st;
   check_all(qs, "deep", &st);
-  EXPECT_GT(st.meeting, st.hits * 9 / 10);
+  EXPECT_GT(st.flagged, st.hits * 9 / 10);
   EXPECT_GT(st.hits, static_cast<int>(qs.size()) * 9 / 10);
 }
 
@@ -722,7 +599,7 @@ TEST(CylinderTriangle, NearParallelManifolds) {
   EXPECT_GE(st.counts[3] + st.counts[4], st.hits * 9 / 10);
   check_all(sides, "near-parallel to the side", &st);
   EXPECT_EQ(st.hits, static_cast<int>(sides.size()));
-  EXPECT_EQ(st.multi, st.hits);
+  EXPECT_EQ(st.counts[1], 0);  // every contact has more than one point
 }
 
 /// Exactly touching (representable) configurations: count 0; B moved onto touching by
@@ -779,7 +656,7 @@ TEST(CylinderTriangle, DegenerateTriangles) {
     qs.push_back(two);
     for (double hgt : {1e-3, 1e-5, 1e-7}) {  // slivers
       Query s = q;
-      const Vec3d ab = b - a, perp = ab.cross(random_unit(g)).normalized();
+      const Vec3d ab = b - a, perp = ab.cross(test::random_unit_vector(g)).normalized();
       s.v[2] = test::round_to_float(Vec3d(a + (0.3 + 0.4 * std::fabs(uni(g))) * ab + hgt * ab.norm() * perp));
       qs.push_back(s);
     }
@@ -796,29 +673,20 @@ TEST(CylinderTriangle, SliverIsCapsuleCylinder) {
   std::vector<Query> qs;
   for (int i = 0; i < static_cast<int>(test::scaled(200)); ++i) {
     Query q = random_query(g, 1.0, 0.0, 0.6);
-    const Vec3d a = q.v[0], b = q.v[1], perp = (b - a).cross(random_unit(g)).normalized();
+    const Vec3d a = q.v[0], b = q.v[1], perp = (b - a).cross(test::random_unit_vector(g)).normalized();
     q.v[2] = test::round_to_float(Vec3d(0.5 * (a + b) + 1e-7 * (b - a).norm() * perp));
     qs.push_back(q);
   }
   const auto mine = run(qs, KernelPath::kSimd);
   // capsule lanes: core v0 .. v1, radius r
   const double r = 1e-6;
-  std::vector<float> cp[3], cr[9], ce[3];
-  for (const Query& q : qs) {
+  const auto sliver = test::run_queries(&collide_capsule_cylinder, qs, KernelPath::kSimd, [&](const Query& q) {
     const Vec3d c = 0.5 * (q.v[0] + q.v[1]), u = (q.v[1] - q.v[0]).normalized();
-    for (int i = 0; i < 3; ++i) cp[i].push_back(float(c[i]));
-    for (int i = 0; i < 9; ++i) cr[i].push_back(i % 3 == 2 ? float(u[i / 3]) : 0.0f);
-    ce[0].push_back(float(r)), ce[1].push_back(float(0.5 * (q.v[1] - q.v[0]).norm())), ce[2].push_back(0.0f);
-  }
-  LeafSoA ca{};
-  for (int i = 0; i < 3; ++i) ca.p[i] = cp[i].data(), ca.e[i] = ce[i].data();
-  for (int i = 0; i < 9; ++i) ca.r[i] = cr[i].data();
-  const Lanes l(qs);
-  test::ManifoldLanes o(static_cast<uint32_t>(qs.size()));
-  collide_capsule_cylinder(ca, l.a, o.view(), Range{0, static_cast<uint32_t>(qs.size())}, NarrowConfig{});
+    return std::pair{test::axial_leaf(kLeafCapsule, c, u, r, 0.5 * (q.v[1] - q.v[0]).norm()), cylinder_leaf(q)};
+  });
   int compared = 0;
   for (uint32_t k = 0; k < qs.size(); ++k) {
-    const test::PairResult s = o.result(k);
+    const test::PairResult& s = sliver[k];
     const double tol = kRel * size_of(qs[k]);
     if (s.count == 0 || s.depth - r < 2 * tol) continue;
     ASSERT_GE(mine[k].count, 1u) << k;
