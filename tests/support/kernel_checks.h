@@ -84,13 +84,15 @@ inline std::vector<std::tuple<double, double>> kernel_scales() {
 
 /// A lane's reference, the test's own: depth (> 0 overlapping, else minus the distance),
 /// the normal from A to B, whether it is the unique minimum (normals are held to it
-/// there, within angle_tol), and a test-defined class of the lane (counted, printed).
+/// there, within angle_tol), a test-defined class of the lane (counted, printed), and
+/// whether the pair is apart (the distance in closed form, not refined by `improve`).
 struct LaneRef {
   double depth = 0;
   Eigen::Vector3d n = Eigen::Vector3d::UnitZ();
   bool unique = false;
   double angle_tol = 0;
   bool flag = false;
+  bool apart = false;
 };
 
 /// What check_lanes saw: lanes, contacts (SIMD path), lanes by point count, flagged

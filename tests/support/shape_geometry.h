@@ -57,14 +57,18 @@ inline double box_sd(const Eigen::Vector3d& c, const Eigen::Matrix3d& Q, const E
   return inside > 0 ? l.cwiseMax(0.0).norm() : inside;
 }
 
-/// Signed distance of x to the solid cylinder at p with rotation R (column 2 = axis),
-/// radius rc and half length h (< 0 inside: minus the distance to the nearest face).
-inline double cylinder_sd(const Eigen::Vector3d& p, const Eigen::Matrix3d& R, double rc, double h,
-                          const Eigen::Vector3d& x) {
-  const Eigen::Vector3d l = R.transpose() * (x - p);
+/// Signed distance of l (in the cylinder's frame) to the solid cylinder of radius rc and
+/// half length h about the z axis (< 0 inside: minus the distance to the nearest face).
+inline double cylinder_sd_local(const Eigen::Vector3d& l, double rc, double h) {
   const double dr = std::hypot(l.x(), l.y()) - rc, dz = std::fabs(l.z()) - h;
   if (dr <= 0 && dz <= 0) return std::max(dr, dz);
   return std::hypot(std::max(dr, 0.0), std::max(dz, 0.0));
+}
+
+/// The same for the cylinder at p with rotation R (column 2 = axis), x in the world.
+inline double cylinder_sd(const Eigen::Vector3d& p, const Eigen::Matrix3d& R, double rc, double h,
+                          const Eigen::Vector3d& x) {
+  return cylinder_sd_local(R.transpose() * (x - p), rc, h);
 }
 
 /// The closest point of that solid cylinder to an outside point x.
