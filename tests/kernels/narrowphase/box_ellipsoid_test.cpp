@@ -161,79 +161,61 @@ Ref reference(const Query& q) {
 // The per-lane check
 // ---------------------------------------------------------------------------------------
 
-struct Stats {
-  int lanes = 0, hits = 0, normal_checked = 0;
-  double worst_depth = 0, worst_angle = 0, worst_path_depth = 0, worst_path_angle = 0;
-};
-
 double coord_ulp(const Query& q) {
   const double m = std::max(q.a.p.cwiseAbs().maxCoeff(), q.b.p.cwiseAbs().maxCoeff());
   return (m + size_of(q)) * std::ldexp(1.0, -23);
 }
 
-void check_all(const std::vector<Query>& qs, const char* what, Stats* st_out = nullptr) {
-  SCOPED_TRACE(what);
-  const std::vector<test::PairResult> simd = run(qs, KernelPath::kSimd), scal = run(qs, KernelPath::kScalar);
-  Stats st;
-  for (size_t k = 0; k < qs.size(); ++k) {
-    const Query& q = qs[k];
-    const Ref f = reference(q);
-    const double L = size_of(q), tol = kRel * L;
-    ++st.lanes;
-    if (std::fabs(f.s) <= tol) continue;
-    for (const test::PairResult* hp : {&simd[k], &scal[k]}) {
-      const test::PairResult& h = *hp;
-      const char* path = hp == &simd[k] ? " simd" : " scalar";
-      ASSERT_EQ(h.count > 0, f.s > 0)
-          << what << " lane " << k << " depth_ref " << f.s << " got " << h.depth << path;
-      if (f.s <= 0) continue;
-      ASSERT_EQ(h.count, 1u);
-      if (hp == &simd[k]) ++st.hits;
-      const double dd = std::fabs(h.depth - f.s);
-      st.worst_depth = std::max(st.worst_depth, dd / L);
-      EXPECT_LE(dd, tol) << what << " lane " << k << path << " depth " << h.depth << " ref " << f.s << " e "
-                         << q.b.e.transpose() << " h " << q.a.e.transpose();
-      EXPECT_EQ(h.pd[0], h.depth);
-      ASSERT_TRUE(h.n.allFinite());
-      EXPECT_NEAR(h.n.norm(), 1.0, 1e-6);
-      EXPECT_LE(overlap(q, h.n), f.s + tol) << what << " lane " << k << path;
-      const double slack = tol + coord_ulp(q);
+using Stats = test::LaneStats;
+
+/// The pair for test::check_lanes: the references above and the distance of the moved pair
+/// for the translation check.
+const test::PairModel<Query>& model() {
+  static const test::PairModel<Query> instance = [] {
+    test::PairModel<Query> m;
+    m.rel = kRel;
+    m.max_points = 1;
+    m.point_ulps = 1;
+    m.same_bytes_paths = false;
+    m.reference = [](const Query& q) {
+      const Ref f = reference(q);
+      return test::LaneRef{f.s, f.n, f.conditioned, kAngleTol, false};
+    };
+    m.size = size_of;
+    m.coord_ulp = coord_ulp;
+    m.overlap = overlap;
+    // The ellipsoid's point on its surface; the box's where conditioned, up to the slide
+    // of the ellipsoid's support point under the normal's error (rho per rad, rho =
+    // e_max^2 / e_min the largest radius of curvature; the error: the angle to the
+    // reference's normal plus 1e-6).
+    m.points = [](const Query& q, const test::LaneRef& f, const test::PairResult& h, double, double ptol,
+                  const std::string& where) {
+      EXPECT_EQ(h.pd[0], h.depth) << where;
       const Vec3d on_a = h.pt[0] + h.n * (0.5 * h.depth), on_b = h.pt[0] - h.n * (0.5 * h.depth);
-      EXPECT_NEAR(sd_ellipsoid(q.b, on_b), 0.0, slack) << what << " lane " << k << path;
-      if (f.conditioned) {
-        // The box's point: on its surface up to the slide of the ellipsoid's support
-        // point under the normal's error (rho per rad, rho = e_max^2 / e_min the largest
-        // radius of curvature; the error: the angle to the reference's normal plus 1e-6).
+      EXPECT_NEAR(sd_ellipsoid(q.b, on_b), 0.0, ptol) << where;
+      if (f.unique) {
         const double rho = q.b.e.maxCoeff() * q.b.e.maxCoeff() / q.b.e.minCoeff();
-        const double ang = angle(h.n, f.n);
-        EXPECT_NEAR(sd_box(q.a, on_a), 0.0, slack + (ang + 1e-6) * rho) << what << " lane " << k << path;
-        st.worst_angle = std::max(st.worst_angle, ang);
-        // A normal farther than kAngleTol is accepted only when it is as good a separating
-        // direction as the reference's up to the overlap's float rounding (kRoundingSlack
-        // L), and within 10 kAngleTol: the overlap then rises by less than its rounding over
-        // that angle (seen: 3.1e-4 rad, 6.9e-8 L worse, 1 lane in ~1600 at intensity 10).
-        const bool as_good = overlap(q, h.n) <= f.s + kRoundingSlack * L;
-        EXPECT_TRUE(ang <= kAngleTol || (as_good && ang <= 10 * kAngleTol))
-            << what << " lane " << k << path << " angle " << ang << " n " << h.n.transpose() << " ref "
-            << f.n.transpose() << " overlap - ref " << overlap(q, h.n) - f.s;
+        EXPECT_NEAR(sd_box(q.a, on_a), 0.0, ptol + (angle(h.n, f.n) + 1e-6) * rho) << where;
       }
-    }
-    if (f.s > tol && f.conditioned) ++st.normal_checked;
-    if (simd[k].count && scal[k].count) {
-      const double pd = std::fabs(simd[k].depth - scal[k].depth), pa = angle(simd[k].n, scal[k].n);
-      st.worst_path_depth = std::max(st.worst_path_depth, pd / L);
-      if (f.conditioned) st.worst_path_angle = std::max(st.worst_path_angle, pa);
-      EXPECT_LE(pd, tol) << what << " lane " << k;
-      if (f.conditioned) {
-        EXPECT_LE(pa, kAngleTol) << what << " lane " << k;
-      }
-    }
-  }
-  std::printf(
-      "  %-30s lanes %5d hits %5d normals %5d | worst depth %.2g L, angle %.2g; simd-scalar %.2g L, %.2g\n",
-      what, st.lanes, st.hits, st.normal_checked, st.worst_depth, st.worst_angle, st.worst_path_depth,
-      st.worst_path_angle);
-  if (st_out != nullptr) *st_out = st;
+    };
+    // A normal farther than kAngleTol is accepted only when it is as good a separating
+    // direction as the reference's up to the overlap's float rounding (kRoundingSlack L),
+    // and within 10 kAngleTol: the overlap then rises by less than its rounding over that
+    // angle (seen: 3.1e-4 rad, 6.9e-8 L worse, 1 lane in ~1600 at intensity 10).
+    m.normal_ok = [](const Query& q, const test::LaneRef& f, const test::PairResult& h, double ang) {
+      const bool as_good = overlap(q, h.n) <= f.depth + kRoundingSlack * size_of(q);
+      return ang <= kAngleTol || (as_good && ang <= 10 * kAngleTol);
+    };
+    return m;
+  }();
+  return instance;
+}
+
+/// Checks (a)-(e) and the translation check (test::check_lanes) for every lane of qs
+/// (already rounded).
+void check_all(const std::vector<Query>& qs, const char* what, Stats* out_stats = nullptr) {
+  const Stats st = test::check_lanes(model(), qs, run(qs, KernelPath::kSimd), run(qs, KernelPath::kScalar), what);
+  if (out_stats != nullptr) *out_stats = st;
 }
 
 // ---------------------------------------------------------------------------------------
@@ -425,7 +407,7 @@ TEST_P(BoxEllipsoid, RandomPosesAgainstDoubleReference) {
   Stats st;
   check_all(random_queries(g, n, size, offset), "random", &st);
   EXPECT_GT(st.hits, n / 4);
-  EXPECT_GT(st.normal_checked, st.hits / 3);
+  EXPECT_GT(st.normals_checked, st.hits / 3);
 }
 
 INSTANTIATE_TEST_SUITE_P(Scales, BoxEllipsoid, ::testing::ValuesIn(test::kernel_scales()));

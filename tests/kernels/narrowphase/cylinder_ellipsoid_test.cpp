@@ -467,7 +467,8 @@ std::string describe(const test::PairResult& r) {
 
 /// (d): point[0] -+ n depth/2 on B's and A's surfaces, the support planes along n
 /// depth/2 either side, pdepth == depth.
-void check_point(const Query& q, const test::PairResult& h, double /*tol*/, double ptol, const std::string& where) {
+void check_point(const Query& q, const test::LaneRef&, const test::PairResult& h, double /*tol*/, double ptol,
+                 const std::string& where) {
   ASSERT_TRUE(h.pt[0].allFinite()) << where;
   EXPECT_EQ(h.pd[0], h.depth) << where;
   const Vec3d n = h.n.normalized();

@@ -204,11 +204,6 @@ Ref reference(const Query& q) {
 // The per-lane check
 // ---------------------------------------------------------------------------------------
 
-struct Stats {
-  int lanes = 0, hits = 0, through = 0, normal_checked = 0;
-  double worst_depth = 0, worst_angle = 0, worst_path_depth = 0, worst_path_angle = 0;
-};
-
 double coord_ulp(const Query& q) {
   double m = q.a.p.cwiseAbs().maxCoeff();
   for (const Vec3d& v : q.b.v) m = std::max(m, v.cwiseAbs().maxCoeff());
@@ -219,69 +214,48 @@ double triangle_distance(const Tri& t, const Vec3d& x) {
   return nref::triangle_distance(test::v3(x), test::v3(t.v[0]), test::v3(t.v[1]), test::v3(t.v[2]));
 }
 
-void check_all(const std::vector<Query>& qs, const char* what, Stats* st_out = nullptr) {
-  SCOPED_TRACE(what);
-  const std::vector<test::PairResult> simd = run(qs, KernelPath::kSimd), scal = run(qs, KernelPath::kScalar);
-  Stats st;
-  for (size_t k = 0; k < qs.size(); ++k) {
-    const Query& q = qs[k];
-    const Ref f = reference(q);
-    const double L = size_of(q), tol = kRel * L;
-    ++st.lanes;
-    if (std::fabs(f.s) <= tol) continue;
-    for (const test::PairResult* hp : {&simd[k], &scal[k]}) {
-      const test::PairResult& h = *hp;
-      const char* path = hp == &simd[k] ? " simd" : " scalar";
-      ASSERT_EQ(h.count > 0, f.s > 0)
-          << what << " lane " << k << " depth_ref " << f.s << " got " << h.depth << path;
-      if (f.s <= 0) continue;
-      ASSERT_EQ(h.count, 1u);
-      if (hp == &simd[k]) {
-        ++st.hits;
-        st.through += f.through;
-      }
-      const double dd = std::fabs(h.depth - f.s);
-      st.worst_depth = std::max(st.worst_depth, dd / L);
-      EXPECT_LE(dd, tol) << what << " lane " << k << path << " depth " << h.depth << " ref " << f.s
-                         << (f.through ? " through" : " outside") << " e " << q.a.e.transpose();
-      EXPECT_EQ(h.pd[0], h.depth);
-      ASSERT_TRUE(h.n.allFinite());
-      EXPECT_NEAR(h.n.norm(), 1.0, 1e-6);
-      EXPECT_LE(overlap(q, h.n), f.s + tol) << what << " lane " << k << path;
-      const double slack = tol + coord_ulp(q);
+using Stats = test::LaneStats;
+
+/// The pair for test::check_lanes: the references above and the distance of the moved pair
+/// for the translation check.
+const test::PairModel<Query>& model() {
+  static const test::PairModel<Query> instance = [] {
+    test::PairModel<Query> m;
+    m.rel = kRel;
+    m.max_points = 1;
+    m.point_ulps = 1;
+    m.same_bytes_paths = false;
+    m.flag_name = "through";
+    m.reference = [](const Query& q) {
+      const Ref f = reference(q);
+      return test::LaneRef{f.s, f.n, f.conditioned, kAngleTol, f.through};
+    };
+    m.size = size_of;
+    m.coord_ulp = coord_ulp;
+    m.overlap = overlap;
+    // A's point on the ellipsoid; B's on the triangle where the minimiser is unique, up to
+    // the slide of A's support point under the normal's rounding: rho * 1e-6 rad for the
+    // largest radius of curvature rho = e_max^2 / e_min (a pancake's face: 1e4 L).
+    m.points = [](const Query& q, const test::LaneRef& f, const test::PairResult& h, double, double ptol,
+                  const std::string& where) {
+      EXPECT_EQ(h.pd[0], h.depth) << where;
       const Vec3d on_a = h.pt[0] + h.n * (0.5 * h.depth), on_b = h.pt[0] - h.n * (0.5 * h.depth);
-      EXPECT_NEAR(sd_ellipsoid(q.a, on_a), 0.0, slack) << what << " lane " << k << path;
-      // B's point lies on the triangle where the minimiser is unique, up to the slide of
-      // A's support point under the normal's rounding: rho * 1e-6 rad for the largest
-      // radius of curvature rho = e_max^2 / e_min (a pancake's face: 1e4 L).
-      if (f.conditioned) {
+      EXPECT_NEAR(sd_ellipsoid(q.a, on_a), 0.0, ptol) << where;
+      if (f.unique) {
         const double rho = q.a.e.maxCoeff() * q.a.e.maxCoeff() / q.a.e.minCoeff();
-        EXPECT_LE(triangle_distance(q.b, on_b), slack + 1e-6 * rho) << what << " lane " << k << path;
+        EXPECT_LE(triangle_distance(q.b, on_b), ptol + 1e-6 * rho) << where;
       }
-      if (f.conditioned) {
-        const double ang = angle(h.n, f.n);
-        st.worst_angle = std::max(st.worst_angle, ang);
-        EXPECT_LE(ang, kAngleTol) << what << " lane " << k << path << " n " << h.n.transpose() << " ref "
-                                  << f.n.transpose() << (f.through ? " through" : " outside");
-      }
-    }
-    if (f.s > tol && f.conditioned) ++st.normal_checked;
-    if (simd[k].count && scal[k].count) {
-      const double pd = std::fabs(simd[k].depth - scal[k].depth), pa = angle(simd[k].n, scal[k].n);
-      st.worst_path_depth = std::max(st.worst_path_depth, pd / L);
-      if (f.conditioned) st.worst_path_angle = std::max(st.worst_path_angle, pa);
-      EXPECT_LE(pd, tol) << what << " lane " << k;
-      if (f.conditioned) {
-        EXPECT_LE(pa, kAngleTol) << what << " lane " << k;
-      }
-    }
-  }
-  std::printf(
-      "  %-30s lanes %5d hits %5d through %5d normals %5d | worst depth %.2g L, angle %.2g; simd-scalar "
-      "%.2g L, %.2g\n",
-      what, st.lanes, st.hits, st.through, st.normal_checked, st.worst_depth, st.worst_angle,
-      st.worst_path_depth, st.worst_path_angle);
-  if (st_out != nullptr) *st_out = st;
+    };
+    return m;
+  }();
+  return instance;
+}
+
+/// Checks (a)-(e) and the translation check (test::check_lanes) for every lane of qs
+/// (already rounded).
+void check_all(const std::vector<Query>& qs, const char* what, Stats* out_stats = nullptr) {
+  const Stats st = test::check_lanes(model(), qs, run(qs, KernelPath::kSimd), run(qs, KernelPath::kScalar), what);
+  if (out_stats != nullptr) *out_stats = st;
 }
 
 // ---------------------------------------------------------------------------------------
@@ -499,8 +473,8 @@ TEST_P(EllipsoidTriangle, RandomPosesAgainstDoubleReference) {
   Stats st;
   check_all(random_queries(g, n, size, offset), "random", &st);
   EXPECT_GT(st.hits, n / 4);
-  EXPECT_GT(st.through, n / 5);
-  EXPECT_GT(st.normal_checked, st.hits / 2);
+  EXPECT_GT(st.flagged, n / 5);
+  EXPECT_GT(st.normals_checked, st.hits / 2);
 }
 
 INSTANTIATE_TEST_SUITE_P(Scales, EllipsoidTriangle, ::testing::ValuesIn(test::kernel_scales()));
@@ -522,11 +496,11 @@ TEST(EllipsoidTriangleCases, TerrainNeedlesPancakesDegenerate) {
   EXPECT_GT(st.hits, 30);
   const int n_thin = static_cast<int>(test::scaled(300));
   check_all(thin_queries(g, n_thin), "needle / pancake", &st);
-  EXPECT_GT(st.through, n_thin / 5);
+  EXPECT_GT(st.flagged, n_thin / 5);
   check_all(degenerate_queries(g, static_cast<int>(test::scaled(200))), "degenerate triangles", &st);
   EXPECT_GT(st.hits, 30);
   check_all(grazing_queries(g, static_cast<int>(test::scaled(200))), "small grazing triangles", &st);
-  EXPECT_GT(st.normal_checked, 50);
+  EXPECT_GT(st.normals_checked, 50);
 }
 
 TEST(EllipsoidTriangleCases, CentreOnTheTriangle) {
