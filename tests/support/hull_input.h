@@ -12,6 +12,7 @@
 #include <cmath>
 #include <cstdint>
 #include <random>
+#include <string>
 #include <vector>
 
 #include "host/narrowphase/convex_hull.h"
@@ -148,6 +149,68 @@ inline D3 closest_on_segment(D3 a, D3 b, D3 c) {
 /// Test part results (failures) recorded so far in the running test.
 inline int failure_parts() {
   return ::testing::UnitTest::GetInstance()->current_test_info()->result()->total_part_count();
+}
+
+/// HullData from vertices and convex polygons given in cyclic order (either
+/// orientation): planes by Newell's method in double, polygons turned counter-clockwise
+/// seen from outside, offsets = the largest n.v over the hull (every vertex behind), one edge direction
+/// per parallel class.
+inline HullData hull_from_polygons(const std::vector<Eigen::Vector3f>& v, std::vector<std::vector<uint32_t>> polys) {
+  HullData h;
+  h.vertices = v;
+  D3 centre;
+  for (const auto& q : v) centre = centre + D3{q.x(), q.y(), q.z()};
+  centre = (1.0 / static_cast<double>(v.size())) * centre;
+  auto at = [&](uint32_t i) { return D3{v[i].x(), v[i].y(), v[i].z()}; };
+  for (auto& poly : polys) {
+    D3 nn, m;
+    for (size_t i = 0; i < poly.size(); ++i) {
+      nn = nn + cross(at(poly[i]), at(poly[(i + 1) % poly.size()]));
+      m = m + at(poly[i]);
+    }
+    m = (1.0 / static_cast<double>(poly.size())) * m;
+    if (dot(nn, m - centre) < 0) {
+      std::reverse(poly.begin(), poly.end());
+      nn = -1.0 * nn;
+    }
+    nn = unit(nn);
+    double off = -1e300;
+    for (uint32_t i = 0; i < v.size(); ++i) off = std::max(off, dot(nn, at(i)));
+    h.faces.push_back(poly);
+    h.face_normals.emplace_back(static_cast<float>(nn.x), static_cast<float>(nn.y), static_cast<float>(nn.z));
+    h.face_offsets.push_back(static_cast<float>(off));
+    for (size_t i = 0; i < poly.size(); ++i) {
+      const D3 ed = unit(at(poly[(i + 1) % poly.size()]) - at(poly[i]));
+      bool dup = false;
+      for (const auto& x : h.edge_dirs) dup = dup || std::fabs(dot(ed, D3{x.x(), x.y(), x.z()})) > 1 - 1e-12;
+      if (!dup)
+        h.edge_dirs.emplace_back(static_cast<float>(ed.x), static_cast<float>(ed.y),
+                                 static_cast<float>(ed.z));
+    }
+  }
+  return h;
+}
+
+/// The tiny (1e-4), huge (1e4) and far (1e5 from the origin) suites of the hull tests:
+/// pairs(g, hulls, scale, offset) around 12 random hulls of that scale, checked by
+/// check(name, pairs, hulls), whose statistics must count more than 100 hits and 100
+/// misses in each.
+template <class Pairs, class Check>
+void check_tiny_huge_far(Pairs pairs, Check check) {
+  for (const double scale : {1e-4, 1e4}) {
+    Rng g(777 + static_cast<uint32_t>(scale > 1));
+    Hulls hulls;
+    add_random_hulls(g, &hulls, 12, scale);
+    const auto st = check("scale " + std::to_string(scale), pairs(g, hulls, scale, 0.0), hulls);
+    EXPECT_GT(st.hits, 100u);
+    EXPECT_GT(st.misses, 100u);
+  }
+  Rng g(4242);
+  Hulls hulls;
+  add_random_hulls(g, &hulls, 12, 1.0);
+  const auto st = check("far 1e5", pairs(g, hulls, 1.0, 1e5), hulls);
+  EXPECT_GT(st.hits, 100u);
+  EXPECT_GT(st.misses, 100u);
 }
 
 }  // namespace impact::test::hull_input

@@ -7,6 +7,7 @@
 //   ManifoldLanes owning, poisoned output lanes; result(k), lane_bits(k), untouched(k)
 //   run_bucket    a kernel over lanes [begin, end) of two Leaf lists, padded past n
 //   run_queries   the same over a test's own pair structs, read back as PairResults
+//   BucketLanes   a test's pairs as both sides of one bucket, and a kernel run over it
 //   *_leaf        Leafs from double shapes (rounded to float as the host stores them)
 #pragma once
 
@@ -276,6 +277,33 @@ std::vector<PairResult> run_queries(kernels::PairKernel kern, const std::vector<
   if (keep != nullptr) *keep = std::move(o);
   return out;
 }
+
+/// A test's pairs as the two sides of one bucket (leaves(p): its A and B Leafs).
+struct BucketLanes {
+  uint32_t n = 0;
+  LeafLanes la, lb;
+
+  template <class P, class Leaves>
+  BucketLanes(const std::vector<P>& pairs, Leaves leaves) : n(static_cast<uint32_t>(pairs.size())) {
+    for (const P& p : pairs) {
+      const auto [a, b] = leaves(p);
+      la.push(a);
+      lb.push(b);
+    }
+  }
+  kernels::LeafSoA a() const { return la.soa(); }
+  kernels::LeafSoA b() const { return lb.soa(); }
+
+  /// kern over the whole bucket on `path` with the hulls hv.
+  ManifoldLanes run(kernels::PairKernel kern, const kernels::HullView& hv, kernels::KernelPath path) const {
+    ManifoldLanes o(n);
+    kernels::NarrowConfig cfg;
+    cfg.path = path;
+    cfg.hulls = hv;
+    kern(a(), b(), o.view(), kernels::Range{0, n}, cfg);
+    return o;
+  }
+};
 
 /// The same over the whole bucket.
 inline ManifoldLanes run_bucket(kernels::PairKernel kern, const std::vector<Leaf>& a, const std::vector<Leaf>& b,

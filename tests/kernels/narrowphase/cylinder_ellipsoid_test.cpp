@@ -106,14 +106,7 @@ namespace {
 using Vec3d = Eigen::Vector3d;
 using Mat3d = Eigen::Matrix3d;
 namespace nref = test::nref;
-using test::angle;
-using test::columns;
-using test::rot;
-using test::radial;
-using test::tangential;
-using test::frame_of;
-using test::v3;
-using test::ev;
+using test::angle, test::columns, test::rot, test::radial, test::tangential, test::frame_of, test::v3, test::ev;
 
 constexpr double kRel = 1e-5;       // depth tolerance, of L
 constexpr double kAngleTol = 1e-3;  // rad, where the minimum is unique and conditioned

@@ -56,8 +56,7 @@ namespace {
 
 namespace nref = test::nref;
 using Vec3d = Eigen::Vector3d;
-using test::ManifoldLanes;
-using test::PairResult;
+using test::ManifoldLanes, test::PairResult;
 
 constexpr double kRel = 1e-5;       // depth / point tolerance, of L
 constexpr double kAngleTol = 1e-3;  // rad, where the reference's minimum is unique
