@@ -213,4 +213,40 @@ void check_tiny_huge_far(Pairs pairs, Check check) {
   EXPECT_GT(st.misses, 100u);
 }
 
+/// Where point_near_hull put its point.
+enum class Near { kBox, kVertex, kEdge, kFace };
+
+/// A random point near hull h posed as lane q (p, R): uniform in the box of +-2 scale
+/// about its origin, within reach * [0, spread] of a vertex or of an edge point, or along
+/// a face's normal within reach * [-spread, spread] of the face's centroid (*face_normal:
+/// that normal in the world, unnormalised by the pose's float rotation), one in four each.
+template <class Lane>
+D3 point_near_hull(Rng& g, const HullData& h, const Lane& q, double scale, double reach, double spread,
+                   Near* where = nullptr, D3* face_normal = nullptr) {
+  const uint32_t pick = static_cast<uint32_t>(g() % 4);
+  if (where != nullptr) *where = static_cast<Near>(pick);
+  switch (pick) {
+    case 0:
+      return to_world(q, Eigen::Vector3f::Zero()) +
+             D3{uni(g, -2 * scale, 2 * scale), uni(g, -2 * scale, 2 * scale), uni(g, -2 * scale, 2 * scale)};
+    case 1: return to_world(q, h.vertices[g() % h.vertices.size()]) + (reach * uni(g, 0.0, spread)) * random_unit(g);
+    case 2: {
+      const auto& f = h.faces[g() % h.faces.size()];
+      const size_t j = g() % f.size();
+      const D3 a = to_world(q, h.vertices[f[j]]), b = to_world(q, h.vertices[f[(j + 1) % f.size()]]);
+      return a + uni(g, 0, 1) * (b - a) + (reach * uni(g, 0.0, spread)) * random_unit(g);
+    }
+    default: {
+      const size_t fi = g() % h.faces.size();
+      const auto& f = h.faces[fi];
+      D3 m;
+      for (uint32_t v : f) m = m + to_world(q, h.vertices[v]);
+      m = (1.0 / static_cast<double>(f.size())) * m;
+      const D3 nw = to_world(q, h.face_normals[fi]) - to_world(q, Eigen::Vector3f::Zero());
+      if (face_normal != nullptr) *face_normal = nw;
+      return m + (reach * uni(g, -spread, spread)) * nw;
+    }
+  }
+}
+
 }  // namespace impact::test::hull_input

@@ -325,35 +325,11 @@ std::vector<Pair> random_pairs(Rng& g, const Hulls& hulls, uint32_t h0, uint32_t
     q.h = static_cast<float>(scale * (g() % 8 == 0 ? 0.0 : uni(g, 0.0, 1.0)));
     const HullData& h = hulls.data[q.hull];
     const double reach = q.r + q.h;
-    D3 c;
-    switch (g() % 4) {
-      case 0:
-        c = to_world(q, Eigen::Vector3f::Zero()) +
-            D3{uni(g, -2 * scale, 2 * scale), uni(g, -2 * scale, 2 * scale), uni(g, -2 * scale, 2 * scale)};
-        break;
-      case 1:
-        c = to_world(q, h.vertices[g() % h.vertices.size()]) + (reach * uni(g, 0.0, 1.3)) * random_unit(g);
-        break;
-      case 2: {
-        const auto& f = h.faces[g() % h.faces.size()];
-        const size_t j = g() % f.size();
-        const D3 a = to_world(q, h.vertices[f[j]]), b = to_world(q, h.vertices[f[(j + 1) % f.size()]]);
-        c = a + uni(g, 0, 1) * (b - a) + (reach * uni(g, 0.0, 1.3)) * random_unit(g);
-        break;
-      }
-      default: {
-        const size_t fi = g() % h.faces.size();
-        const auto& f = h.faces[fi];
-        D3 m;
-        for (uint32_t v : f) m = m + to_world(q, h.vertices[v]);
-        m = (1.0 / static_cast<double>(f.size())) * m;
-        const D3 nw = to_world(q, h.face_normals[fi]) - to_world(q, Eigen::Vector3f::Zero());
-        c = m + (reach * uni(g, -1.3, 1.3)) * nw;
-        // Half of these lie (nearly) parallel to the face.
-        if (g() & 1) axis_rotation(cross(nw, random_unit(g)) + uni(g, -0.03, 0.03) * nw, q.Ra);
-        break;
-      }
-    }
+    Near where;
+    D3 nw;
+    const D3 c = point_near_hull(g, h, q, scale, reach, 1.3, &where, &nw);
+    // Half of those near a face lie (nearly) parallel to it.
+    if (where == Near::kFace && (g() & 1)) axis_rotation(cross(nw, random_unit(g)) + uni(g, -0.03, 0.03) * nw, q.Ra);
     set_c(&q, c);
     out.push_back(q);
   }

@@ -292,34 +292,7 @@ std::vector<Pair> random_pairs(Rng& g, const Hulls& hulls, uint32_t h0, uint32_t
     q.p[0] = static_cast<float>(p.x), q.p[1] = static_cast<float>(p.y), q.p[2] = static_cast<float>(p.z);
     q.r = static_cast<float>(scale * uni(g, 0.05, 1.0));
     const HullData& h = hulls.data[q.hull];
-    D3 c;
-    switch (g() % 4) {
-      case 0:  // anywhere in a box around the hull
-        c = to_world(q, Eigen::Vector3f::Zero()) +
-            D3{uni(g, -2 * scale, 2 * scale), uni(g, -2 * scale, 2 * scale), uni(g, -2 * scale, 2 * scale)};
-        break;
-      case 1:  // near a vertex
-        c = to_world(q, h.vertices[g() % h.vertices.size()]) + (q.r * uni(g, 0.0, 1.5)) * random_unit(g);
-        break;
-      case 2: {  // near an edge
-        const auto& f = h.faces[g() % h.faces.size()];
-        const size_t j = g() % f.size();
-        const D3 a = to_world(q, h.vertices[f[j]]), b = to_world(q, h.vertices[f[(j + 1) % f.size()]]);
-        c = a + uni(g, 0, 1) * (b - a) + (q.r * uni(g, 0.0, 1.5)) * random_unit(g);
-        break;
-      }
-      default: {  // near a face, along its normal
-        const size_t fi = g() % h.faces.size();
-        const auto& f = h.faces[fi];
-        D3 m;
-        for (uint32_t v : f) m = m + to_world(q, h.vertices[v]);
-        m = (1.0 / static_cast<double>(f.size())) * m;
-        const Eigen::Vector3f& fl = h.face_normals[fi];
-        const D3 nw = to_world(q, fl) - to_world(q, Eigen::Vector3f::Zero());
-        c = m + (q.r * uni(g, -1.5, 1.5)) * nw;
-        break;
-      }
-    }
+    const D3 c = point_near_hull(g, h, q, scale, q.r, 1.5);
     q.c[0] = static_cast<float>(c.x), q.c[1] = static_cast<float>(c.y), q.c[2] = static_cast<float>(c.z);
     out.push_back(q);
   }
