@@ -155,7 +155,8 @@ inline int failure_parts() {
 /// orientation): planes by Newell's method in double, polygons turned counter-clockwise
 /// seen from outside, offsets = the largest n.v over the hull (every vertex behind), one edge direction
 /// per parallel class.
-inline HullData hull_from_polygons(const std::vector<Eigen::Vector3f>& v, std::vector<std::vector<uint32_t>> polys) {
+inline HullData hull_from_polygons(const std::vector<Eigen::Vector3f>& v,
+                                   std::vector<std::vector<uint32_t>> polys) {
   HullData h;
   h.vertices = v;
   D3 centre;
@@ -229,7 +230,9 @@ D3 point_near_hull(Rng& g, const HullData& h, const Lane& q, double scale, doubl
     case 0:
       return to_world(q, Eigen::Vector3f::Zero()) +
              D3{uni(g, -2 * scale, 2 * scale), uni(g, -2 * scale, 2 * scale), uni(g, -2 * scale, 2 * scale)};
-    case 1: return to_world(q, h.vertices[g() % h.vertices.size()]) + (reach * uni(g, 0.0, spread)) * random_unit(g);
+    case 1:
+      return to_world(q, h.vertices[g() % h.vertices.size()]) +
+             (reach * uni(g, 0.0, spread)) * random_unit(g);
     case 2: {
       const auto& f = h.faces[g() % h.faces.size()];
       const size_t j = g() % f.size();

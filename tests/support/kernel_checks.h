@@ -10,6 +10,7 @@
 
 #include <gtest/gtest.h>
 
+#include <Eigen/Core>
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -18,8 +19,6 @@
 #include <string>
 #include <tuple>
 #include <vector>
-
-#include <Eigen/Core>
 
 #include "support/leaf_lanes.h"
 #include "support/shape_geometry.h"
@@ -112,29 +111,30 @@ enum class Carries { kSinglePointExact, kDeepestWithinTol, kNoRule };
 /// check_lanes. The functions taking a point or a shift are in the world frame.
 template <class Q>
 struct PairModel {
-  double rel = 1e-5;          ///< depth tolerance, of L
-  uint32_t max_points = 4;    ///< the kernel's most contact points
+  double rel = 1e-5;                ///< depth tolerance, of L
+  uint32_t max_points = 4;          ///< the kernel's most contact points
   const char* flag_name = nullptr;  ///< printed name of LaneRef::flag ("core inside")
   Carries carries = Carries::kSinglePointExact;
-  std::function<LaneRef(const Q&)> reference;
-  std::function<double(const Q&)> size;       ///< L: the larger bounding radius
-  std::function<double(const Q&)> coord_ulp;  ///< one ulp of the largest coordinate
+  std::function<LaneRef(const Q&)> reference = {};
+  std::function<double(const Q&)> size = {};       ///< L: the larger bounding radius
+  std::function<double(const Q&)> coord_ulp = {};  ///< one ulp of the largest coordinate
   /// The support overlap h_A(n) + h_B(-n) along n (any length).
-  std::function<double(const Q&, const Eigen::Vector3d&)> overlap;
+  std::function<double(const Q&, const Eigen::Vector3d&)> overlap = {};
   /// Signed distances to A's and B's surfaces (< 0 inside).
-  std::function<double(const Q&, const Eigen::Vector3d&)> sd_a, sd_b;
+  std::function<double(const Q&, const Eigen::Vector3d&)> sd_a = {}, sd_b = {};
   /// > 0: the distance between A and B moved by shift; <= 0: they meet (the translation check).
-  std::function<double(const Q&, const Eigen::Vector3d&)> apart;
+  std::function<double(const Q&, const Eigen::Vector3d&)> apart = {};
   /// Optional: a check of a contact's points replacing the default (points_on_surfaces).
-  std::function<void(const Q&, const LaneRef&, const PairResult&, double tol, double ptol, const std::string& where)>
-      points;
+  std::function<void(const Q&, const LaneRef&, const PairResult&, double tol, double ptol,
+                     const std::string& where)>
+      points = {};
   /// Optional: whether a normal ang rad from a unique reference's is acceptable, replacing
   /// ang <= angle_tol.
-  std::function<bool(const Q&, const LaneRef&, const PairResult&, double ang)> normal_ok;
+  std::function<bool(const Q&, const LaneRef&, const PairResult&, double ang)> normal_ok = {};
   /// Optional: refines the reference from a kernel answer (a basin its sampling missed).
-  std::function<void(const Q&, LaneRef&, const PairResult&, LaneStats&)> improve;
+  std::function<void(const Q&, LaneRef&, const PairResult&, LaneStats&)> improve = {};
   /// Optional: the lane as C++ literals, for failure messages.
-  std::function<std::string(const Q&)> literal;
+  std::function<std::string(const Q&)> literal = {};
   bool apart_at_most_d = false;  ///< the translation check also bounds the distance above
   /// The two paths give the same bytes; else (kernels whose two widths contract
   /// differently) depths within tol and, where unique, normals within angle_tol.
@@ -198,8 +198,8 @@ LaneStats check_lanes(const PairModel<Q>& m, const std::vector<Q>& qs, const std
       const std::string where = lane + (is_simd ? " simd" : " scalar");
       ASSERT_LE(h.count, m.max_points) << where;
       if (std::fabs(f.depth) <= tol) return;
-      ASSERT_EQ(h.count > 0, f.depth > 0) << where << " depth_ref " << f.depth << " got "
-                                          << (h.count > 0 ? h.depth : 0.0);
+      ASSERT_EQ(h.count > 0, f.depth > 0)
+          << where << " depth_ref " << f.depth << " got " << (h.count > 0 ? h.depth : 0.0);
       if (f.depth <= 0) return;
       if (is_simd) {
         ++st.hits;
@@ -208,8 +208,8 @@ LaneStats check_lanes(const PairModel<Q>& m, const std::vector<Q>& qs, const std
       }
       const double dd = std::fabs(h.depth - f.depth);
       if (dd / L > st.worst_depth) st.worst_depth = dd / L, st.worst_depth_lane = k;
-      EXPECT_LE(dd, tol) << where << " depth " << h.depth << " ref " << f.depth << " (" << (h.depth - f.depth) / L
-                         << " L)";
+      EXPECT_LE(dd, tol) << where << " depth " << h.depth << " ref " << f.depth << " ("
+                         << (h.depth - f.depth) / L << " L)";
       ASSERT_TRUE(h.n.allFinite()) << where;
       EXPECT_NEAR(h.n.norm(), 1.0, 1e-6) << where;
       EXPECT_LE(m.overlap(q, h.n), f.depth + tol) << where << ": n is not a minimum direction";
@@ -218,8 +218,8 @@ LaneStats check_lanes(const PairModel<Q>& m, const std::vector<Q>& qs, const std
         if (is_simd) ++st.normals_checked;
         if (ang > st.worst_angle) st.worst_angle = ang, st.worst_angle_lane = k;
         EXPECT_TRUE(m.normal_ok ? m.normal_ok(q, f, h, ang) : ang <= f.angle_tol)
-            << where << " angle " << ang << " n " << h.n.transpose() << " ref " << f.n.transpose() << " overlap - ref "
-            << m.overlap(q, h.n) - f.depth;
+            << where << " angle " << ang << " n " << h.n.transpose() << " ref " << f.n.transpose()
+            << " overlap - ref " << m.overlap(q, h.n) - f.depth;
       }
       if (m.points)
         m.points(q, f, h, tol, ptol, where);
@@ -231,7 +231,8 @@ LaneStats check_lanes(const PairModel<Q>& m, const std::vector<Q>& qs, const std
     if (m.same_bytes_paths) {
       EXPECT_TRUE(same_bytes(simd[k], scal[k])) << lane << ": the SIMD and scalar paths differ";
     } else if (std::fabs(f.depth) > tol && simd[k].count && scal[k].count) {
-      EXPECT_LE(std::fabs(simd[k].depth - scal[k].depth), tol) << lane << ": the SIMD and scalar depths differ";
+      EXPECT_LE(std::fabs(simd[k].depth - scal[k].depth), tol)
+          << lane << ": the SIMD and scalar depths differ";
       if (f.unique) {
         EXPECT_LE(angle(simd[k].n, scal[k].n), f.angle_tol) << lane << ": the SIMD and scalar normals differ";
       }
@@ -250,8 +251,8 @@ LaneStats check_lanes(const PairModel<Q>& m, const std::vector<Q>& qs, const std
   }
   std::printf("  %-28s lanes %4d hits %4d", what, st.lanes, st.hits);
   if (m.flag_name != nullptr) std::printf(" %s %4d", m.flag_name, st.flagged);
-  std::printf(" points 1/2/3/4 %d/%d/%d/%d normals %4d", st.counts[1], st.counts[2], st.counts[3], st.counts[4],
-              st.normals_checked);
+  std::printf(" points 1/2/3/4 %d/%d/%d/%d normals %4d", st.counts[1], st.counts[2], st.counts[3],
+              st.counts[4], st.normals_checked);
   if (m.improve) std::printf(" ref improved %d", st.improved);
   std::printf(" | worst |depth-ref| %.2g L (lane %zu), angle %.2g rad (lane %zu)\n", st.worst_depth,
               st.worst_depth_lane, st.worst_angle, st.worst_angle_lane);

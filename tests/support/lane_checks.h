@@ -54,8 +54,8 @@ void expect_chunk_invariant(const std::vector<Query>& qs, Run run, Same same, st
       const uint32_t e = single ? b + 1 : std::min(n, b + 1 + static_cast<uint32_t>(g() % max_chunk));
       const auto part = run(qs, b, e);
       for (uint32_t k = b; k < e; ++k)
-        EXPECT_TRUE(same(part[k], all[k])) << (single ? "lane by lane" : "chunks") << " [" << b << ", " << e
-                                           << ") lane " << k;
+        EXPECT_TRUE(same(part[k], all[k]))
+            << (single ? "lane by lane" : "chunks") << " [" << b << ", " << e << ") lane " << k;
       b = e;
     }
   }

@@ -11,14 +11,13 @@
 //   *_leaf        Leafs from double shapes (rounded to float as the host stores them)
 #pragma once
 
+#include <Eigen/Core>
 #include <algorithm>
 #include <bit>
 #include <cmath>
 #include <cstdint>
 #include <utility>
 #include <vector>
-
-#include <Eigen/Core>
 
 #include "kernels/narrowphase/leaf.h"
 
@@ -54,7 +53,8 @@ inline Leaf sphere_leaf(const Eigen::Vector3d& c, double r) {
 
 /// A capsule (or cylinder) along the axis u, stored as R's column 2 exactly as given (the
 /// float-rounded axis the references use); the other columns complete a frame.
-inline Leaf axial_leaf(kernels::LeafType t, const Eigen::Vector3d& p, const Eigen::Vector3d& u, double r, double h) {
+inline Leaf axial_leaf(kernels::LeafType t, const Eigen::Vector3d& p, const Eigen::Vector3d& u, double r,
+                       double h) {
   const Eigen::Vector3d w = u.normalized();
   const Eigen::Vector3d a = std::fabs(w.x()) < 0.6 ? Eigen::Vector3d(1, 0, 0) : Eigen::Vector3d(0, 1, 0);
   const Eigen::Vector3d x = a.cross(w).normalized();
@@ -239,13 +239,16 @@ struct ManifoldLanes {
 
 /// Lanes rounded up to whole blocks of 16 plus one more block: room for every SIMD
 /// width and for a kernel that wrongly writes past its range.
-inline uint32_t padded_lanes(uint32_t n) { return (n + 15) / 16 * 16 + 16; }
+inline uint32_t padded_lanes(uint32_t n) {
+  return (n + 15) / 16 * 16 + 16;
+}
 
 /// kern over lanes [begin, end) of the bucket a[k], b[k] (a and b of equal size), with
 /// cfg (its path and hulls as given); the inputs are padded to padded_lanes(n) with
 /// copies of lane 0, the output poisoned there and outside [begin, end).
-inline ManifoldLanes run_bucket(kernels::PairKernel kern, const std::vector<Leaf>& a, const std::vector<Leaf>& b,
-                                const kernels::NarrowConfig& cfg, uint32_t begin, uint32_t end) {
+inline ManifoldLanes run_bucket(kernels::PairKernel kern, const std::vector<Leaf>& a,
+                                const std::vector<Leaf>& b, const kernels::NarrowConfig& cfg, uint32_t begin,
+                                uint32_t end) {
   const uint32_t n = static_cast<uint32_t>(a.size()), cap = padded_lanes(n);
   const LeafLanes la(a, cap), lb(b, cap);
   ManifoldLanes out(cap);
@@ -257,9 +260,10 @@ inline ManifoldLanes run_bucket(kernels::PairKernel kern, const std::vector<Leaf
 /// into its two Leafs by leaves(q) (a std::pair); lane k read back as a PairResult (lanes
 /// outside the range left empty); `keep`, if given, receives the output lanes.
 template <class Q, class Leaves>
-std::vector<PairResult> run_queries(kernels::PairKernel kern, const std::vector<Q>& qs, kernels::KernelPath path,
-                                    Leaves leaves, uint32_t begin = 0, uint32_t end = ~0u,
-                                    ManifoldLanes* keep = nullptr, const kernels::HullView* hulls = nullptr) {
+std::vector<PairResult> run_queries(kernels::PairKernel kern, const std::vector<Q>& qs,
+                                    kernels::KernelPath path, Leaves leaves, uint32_t begin = 0,
+                                    uint32_t end = ~0u, ManifoldLanes* keep = nullptr,
+                                    const kernels::HullView* hulls = nullptr) {
   std::vector<Leaf> a, b;
   for (const Q& q : qs) {
     const auto [la, lb] = leaves(q);
@@ -306,8 +310,8 @@ struct BucketLanes {
 };
 
 /// The same over the whole bucket.
-inline ManifoldLanes run_bucket(kernels::PairKernel kern, const std::vector<Leaf>& a, const std::vector<Leaf>& b,
-                                const kernels::NarrowConfig& cfg) {
+inline ManifoldLanes run_bucket(kernels::PairKernel kern, const std::vector<Leaf>& a,
+                                const std::vector<Leaf>& b, const kernels::NarrowConfig& cfg) {
   return run_bucket(kern, a, b, cfg, 0, static_cast<uint32_t>(a.size()));
 }
 

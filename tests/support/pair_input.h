@@ -20,6 +20,7 @@
 // GJK / EPA route).
 #pragma once
 
+#include <Eigen/Core>
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -29,8 +30,6 @@
 #include <string>
 #include <utility>
 #include <vector>
-
-#include <Eigen/Core>
 
 #include "host/narrowphase/shape_store.h"
 #include "kernels/narrowphase/pair_kernels.h"
@@ -116,7 +115,8 @@ inline double kernel_rel_tolerance(LeafType a, LeafType b) {
 /// half-space (collide_support_halfspace). cfg passes through (sat_max_vertices = 0
 /// keeps box / hull pairs on GJK + EPA).
 inline void collide_general(LeafType a, LeafType b, const kernels::LeafSoA& la, const kernels::LeafSoA& lb,
-                            const kernels::ManifoldSoA& out, kernels::Range r, const kernels::NarrowConfig& cfg) {
+                            const kernels::ManifoldSoA& out, kernels::Range r,
+                            const kernels::NarrowConfig& cfg) {
   if (b == kernels::kLeafHalfSpace)
     kernels::collide_support_halfspace(la, lb, out, r, cfg, a);
   else
@@ -147,8 +147,12 @@ inline std::vector<std::pair<LeafType, LeafType>> all_buckets() {
 using nref::V3;
 using Rng = std::mt19937;
 
-inline float f32(double v) { return static_cast<float>(v); }
-inline double uni(Rng& g, double a, double b) { return std::uniform_real_distribution<double>(a, b)(g); }
+inline float f32(double v) {
+  return static_cast<float>(v);
+}
+inline double uni(Rng& g, double a, double b) {
+  return std::uniform_real_distribution<double>(a, b)(g);
+}
 /// test::random_normal_draws, normalised as a V3.
 inline V3 random_unit_v3(Rng& g) {
   const Eigen::Vector3d v = random_normal_draws(g);
@@ -223,7 +227,8 @@ inline HullData brute_force_hull(const std::vector<Eigen::Vector3f>& pf) {
     for (size_t i = 0; i < on.size(); ++i) {
       const V3 ed = nref::normalized(P[on[(i + 1) % on.size()]] - P[on[i]]);
       bool dup = false;
-      for (const auto& x : h.edge_dirs) dup = dup || std::fabs(nref::dot(ed, V3{x.x(), x.y(), x.z()})) > 1 - 1e-9;
+      for (const auto& x : h.edge_dirs)
+        dup = dup || std::fabs(nref::dot(ed, V3{x.x(), x.y(), x.z()})) > 1 - 1e-9;
       if (!dup) h.edge_dirs.push_back(Eigen::Vector3f(f32(ed.x), f32(ed.y), f32(ed.z)));
     }
   }
@@ -233,7 +238,8 @@ inline HullData brute_force_hull(const std::vector<Eigen::Vector3f>& pf) {
 /// The 8 corners of the box of half extents hx, hy, hz about the origin.
 inline std::vector<Eigen::Vector3f> corners(double hx, double hy, double hz) {
   std::vector<Eigen::Vector3f> c;
-  for (int i = 0; i < 8; ++i) c.emplace_back(f32((i & 1) ? hx : -hx), f32((i & 2) ? hy : -hy), f32((i & 4) ? hz : -hz));
+  for (int i = 0; i < 8; ++i)
+    c.emplace_back(f32((i & 1) ? hx : -hx), f32((i & 2) ? hy : -hy), f32((i & 4) ? hz : -hz));
   return c;
 }
 
@@ -265,7 +271,9 @@ inline Leaf make_leaf(LeafType t, V3 c, double scale, Rng& g, HullBank& w) {
   };
   put_p(c);
   switch (t) {
-    case k::kLeafSphere: l.e[0] = f32(scale * uni(g, 0.2, 1.0)); break;
+    case k::kLeafSphere:
+      l.e[0] = f32(scale * uni(g, 0.2, 1.0));
+      break;
     case k::kLeafCapsule:
     case k::kLeafCylinder:
       set_rotation(l, m);
@@ -315,7 +323,8 @@ inline Leaf make_leaf(LeafType t, V3 c, double scale, Rng& g, HullBank& w) {
       l.e[2] = f32(n.z);
       break;
     }
-    default: break;
+    default:
+      break;
   }
   return l;
 }
@@ -343,7 +352,9 @@ inline Leaf degenerate_leaf(const Leaf& in, Rng& g, HullBank& w) {
   Leaf l = in;
   const bool first = g() & 1;
   switch (l.t) {
-    case k::kLeafSphere: l.e[0] = f32(0.1 * l.e[0]); break;
+    case k::kLeafSphere:
+      l.e[0] = f32(0.1 * l.e[0]);
+      break;
     case k::kLeafCapsule:
       if (first)
         l.e[1] = 0.0f;  // a sphere
@@ -381,7 +392,8 @@ inline Leaf degenerate_leaf(const Leaf& in, Rng& g, HullBank& w) {
       for (int j = 0; j < 3; ++j) l.w[3 + j] = f32(apex[j]);
       break;
     }
-    default: break;
+    default:
+      break;
   }
   return l;
 }
@@ -433,7 +445,9 @@ inline Lane make_lane(const Leaf& a, const Leaf& b, const HullBank& w) {
 }
 
 /// The pair's size: the larger bounding radius.
-inline double lane_size(const Lane& l) { return std::max(l.sa.bound_radius(), l.sb.bound_radius()); }
+inline double lane_size(const Lane& l) {
+  return std::max(l.sa.bound_radius(), l.sb.bound_radius());
+}
 
 /// The largest coordinate of a shape (its centre, its vertices).
 inline double coord_magnitude(const nref::Shape& s) {
@@ -505,8 +519,8 @@ struct LaneSet {
 /// The standard sets of bucket (ta, tb), each `count` lanes times `per` (random: 8 per,
 /// the others 1-1.3 per): random, tiny 1e-4, huge 1e4, far 1e5, deep, coincident,
 /// touching, and for box pairs needle/pancake boxes; with `extended`, a set of
-/// degenerate leaves of every type and, for hull pairs, one of many-vertex hulls. The sets are made first and in this order: HullStore
-/// may reallocate while hulls are added (views are taken after).
+/// degenerate leaves of every type and, for hull pairs, one of many-vertex hulls. The sets are made first and
+/// in this order: HullStore may reallocate while hulls are added (views are taken after).
 inline std::vector<LaneSet> standard_lane_sets(LeafType ta, LeafType tb, double per, Rng& g, HullBank& w,
                                                bool extended = false) {
   const std::string name = pair_name(ta, tb);
@@ -538,10 +552,11 @@ inline std::vector<LaneSet> standard_lane_sets(LeafType ta, LeafType tb, double 
     sets.push_back({name + " touching", std::move(touch)});
   }
   if (ta == kernels::kLeafBox || tb == kernels::kLeafBox)
-    sets.push_back({name + " needle/pancake", random_lanes(ta, tb, count(16), 1.0, 0.0, 0.0, 1.1, g, w, &thin_box)});
-  if (extended) {
     sets.push_back(
-        {name + " degenerate", random_lanes(ta, tb, count(24), 1.0, 0.0, 0.0, 1.1, g, w, &degenerate_leaf, false)});
+        {name + " needle/pancake", random_lanes(ta, tb, count(16), 1.0, 0.0, 0.0, 1.1, g, w, &thin_box)});
+  if (extended) {
+    sets.push_back({name + " degenerate",
+                    random_lanes(ta, tb, count(24), 1.0, 0.0, 0.0, 1.1, g, w, &degenerate_leaf, false)});
     if (ta == kernels::kLeafConvex || tb == kernels::kLeafConvex)
       sets.push_back({name + " many-vertex hulls",
                       random_lanes(ta, tb, count(12), 1.0, 0.0, 0.0, 1.1, g, w, &many_vertex_hull, false)});
@@ -550,7 +565,8 @@ inline std::vector<LaneSet> standard_lane_sets(LeafType ta, LeafType tb, double 
 }
 
 /// The A and B leaves of lanes (swapped: B and A).
-inline std::pair<std::vector<Leaf>, std::vector<Leaf>> leaves_of(const std::vector<Lane>& lanes, bool swap = false) {
+inline std::pair<std::vector<Leaf>, std::vector<Leaf>> leaves_of(const std::vector<Lane>& lanes,
+                                                                 bool swap = false) {
   std::pair<std::vector<Leaf>, std::vector<Leaf>> v;
   for (const Lane& l : lanes) {
     v.first.push_back(swap ? l.b : l.a);
@@ -603,7 +619,8 @@ inline std::string literal(const char* name, const Leaf& l, const HullBank& w) {
     o << "\n     hull local vertices={";
     const auto& pts = w.hull_points[l.ref];
     for (size_t i = 0; i < pts.size(); ++i)
-      o << (i ? ", " : "") << "{" << flit(pts[i].x()) << ", " << flit(pts[i].y()) << ", " << flit(pts[i].z()) << "}";
+      o << (i ? ", " : "") << "{" << flit(pts[i].x()) << ", " << flit(pts[i].y()) << ", " << flit(pts[i].z())
+        << "}";
     o << "};";
   }
   o << "\n";
@@ -614,8 +631,8 @@ inline std::string literal(const char* name, const Leaf& l, const HullBank& w) {
 inline std::string literal(const Lane& l, const HullBank& w) {
   std::ostringstream o;
   o.precision(9);
-  o << literal("A", l.a, w) << literal("B", l.b, w) << "    reference: s=" << l.ref.s << " n={" << l.ref.n.x << ", "
-    << l.ref.n.y << ", " << l.ref.n.z << "}";
+  o << literal("A", l.a, w) << literal("B", l.b, w) << "    reference: s=" << l.ref.s << " n={" << l.ref.n.x
+    << ", " << l.ref.n.y << ", " << l.ref.n.z << "}";
   return o.str();
 }
 

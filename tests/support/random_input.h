@@ -48,7 +48,9 @@ inline Eigen::Vector3d random_normal_draws(std::mt19937& g) {
 }
 
 /// A uniformly random unit vector in double (random_normal_draws, normalised).
-inline Eigen::Vector3d random_unit_vector(std::mt19937& g) { return random_normal_draws(g).normalized(); }
+inline Eigen::Vector3d random_unit_vector(std::mt19937& g) {
+  return random_normal_draws(g).normalized();
+}
 
 /// A rotation taking +z to the unit vector m, turned about m by a uniform random angle.
 inline Eigen::Matrix3d frame_with_z(std::mt19937& g, const Eigen::Vector3d& m) {

@@ -5,11 +5,10 @@
 // (tests/support/narrow_reference.h).
 #pragma once
 
-#include <algorithm>
-#include <cmath>
-
 #include <Eigen/Core>
 #include <Eigen/Geometry>
+#include <algorithm>
+#include <cmath>
 
 #include "support/narrow_reference.h"
 
@@ -45,8 +44,12 @@ inline Eigen::Matrix3d turn_to(const Eigen::Vector3d& from, const Eigen::Vector3
 }
 
 /// The unit vector at angle a in the xy plane, and the one a quarter turn on.
-inline Eigen::Vector3d radial(double a) { return {std::cos(a), std::sin(a), 0.0}; }
-inline Eigen::Vector3d tangential(double a) { return {-std::sin(a), std::cos(a), 0.0}; }
+inline Eigen::Vector3d radial(double a) {
+  return {std::cos(a), std::sin(a), 0.0};
+}
+inline Eigen::Vector3d tangential(double a) {
+  return {-std::sin(a), std::cos(a), 0.0};
+}
 
 /// Signed distance of x to the solid box at c with rotation Q (columns: its axes) and
 /// half extents e (< 0 inside).
@@ -72,8 +75,8 @@ inline double cylinder_sd(const Eigen::Vector3d& p, const Eigen::Matrix3d& R, do
 }
 
 /// The closest point of that solid cylinder to an outside point x.
-inline Eigen::Vector3d cylinder_closest(const Eigen::Vector3d& p, const Eigen::Matrix3d& R, double rc, double h,
-                                        const Eigen::Vector3d& x) {
+inline Eigen::Vector3d cylinder_closest(const Eigen::Vector3d& p, const Eigen::Matrix3d& R, double rc,
+                                        double h, const Eigen::Vector3d& x) {
   const Eigen::Vector3d l = R.transpose() * (x - p);
   const double rho = std::hypot(l.x(), l.y());
   const double s = rho > rc ? rc / rho : 1.0;
@@ -81,8 +84,12 @@ inline Eigen::Vector3d cylinder_closest(const Eigen::Vector3d& p, const Eigen::M
 }
 
 /// Eigen and reference vectors.
-inline nref::V3 v3(const Eigen::Vector3d& v) { return {v.x(), v.y(), v.z()}; }
-inline Eigen::Vector3d ev(const nref::V3& v) { return {v.x, v.y, v.z}; }
+inline nref::V3 v3(const Eigen::Vector3d& v) {
+  return {v.x(), v.y(), v.z()};
+}
+inline Eigen::Vector3d ev(const nref::V3& v) {
+  return {v.x, v.y, v.z};
+}
 
 /// A posed leaf of type t for the reference: centre p, rotation R, sizes e (leaf.h).
 inline nref::Shape posed_shape(kernels::LeafType t, const Eigen::Vector3d& p, const Eigen::Matrix3d& R,

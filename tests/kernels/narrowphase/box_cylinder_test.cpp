@@ -72,9 +72,9 @@
 #include "kernels/narrowphase/pair_kernels.h"
 #include "support/kernel_checks.h"
 #include "support/leaf_lanes.h"
-#include "support/shape_geometry.h"
 #include "support/narrow_reference.h"
 #include "support/random_input.h"
+#include "support/shape_geometry.h"
 #include "support/test_support.h"
 
 namespace impact::kernels {
@@ -83,7 +83,8 @@ namespace {
 using Vec3d = Eigen::Vector3d;
 using Mat3d = Eigen::Matrix3d;
 namespace nref = test::nref;
-using test::angle, test::columns, test::rot, test::turn_to, test::radial, test::tangential, test::v3, test::ev;
+using test::angle, test::columns, test::rot, test::turn_to, test::radial, test::tangential, test::v3,
+    test::ev;
 
 constexpr double kRel = 1e-5;       // depth tolerance, of L
 constexpr double kAngleTol = 1e-4;  // rad, where the minimum is unique and conditioned
@@ -126,21 +127,29 @@ double coord_ulp(const Query& q) {
 /// Runs `kern` (the kernel under test unless given) on lanes [begin, end) of one bucket.
 std::vector<test::PairResult> run(const std::vector<Query>& qs, KernelPath path, PairKernel kern = nullptr,
                                   uint32_t begin = 0, uint32_t end = ~0u) {
-  return test::run_queries(kern != nullptr ? kern : &collide_box_cylinder, qs, path, [](const Query& q) {
-    return std::pair{test::posed_leaf(kLeafBox, q.c, q.Q, q.e), test::posed_leaf(kLeafCylinder, q.p, q.R, Vec3d(q.rc, q.h, 0))};
-  }, begin, end);
+  return test::run_queries(
+      kern != nullptr ? kern : &collide_box_cylinder, qs, path,
+      [](const Query& q) {
+        return std::pair{test::posed_leaf(kLeafBox, q.c, q.Q, q.e),
+                         test::posed_leaf(kLeafCylinder, q.p, q.R, Vec3d(q.rc, q.h, 0))};
+      },
+      begin, end);
 }
 
 // --- references -------------------------------------------------------------------------------
 
-double box_sd(const Query& q, const Vec3d& x) { return test::box_sd(q.c, q.Q, q.e, x); }
+double box_sd(const Query& q, const Vec3d& x) {
+  return test::box_sd(q.c, q.Q, q.e, x);
+}
 
 /// Signed distance of x to the solid cylinder of q moved by `shift` (< 0 inside).
 double cyl_sd(const Query& q, const Vec3d& x, const Vec3d& shift = Vec3d::Zero()) {
   return test::cylinder_sd(q.p + shift, q.R, q.rc, q.h, x);
 }
 
-Vec3d cyl_closest(const Query& q, const Vec3d& x) { return test::cylinder_closest(q.p, q.R, q.rc, q.h, x); }
+Vec3d cyl_closest(const Query& q, const Vec3d& x) {
+  return test::cylinder_closest(q.p, q.R, q.rc, q.h, x);
+}
 
 /// The least signed distance to the cylinder (moved by `shift`) over the box's surface:
 /// per face, nested golden-section search over its two coordinates; where = the point.
@@ -183,8 +192,12 @@ double gap(const Query& q, const Vec3d& shift = Vec3d::Zero(), Vec3d* where = nu
   return m;
 }
 
-nref::Shape box_shape(const Query& q) { return test::posed_shape(kLeafBox, q.c, q.Q, q.e); }
-nref::Shape cylinder_shape(const Query& q) { return test::posed_shape(kLeafCylinder, q.p, q.R, Vec3d(q.rc, q.h, 0)); }
+nref::Shape box_shape(const Query& q) {
+  return test::posed_shape(kLeafBox, q.c, q.Q, q.e);
+}
+nref::Shape cylinder_shape(const Query& q) {
+  return test::posed_shape(kLeafCylinder, q.p, q.R, Vec3d(q.rc, q.h, 0));
+}
 
 /// The support overlap of A and B along n.
 double overlap_along(const Query& q, const Vec3d& n) {
@@ -261,29 +274,22 @@ Ref reference(const Query& q) {
 using Stats = test::LaneStats;
 
 /// The pair for test::check_lanes: the references above, the gap for the translation check.
-const test::PairModel<Query>& model() {
-  static const test::PairModel<Query> instance = [] {
-    test::PairModel<Query> m;
-    m.rel = kRel;
-    m.reference = [](const Query& q) {
-      const Ref f = reference(q);
-      return test::LaneRef{f.depth, f.n, f.unique, f.angle_tol, false};
-    };
-    m.size = size_of;
-    m.coord_ulp = coord_ulp;
-    m.overlap = overlap_along;
-    m.sd_a = box_sd;
-    m.sd_b = [](const Query& q, const Vec3d& x) { return cyl_sd(q, x); };
-    m.apart = [](const Query& q, const Vec3d& shift) { return gap(q, shift); };
-    return m;
-  }();
-  return instance;
-}
-
-/// Checks (a)-(e) and the translation check (test::check_lanes) for every lane of qs
-/// (already rounded).
 void check_all(const std::vector<Query>& qs, const char* what, Stats* out_stats = nullptr) {
-  const Stats st = test::check_lanes(model(), qs, run(qs, KernelPath::kSimd), run(qs, KernelPath::kScalar), what);
+  static const test::PairModel<Query> model{
+      .rel = kRel,
+      .reference =
+          [](const Query& q) {
+            const Ref f = reference(q);
+            return test::LaneRef{f.depth, f.n, f.unique, f.angle_tol, false};
+          },
+      .size = size_of,
+      .coord_ulp = coord_ulp,
+      .overlap = overlap_along,
+      .sd_a = box_sd,
+      .sd_b = [](const Query& q, const Vec3d& x) { return cyl_sd(q, x); },
+      .apart = [](const Query& q, const Vec3d& shift) { return gap(q, shift); }};
+  const Stats st =
+      test::check_lanes(model, qs, run(qs, KernelPath::kSimd), run(qs, KernelPath::kScalar), what);
   if (out_stats != nullptr) *out_stats = st;
 }
 

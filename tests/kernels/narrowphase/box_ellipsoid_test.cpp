@@ -47,12 +47,12 @@
 
 #include "kernels/narrowphase/pair_kernels.h"
 #include "support/ellipsoid_reference.h"
-#include "support/lane_checks.h"
 #include "support/kernel_checks.h"
+#include "support/lane_checks.h"
 #include "support/leaf_lanes.h"
-#include "support/shape_geometry.h"
 #include "support/narrow_reference.h"
 #include "support/random_input.h"
+#include "support/shape_geometry.h"
 #include "support/test_support.h"
 
 namespace impact::kernels {
@@ -94,11 +94,15 @@ double size_of(const Query& q) {
 }
 
 /// Runs `kern` on lanes [begin, end) of all queries as one bucket (full SIMD blocks and a tail).
-std::vector<test::PairResult> run(const std::vector<Query>& qs, KernelPath path, PairKernel kern, uint32_t begin = 0,
-                                  uint32_t end = ~0u) {
-  return test::run_queries(kern, qs, path, [](const Query& q) {
-    return std::pair{test::posed_leaf(kLeafBox, q.a.p, q.a.R, q.a.e), test::posed_leaf(kLeafEllipsoid, q.b.p, q.b.R, q.b.e)};
-  }, begin, end);
+std::vector<test::PairResult> run(const std::vector<Query>& qs, KernelPath path, PairKernel kern,
+                                  uint32_t begin = 0, uint32_t end = ~0u) {
+  return test::run_queries(
+      kern, qs, path,
+      [](const Query& q) {
+        return std::pair{test::posed_leaf(kLeafBox, q.a.p, q.a.R, q.a.e),
+                         test::posed_leaf(kLeafEllipsoid, q.b.p, q.b.R, q.b.e)};
+      },
+      begin, end);
 }
 
 std::vector<test::PairResult> run(const std::vector<Query>& qs, KernelPath path) {
@@ -115,7 +119,9 @@ double sd_ellipsoid(const Posed& b, const Vec3d& x) {
   return test::eref::signed_distance_local(b.e, b.R.transpose() * (x - b.p));
 }
 
-double sd_box(const Posed& a, const Vec3d& x) { return test::box_sd(a.p, a.R, a.e, x); }
+double sd_box(const Posed& a, const Vec3d& x) {
+  return test::box_sd(a.p, a.R, a.e, x);
+}
 
 /// The least signed distance to the ellipsoid over the solid box (convex: nested
 /// golden-section search over the box's three coordinates).
@@ -142,11 +148,13 @@ struct Ref {
 };
 
 double overlap(const Query& q, const Vec3d& n) {
-  return nref::overlap(test::posed_shape(kLeafBox, q.a.p, q.a.R, q.a.e), test::posed_shape(kLeafEllipsoid, q.b.p, q.b.R, q.b.e), test::v3(n.normalized()));
+  return nref::overlap(test::posed_shape(kLeafBox, q.a.p, q.a.R, q.a.e),
+                       test::posed_shape(kLeafEllipsoid, q.b.p, q.b.R, q.b.e), test::v3(n.normalized()));
 }
 
 Ref reference(const Query& q) {
-  const nref::Shape a = test::posed_shape(kLeafBox, q.a.p, q.a.R, q.a.e), b = test::posed_shape(kLeafEllipsoid, q.b.p, q.b.R, q.b.e);
+  const nref::Shape a = test::posed_shape(kLeafBox, q.a.p, q.a.R, q.a.e),
+                    b = test::posed_shape(kLeafEllipsoid, q.b.p, q.b.R, q.b.e);
   const nref::PairResult r = nref::solve_pair(a, b, {}, nref::dense_options());
   const double L = size_of(q);
   Ref f;
@@ -170,51 +178,46 @@ using Stats = test::LaneStats;
 
 /// The pair for test::check_lanes: the references above and the distance of the moved pair
 /// for the translation check.
-const test::PairModel<Query>& model() {
-  static const test::PairModel<Query> instance = [] {
-    test::PairModel<Query> m;
-    m.rel = kRel;
-    m.max_points = 1;
-    m.point_ulps = 1;
-    m.same_bytes_paths = false;
-    m.reference = [](const Query& q) {
-      const Ref f = reference(q);
-      return test::LaneRef{f.s, f.n, f.conditioned, kAngleTol, false};
-    };
-    m.size = size_of;
-    m.coord_ulp = coord_ulp;
-    m.overlap = overlap;
-    // The ellipsoid's point on its surface; the box's where conditioned, up to the slide
-    // of the ellipsoid's support point under the normal's error (rho per rad, rho =
-    // e_max^2 / e_min the largest radius of curvature; the error: the angle to the
-    // reference's normal plus 1e-6).
-    m.points = [](const Query& q, const test::LaneRef& f, const test::PairResult& h, double, double ptol,
-                  const std::string& where) {
-      EXPECT_EQ(h.pd[0], h.depth) << where;
-      const Vec3d on_a = h.pt[0] + h.n * (0.5 * h.depth), on_b = h.pt[0] - h.n * (0.5 * h.depth);
-      EXPECT_NEAR(sd_ellipsoid(q.b, on_b), 0.0, ptol) << where;
-      if (f.unique) {
-        const double rho = q.b.e.maxCoeff() * q.b.e.maxCoeff() / q.b.e.minCoeff();
-        EXPECT_NEAR(sd_box(q.a, on_a), 0.0, ptol + (angle(h.n, f.n) + 1e-6) * rho) << where;
-      }
-    };
-    // A normal farther than kAngleTol is accepted only when it is as good a separating
-    // direction as the reference's up to the overlap's float rounding (kRoundingSlack L),
-    // and within 10 kAngleTol: the overlap then rises by less than its rounding over that
-    // angle (seen: 3.1e-4 rad, 6.9e-8 L worse, 1 lane in ~1600 at intensity 10).
-    m.normal_ok = [](const Query& q, const test::LaneRef& f, const test::PairResult& h, double ang) {
-      const bool as_good = overlap(q, h.n) <= f.depth + kRoundingSlack * size_of(q);
-      return ang <= kAngleTol || (as_good && ang <= 10 * kAngleTol);
-    };
-    return m;
-  }();
-  return instance;
-}
-
-/// Checks (a)-(e) and the translation check (test::check_lanes) for every lane of qs
-/// (already rounded).
 void check_all(const std::vector<Query>& qs, const char* what, Stats* out_stats = nullptr) {
-  const Stats st = test::check_lanes(model(), qs, run(qs, KernelPath::kSimd), run(qs, KernelPath::kScalar), what);
+  // The ellipsoid's point on its surface; the box's where conditioned, up to the slide
+  // of the ellipsoid's support point under the normal's error (rho per rad, rho =
+  // e_max^2 / e_min the largest radius of curvature; the error: the angle to the
+  // reference's normal plus 1e-6).
+  // A normal farther than kAngleTol is accepted only when it is as good a separating
+  // direction as the reference's up to the overlap's float rounding (kRoundingSlack L),
+  // and within 10 kAngleTol: the overlap then rises by less than its rounding over that
+  // angle (seen: 3.1e-4 rad, 6.9e-8 L worse, 1 lane in ~1600 at intensity 10).
+  static const test::PairModel<Query> model{
+      .rel = kRel,
+      .max_points = 1,
+      .reference =
+          [](const Query& q) {
+            const Ref f = reference(q);
+            return test::LaneRef{f.s, f.n, f.conditioned, kAngleTol, false};
+          },
+      .size = size_of,
+      .coord_ulp = coord_ulp,
+      .overlap = overlap,
+      .points =
+          [](const Query& q, const test::LaneRef& f, const test::PairResult& h, double, double ptol,
+             const std::string& where) {
+            EXPECT_EQ(h.pd[0], h.depth) << where;
+            const Vec3d on_a = h.pt[0] + h.n * (0.5 * h.depth), on_b = h.pt[0] - h.n * (0.5 * h.depth);
+            EXPECT_NEAR(sd_ellipsoid(q.b, on_b), 0.0, ptol) << where;
+            if (f.unique) {
+              const double rho = q.b.e.maxCoeff() * q.b.e.maxCoeff() / q.b.e.minCoeff();
+              EXPECT_NEAR(sd_box(q.a, on_a), 0.0, ptol + (angle(h.n, f.n) + 1e-6) * rho) << where;
+            }
+          },
+      .normal_ok =
+          [](const Query& q, const test::LaneRef& f, const test::PairResult& h, double ang) {
+            const bool as_good = overlap(q, h.n) <= f.depth + kRoundingSlack * size_of(q);
+            return ang <= kAngleTol || (as_good && ang <= 10 * kAngleTol);
+          },
+      .same_bytes_paths = false,
+      .point_ulps = 1};
+  const Stats st =
+      test::check_lanes(model, qs, run(qs, KernelPath::kSimd), run(qs, KernelPath::kScalar), what);
   if (out_stats != nullptr) *out_stats = st;
 }
 
@@ -235,8 +238,10 @@ std::vector<Query> random_queries(std::mt19937& g, int n, double size, double of
     const Vec3d v(u(g), u(g), u(g));
     // Half near the box's surface (its corner region scaled by 1.1 plus the radii), half
     // anywhere within reach.
-    const Vec3d c = k % 2 ? Vec3d(p + q.a.R * v.cwiseProduct(q.a.e) * 1.1 + test::random_unit_vector(g) * (0.8 * e.mean()))
-                          : Vec3d(p + v * (1.6 * size));
+    const Vec3d c =
+        k % 2
+            ? Vec3d(p + q.a.R * v.cwiseProduct(q.a.e) * 1.1 + test::random_unit_vector(g) * (0.8 * e.mean()))
+            : Vec3d(p + v * (1.6 * size));
     q.b = Posed{c, test::random_rotation(g), e};
     qs.push_back(rounded(q));
   }
@@ -389,7 +394,8 @@ TEST(BoxEllipsoidReference, ReferencesAgree) {
   int compared = 0;
   for (const Query& q : random_queries(g, static_cast<int>(test::scaled(40)), 1.0, 0.0)) {
     const nref::PairResult r =
-        nref::solve_pair(test::posed_shape(kLeafBox, q.a.p, q.a.R, q.a.e), test::posed_shape(kLeafEllipsoid, q.b.p, q.b.R, q.b.e), {}, nref::dense_options());
+        nref::solve_pair(test::posed_shape(kLeafBox, q.a.p, q.a.R, q.a.e),
+                         test::posed_shape(kLeafEllipsoid, q.b.p, q.b.R, q.b.e), {}, nref::dense_options());
     if (!(r.s < -1e-3)) continue;
     const double sd = box_minimum(q, 28);
     EXPECT_NEAR(r.s, -sd, 1e-6) << compared;
@@ -416,8 +422,9 @@ TEST(BoxEllipsoidCases, ConstructedTouching) {
   std::mt19937 g(29);
   const std::vector<Touch> ts = touching_queries(g, static_cast<int>(test::scaled(300)));
   for (KernelPath path : {KernelPath::kSimd, KernelPath::kScalar}) {
-    const int hits = test::expect_built(ts, run(test::queries_of(ts), path), kRel, size_of,
-                                        [](size_t, double) { return kAngleTol; }, "touching");
+    const int hits = test::expect_built(
+        ts, run(test::queries_of(ts), path), kRel, size_of, [](size_t, double) { return kAngleTol; },
+        "touching");
     EXPECT_GT(hits, static_cast<int>(ts.size()) / 4);
   }
 }
@@ -520,9 +527,12 @@ TEST(BoxEllipsoidCases, RoundEllipsoidIsSphereBox) {
   const std::vector<test::PairResult> mine = run(qs, KernelPath::kSimd);
   const size_t n = qs.size();
   test::ManifoldLanes o;
-  test::run_queries(&collide_sphere_box, qs, KernelPath::kSimd, [](const Query& q) {
-    return std::pair{test::sphere_leaf(q.b.p, q.b.e[0]), test::posed_leaf(kLeafBox, q.a.p, q.a.R, q.a.e)};
-  }, 0, ~0u, &o);
+  test::run_queries(
+      &collide_sphere_box, qs, KernelPath::kSimd,
+      [](const Query& q) {
+        return std::pair{test::sphere_leaf(q.b.p, q.b.e[0]), test::posed_leaf(kLeafBox, q.a.p, q.a.R, q.a.e)};
+      },
+      0, ~0u, &o);
   int hits = 0;
   for (uint32_t k = 0; k < n; ++k) {
     const test::PairResult r = o.result(k);

@@ -94,9 +94,12 @@ ManifoldLanes run(k::PairKernel kern, const Bucket& bk, const k::HullView& hv, k
 }
 
 ManifoldLanes run_gjk(const Bucket& bk, const k::HullView& hv) {
-  return bk.run([](const k::LeafSoA& a, const k::LeafSoA& b, const k::ManifoldSoA& o, k::Range r,
-                   const k::NarrowConfig& cfg) { k::collide_gjk_epa(a, b, o, r, cfg, k::kLeafCapsule, k::kLeafConvex); },
-                hv, k::KernelPath::kSimd);
+  return bk.run(
+      [](const k::LeafSoA& a, const k::LeafSoA& b, const k::ManifoldSoA& o, k::Range r,
+         const k::NarrowConfig& cfg) {
+        k::collide_gjk_epa(a, b, o, r, cfg, k::kLeafCapsule, k::kLeafConvex);
+      },
+      hv, k::KernelPath::kSimd);
 }
 
 // --- the reference ---------------------------------------------------------------------------
@@ -329,7 +332,8 @@ std::vector<Pair> random_pairs(Rng& g, const Hulls& hulls, uint32_t h0, uint32_t
     D3 nw;
     const D3 c = point_near_hull(g, h, q, scale, reach, 1.3, &where, &nw);
     // Half of those near a face lie (nearly) parallel to it.
-    if (where == Near::kFace && (g() & 1)) axis_rotation(cross(nw, random_unit(g)) + uni(g, -0.03, 0.03) * nw, q.Ra);
+    if (where == Near::kFace && (g() & 1))
+      axis_rotation(cross(nw, random_unit(g)) + uni(g, -0.03, 0.03) * nw, q.Ra);
     set_c(&q, c);
     out.push_back(q);
   }
@@ -354,11 +358,11 @@ TEST(CapsuleConvex, RandomPosesAgreeWithReference) {
 }
 
 TEST(CapsuleConvex, TinyHugeAndFarScales) {
-  check_tiny_huge_far(
-      [](Rng& g, const Hulls& h, double scale, double offset) {
-        return random_pairs(g, h, 0, 12, scaled(800), scale, offset);
-      },
-      [](const std::string& what, const std::vector<Pair>& pairs, const Hulls& h) { return check_pairs(what, pairs, h); });
+  check_tiny_huge_far([](Rng& g, const Hulls& h, double scale,
+                         double offset) { return random_pairs(g, h, 0, 12, scaled(800), scale, offset); },
+                      [](const std::string& what, const std::vector<Pair>& pairs, const Hulls& h) {
+                        return check_pairs(what, pairs, h);
+                      });
 }
 
 TEST(CapsuleConvex, ManyFaceHull) {

@@ -51,9 +51,9 @@
 #include "kernels/narrowphase/pair_kernels.h"
 #include "support/kernel_checks.h"
 #include "support/leaf_lanes.h"
-#include "support/shape_geometry.h"
 #include "support/narrow_reference.h"
 #include "support/random_input.h"
+#include "support/shape_geometry.h"
 #include "support/test_support.h"
 
 namespace impact::kernels {
@@ -103,12 +103,13 @@ double coord_ulp(const Query& q) {
 /// (the capsule's R: column 2, the axis, as rounded).
 std::vector<test::PairResult> run(const std::vector<Query>& qs, KernelPath path, PairKernel kern = nullptr,
                                   uint32_t begin = 0, uint32_t end = ~0u) {
-  return test::run_queries(kern != nullptr ? kern : pair_kernel(kLeafCapsule, kLeafCylinder), qs, path,
-                           [](const Query& q) {
-                             return std::pair{test::axial_leaf(kLeafCapsule, q.c, q.u, q.r, q.hs),
-                                              test::posed_leaf(kLeafCylinder, q.p, q.R, Vec3d(q.rc, q.h, 0))};
-                           },
-                           begin, end);
+  return test::run_queries(
+      kern != nullptr ? kern : pair_kernel(kLeafCapsule, kLeafCylinder), qs, path,
+      [](const Query& q) {
+        return std::pair{test::axial_leaf(kLeafCapsule, q.c, q.u, q.r, q.hs),
+                         test::posed_leaf(kLeafCylinder, q.p, q.R, Vec3d(q.rc, q.h, 0))};
+      },
+      begin, end);
 }
 
 // --- references -------------------------------------------------------------------------------
@@ -118,7 +119,9 @@ double cyl_sd(const Query& q, const Vec3d& x, const Vec3d& shift = Vec3d::Zero()
   return test::cylinder_sd(q.p + shift, q.R, q.rc, q.h, x);
 }
 
-Vec3d cyl_closest(const Query& q, const Vec3d& x) { return test::cylinder_closest(q.p, q.R, q.rc, q.h, x); }
+Vec3d cyl_closest(const Query& q, const Vec3d& x) {
+  return test::cylinder_closest(q.p, q.R, q.rc, q.h, x);
+}
 
 /// Signed distance of x to the capsule (< 0 inside).
 double cap_sd(const Query& q, const Vec3d& x) {
@@ -155,7 +158,9 @@ nref::Shape capsule_shape(const Query& q) {
   s.e[1] = q.hs;
   return s;
 }
-nref::Shape cylinder_shape(const Query& q) { return test::posed_shape(kLeafCylinder, q.p, q.R, Vec3d(q.rc, q.h, 0)); }
+nref::Shape cylinder_shape(const Query& q) {
+  return test::posed_shape(kLeafCylinder, q.p, q.R, Vec3d(q.rc, q.h, 0));
+}
 
 /// The support overlap of A and B along n (the reference's o(n), plus the capsule radius).
 double overlap_along(const Query& q, const Vec3d& n) {
@@ -222,31 +227,24 @@ using Stats = test::LaneStats;
 
 /// The pair for test::check_lanes: the references above and the distance of the moved pair
 /// for the translation check.
-const test::PairModel<Query>& model() {
-  static const test::PairModel<Query> instance = [] {
-    test::PairModel<Query> m;
-    m.rel = kRel;
-    m.max_points = 2;
-    m.flag_name = "core-inside";
-    m.reference = [](const Query& q) {
-      const Ref f = reference(q);
-      return test::LaneRef{f.depth, f.n, f.unique, kAngleTol, !f.core_outside};
-    };
-    m.size = size_of;
-    m.coord_ulp = coord_ulp;
-    m.overlap = overlap_along;
-    m.sd_a = cap_sd;
-    m.sd_b = [](const Query& q, const Vec3d& x) { return cyl_sd(q, x); };
-    m.apart = [](const Query& q, const Vec3d& shift) { return core_min(q, shift) - q.r; };
-    return m;
-  }();
-  return instance;
-}
-
-/// Checks (a)-(e) and the translation check (test::check_lanes) for every lane of qs
-/// (already rounded).
 void check_all(const std::vector<Query>& qs, const char* what, Stats* out_stats = nullptr) {
-  const Stats st = test::check_lanes(model(), qs, run(qs, KernelPath::kSimd), run(qs, KernelPath::kScalar), what);
+  static const test::PairModel<Query> model{
+      .rel = kRel,
+      .max_points = 2,
+      .flag_name = "core-inside",
+      .reference =
+          [](const Query& q) {
+            const Ref f = reference(q);
+            return test::LaneRef{f.depth, f.n, f.unique, kAngleTol, !f.core_outside};
+          },
+      .size = size_of,
+      .coord_ulp = coord_ulp,
+      .overlap = overlap_along,
+      .sd_a = cap_sd,
+      .sd_b = [](const Query& q, const Vec3d& x) { return cyl_sd(q, x); },
+      .apart = [](const Query& q, const Vec3d& shift) { return core_min(q, shift) - q.r; }};
+  const Stats st =
+      test::check_lanes(model, qs, run(qs, KernelPath::kSimd), run(qs, KernelPath::kScalar), what);
   if (out_stats != nullptr) *out_stats = st;
 }
 
@@ -390,10 +388,11 @@ TEST(CapsuleCylinder, DeepCores) {
     // crossing a rim
     const double a = M_PI * uni(g);
     const Vec3d rim(rc * std::cos(a), rc * std::sin(a), h * (uni(g) > 0 ? 1 : -1));
-    qs.push_back(posed(g, rim + 0.1 * Vec3d(uni(g), uni(g), uni(g)), test::random_unit_vector(g), r, hs, rc, h));
+    qs.push_back(
+        posed(g, rim + 0.1 * Vec3d(uni(g), uni(g), uni(g)), test::random_unit_vector(g), r, hs, rc, h));
     // wholly inside, short core
-    qs.push_back(posed(g, Vec3d(0.3 * rc * uni(g), 0.3 * rc * uni(g), 0.3 * h * uni(g)), test::random_unit_vector(g), 0.05,
-                       0.2 * std::min(rc, h), rc, h));
+    qs.push_back(posed(g, Vec3d(0.3 * rc * uni(g), 0.3 * rc * uni(g), 0.3 * h * uni(g)),
+                       test::random_unit_vector(g), 0.05, 0.2 * std::min(rc, h), rc, h));
     // coincident centres
     Query c = posed(g, Vec3d::Zero(), test::random_unit_vector(g), r, hs, rc, h);
     c.c = c.p;
@@ -470,7 +469,8 @@ TEST(CapsuleCylinder, ShortCoresAtARim) {
       const Vec3d out =
           (Vec3d(std::cos(a), std::sin(a), 0) * (0.2 + std::fabs(uni(g))) + Vec3d(0, 0, side)).normalized();
       const double dist = 0.02 + 0.28 * std::fabs(uni(g));
-      qs.push_back(posed(g, rim + dist * out, test::random_unit_vector(g), dist * (0.5 + std::fabs(uni(g))), hs, rc, h));
+      qs.push_back(posed(g, rim + dist * out, test::random_unit_vector(g), dist * (0.5 + std::fabs(uni(g))),
+                         hs, rc, h));
       // the core perpendicular to the offset, its nearest point to the rim just beyond an
       // end: the interior (rim) candidate's direction ties the end's within rounding
       const Vec3d u = out.cross(test::random_unit_vector(g)).normalized();

@@ -56,12 +56,12 @@
 
 #include "kernels/narrowphase/pair_kernels.h"
 #include "support/ellipsoid_reference.h"
-#include "support/lane_checks.h"
 #include "support/kernel_checks.h"
+#include "support/lane_checks.h"
 #include "support/leaf_lanes.h"
-#include "support/shape_geometry.h"
 #include "support/narrow_reference.h"
 #include "support/random_input.h"
+#include "support/shape_geometry.h"
 #include "support/test_support.h"
 
 namespace impact::kernels {
@@ -110,12 +110,13 @@ double size_of(const Query& q) {
 
 /// The capsule (R's column 2 exactly the rounded axis the references use) and the ellipsoid.
 std::pair<test::Leaf, test::Leaf> leaves(const Query& q) {
-  return {test::axial_leaf(kLeafCapsule, q.a.p, q.a.u, q.a.r, q.a.h), test::posed_leaf(kLeafEllipsoid, q.b.p, q.b.R, q.b.e)};
+  return {test::axial_leaf(kLeafCapsule, q.a.p, q.a.u, q.a.r, q.a.h),
+          test::posed_leaf(kLeafEllipsoid, q.b.p, q.b.R, q.b.e)};
 }
 
 /// Runs `kern` on lanes [begin, end) of all queries as one bucket (full SIMD blocks and a tail).
-std::vector<test::PairResult> run(const std::vector<Query>& qs, KernelPath path, PairKernel kern, uint32_t begin = 0,
-                                  uint32_t end = ~0u) {
+std::vector<test::PairResult> run(const std::vector<Query>& qs, KernelPath path, PairKernel kern,
+                                  uint32_t begin = 0, uint32_t end = ~0u) {
   return test::run_queries(kern, qs, path, leaves, begin, end);
 }
 
@@ -159,7 +160,9 @@ nref::Shape capsule_shape(const Query& q) {
   return s;
 }
 
-nref::Shape ellipsoid_shape(const Ell& b) { return test::posed_shape(kLeafEllipsoid, b.p, b.R, b.e); }
+nref::Shape ellipsoid_shape(const Ell& b) {
+  return test::posed_shape(kLeafEllipsoid, b.p, b.R, b.e);
+}
 
 struct Ref {
   double s;      // depth (> 0 overlapping)
@@ -250,41 +253,35 @@ using Stats = test::LaneStats;
 
 /// The pair for test::check_lanes: the references above and the distance of the moved pair
 /// for the translation check.
-const test::PairModel<Query>& model() {
-  static const test::PairModel<Query> instance = [] {
-    test::PairModel<Query> m;
-    m.rel = kRel;
-    m.max_points = 1;
-    m.point_ulps = 1;
-    m.same_bytes_paths = false;
-    m.flag_name = "through";
-    m.reference = [](const Query& q) {
-      const Ref f = reference(q);
-      return test::LaneRef{f.s, f.n, f.conditioned, f.angle_tol, f.through};
-    };
-    m.size = size_of;
-    m.coord_ulp = coord_ulp;
-    m.overlap = overlap;
-    // The points on both surfaces (+ for A the slide of B's support point under the
-    // normal's rounding: 1e-6 of the largest radius of curvature e_max^2 / e_min; a
-    // pancake's face: 1e4 L).
-    m.points = [](const Query& q, const test::LaneRef&, const test::PairResult& h, double, double ptol,
-                  const std::string& where) {
-      EXPECT_EQ(h.pd[0], h.depth) << where;
-      const Vec3d on_a = h.pt[0] + h.n * (0.5 * h.depth), on_b = h.pt[0] - h.n * (0.5 * h.depth);
-      const double rho = q.b.e.maxCoeff() * q.b.e.maxCoeff() / q.b.e.minCoeff();
-      EXPECT_NEAR(sd_capsule(q, on_a), 0.0, ptol + 1e-6 * rho) << where;
-      EXPECT_NEAR(sd_ellipsoid(q.b, on_b), 0.0, ptol) << where;
-    };
-    return m;
-  }();
-  return instance;
-}
-
-/// Checks (a)-(e) and the translation check (test::check_lanes) for every lane of qs
-/// (already rounded).
 void check_all(const std::vector<Query>& qs, const char* what, Stats* out_stats = nullptr) {
-  const Stats st = test::check_lanes(model(), qs, run(qs, KernelPath::kSimd), run(qs, KernelPath::kScalar), what);
+  // The points on both surfaces (+ for A the slide of B's support point under the
+  // normal's rounding: 1e-6 of the largest radius of curvature e_max^2 / e_min; a
+  // pancake's face: 1e4 L).
+  static const test::PairModel<Query> model{
+      .rel = kRel,
+      .max_points = 1,
+      .flag_name = "through",
+      .reference =
+          [](const Query& q) {
+            const Ref f = reference(q);
+            return test::LaneRef{f.s, f.n, f.conditioned, f.angle_tol, f.through};
+          },
+      .size = size_of,
+      .coord_ulp = coord_ulp,
+      .overlap = overlap,
+      .points =
+          [](const Query& q, const test::LaneRef&, const test::PairResult& h, double, double ptol,
+             const std::string& where) {
+            EXPECT_EQ(h.pd[0], h.depth) << where;
+            const Vec3d on_a = h.pt[0] + h.n * (0.5 * h.depth), on_b = h.pt[0] - h.n * (0.5 * h.depth);
+            const double rho = q.b.e.maxCoeff() * q.b.e.maxCoeff() / q.b.e.minCoeff();
+            EXPECT_NEAR(sd_capsule(q, on_a), 0.0, ptol + 1e-6 * rho) << where;
+            EXPECT_NEAR(sd_ellipsoid(q.b, on_b), 0.0, ptol) << where;
+          },
+      .same_bytes_paths = false,
+      .point_ulps = 1};
+  const Stats st =
+      test::check_lanes(model, qs, run(qs, KernelPath::kSimd), run(qs, KernelPath::kScalar), what);
   if (out_stats != nullptr) *out_stats = st;
 }
 
@@ -428,7 +425,8 @@ TEST(CapsuleEllipsoidReference, ReferencesAgree) {
     const double t = core_minimum(q, &sd);
     if (!(sd > 1e-3)) continue;
     const Ref f = outside_reference(q, sd, t);
-    const nref::PairResult r = nref::solve_pair(capsule_shape(q), ellipsoid_shape(q.b), {}, nref::dense_options());
+    const nref::PairResult r =
+        nref::solve_pair(capsule_shape(q), ellipsoid_shape(q.b), {}, nref::dense_options());
     // (The float-rounded R is orthonormal to ~6e-8: the support function reads it as a
     // linear map, the point reference inverts it by its transpose.)
     EXPECT_NEAR(r.s, f.s, 2e-7) << compared;
@@ -459,11 +457,13 @@ TEST(CapsuleEllipsoidCases, ConstructedTouching) {
   // (in a flat valley, the bound of check_all: an end nearly tangent to the surface has
   // the circle's candidate 3e-4 rad away within float noise of the minimum)
   const auto angle_tol = [&](size_t k, double L) {
-    const double rise = nref::ring_rise(capsule_shape(ts[k].q), ellipsoid_shape(ts[k].q.b), test::v3(ts[k].n));
+    const double rise =
+        nref::ring_rise(capsule_shape(ts[k].q), ellipsoid_shape(ts[k].q.b), test::v3(ts[k].n));
     return nref::valley_angle(kAngleTol, std::max(rise, 1e-6 * L), 3e-3, kValleyNoise * L);
   };
   for (KernelPath path : {KernelPath::kSimd, KernelPath::kScalar}) {
-    const int hits = test::expect_built(ts, run(test::queries_of(ts), path), kRel, size_of, angle_tol, "touching");
+    const int hits =
+        test::expect_built(ts, run(test::queries_of(ts), path), kRel, size_of, angle_tol, "touching");
     EXPECT_GT(hits, static_cast<int>(ts.size()) / 4);
   }
 }
@@ -534,9 +534,12 @@ TEST(CapsuleEllipsoidCases, RoundEllipsoidIsSphereCapsule) {
   // sphere (A) - capsule (B): the same pairs with the roles swapped.
   const size_t n = qs.size();
   test::ManifoldLanes o;
-  test::run_queries(&collide_sphere_capsule, qs, KernelPath::kSimd, [](const Query& q) {
-    return std::pair{test::sphere_leaf(q.b.p, q.b.e[0]), leaves(q).first};
-  }, 0, ~0u, &o);
+  test::run_queries(
+      &collide_sphere_capsule, qs, KernelPath::kSimd,
+      [](const Query& q) {
+        return std::pair{test::sphere_leaf(q.b.p, q.b.e[0]), leaves(q).first};
+      },
+      0, ~0u, &o);
   int hits = 0;
   for (uint32_t k = 0; k < n; ++k) {
     const test::PairResult r = o.result(k);
@@ -562,9 +565,12 @@ TEST(CapsuleEllipsoidCases, ZeroLengthCoreIsSphereEllipsoid) {
   const std::vector<test::PairResult> mine = run(qs, KernelPath::kSimd);
   const size_t n = qs.size();
   test::ManifoldLanes o;
-  test::run_queries(&collide_sphere_ellipsoid, qs, KernelPath::kSimd, [](const Query& q) {
-    return std::pair{test::sphere_leaf(q.a.p, q.a.r), leaves(q).second};
-  }, 0, ~0u, &o);
+  test::run_queries(
+      &collide_sphere_ellipsoid, qs, KernelPath::kSimd,
+      [](const Query& q) {
+        return std::pair{test::sphere_leaf(q.a.p, q.a.r), leaves(q).second};
+      },
+      0, ~0u, &o);
   int hits = 0;
   for (uint32_t k = 0; k < n; ++k) {
     const test::PairResult r = o.result(k);

@@ -61,13 +61,13 @@ namespace {
 namespace k = kernels;
 using kernels::KernelPath;
 
-constexpr double kAngleTol = 0.02;   // rad, where the reference's minimum is unique
+constexpr double kAngleTol = 0.02;  // rad, where the reference's minimum is unique
 // The two paths of a kernel without the same-bytes promise: the same formulas, fused
 // multiply-adds contracted differently (measured: depth 2.2e-7 L, normals 4.9e-7 rad).
 constexpr double kPathDepthRel = 1e-6;  // of L
 constexpr double kPathAngleTol = 1e-5;  // rad, where the reference's minimum is unique
 constexpr double kPointRel = 1e-5;      // of L: points and point depths
-constexpr double kGeneralRel = 1e-3;  // the general route's depth tolerance, of L
+constexpr double kGeneralRel = 1e-3;    // the general route's depth tolerance, of L
 
 /// Buckets whose kernels promise the same bytes on both paths: those running the same
 /// per-lane code for kSimd and kScalar (GJK / EPA and SAT: gjk_epa.cpp, sat.cpp; sphere-
@@ -75,10 +75,10 @@ constexpr double kGeneralRel = 1e-3;  // the general route's depth tolerance, of
 /// compiled without FMA contraction (no_contract.h). The others agree within tolerance.
 const std::set<std::pair<LeafType, LeafType>>& same_bytes_buckets() {
   static const std::set<std::pair<LeafType, LeafType>> s = {
-      {k::kLeafBox, k::kLeafConvex},          {k::kLeafConvex, k::kLeafConvex},
-      {k::kLeafSphere, k::kLeafConvex},       {k::kLeafCapsule, k::kLeafConvex},
-      {k::kLeafCapsule, k::kLeafCylinder},    {k::kLeafBox, k::kLeafCylinder},
-      {k::kLeafCylinder, k::kLeafCylinder},   {k::kLeafCylinder, k::kLeafEllipsoid},
+      {k::kLeafBox, k::kLeafConvex},        {k::kLeafConvex, k::kLeafConvex},
+      {k::kLeafSphere, k::kLeafConvex},     {k::kLeafCapsule, k::kLeafConvex},
+      {k::kLeafCapsule, k::kLeafCylinder},  {k::kLeafBox, k::kLeafCylinder},
+      {k::kLeafCylinder, k::kLeafCylinder}, {k::kLeafCylinder, k::kLeafEllipsoid},
       {k::kLeafCylinder, k::kLeafTriangle},
   };
   return s;
@@ -88,7 +88,9 @@ struct Bucket {
   LeafType a, b;
 };
 
-void PrintTo(const Bucket& c, std::ostream* os) { *os << pair_name(c.a, c.b); }
+void PrintTo(const Bucket& c, std::ostream* os) {
+  *os << pair_name(c.a, c.b);
+}
 
 std::vector<Bucket> buckets(bool same_type_only = false) {
   std::vector<Bucket> v;
@@ -97,9 +99,13 @@ std::vector<Bucket> buckets(bool same_type_only = false) {
   return v;
 }
 
-std::string bucket_name(const ::testing::TestParamInfo<Bucket>& i) { return pair_name(i.param.a, i.param.b); }
+std::string bucket_name(const ::testing::TestParamInfo<Bucket>& i) {
+  return pair_name(i.param.a, i.param.b);
+}
 
-const char* path_name(KernelPath p) { return p == KernelPath::kSimd ? "simd" : "scalar"; }
+const char* path_name(KernelPath p) {
+  return p == KernelPath::kSimd ? "simd" : "scalar";
+}
 
 class PairContract : public ::testing::TestWithParam<Bucket> {
  protected:
@@ -128,11 +134,14 @@ std::string describe(const PairResult& r) {
   std::ostringstream o;
   o.precision(9);
   o << "count " << r.count;
-  if (r.count > 0 && r.count <= 4) o << " depth " << r.depth << " n {" << r.n.x() << ", " << r.n.y() << ", " << r.n.z() << "}";
+  if (r.count > 0 && r.count <= 4)
+    o << " depth " << r.depth << " n {" << r.n.x() << ", " << r.n.y() << ", " << r.n.z() << "}";
   return o.str();
 }
 
-V3 v3_of(const Eigen::Vector3d& v) { return {v.x(), v.y(), v.z()}; }
+V3 v3_of(const Eigen::Vector3d& v) {
+  return {v.x(), v.y(), v.z()};
+}
 
 /// Every point of r lies within depth/2 + 2 tol (+ 2 ulps) of both surfaces, with
 /// -tol <= pdepth <= depth + tol (matrix_test's (d)).
@@ -140,18 +149,22 @@ bool points_on_surfaces(const Lane& l, const PairResult& r, double tol) {
   nref::Options light;
   light.samples = 1000;
   light.starts = 3;
-  const double lim = 0.5 * std::max(r.depth, 0.0) + 2 * tol + 2 * std::max(coord_magnitude(l.sa), coord_magnitude(l.sb)) * std::ldexp(1.0, -23);
+  const double lim = 0.5 * std::max(r.depth, 0.0) + 2 * tol +
+                     2 * std::max(coord_magnitude(l.sa), coord_magnitude(l.sb)) * std::ldexp(1.0, -23);
   for (uint32_t q = 0; q < r.count && q < 4; ++q) {
     const V3 x{r.pt[q].x(), r.pt[q].y(), r.pt[q].z()};
     if (r.pd[q] < -tol || r.pd[q] > r.depth + tol) return false;
-    if (std::fabs(nref::signed_distance(l.sa, x, light)) > lim || std::fabs(nref::signed_distance(l.sb, x, light)) > lim)
+    if (std::fabs(nref::signed_distance(l.sa, x, light)) > lim ||
+        std::fabs(nref::signed_distance(l.sb, x, light)) > lim)
       return false;
   }
   return true;
 }
 
 /// One float ulp of the lane's largest world coordinate.
-double point_ulp(const Lane& l) { return std::max(coord_magnitude(l.sa), coord_magnitude(l.sb)) * std::ldexp(1.0, -23); }
+double point_ulp(const Lane& l) {
+  return std::max(coord_magnitude(l.sa), coord_magnitude(l.sb)) * std::ldexp(1.0, -23);
+}
 
 // ---------------------------------------------------------------------------------------
 
@@ -171,7 +184,8 @@ TEST(PairTable, OrderAndRange) {
     EXPECT_LE(s.a, s.b) << s.name;
     EXPECT_TRUE(seen.insert({s.a, s.b}).second) << s.name << " listed twice";
   }
-  EXPECT_EQ(seen.size() + 2, all_buckets().size()) << "every bucket but box-hull and hull-hull is specialised";
+  EXPECT_EQ(seen.size() + 2, all_buckets().size())
+      << "every bucket but box-hull and hull-hull is specialised";
 }
 
 TEST_P(PairContract, Registered) {
@@ -211,7 +225,8 @@ TEST_P(SameTypeContract, BothOrders) {
   int compared = 0;
   for (const LaneSet& s : ss)
     for (KernelPath path : {KernelPath::kSimd, KernelPath::kScalar}) {
-      const ManifoldLanes ab = run_lanes(kern_, s.lanes, bank_, path), ba = run_lanes(kern_, s.lanes, bank_, path, true);
+      const ManifoldLanes ab = run_lanes(kern_, s.lanes, bank_, path),
+                          ba = run_lanes(kern_, s.lanes, bank_, path, true);
       int printed = 0;
       for (uint32_t i = 0; i < s.lanes.size(); ++i) {
         const Lane& l = s.lanes[i];
@@ -226,7 +241,8 @@ TEST_P(SameTypeContract, BothOrders) {
           if (std::fabs(x.depth - y.depth) > t) why = " depth differs when swapped";
           const double ang = nref::angle(v3_of(x.n), v3_of(-y.n));
           const double o_swapped = nref::overlap(l.sa, l.sb, nref::normalized(v3_of(-y.n)));
-          if (l.ref.unique(2 * t) ? ang > kAngleTol : o_swapped > l.ref.s + t) why += " swapped normal is not -n";
+          if (l.ref.unique(2 * t) ? ang > kAngleTol : o_swapped > l.ref.s + t)
+            why += " swapped normal is not -n";
         }
         if (!why.empty() && printed++ < 3)
           ADD_FAILURE() << s.what << " [" << path_name(path) << "] lane " << i << ":" << why << "\n"
@@ -261,7 +277,8 @@ TEST_P(PairContract, SimdMatchesScalar) {
         if (std::fabs(l.ref.s) > t) why = " hit differs";
       } else if (x.count > 0) {
         ++compared;
-        const double L = lane_size(l), dd = std::fabs(x.depth - y.depth), ang = nref::angle(v3_of(x.n), v3_of(y.n));
+        const double L = lane_size(l), dd = std::fabs(x.depth - y.depth),
+                     ang = nref::angle(v3_of(x.n), v3_of(y.n));
         worst_depth = std::max(worst_depth, dd / L);
         if (dd > kPathDepthRel * L) why += " depths differ by more than 1e-6 L";
         if (l.ref.unique(2 * t)) {
@@ -270,7 +287,8 @@ TEST_P(PairContract, SimdMatchesScalar) {
         }
         for (const PairResult* r : {&x, &y})
           if (nref::overlap(l.sa, l.sb, nref::normalized(v3_of(r->n))) > l.ref.s + t)
-            why += std::string(" the ") + (r == &x ? "simd" : "scalar") + " normal is not a minimum direction";
+            why +=
+                std::string(" the ") + (r == &x ? "simd" : "scalar") + " normal is not a minimum direction";
         if (x.count != y.count && std::fabs(l.ref.s) > t) {
           why += " point counts differ";
         } else if (x.count == y.count) {
@@ -282,7 +300,8 @@ TEST_P(PairContract, SimdMatchesScalar) {
           for (uint32_t q = 0; q < x.count; ++q) {
             bool found = false;
             for (uint32_t r = 0; r < y.count && !found; ++r)
-              if (!used[r] && (x.pt[q] - y.pt[r]).norm() <= slack && std::fabs(x.pd[q] - y.pd[r]) <= kPointRel * L)
+              if (!used[r] && (x.pt[q] - y.pt[r]).norm() <= slack &&
+                  std::fabs(x.pd[q] - y.pd[r]) <= kPointRel * L)
                 found = used[r] = true;
             found_all = found_all && found;
           }
@@ -297,14 +316,16 @@ TEST_P(PairContract, SimdMatchesScalar) {
       }
       if (!why.empty() && printed++ < 3)
         ADD_FAILURE() << s.what << " lane " << i << ":" << why << "\n"
-                      << literal(l, bank_) << "\n    simd:   " << describe(x) << "\n    scalar: " << describe(y);
+                      << literal(l, bank_) << "\n    simd:   " << describe(x)
+                      << "\n    scalar: " << describe(y);
     }
   }
   EXPECT_LE(alternative, std::max(1, lanes / 50)) << "lanes whose paths chose different points";
   std::printf(
-      "  %-22s lanes %4d same bytes %4d%s | compared %4d worst |depth diff| %.2g L, angle %.2g; other points %d\n",
-      pair_name(c.a, c.b).c_str(), lanes, same, bytes ? " (promised)" : "", compared, worst_depth, worst_angle,
-      alternative);
+      "  %-22s lanes %4d same bytes %4d%s | compared %4d worst |depth diff| %.2g L, angle %.2g; other points "
+      "%d\n",
+      pair_name(c.a, c.b).c_str(), lanes, same, bytes ? " (promised)" : "", compared, worst_depth,
+      worst_angle, alternative);
 }
 
 TEST_P(PairContract, PartitionAndShuffle) {
@@ -325,8 +346,8 @@ TEST_P(PairContract, PartitionAndShuffle) {
           bits[i] = o.lane_bits(i);
           EXPECT_LE(o.count[i], 4u) << "lane " << i << " not written or count past 4";
         } else {
-          EXPECT_TRUE(o.untouched(i)) << "lane " << i << " written outside the range [" << begin << ", " << end
-                                      << ") of " << qs.size();
+          EXPECT_TRUE(o.untouched(i)) << "lane " << i << " written outside the range [" << begin << ", "
+                                      << end << ") of " << qs.size();
         }
       }
       return bits;
@@ -376,12 +397,13 @@ TEST_P(PairContract, AgreesWithGjkEpa) {
         }
         if (!why.empty() && printed++ < 3)
           ADD_FAILURE() << s.what << " [" << path_name(path) << "] lane " << i << ":" << why << "\n"
-                        << literal(l, bank_) << "\n    kernel:  " << describe(x) << "\n    general: " << describe(y);
+                        << literal(l, bank_) << "\n    kernel:  " << describe(x)
+                        << "\n    general: " << describe(y);
       }
     }
   }
-  std::printf("  %-22s lanes %4d compared %4d | worst |depth diff| %.2g L, angle %.2g\n", pair_name(c.a, c.b).c_str(),
-              lanes, compared, worst_depth, worst_angle);
+  std::printf("  %-22s lanes %4d compared %4d | worst |depth diff| %.2g L, angle %.2g\n",
+              pair_name(c.a, c.b).c_str(), lanes, compared, worst_depth, worst_angle);
   EXPECT_GT(compared, lanes / 8);
 }
 
@@ -397,11 +419,11 @@ TEST(KnownMisses, DISABLED_CylinderEllipsoidTakesTheGlobalMinimum) {
   a.t = k::kLeafCylinder;
   b.t = k::kLeafEllipsoid;
   const float ap[3] = {-0.304256618f, 0.561342537f, 0.626860738f};
-  const float ar[9] = {-0.0957207084f, -0.961459756f, -0.257745475f, -0.0016461882f, 0.259086996f,
+  const float ar[9] = {-0.0957207084f, -0.961459756f, -0.257745475f,  -0.0016461882f, 0.259086996f,
                        -0.965852559f,  0.995406866f,  -0.0920277983f, -0.026382735f};
   const float ae[3] = {0.1232327f, 0.297027081f, 0.0f};
   const float bp[3] = {-0.478819937f, 0.47155115f, 0.7963202f};
-  const float br[9] = {0.944330752f, -0.0341334678f, 0.327222198f, -0.202874303f, 0.722578883f,
+  const float br[9] = {0.944330752f, -0.0341334678f, 0.327222198f,  -0.202874303f, 0.722578883f,
                        0.660849273f, -0.259000927f,  -0.690445304f, 0.675428629f};
   const float be[3] = {0.693425834f, 0.840815246f, 0.247810468f};
   std::copy(ap, ap + 3, a.p), std::copy(ar, ar + 9, a.r), std::copy(ae, ae + 3, a.e);

@@ -405,7 +405,6 @@ std::vector<uint8_t> lane_bytes(const test::ManifoldLanes& o, uint32_t k) {
   return b;
 }
 
-
 /// The kernel lists the touching lanes of a chunk and runs the picks over groups of
 /// them: buckets where no lane touches, where every lane does (deep), where they
 /// alternate, and where hulls over 64 vertices (the per-pair fallback) sit between

@@ -103,9 +103,12 @@ ManifoldLanes run(const Bucket& bk, const k::HullView& hv, k::KernelPath path) {
 }
 
 ManifoldLanes run_gjk(const Bucket& bk, const k::HullView& hv) {
-  return bk.run([](const k::LeafSoA& a, const k::LeafSoA& b, const k::ManifoldSoA& o, k::Range r,
-                   const k::NarrowConfig& cfg) { k::collide_gjk_epa(a, b, o, r, cfg, k::kLeafConvex, k::kLeafTriangle); },
-                hv, k::KernelPath::kSimd);
+  return bk.run(
+      [](const k::LeafSoA& a, const k::LeafSoA& b, const k::ManifoldSoA& o, k::Range r,
+         const k::NarrowConfig& cfg) {
+        k::collide_gjk_epa(a, b, o, r, cfg, k::kLeafConvex, k::kLeafTriangle);
+      },
+      hv, k::KernelPath::kSimd);
 }
 
 // --- the reference ---------------------------------------------------------------------------

@@ -47,9 +47,9 @@
 // (2 points: the side line clipped to the disk), side by side (2 points: the overlap of
 // the heights); near-parallel tilts (0..1e-2 rad) of those; exactly touching (count 0);
 // needles and pancakes (1e-4); symmetries (a rigid motion of the whole pair, A and B
-// swapped, an axis reversed). Registration, range partitions, shuffled buckets and the agreement with GJK / EPA:
-// contract_test.cpp (every bucket of the table). Lane counts scale with
-// IMPACT_TEST_INTENSITY; a sanitizer build runs a quarter of them.
+// swapped, an axis reversed). Registration, range partitions, shuffled buckets and the agreement with GJK /
+// EPA: contract_test.cpp (every bucket of the table). Lane counts scale with IMPACT_TEST_INTENSITY; a
+// sanitizer build runs a quarter of them.
 #include <gtest/gtest.h>
 
 #include <Eigen/Core>
@@ -68,9 +68,9 @@
 #include "kernels/narrowphase/pair_kernels.h"
 #include "support/kernel_checks.h"
 #include "support/leaf_lanes.h"
-#include "support/shape_geometry.h"
 #include "support/narrow_reference.h"
 #include "support/random_input.h"
+#include "support/shape_geometry.h"
 #include "support/test_support.h"
 
 namespace impact::kernels {
@@ -79,7 +79,8 @@ namespace {
 using Vec3d = Eigen::Vector3d;
 using Mat3d = Eigen::Matrix3d;
 namespace nref = test::nref;
-using test::angle, test::columns, test::rot, test::radial, test::tangential, test::frame_of, test::v3, test::ev;
+using test::angle, test::columns, test::rot, test::radial, test::tangential, test::frame_of, test::v3,
+    test::ev;
 
 constexpr double kRel = 1e-5;       // depth tolerance, of L
 constexpr double kAngleTol = 1e-4;  // rad, where the minimum is unique and conditioned
@@ -134,13 +135,19 @@ double coord_ulp(const Query& q) {
 // --- running the kernel -----------------------------------------------------------------------
 
 /// A cylinder as the kernel reads it (e0 = radius, e1 = half length).
-test::Leaf leaf_of(const Cyl& c) { return test::posed_leaf(kLeafCylinder, c.p, c.R, Vec3d(c.r, c.h, 0.0)); }
+test::Leaf leaf_of(const Cyl& c) {
+  return test::posed_leaf(kLeafCylinder, c.p, c.R, Vec3d(c.r, c.h, 0.0));
+}
 
 /// Runs `kern` (the kernel under test unless given) on lanes [begin, end) of one bucket.
 std::vector<test::PairResult> run(const std::vector<Query>& qs, KernelPath path, PairKernel kern = nullptr,
                                   uint32_t begin = 0, uint32_t end = ~0u) {
-  return test::run_queries(kern != nullptr ? kern : &collide_cylinder_cylinder, qs, path,
-                           [](const Query& q) { return std::pair{leaf_of(q.a), leaf_of(q.b)}; }, begin, end);
+  return test::run_queries(
+      kern != nullptr ? kern : &collide_cylinder_cylinder, qs, path,
+      [](const Query& q) {
+        return std::pair{leaf_of(q.a), leaf_of(q.b)};
+      },
+      begin, end);
 }
 
 // --- references -------------------------------------------------------------------------------
@@ -150,7 +157,9 @@ double cyl_sd(const Cyl& c, const Vec3d& x, const Vec3d& shift = Vec3d::Zero()) 
   return test::cylinder_sd(c.p + shift, c.R, c.r, c.h, x);
 }
 
-Vec3d cyl_closest(const Cyl& c, const Vec3d& x) { return test::cylinder_closest(c.p, c.R, c.r, c.h, x); }
+Vec3d cyl_closest(const Cyl& c, const Vec3d& x) {
+  return test::cylinder_closest(c.p, c.R, c.r, c.h, x);
+}
 
 /// The least signed distance to B (moved by `shift`) over the solid A: A's point
 /// (u, v, t) = p_A + R_A (u, v, t), t in [-h, h], u in [-r, r], v across the disk's chord
@@ -166,8 +175,8 @@ double solid_minimum(const Query& q, const Vec3d& shift = Vec3d::Zero(), Vec3d* 
   auto over_v = [&](const Vec3d& base, double u, double* v_at) {
     const double w = std::sqrt(std::max(0.0, a.r * a.r - u * u));
     const Vec3d bu = base + u * mu;
-    return test::golden_section_min([&](double v) { return test::cylinder_sd_local(bu + v * mv, b.r, b.h); }, -w, w,
-                                    kGoldenIters, v_at);
+    return test::golden_section_min([&](double v) { return test::cylinder_sd_local(bu + v * mv, b.r, b.h); },
+                                    -w, w, kGoldenIters, v_at);
   };
   auto over_uv = [&](double t, double* u_at, double* v_at) {
     const Vec3d base = o + t * mt;
@@ -191,7 +200,9 @@ double solid_minimum(const Query& q, const Vec3d& shift = Vec3d::Zero(), Vec3d* 
   return best;
 }
 
-nref::Shape shape_of(const Cyl& c) { return test::posed_shape(kLeafCylinder, c.p, c.R, Vec3d(c.r, c.h, 0)); }
+nref::Shape shape_of(const Cyl& c) {
+  return test::posed_shape(kLeafCylinder, c.p, c.R, Vec3d(c.r, c.h, 0));
+}
 
 /// The support overlap of A and B along n.
 double overlap_along(const Query& q, const Vec3d& n) {
@@ -264,30 +275,23 @@ using Stats = test::LaneStats;
 
 /// The pair for test::check_lanes: the references above and the distance of the moved pair
 /// for the translation check.
-const test::PairModel<Query>& model() {
-  static const test::PairModel<Query> instance = [] {
-    test::PairModel<Query> m;
-    m.rel = kRel;
-    m.carries = test::Carries::kDeepestWithinTol;
-    m.reference = [](const Query& q) {
-      const Ref f = reference(q);
-      return test::LaneRef{f.depth, f.n, f.unique, kAngleTol, false};
-    };
-    m.size = size_of;
-    m.coord_ulp = coord_ulp;
-    m.overlap = overlap_along;
-    m.sd_a = [](const Query& q, const Vec3d& x) { return cyl_sd(q.a, x); };
-    m.sd_b = [](const Query& q, const Vec3d& x) { return cyl_sd(q.b, x); };
-    m.apart = [](const Query& q, const Vec3d& shift) { return solid_minimum(q, shift); };
-    return m;
-  }();
-  return instance;
-}
-
-/// Checks (a)-(e) and the translation check (test::check_lanes) for every lane of qs
-/// (already rounded).
 void check_all(const std::vector<Query>& qs, const char* what, Stats* out_stats = nullptr) {
-  const Stats st = test::check_lanes(model(), qs, run(qs, KernelPath::kSimd), run(qs, KernelPath::kScalar), what);
+  static const test::PairModel<Query> model{
+      .rel = kRel,
+      .carries = test::Carries::kDeepestWithinTol,
+      .reference =
+          [](const Query& q) {
+            const Ref f = reference(q);
+            return test::LaneRef{f.depth, f.n, f.unique, kAngleTol, false};
+          },
+      .size = size_of,
+      .coord_ulp = coord_ulp,
+      .overlap = overlap_along,
+      .sd_a = [](const Query& q, const Vec3d& x) { return cyl_sd(q.a, x); },
+      .sd_b = [](const Query& q, const Vec3d& x) { return cyl_sd(q.b, x); },
+      .apart = [](const Query& q, const Vec3d& shift) { return solid_minimum(q, shift); }};
+  const Stats st =
+      test::check_lanes(model, qs, run(qs, KernelPath::kSimd), run(qs, KernelPath::kScalar), what);
   if (out_stats != nullptr) *out_stats = st;
 }
 

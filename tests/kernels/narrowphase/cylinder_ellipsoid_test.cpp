@@ -71,8 +71,9 @@
 // cylinder's axis reversed, the ellipsoid's axes permuted / negated with its radii);
 // range partitions and shuffled buckets of ring and thin lanes (same bytes);
 // NaN-free outputs on degenerate but valid inputs. Registration, the general
-// partitions and the agreement with GJK / EPA: contract_test.cpp. A failing lane prints itself as a C++ literal (lane(...), below). Lane
-// counts scale with IMPACT_TEST_INTENSITY; a sanitizer build runs a quarter of them.
+// partitions and the agreement with GJK / EPA: contract_test.cpp. A failing lane prints itself as a C++
+// literal (lane(...), below). Lane counts scale with IMPACT_TEST_INTENSITY; a sanitizer build runs a quarter
+// of them.
 #include <gtest/gtest.h>
 
 #include <Eigen/Core>
@@ -92,12 +93,12 @@
 
 #include "kernels/narrowphase/pair_kernels.h"
 #include "support/ellipsoid_reference.h"
-#include "support/lane_checks.h"
 #include "support/kernel_checks.h"
+#include "support/lane_checks.h"
 #include "support/leaf_lanes.h"
-#include "support/shape_geometry.h"
 #include "support/narrow_reference.h"
 #include "support/random_input.h"
+#include "support/shape_geometry.h"
 #include "support/test_support.h"
 
 namespace impact::kernels {
@@ -106,7 +107,8 @@ namespace {
 using Vec3d = Eigen::Vector3d;
 using Mat3d = Eigen::Matrix3d;
 namespace nref = test::nref;
-using test::angle, test::columns, test::rot, test::radial, test::tangential, test::frame_of, test::v3, test::ev;
+using test::angle, test::columns, test::rot, test::radial, test::tangential, test::frame_of, test::v3,
+    test::ev;
 
 constexpr double kRel = 1e-5;       // depth tolerance, of L
 constexpr double kAngleTol = 1e-3;  // rad, where the minimum is unique and conditioned
@@ -208,22 +210,35 @@ std::string literal(const Query& q) {
 // --- running the kernel -----------------------------------------------------------------------
 
 /// The leaves as the kernel reads them (cylinder: e0 = radius, e1 = half length).
-test::Leaf leaf_of(const Cyl& c) { return test::posed_leaf(kLeafCylinder, c.p, c.R, Vec3d(c.r, c.h, 0.0)); }
-test::Leaf leaf_of(const Ell& s) { return test::posed_leaf(kLeafEllipsoid, s.p, s.R, s.e); }
+test::Leaf leaf_of(const Cyl& c) {
+  return test::posed_leaf(kLeafCylinder, c.p, c.R, Vec3d(c.r, c.h, 0.0));
+}
+test::Leaf leaf_of(const Ell& s) {
+  return test::posed_leaf(kLeafEllipsoid, s.p, s.R, s.e);
+}
 
 /// Runs `kern` (the kernel under test unless given) on lanes [begin, end) of one bucket;
 /// `keep`, if given, receives the output lanes.
 std::vector<test::PairResult> run(const std::vector<Query>& qs, KernelPath path, PairKernel kern = nullptr,
-                                  uint32_t begin = 0, uint32_t end = ~0u, test::ManifoldLanes* keep = nullptr) {
-  return test::run_queries(kern != nullptr ? kern : &collide_cylinder_ellipsoid, qs, path,
-                           [](const Query& q) { return std::pair{leaf_of(q.a), leaf_of(q.b)}; }, begin, end, keep);
+                                  uint32_t begin = 0, uint32_t end = ~0u,
+                                  test::ManifoldLanes* keep = nullptr) {
+  return test::run_queries(
+      kern != nullptr ? kern : &collide_cylinder_ellipsoid, qs, path,
+      [](const Query& q) {
+        return std::pair{leaf_of(q.a), leaf_of(q.b)};
+      },
+      begin, end, keep);
 }
 
 // --- references -------------------------------------------------------------------------------
 
-double cyl_sd(const Cyl& c, const Vec3d& x) { return test::cylinder_sd(c.p, c.R, c.r, c.h, x); }
+double cyl_sd(const Cyl& c, const Vec3d& x) {
+  return test::cylinder_sd(c.p, c.R, c.r, c.h, x);
+}
 
-Vec3d cyl_closest(const Cyl& c, const Vec3d& x) { return test::cylinder_closest(c.p, c.R, c.r, c.h, x); }
+Vec3d cyl_closest(const Cyl& c, const Vec3d& x) {
+  return test::cylinder_closest(c.p, c.R, c.r, c.h, x);
+}
 
 /// Signed distance of x to the ellipsoid's surface (< 0 inside), by bisection of the
 /// secular equation.
@@ -245,8 +260,8 @@ double solid_minimum(const Query& q, const Vec3d& shift = Vec3d::Zero(), Vec3d* 
   auto over_v = [&](const Vec3d& base, double chord, double u, double* v_at) {
     const double w = std::sqrt(std::max(0.0, chord * chord - u * u));
     const Vec3d bu = base + u * mu;
-    return test::golden_section_min([&](double v) { return test::cylinder_sd_local(bu + v * mv, a.r, a.h); }, -w, w,
-                                    kGoldenIters, v_at);
+    return test::golden_section_min([&](double v) { return test::cylinder_sd_local(bu + v * mv, a.r, a.h); },
+                                    -w, w, kGoldenIters, v_at);
   };
   auto over_uv = [&](double t, double* u_at, double* v_at) {
     const Vec3d base = o + t * mt;
@@ -271,9 +286,13 @@ double solid_minimum(const Query& q, const Vec3d& shift = Vec3d::Zero(), Vec3d* 
   return best;
 }
 
-nref::Shape cyl_shape(const Cyl& c) { return test::posed_shape(kLeafCylinder, c.p, c.R, Vec3d(c.r, c.h, 0)); }
+nref::Shape cyl_shape(const Cyl& c) {
+  return test::posed_shape(kLeafCylinder, c.p, c.R, Vec3d(c.r, c.h, 0));
+}
 
-nref::Shape ell_shape(const Ell& b) { return test::posed_shape(kLeafEllipsoid, b.p, b.R, b.e); }
+nref::Shape ell_shape(const Ell& b) {
+  return test::posed_shape(kLeafEllipsoid, b.p, b.R, b.e);
+}
 
 /// The support overlap of A and B along n.
 double overlap_along(const Query& q, const Vec3d& n) {
@@ -467,7 +486,8 @@ void check_point(const Query& q, const test::LaneRef&, const test::PairResult& h
   const Vec3d n = h.n.normalized();
   const Vec3d on_a = h.pt[0] + 0.5 * h.depth * n, on_b = h.pt[0] - 0.5 * h.depth * n;
   EXPECT_LE(std::fabs(ell_sd(q.b, on_b)), ptol) << where << ": point - n depth/2 off B";
-  EXPECT_LE(std::fabs(cyl_sd(q.a, on_a)), ptol + 1e-6 * curvature_radius(q.b)) << where << ": point + n depth/2 off A";
+  EXPECT_LE(std::fabs(cyl_sd(q.a, on_a)), ptol + 1e-6 * curvature_radius(q.b))
+      << where << ": point + n depth/2 off A";
   const double ha = nref::support(cyl_shape(q.a), v3(n)), hb = nref::support(ell_shape(q.b), v3(-n));
   EXPECT_NEAR(n.dot(on_a), ha, ptol) << where << ": not on A's support plane";
   EXPECT_NEAR(n.dot(on_b), -hb, ptol) << where << ": not on B's support plane";
@@ -480,43 +500,37 @@ using Stats = test::LaneStats;
 /// double than the reference's minimum refining the reference from there (the sampling
 /// missed that basin; the kernel's depth must match it), one point on both support planes
 /// (check_point), and the solid minimum for the translation check (bounded on both sides).
-const test::PairModel<Query>& model() {
-  static const test::PairModel<Query> instance = [] {
-    test::PairModel<Query> m;
-    m.rel = kRel;
-    m.max_points = 1;
-    m.reference = [](const Query& q) {
-      const Ref f = reference(q);
-      test::LaneRef r{f.depth, f.n, f.unique, kAngleTol, false};
-      r.apart = f.apart;
-      return r;
-    };
-    m.improve = [](const Query& q, test::LaneRef& f, const test::PairResult& h, Stats& st) {
-      if (f.apart || h.count == 0 || !h.n.allFinite() || !(h.n.norm() > 0.5)) return;
-      const double ok = overlap_along(q, h.n);
-      if (!(ok < f.depth - 1e-9 * size_of(q))) return;
-      const nref::Shape sa = cyl_shape(q.a), sb = ell_shape(q.b);
-      const auto r = nref::detail::refine([&](const nref::V3& n) { return nref::overlap(sa, sb, n); },
-                                          v3(h.n.normalized()), ok, 1e-3);
-      f.depth = r.first, f.n = ev(r.second), f.unique = false;
-      ++st.improved;
-    };
-    m.size = size_of;
-    m.coord_ulp = coord_ulp;
-    m.overlap = overlap_along;
-    m.points = check_point;
-    m.apart = [](const Query& q, const Vec3d& shift) { return solid_minimum(q, shift); };
-    m.apart_at_most_d = true;
-    m.literal = literal;
-    return m;
-  }();
-  return instance;
-}
-
-/// Checks (a)-(e) and the translation check (test::check_lanes) for every lane of qs
-/// (already rounded).
 void check_all(const std::vector<Query>& qs, const char* what, Stats* out_stats = nullptr) {
-  const Stats st = test::check_lanes(model(), qs, run(qs, KernelPath::kSimd), run(qs, KernelPath::kScalar), what);
+  static const test::PairModel<Query> model{
+      .rel = kRel,
+      .max_points = 1,
+      .reference =
+          [](const Query& q) {
+            const Ref f = reference(q);
+            test::LaneRef r{f.depth, f.n, f.unique, kAngleTol, false};
+            r.apart = f.apart;
+            return r;
+          },
+      .size = size_of,
+      .coord_ulp = coord_ulp,
+      .overlap = overlap_along,
+      .apart = [](const Query& q, const Vec3d& shift) { return solid_minimum(q, shift); },
+      .points = check_point,
+      .improve =
+          [](const Query& q, test::LaneRef& f, const test::PairResult& h, Stats& st) {
+            if (f.apart || h.count == 0 || !h.n.allFinite() || !(h.n.norm() > 0.5)) return;
+            const double ok = overlap_along(q, h.n);
+            if (!(ok < f.depth - 1e-9 * size_of(q))) return;
+            const nref::Shape sa = cyl_shape(q.a), sb = ell_shape(q.b);
+            const auto r = nref::detail::refine([&](const nref::V3& n) { return nref::overlap(sa, sb, n); },
+                                                v3(h.n.normalized()), ok, 1e-3);
+            f.depth = r.first, f.n = ev(r.second), f.unique = false;
+            ++st.improved;
+          },
+      .literal = literal,
+      .apart_at_most_d = true};
+  const Stats st =
+      test::check_lanes(model, qs, run(qs, KernelPath::kSimd), run(qs, KernelPath::kScalar), what);
   if (out_stats != nullptr) *out_stats = st;
 }
 
@@ -1409,7 +1423,7 @@ TEST(CylinderEllipsoid, FiniteOutputsOnDegenerateInputs) {
       EXPECT_EQ(r->pd[0], r->depth) << k;
     }
     EXPECT_TRUE(test::same_bytes(simd[k], scal[k])) << k << ": the SIMD and scalar paths differ\n simd   "
-                                              << describe(simd[k]) << "\n scalar " << describe(scal[k]);
+                                                    << describe(simd[k]) << "\n scalar " << describe(scal[k]);
   }
   EXPECT_GT(hits, static_cast<int>(qs.size()) / 2);
 }

@@ -63,9 +63,9 @@
 #include "kernels/narrowphase/pair_kernels.h"
 #include "support/kernel_checks.h"
 #include "support/leaf_lanes.h"
-#include "support/shape_geometry.h"
 #include "support/narrow_reference.h"
 #include "support/random_input.h"
+#include "support/shape_geometry.h"
 #include "support/test_support.h"
 
 namespace impact::kernels {
@@ -115,23 +115,30 @@ double coord_ulp(const Query& q) {
 // --- running the kernel -----------------------------------------------------------------------
 
 /// The cylinder and the triangle of a query.
-test::Leaf cylinder_leaf(const Query& q) { return test::posed_leaf(kLeafCylinder, q.p, q.R, Vec3d(q.rc, q.h, 0)); }
+test::Leaf cylinder_leaf(const Query& q) {
+  return test::posed_leaf(kLeafCylinder, q.p, q.R, Vec3d(q.rc, q.h, 0));
+}
 
 /// Runs `kern` (the kernel under test unless given) on lanes [begin, end) of one bucket.
 std::vector<test::PairResult> run(const std::vector<Query>& qs, KernelPath path, PairKernel kern = nullptr,
                                   uint32_t begin = 0, uint32_t end = ~0u) {
-  return test::run_queries(kern != nullptr ? kern : pair_kernel(kLeafCylinder, kLeafTriangle), qs, path,
-                           [](const Query& q) {
-                             return std::pair{cylinder_leaf(q), test::triangle_leaf(q.v[0], q.v[1], q.v[2])};
-                           },
-                           begin, end);
+  return test::run_queries(
+      kern != nullptr ? kern : pair_kernel(kLeafCylinder, kLeafTriangle), qs, path,
+      [](const Query& q) {
+        return std::pair{cylinder_leaf(q), test::triangle_leaf(q.v[0], q.v[1], q.v[2])};
+      },
+      begin, end);
 }
 
 // --- references -------------------------------------------------------------------------------
 
-double cyl_sd(const Query& q, const Vec3d& x) { return test::cylinder_sd(q.p, q.R, q.rc, q.h, x); }
+double cyl_sd(const Query& q, const Vec3d& x) {
+  return test::cylinder_sd(q.p, q.R, q.rc, q.h, x);
+}
 
-Vec3d cyl_closest(const Query& q, const Vec3d& x) { return test::cylinder_closest(q.p, q.R, q.rc, q.h, x); }
+Vec3d cyl_closest(const Query& q, const Vec3d& x) {
+  return test::cylinder_closest(q.p, q.R, q.rc, q.h, x);
+}
 
 /// The least signed distance to the cylinder over the triangle moved by `shift` (convex:
 /// nested golden-section search over the barycentric coordinates); where = the point.
@@ -154,7 +161,9 @@ double triangle_minimum(const Query& q, const Vec3d& shift = Vec3d::Zero(), Vec3
   return best;
 }
 
-nref::Shape cylinder_shape(const Query& q) { return test::posed_shape(kLeafCylinder, q.p, q.R, Vec3d(q.rc, q.h, 0)); }
+nref::Shape cylinder_shape(const Query& q) {
+  return test::posed_shape(kLeafCylinder, q.p, q.R, Vec3d(q.rc, q.h, 0));
+}
 nref::Shape triangle_shape(const Query& q) {
   return nref::make_triangle(v3(q.v[0]), v3(q.v[1]), v3(q.v[2]));
 }
@@ -227,7 +236,8 @@ Ref reference(const Query& q) {
     f.unique = m > 1e-3 * size_of(q);
     return f;
   }
-  const nref::PairResult s = nref::solve_pair(cylinder_shape(q), triangle_shape(q), {}, nref::dense_options());
+  const nref::PairResult s =
+      nref::solve_pair(cylinder_shape(q), triangle_shape(q), {}, nref::dense_options());
   f.depth = s.s;
   f.n = ev(s.n);
   double rise = 0;
@@ -242,31 +252,24 @@ using Stats = test::LaneStats;
 
 /// The pair for test::check_lanes: the references above and the distance of the moved pair
 /// for the translation check.
-const test::PairModel<Query>& model() {
-  static const test::PairModel<Query> instance = [] {
-    test::PairModel<Query> m;
-    m.rel = kRel;
-    m.flag_name = "meeting";
-    m.carries = test::Carries::kNoRule;
-    m.reference = [](const Query& q) {
-      const Ref f = reference(q);
-      return test::LaneRef{f.depth, f.n, f.unique, f.angle_tol, !f.outside};
-    };
-    m.size = size_of;
-    m.coord_ulp = coord_ulp;
-    m.overlap = overlap_along;
-    m.sd_a = cyl_sd;
-    m.sd_b = tri_distance;  // unsigned: the triangle has no inside
-    m.apart = [](const Query& q, const Vec3d& shift) { return triangle_minimum(q, shift); };
-    return m;
-  }();
-  return instance;
-}
-
-/// Checks (a)-(e) and the translation check (test::check_lanes) for every lane of qs
-/// (already rounded).
 void check_all(const std::vector<Query>& qs, const char* what, Stats* out_stats = nullptr) {
-  const Stats st = test::check_lanes(model(), qs, run(qs, KernelPath::kSimd), run(qs, KernelPath::kScalar), what);
+  static const test::PairModel<Query> model{
+      .rel = kRel,
+      .flag_name = "meeting",
+      .carries = test::Carries::kNoRule,
+      .reference =
+          [](const Query& q) {
+            const Ref f = reference(q);
+            return test::LaneRef{f.depth, f.n, f.unique, f.angle_tol, !f.outside};
+          },
+      .size = size_of,
+      .coord_ulp = coord_ulp,
+      .overlap = overlap_along,
+      .sd_a = cyl_sd,
+      .sd_b = tri_distance,  // unsigned: the triangle has no inside
+      .apart = [](const Query& q, const Vec3d& shift) { return triangle_minimum(q, shift); }};
+  const Stats st =
+      test::check_lanes(model, qs, run(qs, KernelPath::kSimd), run(qs, KernelPath::kScalar), what);
   if (out_stats != nullptr) *out_stats = st;
 }
 
@@ -370,7 +373,8 @@ TEST(CylinderTriangle, ReferenceMatchesClosedForms) {
     const Query w = random_query(g, 1.0, 0.0, 1.2);
     const double m = triangle_minimum(w);
     if (m <= 1e-3) continue;
-    const nref::PairResult s = nref::solve_pair(cylinder_shape(w), triangle_shape(w), {}, nref::dense_options());
+    const nref::PairResult s =
+        nref::solve_pair(cylinder_shape(w), triangle_shape(w), {}, nref::dense_options());
     // (the float-rounded rotation is orthonormal to ~1e-8: cyl_sd reads all of R, nref
     // only the axis)
     EXPECT_NEAR(s.s, -m, 1e-7) << i;
@@ -678,10 +682,12 @@ TEST(CylinderTriangle, SliverIsCapsuleCylinder) {
   const auto mine = run(qs, KernelPath::kSimd);
   // capsule lanes: core v0 .. v1, radius r
   const double r = 1e-6;
-  const auto sliver = test::run_queries(&collide_capsule_cylinder, qs, KernelPath::kSimd, [&](const Query& q) {
-    const Vec3d c = 0.5 * (q.v[0] + q.v[1]), u = (q.v[1] - q.v[0]).normalized();
-    return std::pair{test::axial_leaf(kLeafCapsule, c, u, r, 0.5 * (q.v[1] - q.v[0]).norm()), cylinder_leaf(q)};
-  });
+  const auto sliver =
+      test::run_queries(&collide_capsule_cylinder, qs, KernelPath::kSimd, [&](const Query& q) {
+        const Vec3d c = 0.5 * (q.v[0] + q.v[1]), u = (q.v[1] - q.v[0]).normalized();
+        return std::pair{test::axial_leaf(kLeafCapsule, c, u, r, 0.5 * (q.v[1] - q.v[0]).norm()),
+                         cylinder_leaf(q)};
+      });
   int compared = 0;
   for (uint32_t k = 0; k < qs.size(); ++k) {
     const test::PairResult& s = sliver[k];

@@ -53,12 +53,12 @@
 
 #include "kernels/narrowphase/pair_kernels.h"
 #include "support/ellipsoid_reference.h"
-#include "support/lane_checks.h"
 #include "support/kernel_checks.h"
+#include "support/lane_checks.h"
 #include "support/leaf_lanes.h"
-#include "support/shape_geometry.h"
 #include "support/narrow_reference.h"
 #include "support/random_input.h"
+#include "support/shape_geometry.h"
 #include "support/test_support.h"
 
 namespace impact::kernels {
@@ -105,12 +105,13 @@ double size_of(const Query& q) {
 }
 
 std::pair<test::Leaf, test::Leaf> leaves(const Query& q) {
-  return {test::posed_leaf(kLeafEllipsoid, q.a.p, q.a.R, q.a.e), test::triangle_leaf(q.b.v[0], q.b.v[1], q.b.v[2])};
+  return {test::posed_leaf(kLeafEllipsoid, q.a.p, q.a.R, q.a.e),
+          test::triangle_leaf(q.b.v[0], q.b.v[1], q.b.v[2])};
 }
 
 /// Runs `kern` on lanes [begin, end) of all queries as one bucket (full SIMD blocks and a tail).
-std::vector<test::PairResult> run(const std::vector<Query>& qs, KernelPath path, PairKernel kern, uint32_t begin = 0,
-                                  uint32_t end = ~0u) {
+std::vector<test::PairResult> run(const std::vector<Query>& qs, KernelPath path, PairKernel kern,
+                                  uint32_t begin = 0, uint32_t end = ~0u) {
   return test::run_queries(kern, qs, path, leaves, begin, end);
 }
 
@@ -151,7 +152,9 @@ double triangle_minimum(const Query& q, Vec3d* where) {
   return best;
 }
 
-nref::Shape ellipsoid_shape(const Ell& b) { return test::posed_shape(kLeafEllipsoid, b.p, b.R, b.e); }
+nref::Shape ellipsoid_shape(const Ell& b) {
+  return test::posed_shape(kLeafEllipsoid, b.p, b.R, b.e);
+}
 
 nref::Shape triangle_shape(const Tri& t) {
   return nref::make_triangle(test::v3(t.v[0]), test::v3(t.v[1]), test::v3(t.v[2]));
@@ -218,43 +221,37 @@ using Stats = test::LaneStats;
 
 /// The pair for test::check_lanes: the references above and the distance of the moved pair
 /// for the translation check.
-const test::PairModel<Query>& model() {
-  static const test::PairModel<Query> instance = [] {
-    test::PairModel<Query> m;
-    m.rel = kRel;
-    m.max_points = 1;
-    m.point_ulps = 1;
-    m.same_bytes_paths = false;
-    m.flag_name = "through";
-    m.reference = [](const Query& q) {
-      const Ref f = reference(q);
-      return test::LaneRef{f.s, f.n, f.conditioned, kAngleTol, f.through};
-    };
-    m.size = size_of;
-    m.coord_ulp = coord_ulp;
-    m.overlap = overlap;
-    // A's point on the ellipsoid; B's on the triangle where the minimiser is unique, up to
-    // the slide of A's support point under the normal's rounding: rho * 1e-6 rad for the
-    // largest radius of curvature rho = e_max^2 / e_min (a pancake's face: 1e4 L).
-    m.points = [](const Query& q, const test::LaneRef& f, const test::PairResult& h, double, double ptol,
-                  const std::string& where) {
-      EXPECT_EQ(h.pd[0], h.depth) << where;
-      const Vec3d on_a = h.pt[0] + h.n * (0.5 * h.depth), on_b = h.pt[0] - h.n * (0.5 * h.depth);
-      EXPECT_NEAR(sd_ellipsoid(q.a, on_a), 0.0, ptol) << where;
-      if (f.unique) {
-        const double rho = q.a.e.maxCoeff() * q.a.e.maxCoeff() / q.a.e.minCoeff();
-        EXPECT_LE(triangle_distance(q.b, on_b), ptol + 1e-6 * rho) << where;
-      }
-    };
-    return m;
-  }();
-  return instance;
-}
-
-/// Checks (a)-(e) and the translation check (test::check_lanes) for every lane of qs
-/// (already rounded).
 void check_all(const std::vector<Query>& qs, const char* what, Stats* out_stats = nullptr) {
-  const Stats st = test::check_lanes(model(), qs, run(qs, KernelPath::kSimd), run(qs, KernelPath::kScalar), what);
+  // A's point on the ellipsoid; B's on the triangle where the minimiser is unique, up to
+  // the slide of A's support point under the normal's rounding: rho * 1e-6 rad for the
+  // largest radius of curvature rho = e_max^2 / e_min (a pancake's face: 1e4 L).
+  static const test::PairModel<Query> model{
+      .rel = kRel,
+      .max_points = 1,
+      .flag_name = "through",
+      .reference =
+          [](const Query& q) {
+            const Ref f = reference(q);
+            return test::LaneRef{f.s, f.n, f.conditioned, kAngleTol, f.through};
+          },
+      .size = size_of,
+      .coord_ulp = coord_ulp,
+      .overlap = overlap,
+      .points =
+          [](const Query& q, const test::LaneRef& f, const test::PairResult& h, double, double ptol,
+             const std::string& where) {
+            EXPECT_EQ(h.pd[0], h.depth) << where;
+            const Vec3d on_a = h.pt[0] + h.n * (0.5 * h.depth), on_b = h.pt[0] - h.n * (0.5 * h.depth);
+            EXPECT_NEAR(sd_ellipsoid(q.a, on_a), 0.0, ptol) << where;
+            if (f.unique) {
+              const double rho = q.a.e.maxCoeff() * q.a.e.maxCoeff() / q.a.e.minCoeff();
+              EXPECT_LE(triangle_distance(q.b, on_b), ptol + 1e-6 * rho) << where;
+            }
+          },
+      .same_bytes_paths = false,
+      .point_ulps = 1};
+  const Stats st =
+      test::check_lanes(model, qs, run(qs, KernelPath::kSimd), run(qs, KernelPath::kScalar), what);
   if (out_stats != nullptr) *out_stats = st;
 }
 
@@ -424,7 +421,8 @@ std::vector<Query> degenerate_queries(std::mt19937& g, int n) {
     const Vec3d d = test::random_unit_vector(g) * (0.3 + u01(g));
     switch (k % 4) {
       case 0: {  // sliver
-        const Vec3d side = d.cross(test::random_unit_vector(g)).normalized() * (d.norm() * std::pow(10.0, -ex(g)));
+        const Vec3d side =
+            d.cross(test::random_unit_vector(g)).normalized() * (d.norm() * std::pow(10.0, -ex(g)));
         q.b = Tri{{c - d, c + d, c + 0.3 * d + side}};
         break;
       }
@@ -483,8 +481,9 @@ TEST(EllipsoidTriangleCases, ConstructedTouching) {
   std::mt19937 g(29);
   const std::vector<Touch> ts = touching_queries(g, static_cast<int>(test::scaled(300)));
   for (KernelPath path : {KernelPath::kSimd, KernelPath::kScalar}) {
-    const int hits = test::expect_built(ts, run(test::queries_of(ts), path), kRel, size_of,
-                                        [](size_t, double) { return kAngleTol; }, "touching");
+    const int hits = test::expect_built(
+        ts, run(test::queries_of(ts), path), kRel, size_of, [](size_t, double) { return kAngleTol; },
+        "touching");
     EXPECT_GT(hits, static_cast<int>(ts.size()) / 4);
   }
 }
@@ -580,9 +579,12 @@ TEST(EllipsoidTriangleCases, RoundEllipsoidIsSphereTriangle) {
   const std::vector<test::PairResult> mine = run(qs, KernelPath::kSimd);
   const size_t n = qs.size();
   test::ManifoldLanes o;
-  test::run_queries(&collide_sphere_triangle, qs, KernelPath::kSimd, [](const Query& q) {
-    return std::pair{test::sphere_leaf(q.a.p, q.a.e[0]), leaves(q).second};
-  }, 0, ~0u, &o);
+  test::run_queries(
+      &collide_sphere_triangle, qs, KernelPath::kSimd,
+      [](const Query& q) {
+        return std::pair{test::sphere_leaf(q.a.p, q.a.e[0]), leaves(q).second};
+      },
+      0, ~0u, &o);
   int hits = 0;
   for (uint32_t k = 0; k < n; ++k) {
     const test::PairResult r = o.result(k);

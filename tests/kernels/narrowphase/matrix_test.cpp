@@ -265,7 +265,9 @@ struct PairCase {
   LeafType a, b;
 };
 
-std::string case_name(const PairCase& c) { return pair_name(c.a, c.b); }
+std::string case_name(const PairCase& c) {
+  return pair_name(c.a, c.b);
+}
 
 void PrintTo(const PairCase& c, std::ostream* os) { *os << case_name(c); }
 
@@ -348,7 +350,6 @@ TEST_P(PairMatrix, AgainstReference) {
   }
   std::printf("%s (tolerance rel %.0e)\n", name.c_str(), rel);
   for (const LaneSet& s : sets) check_all(kern, s.lanes, w, rel, s.what);
-
 }
 
 INSTANTIATE_TEST_SUITE_P(All, PairMatrix, ::testing::ValuesIn(all_pairs(false)),
@@ -384,7 +385,8 @@ TEST(NarrowMatrix, BoxesThroughSatGjkAndHullAgree) {
   check_all(k::pair_kernel(k::kLeafConvex, k::kLeafConvex), hl, w, 1e-3, "box hulls GJK/EPA");
   const ManifoldLanes sat = run(k::pair_kernel(k::kLeafBox, k::kLeafBox), lanes, w, k::KernelPath::kScalar);
   const ManifoldLanes gjk = run(gjk_boxes, lanes, w, k::KernelPath::kScalar);
-  const ManifoldLanes hul = run(k::pair_kernel(k::kLeafConvex, k::kLeafConvex), hl, w, k::KernelPath::kScalar);
+  const ManifoldLanes hul =
+      run(k::pair_kernel(k::kLeafConvex, k::kLeafConvex), hl, w, k::KernelPath::kScalar);
   for (uint32_t i = 0; i < lanes.size(); ++i) {
     const double tol = lane_tol(lanes[i], 1e-3);
     if (std::fabs(lanes[i].ref.s) <= tol) continue;

@@ -90,9 +90,10 @@ ManifoldLanes run_kernel(k::PairKernel kern, const Bucket& bk, const k::HullView
 }
 
 ManifoldLanes run_gjk(const Bucket& bk, const k::HullView& hv) {
-  return bk.run([](const k::LeafSoA& a, const k::LeafSoA& b, const k::ManifoldSoA& o, k::Range r,
-                   const k::NarrowConfig& cfg) { k::collide_gjk_epa(a, b, o, r, cfg, k::kLeafSphere, k::kLeafConvex); },
-                hv, k::KernelPath::kSimd);
+  return bk.run(
+      [](const k::LeafSoA& a, const k::LeafSoA& b, const k::ManifoldSoA& o, k::Range r,
+         const k::NarrowConfig& cfg) { k::collide_gjk_epa(a, b, o, r, cfg, k::kLeafSphere, k::kLeafConvex); },
+      hv, k::KernelPath::kSimd);
 }
 
 // --- the reference ---------------------------------------------------------------------------
@@ -315,11 +316,11 @@ TEST(SphereConvex, RandomPosesAgreeWithReference) {
 }
 
 TEST(SphereConvex, TinyHugeAndFarScales) {
-  check_tiny_huge_far(
-      [](Rng& g, const Hulls& h, double scale, double offset) {
-        return random_pairs(g, h, 0, 12, scaled(800), scale, offset);
-      },
-      [](const std::string& what, const std::vector<Pair>& pairs, const Hulls& h) { return check_pairs(what, pairs, h); });
+  check_tiny_huge_far([](Rng& g, const Hulls& h, double scale,
+                         double offset) { return random_pairs(g, h, 0, 12, scaled(800), scale, offset); },
+                      [](const std::string& what, const std::vector<Pair>& pairs, const Hulls& h) {
+                        return check_pairs(what, pairs, h);
+                      });
 }
 
 TEST(SphereConvex, ManyFaceHull) {
@@ -372,7 +373,7 @@ TEST(SphereConvex, ExactFeaturesAndTouching) {
   EXPECT_EQ(st.hits, 7u);
   const Bucket bk(pairs);
   const ManifoldLanes o = run_kernel(k::pair_kernel(k::kLeafSphere, k::kLeafConvex), bk, hulls.store.view(),
-                           k::KernelPath::kSimd);
+                                     k::KernelPath::kSimd);
   // On the face plane: depth r exactly, normal -x (into the hull).
   ASSERT_EQ(o.count[0], 1);
   EXPECT_EQ(o.depth[0], static_cast<float>(r));

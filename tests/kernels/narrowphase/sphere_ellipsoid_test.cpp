@@ -42,8 +42,8 @@
 #include "support/ellipsoid_reference.h"
 #include "support/kernel_checks.h"
 #include "support/leaf_lanes.h"
-#include "support/shape_geometry.h"
 #include "support/random_input.h"
+#include "support/shape_geometry.h"
 #include "support/test_support.h"
 
 namespace impact::kernels {
@@ -51,9 +51,9 @@ namespace {
 
 using Vec3d = Eigen::Vector3d;
 using Mat3d = Eigen::Matrix3d;
+using test::angle;
 using test::eref::closest_local;
 using test::eref::level;
-using test::angle;
 
 constexpr double kRel = 1e-5;       // depth tolerance, of L
 constexpr double kAngleTol = 1e-3;  // rad, where the nearest point is well conditioned
@@ -86,11 +86,14 @@ double largest(const Query& q) {
 }
 
 /// Runs `kern` on lanes [begin, end) of all queries as one bucket (full SIMD blocks and a tail).
-std::vector<test::PairResult> run(const std::vector<Query>& qs, KernelPath path, PairKernel kern, uint32_t begin = 0,
-                                  uint32_t end = ~0u) {
-  return test::run_queries(kern, qs, path, [](const Query& q) {
-    return std::pair{test::sphere_leaf(q.c, q.r), test::posed_leaf(kLeafEllipsoid, q.b.p, q.b.R, q.b.e)};
-  }, begin, end);
+std::vector<test::PairResult> run(const std::vector<Query>& qs, KernelPath path, PairKernel kern,
+                                  uint32_t begin = 0, uint32_t end = ~0u) {
+  return test::run_queries(
+      kern, qs, path,
+      [](const Query& q) {
+        return std::pair{test::sphere_leaf(q.c, q.r), test::posed_leaf(kLeafEllipsoid, q.b.p, q.b.R, q.b.e)};
+      },
+      begin, end);
 }
 
 std::vector<test::PairResult> run(const std::vector<Query>& qs, KernelPath path) {
