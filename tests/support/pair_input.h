@@ -449,6 +449,14 @@ inline double lane_size(const Lane& l) {
   return std::max(l.sa.bound_radius(), l.sb.bound_radius());
 }
 
+/// Whether the lane's reference normal is well conditioned at tol: unique (every
+/// direction 0.02 rad or more from it overlaps by more than s + tol) and the overlap
+/// rising by at least 1e-6 L 3e-3 rad from it in every direction (the per-kernel tests'
+/// rule, e.g. box_ellipsoid_test.cpp).
+inline bool well_conditioned(const Lane& l, double tol) {
+  return l.ref.unique(tol) && nref::ring_rise(l.sa, l.sb, l.ref.n) >= 1e-6 * lane_size(l);
+}
+
 /// The largest coordinate of a shape (its centre, its vertices).
 inline double coord_magnitude(const nref::Shape& s) {
   double c = std::max({std::fabs(s.p.x), std::fabs(s.p.y), std::fabs(s.p.z)});
