@@ -192,26 +192,37 @@ inline HullData hull_from_polygons(const std::vector<Eigen::Vector3f>& v,
   return h;
 }
 
-/// The tiny (1e-4), huge (1e4) and far (1e5 from the origin) suites of the hull tests:
-/// pairs(g, hulls, scale, offset) around 12 random hulls of that scale, checked by
-/// check(name, pairs, hulls), whose statistics must count more than 100 hits and 100
-/// misses in each.
+/// The scale suites of the hull tests, pairs(g, hulls, hull_count, n, scale, offset)
+/// around random hulls checked by check(name, pairs, hulls) (statistics with hits and
+/// misses): tiny (1e-4), huge (1e4) and far (1e5 from the origin), 800 pairs around 12
+/// hulls each, more than 100 hits and 100 misses; and many_n pairs around a 400-point
+/// hull (more than 500 faces) 3 from the origin, more than many_hits hits and
+/// many_misses misses.
 template <class Pairs, class Check>
-void check_tiny_huge_far(Pairs pairs, Check check) {
+void check_scale_suites(Pairs pairs, Check check, uint32_t many_n, uint32_t many_hits, uint32_t many_misses) {
   for (const double scale : {1e-4, 1e4}) {
     Rng g(777 + static_cast<uint32_t>(scale > 1));
     Hulls hulls;
     add_random_hulls(g, &hulls, 12, scale);
-    const auto st = check("scale " + std::to_string(scale), pairs(g, hulls, scale, 0.0), hulls);
+    const auto st = check("scale " + std::to_string(scale), pairs(g, hulls, 12, 800, scale, 0.0), hulls);
     EXPECT_GT(st.hits, 100u);
     EXPECT_GT(st.misses, 100u);
   }
-  Rng g(4242);
+  {
+    Rng g(4242);
+    Hulls hulls;
+    add_random_hulls(g, &hulls, 12, 1.0);
+    const auto st = check("far 1e5", pairs(g, hulls, 12, 800, 1.0, 1e5), hulls);
+    EXPECT_GT(st.hits, 100u);
+    EXPECT_GT(st.misses, 100u);
+  }
+  Rng g(99);
   Hulls hulls;
-  add_random_hulls(g, &hulls, 12, 1.0);
-  const auto st = check("far 1e5", pairs(g, hulls, 1.0, 1e5), hulls);
-  EXPECT_GT(st.hits, 100u);
-  EXPECT_GT(st.misses, 100u);
+  hulls.add(ellipsoid_points(g, 400, 1.0));
+  ASSERT_GT(hulls.data[0].faces.size(), 500u);
+  const auto st = check("400-point hull", pairs(g, hulls, 1, many_n, 1.0, 3.0), hulls);
+  EXPECT_GT(st.hits, many_hits);
+  EXPECT_GT(st.misses, many_misses);
 }
 
 /// Where point_near_hull put its point.

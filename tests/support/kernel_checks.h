@@ -3,6 +3,7 @@
 // every random-pose suite runs at.
 //   Built<Q>       a test's pair struct with its built depth and normal
 //   expect_built   a kernel's answers against the built ones (hit, depth, normal)
+//   expect_touching_after_push  overlapping pairs moved apart by the reference: touching
 //   kernel_scales  (size, offset from the origin): 1, 1e-4, 1e4, and 1 at 1e5
 //   check_lanes    every lane of a bucket on both paths against the test's reference
 //                  (PairModel: its reference, surfaces, support overlap and distance)
@@ -16,6 +17,7 @@
 #include <cstdio>
 #include <functional>
 #include <limits>
+#include <random>
 #include <string>
 #include <tuple>
 #include <vector>
@@ -72,6 +74,30 @@ int expect_built(const std::vector<Built<Q>>& ts, const std::vector<PairResult>&
   }
   std::printf("  %s: hits %d, worst depth %.2g L, angle %.2g\n", what, hits, worst, worst_angle);
   return hits;
+}
+
+/// Up to `want` pairs drawn by draw(g) (in at most `attempts` draws) that overlap by more
+/// than 1e-3 by reference(q) (a struct with depth and n), B moved apart by that depth
+/// along n by move_b(q, shift) (rounding to float): touching up to rounding, so a contact
+/// that run(qs) still reports must be no deeper than 4 rel size_of(q).
+template <class Draw, class Reference, class Move, class Run, class Size>
+void expect_touching_after_push(std::mt19937& g, int want, int attempts, Draw draw, Reference reference,
+                                Move move_b, Run run, Size size_of, double rel) {
+  using Q = decltype(draw(g));
+  std::vector<Q> qs;
+  for (int i = 0; i < attempts && static_cast<int>(qs.size()) < want; ++i) {
+    Q q = draw(g);
+    const auto f = reference(q);
+    if (f.depth <= 1e-3) continue;
+    move_b(q, Eigen::Vector3d(f.depth * f.n));
+    qs.push_back(q);
+  }
+  const std::vector<PairResult> res = run(qs);
+  for (size_t k = 0; k < qs.size(); ++k) {
+    if (res[k].count > 0) {
+      EXPECT_LE(res[k].depth, 4 * rel * size_of(qs[k])) << "pushed-apart lane " << k;
+    }
+  }
 }
 
 /// (size, offset from the origin) of the random-pose suites: sizes 1, 1e-4 and 1e4 at the

@@ -487,9 +487,7 @@ TEST_P(BoxCylinderScales, RandomPosesAgainstReference) {
   EXPECT_GT(st.normals_checked, st.hits / 2);
 }
 
-INSTANTIATE_TEST_SUITE_P(Scales, BoxCylinderScales,
-                         ::testing::Values(std::make_tuple(1.0, 0.0), std::make_tuple(1e-4, 0.0),
-                                           std::make_tuple(1e4, 0.0), std::make_tuple(1.0, 1e5)));
+INSTANTIATE_TEST_SUITE_P(Scales, BoxCylinderScales, ::testing::ValuesIn(test::kernel_scales()));
 
 TEST(BoxCylinder, DeepBoxes) {
   std::mt19937 g(29);
@@ -973,21 +971,11 @@ TEST(BoxCylinder, Touching) {
     }
   }
   std::mt19937 g(43);
-  std::vector<Query> qs;
-  for (int i = 0; i < 400 && static_cast<int>(qs.size()) < static_cast<int>(test::scaled(40)); ++i) {
-    Query q = random_query(g, 1.0, 0.0, 0.5);
-    const Ref f = reference(q);
-    if (f.depth <= 1e-3) continue;
-    q.p = test::round_to_float(Vec3d(q.p + f.depth * f.n));
-    qs.push_back(q);
-  }
-  const auto res = run(qs, KernelPath::kSimd);
-  for (size_t k = 0; k < qs.size(); ++k) {
-    const double tol = 4 * kRel * size_of(qs[k]);
-    if (res[k].count > 0) {
-      EXPECT_LE(res[k].depth, tol) << k;
-    }
-  }
+  test::expect_touching_after_push(
+      g, static_cast<int>(test::scaled(40)), 400,
+      [](std::mt19937& gg) { return random_query(gg, 1.0, 0.0, 0.5); }, reference,
+      [](Query& q, const Vec3d& s) { q.p = test::round_to_float(Vec3d(q.p + s)); },
+      [](const std::vector<Query>& qs) { return run(qs, KernelPath::kSimd); }, size_of, kRel);
 }
 
 /// Needles and pancakes (1e-4 proportions) of both shapes: boxes 1 x 1e-4 x 1e-4 and

@@ -629,9 +629,7 @@ TEST_P(CylinderCylinderScales, RandomPosesAgainstReference) {
   EXPECT_GT(st.normals_checked, st.hits / 2);
 }
 
-INSTANTIATE_TEST_SUITE_P(Scales, CylinderCylinderScales,
-                         ::testing::Values(std::make_tuple(1.0, 0.0), std::make_tuple(1e-4, 0.0),
-                                           std::make_tuple(1e4, 0.0), std::make_tuple(1.0, 1e5)));
+INSTANTIATE_TEST_SUITE_P(Scales, CylinderCylinderScales, ::testing::ValuesIn(test::kernel_scales()));
 
 /// Deep pairs: coincident centres (any axes), one wholly inside the other (both ways),
 /// a long thin one through the middle of a fat one (both ways).
@@ -941,21 +939,10 @@ TEST(CylinderCylinder, Touching) {
       EXPECT_EQ(run({swapped(q)}, path)[0].count, 0u) << cs.what;
     }
   std::mt19937 g(43);
-  std::vector<Query> qs;
-  for (int i = 0; i < 10 * lanes(40) && static_cast<int>(qs.size()) < lanes(40); ++i) {
-    Query q = random_query(g, 1.0, 0.0, 0.5);
-    const Ref f = reference(q);
-    if (f.depth <= 1e-3) continue;
-    q.b.p = test::round_to_float(Vec3d(q.b.p + f.depth * f.n));
-    qs.push_back(q);
-  }
-  const auto res = run(qs, KernelPath::kSimd);
-  for (size_t k = 0; k < qs.size(); ++k) {
-    const double tol = 4 * kRel * size_of(qs[k]);
-    if (res[k].count > 0) {
-      EXPECT_LE(res[k].depth, tol) << k;
-    }
-  }
+  test::expect_touching_after_push(
+      g, lanes(40), 10 * lanes(40), [](std::mt19937& gg) { return random_query(gg, 1.0, 0.0, 0.5); },
+      reference, [](Query& q, const Vec3d& s) { q.b.p = test::round_to_float(Vec3d(q.b.p + s)); },
+      [](const std::vector<Query>& qs) { return run(qs, KernelPath::kSimd); }, size_of, kRel);
 }
 
 /// Needles and pancakes (1e-4 proportions) of either cylinder or both: radius 1e-4 of

@@ -1115,9 +1115,7 @@ TEST_P(CylinderEllipsoidScales, RandomPosesAgainstReference) {
   EXPECT_GT(st.normals_checked, st.hits / 2);
 }
 
-INSTANTIATE_TEST_SUITE_P(Scales, CylinderEllipsoidScales,
-                         ::testing::Values(std::make_tuple(1.0, 0.0), std::make_tuple(1e-4, 0.0),
-                                           std::make_tuple(1e4, 0.0), std::make_tuple(1.0, 1e5)));
+INSTANTIATE_TEST_SUITE_P(Scales, CylinderEllipsoidScales, ::testing::ValuesIn(test::kernel_scales()));
 
 /// Deep pairs: coincident centres, the ellipsoid inside the cylinder, the cylinder
 /// inside the ellipsoid, a long thin cylinder through a fat ellipsoid, a needle

@@ -395,9 +395,7 @@ TEST_P(CylinderTriangleScales, RandomPosesAgainstReference) {
   EXPECT_GT(st.flagged, n / 8);
 }
 
-INSTANTIATE_TEST_SUITE_P(Scales, CylinderTriangleScales,
-                         ::testing::Values(std::make_tuple(1.0, 0.0), std::make_tuple(1e-4, 0.0),
-                                           std::make_tuple(1e4, 0.0), std::make_tuple(1.0, 1e5)));
+INSTANTIATE_TEST_SUITE_P(Scales, CylinderTriangleScales, ::testing::ValuesIn(test::kernel_scales()));
 
 /// Large triangles (10 .. 1e4 times the cylinder: terrain) through, under and beside it.
 TEST(CylinderTriangle, LargeTriangles) {
@@ -621,21 +619,13 @@ TEST(CylinderTriangle, Touching) {
     EXPECT_EQ(run({aligned(p, Vec3d(rc, -2, h), Vec3d(rc, 2, h), Vec3d(2, 0, 2), rc, h)}, path)[0].count, 0u);
   }
   std::mt19937 g(43);
-  std::vector<Query> qs;
-  for (int i = 0; i < 400 && static_cast<int>(qs.size()) < static_cast<int>(test::scaled(40)); ++i) {
-    Query q = random_query(g, 1.0, 0.0, 0.5);
-    const Ref f = reference(q);
-    if (f.depth <= 1e-3) continue;
-    for (Vec3d& v : q.v) v = test::round_to_float(Vec3d(v + f.depth * f.n));
-    qs.push_back(q);
-  }
-  const auto res = run(qs, KernelPath::kSimd);
-  for (size_t k = 0; k < qs.size(); ++k) {
-    const double tol = 4 * kRel * size_of(qs[k]);
-    if (res[k].count > 0) {
-      EXPECT_LE(res[k].depth, tol) << k;
-    }
-  }
+  test::expect_touching_after_push(
+      g, static_cast<int>(test::scaled(40)), 400,
+      [](std::mt19937& gg) { return random_query(gg, 1.0, 0.0, 0.5); }, reference,
+      [](Query& q, const Vec3d& s) {
+        for (Vec3d& v : q.v) v = test::round_to_float(Vec3d(v + s));
+      },
+      [](const std::vector<Query>& qs) { return run(qs, KernelPath::kSimd); }, size_of, kRel);
 }
 
 /// Degenerate triangles: collinear (exactly), a point, two equal vertices, slivers of

@@ -315,22 +315,13 @@ TEST(SphereConvex, RandomPosesAgreeWithReference) {
   RecordProperty("worst_depth_rel", std::to_string(st.worst_depth));
 }
 
-TEST(SphereConvex, TinyHugeAndFarScales) {
-  check_tiny_huge_far([](Rng& g, const Hulls& h, double scale,
-                         double offset) { return random_pairs(g, h, 0, 12, scaled(800), scale, offset); },
-                      [](const std::string& what, const std::vector<Pair>& pairs, const Hulls& h) {
-                        return check_pairs(what, pairs, h);
-                      });
-}
-
-TEST(SphereConvex, ManyFaceHull) {
-  Rng g(99);
-  Hulls hulls;
-  hulls.add(ellipsoid_points(g, 400, 1.0));
-  ASSERT_GT(hulls.data[0].faces.size(), 500u);
-  const Stats st = check_pairs("400-point hull", random_pairs(g, hulls, 0, 1, scaled(600), 1.0, 3.0), hulls);
-  EXPECT_GT(st.hits, 100u);
-  EXPECT_GT(st.misses, 50u);
+TEST(SphereConvex, TinyHugeFarAndManyFaceHulls) {
+  check_scale_suites([](Rng& g, const Hulls& h, uint32_t hulls, uint32_t n, double scale,
+                        double offset) { return random_pairs(g, h, 0, hulls, scaled(n), scale, offset); },
+                     [](const std::string& what, const std::vector<Pair>& pairs, const Hulls& h) {
+                       return check_pairs(what, pairs, h);
+                     },
+                     600u, 100u, 50u);
 }
 
 TEST(SphereConvex, WithoutEdgeAdjacency) {
