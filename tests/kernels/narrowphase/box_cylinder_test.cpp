@@ -237,19 +237,14 @@ bool unique_minimum(const Query& q, const Vec3d& n_ref, double depth, double sec
   return *rise >= 1e-6 * size_of(q);
 }
 
-struct Ref {
-  double depth = 0;  // > 0: penetration depth; else minus the gap
-  Vec3d n = Vec3d::UnitZ();
-  bool apart = false;
-  bool unique = false;  // the normal is unique at this tolerance
-  // Where unique: the angle a normal may be off, kAngleTol or, in a flat valley, the
-  // angle at which the overlap rises by kValleyNoise L (the valley taken as quadratic
-  // from its rise at 3e-3 rad): a float kernel's overlap is only that exact.
-  double angle_tol = kAngleTol;
-};
+/// The reference (test::LaneRef): depth (> 0 penetration, else minus the distance), the
+/// normal, apart (the distance in closed form), unique and, where unique, the angle a
+/// normal may be off.
+using Ref = test::LaneRef;
 
 Ref reference(const Query& q) {
   Ref f;
+  f.angle_tol = kAngleTol;
   Vec3d x = q.c;
   const double m = gap(q, Vec3d::Zero(), &x);
   const double tol = kRel * size_of(q);
@@ -277,11 +272,7 @@ using Stats = test::LaneStats;
 void check_all(const std::vector<Query>& qs, const char* what, Stats* out_stats = nullptr) {
   static const test::PairModel<Query> model{
       .rel = kRel,
-      .reference =
-          [](const Query& q) {
-            const Ref f = reference(q);
-            return test::LaneRef{f.depth, f.n, f.unique, f.angle_tol, false};
-          },
+      .reference = reference,
       .size = size_of,
       .coord_ulp = coord_ulp,
       .overlap = overlap_along,

@@ -243,15 +243,14 @@ bool unique_minimum(const Query& q, const Vec3d& n_ref, double depth, double sec
   return ring(3e-3, 96) - depth >= 1e-6 * size_of(q);
 }
 
-struct Ref {
-  double depth = 0;  // > 0: penetration depth; else minus the distance
-  Vec3d n = Vec3d::UnitZ();
-  bool apart = false;
-  bool unique = false;  // the normal is unique at this tolerance
-};
+/// The reference (test::LaneRef): depth (> 0 penetration, else minus the distance), the
+/// normal, apart (the distance in closed form), unique and, where unique, the angle a
+/// normal may be off.
+using Ref = test::LaneRef;
 
 Ref reference(const Query& q) {
   Ref f;
+  f.angle_tol = kAngleTol;
   Vec3d x = q.a.p;
   const double m = solid_minimum(q, Vec3d::Zero(), &x);
   const double tol = kRel * size_of(q);
@@ -279,11 +278,7 @@ void check_all(const std::vector<Query>& qs, const char* what, Stats* out_stats 
   static const test::PairModel<Query> model{
       .rel = kRel,
       .carries = test::Carries::kDeepestWithinTol,
-      .reference =
-          [](const Query& q) {
-            const Ref f = reference(q);
-            return test::LaneRef{f.depth, f.n, f.unique, kAngleTol, false};
-          },
+      .reference = reference,
       .size = size_of,
       .coord_ulp = coord_ulp,
       .overlap = overlap_along,
