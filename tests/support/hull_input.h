@@ -12,6 +12,7 @@
 #include <cmath>
 #include <cstdint>
 #include <random>
+#include <string>
 #include <vector>
 
 #include "host/narrowphase/convex_hull.h"
@@ -33,12 +34,10 @@ inline D3 unit(D3 a) { return (1.0 / norm(a)) * a; }
 
 using Rng = std::mt19937;
 inline double uni(Rng& g, double a, double b) { return std::uniform_real_distribution<double>(a, b)(g); }
+/// test::random_normal_draws, normalised as a D3.
 inline D3 random_unit(Rng& g) {
-  std::normal_distribution<double> d(0.0, 1.0);
-  for (;;) {
-    const D3 v{d(g), d(g), d(g)};
-    if (norm(v) > 1e-3) return unit(v);
-  }
+  const Eigen::Vector3d v = random_normal_draws(g);
+  return unit(D3{v.x(), v.y(), v.z()});
 }
 /// Row-major rotation (test::random_rotation_rows) in float.
 inline void random_rotation(Rng& g, float m[9]) {
@@ -150,6 +149,118 @@ inline D3 closest_on_segment(D3 a, D3 b, D3 c) {
 /// Test part results (failures) recorded so far in the running test.
 inline int failure_parts() {
   return ::testing::UnitTest::GetInstance()->current_test_info()->result()->total_part_count();
+}
+
+/// HullData from vertices and convex polygons given in cyclic order (either
+/// orientation): planes by Newell's method in double, polygons turned counter-clockwise
+/// seen from outside, offsets = the largest n.v over the hull (every vertex behind), one edge direction
+/// per parallel class.
+inline HullData hull_from_polygons(const std::vector<Eigen::Vector3f>& v,
+                                   std::vector<std::vector<uint32_t>> polys) {
+  HullData h;
+  h.vertices = v;
+  D3 centre;
+  for (const auto& q : v) centre = centre + D3{q.x(), q.y(), q.z()};
+  centre = (1.0 / static_cast<double>(v.size())) * centre;
+  auto at = [&](uint32_t i) { return D3{v[i].x(), v[i].y(), v[i].z()}; };
+  for (auto& poly : polys) {
+    D3 nn, m;
+    for (size_t i = 0; i < poly.size(); ++i) {
+      nn = nn + cross(at(poly[i]), at(poly[(i + 1) % poly.size()]));
+      m = m + at(poly[i]);
+    }
+    m = (1.0 / static_cast<double>(poly.size())) * m;
+    if (dot(nn, m - centre) < 0) {
+      std::reverse(poly.begin(), poly.end());
+      nn = -1.0 * nn;
+    }
+    nn = unit(nn);
+    double off = -1e300;
+    for (uint32_t i = 0; i < v.size(); ++i) off = std::max(off, dot(nn, at(i)));
+    h.faces.push_back(poly);
+    h.face_normals.emplace_back(static_cast<float>(nn.x), static_cast<float>(nn.y), static_cast<float>(nn.z));
+    h.face_offsets.push_back(static_cast<float>(off));
+    for (size_t i = 0; i < poly.size(); ++i) {
+      const D3 ed = unit(at(poly[(i + 1) % poly.size()]) - at(poly[i]));
+      bool dup = false;
+      for (const auto& x : h.edge_dirs) dup = dup || std::fabs(dot(ed, D3{x.x(), x.y(), x.z()})) > 1 - 1e-12;
+      if (!dup)
+        h.edge_dirs.emplace_back(static_cast<float>(ed.x), static_cast<float>(ed.y),
+                                 static_cast<float>(ed.z));
+    }
+  }
+  return h;
+}
+
+/// The scale suites of the hull tests, pairs(g, hulls, hull_count, n, scale, offset)
+/// around random hulls checked by check(name, pairs, hulls) (statistics with hits and
+/// misses): tiny (1e-4), huge (1e4) and far (1e5 from the origin), 800 pairs around 12
+/// hulls each, more than 100 hits and 100 misses; and many_n pairs around a 400-point
+/// hull (more than 500 faces) 3 from the origin, more than many_hits hits and
+/// many_misses misses.
+template <class Pairs, class Check>
+void check_scale_suites(Pairs pairs, Check check, uint32_t many_n, uint32_t many_hits, uint32_t many_misses) {
+  for (const double scale : {1e-4, 1e4}) {
+    Rng g(777 + static_cast<uint32_t>(scale > 1));
+    Hulls hulls;
+    add_random_hulls(g, &hulls, 12, scale);
+    const auto st = check("scale " + std::to_string(scale), pairs(g, hulls, 12, 800, scale, 0.0), hulls);
+    EXPECT_GT(st.hits, 100u);
+    EXPECT_GT(st.misses, 100u);
+  }
+  {
+    Rng g(4242);
+    Hulls hulls;
+    add_random_hulls(g, &hulls, 12, 1.0);
+    const auto st = check("far 1e5", pairs(g, hulls, 12, 800, 1.0, 1e5), hulls);
+    EXPECT_GT(st.hits, 100u);
+    EXPECT_GT(st.misses, 100u);
+  }
+  Rng g(99);
+  Hulls hulls;
+  hulls.add(ellipsoid_points(g, 400, 1.0));
+  ASSERT_GT(hulls.data[0].faces.size(), 500u);
+  const auto st = check("400-point hull", pairs(g, hulls, 1, many_n, 1.0, 3.0), hulls);
+  EXPECT_GT(st.hits, many_hits);
+  EXPECT_GT(st.misses, many_misses);
+}
+
+/// Where point_near_hull put its point.
+enum class Near { kBox, kVertex, kEdge, kFace };
+
+/// A random point near hull h posed as lane q (p, R): uniform in the box of +-2 scale
+/// about its origin, within reach * [0, spread] of a vertex or of an edge point, or along
+/// a face's normal within reach * [-spread, spread] of the face's centroid (*face_normal:
+/// that normal in the world, unnormalised by the pose's float rotation), one in four each.
+template <class Lane>
+D3 point_near_hull(Rng& g, const HullData& h, const Lane& q, double scale, double reach, double spread,
+                   Near* where = nullptr, D3* face_normal = nullptr) {
+  const uint32_t pick = static_cast<uint32_t>(g() % 4);
+  if (where != nullptr) *where = static_cast<Near>(pick);
+  switch (pick) {
+    case 0:
+      return to_world(q, Eigen::Vector3f::Zero()) +
+             D3{uni(g, -2 * scale, 2 * scale), uni(g, -2 * scale, 2 * scale), uni(g, -2 * scale, 2 * scale)};
+    case 1:
+      return to_world(q, h.vertices[g() % h.vertices.size()]) +
+             (reach * uni(g, 0.0, spread)) * random_unit(g);
+    case 2: {
+      const auto& f = h.faces[g() % h.faces.size()];
+      const size_t j = g() % f.size();
+      const D3 a = to_world(q, h.vertices[f[j]]), b = to_world(q, h.vertices[f[(j + 1) % f.size()]]);
+      return a + uni(g, 0, 1) * (b - a) + (reach * uni(g, 0.0, spread)) * random_unit(g);
+    }
+    default: {
+      const size_t fi = g() % h.faces.size();
+      const auto& f = h.faces[fi];
+      D3 m;
+      for (uint32_t v : f) m = m + to_world(q, h.vertices[v]);
+      m = (1.0 / static_cast<double>(f.size())) * m;
+      const D3 nw = to_world(q, h.face_normals[fi]) - to_world(q, Eigen::Vector3f::Zero());
+      if (face_normal != nullptr) *face_normal = nw;
+      return m + (reach * uni(g, -spread, spread)) * nw;
+    }
+  }
 }
 
 }  // namespace impact::test::hull_input

@@ -499,6 +499,41 @@ inline double valley_angle(double floor, double rise, double at, double noise) {
   return std::max(floor, at * std::sqrt(noise / rise));
 }
 
+/// More samples and starts than the default, for the kernel tests that hold a normal to
+/// 1e-4 rad (needles, pancakes and flat valleys).
+inline Options dense_options() {
+  Options o;
+  o.samples = 6000;
+  o.starts = 8;
+  return o;
+}
+
+/// The least rise of the overlap of A and B over its value at n along the ring `cone`
+/// rad around n (3e-3 by default): 64 samples, the best 4 refined by golden-section
+/// search on the ring's angle (a needle's flat valley is ~1e-4 of the ring wide and
+/// slips between samples). How well conditioned the minimum at n is.
+inline double ring_rise(const Shape& a, const Shape& b, V3 n, double cone = 3e-3) {
+  V3 t1, t2;
+  detail::tangent_basis(n, t1, t2);
+  const double th = std::tan(cone), s = overlap(a, b, n);
+  auto f = [&](double ang) {
+    return overlap(a, b, normalized(n + th * std::cos(ang) * t1 + th * std::sin(ang) * t2)) - s;
+  };
+  std::vector<std::pair<double, double>> samples;
+  for (int i = 0; i < 64; ++i) samples.push_back({f(2 * M_PI * i / 64), 2 * M_PI * i / 64});
+  std::partial_sort(samples.begin(), samples.begin() + 4, samples.end());
+  double best = samples[0].first;
+  for (int k = 0; k < 4; ++k) {
+    double lo = samples[k].second - 2 * M_PI / 64, hi = samples[k].second + 2 * M_PI / 64;
+    for (int it = 0; it < 40; ++it) {
+      const double m1 = lo + 0.381966 * (hi - lo), m2 = lo + 0.618034 * (hi - lo);
+      (f(m1) < f(m2) ? hi : lo) = f(m1) < f(m2) ? m2 : m1;
+    }
+    best = std::min(best, f(0.5 * (lo + hi)));
+  }
+  return best;
+}
+
 /// The reference collision data of A and B (B translated by b_shift).
 inline PairResult solve_pair(const Shape& a, const Shape& b, V3 b_shift = {}, const Options& opt = {}) {
   PairResult r;

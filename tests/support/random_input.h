@@ -1,5 +1,7 @@
-// Random input shared by the shape and raycast tests: a seeded generator of uniform
-// floats, indices, vectors, unit vectors and rotations, and a bumpy grid mesh.
+// Random input shared by the shape, raycast and narrow-phase tests: a seeded generator of
+// uniform floats, indices, vectors, unit vectors and rotations, the double draws of the
+// narrow-phase kernel tests (a unit vector, a rotation, a frame about a given axis), and
+// a bumpy grid mesh.
 #pragma once
 
 #include <cmath>
@@ -31,6 +33,36 @@ struct TestRng {
     return Eigen::Quaternionf(c[0], c[1], c[2], c[3]);
   }
 };
+
+/// Three normal draws in double, x first (from a fresh distribution, so they depend on g
+/// alone), drawn again while their length is at most 1e-3: a uniformly random direction
+/// before normalisation (callers normalise as their arithmetic needs). The draws are
+/// sequenced (a braced list): constructor arguments are evaluated in an unspecified order.
+inline Eigen::Vector3d random_normal_draws(std::mt19937& g) {
+  std::normal_distribution<double> d;
+  for (;;) {
+    const double c[3] = {d(g), d(g), d(g)};
+    const Eigen::Vector3d v(c[0], c[1], c[2]);
+    if (std::sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]) > 1e-3) return v;
+  }
+}
+
+/// A uniformly random unit vector in double (random_normal_draws, normalised).
+inline Eigen::Vector3d random_unit_vector(std::mt19937& g) {
+  return random_normal_draws(g).normalized();
+}
+
+/// A rotation taking +z to the unit vector m, turned about m by a uniform random angle.
+inline Eigen::Matrix3d frame_with_z(std::mt19937& g, const Eigen::Vector3d& m) {
+  const Eigen::Vector3d t = m.unitOrthogonal();
+  const double a = std::uniform_real_distribution<double>(0, 2 * M_PI)(g);
+  const Eigen::Vector3d x = std::cos(a) * t + std::sin(a) * m.cross(t);
+  Eigen::Matrix3d R;
+  R.col(0) = x;
+  R.col(1) = m.cross(x);
+  R.col(2) = m;
+  return R;
+}
 
 /// A uniformly random rotation as a row-major 3x3 in double: a quaternion of 4 normal
 /// draws (drawn again while its length is below 1e-3), normalised (the matrix and

@@ -1,6 +1,5 @@
 // collide_box_cylinder (kernels/narrowphase/pairs/box/box_cylinder.cpp) on both paths against
-// independent double-precision references, and against the general GJK / EPA path
-// (collide_gjk_epa) on the same lanes.
+// independent double-precision references.
 //
 // References (double, the inputs rounded to float as the kernel sees them; no candidate
 // enumeration, no root solve by steps):
@@ -53,8 +52,9 @@
 // (rim points), lying on it (the side line's 2 ends, clipped to the face); near-parallel
 // tilts (0..1e-2 rad) of those; exactly touching (count 0); needle and pancake boxes and
 // cylinders (1e-4); symmetries (a rotation and translation of the whole pair, the
-// cylinder's axis reversed, the box's axes relabelled); range partitions and shuffled
-// buckets (same bytes, nothing written outside the range); agreement with GJK / EPA.
+// cylinder's axis reversed, the box's axes relabelled).
+// Registration, range partitions, shuffled buckets and the agreement with GJK / EPA:
+// contract_test.cpp (every bucket of the table).
 #include <gtest/gtest.h>
 
 #include <Eigen/Core>
@@ -70,9 +70,11 @@
 #include <vector>
 
 #include "kernels/narrowphase/pair_kernels.h"
+#include "support/kernel_checks.h"
 #include "support/leaf_lanes.h"
 #include "support/narrow_reference.h"
 #include "support/random_input.h"
+#include "support/shape_geometry.h"
 #include "support/test_support.h"
 
 namespace impact::kernels {
@@ -81,16 +83,14 @@ namespace {
 using Vec3d = Eigen::Vector3d;
 using Mat3d = Eigen::Matrix3d;
 namespace nref = test::nref;
+using test::angle, test::columns, test::rot, test::turn_to, test::radial, test::tangential, test::v3,
+    test::ev;
 
 constexpr double kRel = 1e-5;       // depth tolerance, of L
 constexpr double kAngleTol = 1e-4;  // rad, where the minimum is unique and conditioned
 constexpr double kValleyNoise = 4e-7;  // of L: twice the worst depth error measured
 /// Golden-section steps per coordinate of the gap: brackets of 0.618^48 ~ 1e-10 of a face.
 constexpr int kGoldenIters = 48;
-
-double angle(const Vec3d& a, const Vec3d& b) {
-  return std::atan2(a.cross(b).norm(), a.dot(b));
-}
 
 struct Query {
   Vec3d c;       // box centre
@@ -124,74 +124,31 @@ double coord_ulp(const Query& q) {
 
 // --- running the kernel -----------------------------------------------------------------------
 
-struct Lanes {
-  std::vector<float> ap[3], ar[9], ae[3], bp[3], br[9], be[3];
-  LeafSoA a{}, b{};
-  explicit Lanes(const std::vector<Query>& qs) {
-    for (const Query& q : qs) {
-      for (int i = 0; i < 3; ++i) {
-        ap[i].push_back(float(q.c[i]));
-        ae[i].push_back(float(q.e[i]));
-        bp[i].push_back(float(q.p[i]));
-      }
-      for (int i = 0; i < 9; ++i) {
-        ar[i].push_back(float(q.Q(i / 3, i % 3)));
-        br[i].push_back(float(q.R(i / 3, i % 3)));
-      }
-      be[0].push_back(float(q.rc)), be[1].push_back(float(q.h)), be[2].push_back(0.0f);
-    }
-    for (int i = 0; i < 3; ++i)
-      a.p[i] = ap[i].data(), a.e[i] = ae[i].data(), b.p[i] = bp[i].data(), b.e[i] = be[i].data();
-    for (int i = 0; i < 9; ++i) a.r[i] = ar[i].data(), b.r[i] = br[i].data();
-  }
-};
-
 /// Runs `kern` (the kernel under test unless given) on lanes [begin, end) of one bucket.
 std::vector<test::PairResult> run(const std::vector<Query>& qs, KernelPath path, PairKernel kern = nullptr,
-                                  uint32_t begin = 0, uint32_t end = ~0u,
-                                  test::ManifoldLanes* keep = nullptr) {
-  if (kern == nullptr) kern = &collide_box_cylinder;
-  const uint32_t n = static_cast<uint32_t>(qs.size());
-  end = std::min(end, n);
-  Lanes l(qs);
-  test::ManifoldLanes o(n);
-  NarrowConfig cfg;
-  cfg.path = path;
-  kern(l.a, l.b, o.view(), Range{begin, end}, cfg);
-  std::vector<test::PairResult> out(n);
-  for (uint32_t k = begin; k < end; ++k) out[k] = o.result(k);
-  if (keep != nullptr) *keep = o;
-  return out;
-}
-
-void gjk_kernel(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out, Range r,
-                const NarrowConfig& cfg) {
-  collide_gjk_epa(a, b, out, r, cfg, kLeafBox, kLeafCylinder);
+                                  uint32_t begin = 0, uint32_t end = ~0u) {
+  return test::run_queries(
+      kern != nullptr ? kern : &collide_box_cylinder, qs, path,
+      [](const Query& q) {
+        return std::pair{test::posed_leaf(kLeafBox, q.c, q.Q, q.e),
+                         test::posed_leaf(kLeafCylinder, q.p, q.R, Vec3d(q.rc, q.h, 0))};
+      },
+      begin, end);
 }
 
 // --- references -------------------------------------------------------------------------------
 
-/// Signed distance of x to the solid box of q (< 0 inside).
 double box_sd(const Query& q, const Vec3d& x) {
-  const Vec3d l = (q.Q.transpose() * (x - q.c)).cwiseAbs() - q.e;
-  const double inside = l.maxCoeff();
-  return inside > 0 ? l.cwiseMax(0.0).norm() : inside;
+  return test::box_sd(q.c, q.Q, q.e, x);
 }
 
 /// Signed distance of x to the solid cylinder of q moved by `shift` (< 0 inside).
 double cyl_sd(const Query& q, const Vec3d& x, const Vec3d& shift = Vec3d::Zero()) {
-  const Vec3d l = q.R.transpose() * (x - q.p - shift);
-  const double dr = std::hypot(l.x(), l.y()) - q.rc, dz = std::fabs(l.z()) - q.h;
-  if (dr <= 0 && dz <= 0) return std::max(dr, dz);
-  return std::hypot(std::max(dr, 0.0), std::max(dz, 0.0));
+  return test::cylinder_sd(q.p + shift, q.R, q.rc, q.h, x);
 }
 
-/// The closest point of the solid cylinder to an outside point x.
 Vec3d cyl_closest(const Query& q, const Vec3d& x) {
-  const Vec3d l = q.R.transpose() * (x - q.p);
-  const double rho = std::hypot(l.x(), l.y());
-  const double s = rho > q.rc ? q.rc / rho : 1.0;
-  return q.p + q.R * Vec3d(l.x() * s, l.y() * s, std::clamp(l.z(), -q.h, q.h));
+  return test::cylinder_closest(q.p, q.R, q.rc, q.h, x);
 }
 
 /// The least signed distance to the cylinder (moved by `shift`) over the box's surface:
@@ -235,40 +192,16 @@ double gap(const Query& q, const Vec3d& shift = Vec3d::Zero(), Vec3d* where = nu
   return m;
 }
 
-nref::V3 v3(const Vec3d& v) {
-  return {v.x(), v.y(), v.z()};
-}
-Vec3d ev(const nref::V3& v) {
-  return {v.x, v.y, v.z};
-}
 nref::Shape box_shape(const Query& q) {
-  nref::Shape s;
-  s.type = kLeafBox;
-  s.p = v3(q.c);
-  for (int i = 0; i < 9; ++i) s.r[i] = q.Q(i / 3, i % 3);
-  for (int i = 0; i < 3; ++i) s.e[i] = q.e[i];
-  return s;
+  return test::posed_shape(kLeafBox, q.c, q.Q, q.e);
 }
 nref::Shape cylinder_shape(const Query& q) {
-  nref::Shape s;
-  s.type = kLeafCylinder;
-  s.p = v3(q.p);
-  for (int i = 0; i < 9; ++i) s.r[i] = q.R(i / 3, i % 3);
-  s.e[0] = q.rc;
-  s.e[1] = q.h;
-  return s;
+  return test::posed_shape(kLeafCylinder, q.p, q.R, Vec3d(q.rc, q.h, 0));
 }
 
 /// The support overlap of A and B along n.
 double overlap_along(const Query& q, const Vec3d& n) {
   return nref::overlap(box_shape(q), cylinder_shape(q), v3(n.normalized()));
-}
-
-nref::Options dense_options() {
-  nref::Options o;
-  o.samples = 6000;
-  o.starts = 8;
-  return o;
 }
 
 /// Whether n_ref is the only minimiser within 0.02 rad: every direction outside that
@@ -304,19 +237,14 @@ bool unique_minimum(const Query& q, const Vec3d& n_ref, double depth, double sec
   return *rise >= 1e-6 * size_of(q);
 }
 
-struct Ref {
-  double depth = 0;  // > 0: penetration depth; else minus the gap
-  Vec3d n = Vec3d::UnitZ();
-  bool apart = false;
-  bool unique = false;  // the normal is unique at this tolerance
-  // Where unique: the angle a normal may be off, kAngleTol or, in a flat valley, the
-  // angle at which the overlap rises by kValleyNoise L (the valley taken as quadratic
-  // from its rise at 3e-3 rad): a float kernel's overlap is only that exact.
-  double angle_tol = kAngleTol;
-};
+/// The reference (test::LaneRef): depth (> 0 penetration, else minus the distance), the
+/// normal, apart (the distance in closed form), unique and, where unique, the angle a
+/// normal may be off.
+using Ref = test::LaneRef;
 
 Ref reference(const Query& q) {
   Ref f;
+  f.angle_tol = kAngleTol;
   Vec3d x = q.c;
   const double m = gap(q, Vec3d::Zero(), &x);
   const double tol = kRel * size_of(q);
@@ -327,7 +255,7 @@ Ref reference(const Query& q) {
     f.unique = m > 1e-3 * size_of(q);
     return f;
   }
-  const nref::PairResult s = nref::solve_pair(box_shape(q), cylinder_shape(q), {}, dense_options());
+  const nref::PairResult s = nref::solve_pair(box_shape(q), cylinder_shape(q), {}, nref::dense_options());
   f.depth = s.s;
   f.n = ev(s.n);
   double rise = 0;
@@ -338,123 +266,25 @@ Ref reference(const Query& q) {
 
 // --- the per-lane check -----------------------------------------------------------------------
 
-struct Stats {
-  int lanes = 0, hits = 0, multi = 0, normals_checked = 0;
-  int counts[5] = {0, 0, 0, 0, 0};
-  double worst_depth = 0, worst_angle = 0;
-};
+using Stats = test::LaneStats;
 
-bool same_bytes(const test::PairResult& x, const test::PairResult& y) {
-  bool same = x.count == y.count;
-  if (same && x.count > 0) {
-    same = std::memcmp(&x.depth, &y.depth, sizeof x.depth) == 0 && std::memcmp(&x.n, &y.n, sizeof x.n) == 0;
-    for (uint32_t i = 0; i < x.count; ++i)
-      same = same && std::memcmp(&x.pt[i], &y.pt[i], sizeof x.pt[i]) == 0 &&
-             std::memcmp(&x.pd[i], &y.pd[i], sizeof x.pd[i]) == 0;
-  }
-  return same;
-}
-
-/// Checks a lane's points: on both surfaces, 0 < pdepth <= depth, one point carries it.
-void check_points(const Query& q, const test::PairResult& h, double ptol, const char* what, size_t k,
-                  const char* path) {
-  for (uint32_t i = 0; i < h.count; ++i) {
-    ASSERT_TRUE(h.pt[i].allFinite()) << what << " lane " << k;
-    EXPECT_GT(h.pd[i], 0.0) << what << " lane " << k << " point " << i << path;
-    EXPECT_LE(h.pd[i], h.depth) << what << " lane " << k << " point " << i << path;
-    const Vec3d on_a = h.pt[i] + 0.5 * h.pd[i] * h.n, on_b = h.pt[i] - 0.5 * h.pd[i] * h.n;
-    EXPECT_LE(std::fabs(box_sd(q, on_a)), ptol) << what << " lane " << k << " point " << i << path;
-    EXPECT_LE(std::fabs(cyl_sd(q, on_b)), ptol) << what << " lane " << k << " point " << i << path;
-  }
-  if (h.count == 1) {
-    EXPECT_EQ(h.pd[0], h.depth) << what << " lane " << k << path;
-  }
-}
-
-/// Checks (a)-(e) and the translation check for every lane of qs (already rounded).
+/// The pair for test::check_lanes: the references above, the gap for the translation check.
 void check_all(const std::vector<Query>& qs, const char* what, Stats* out_stats = nullptr) {
-  SCOPED_TRACE(what);
-  const auto simd = run(qs, KernelPath::kSimd), scal = run(qs, KernelPath::kScalar);
-  Stats st;
-  for (size_t k = 0; k < qs.size(); ++k) {
-    const Query& q = qs[k];
-    const Ref f = reference(q);
-    const double L = size_of(q), tol = kRel * L, ptol = tol + 4 * coord_ulp(q);
-    ++st.lanes;
-    for (const test::PairResult* hp : {&simd[k], &scal[k]}) {
-      const test::PairResult& h = *hp;
-      const bool is_simd = hp == &simd[k];
-      const char* path = is_simd ? " simd" : " scalar";
-      ASSERT_LE(h.count, 4u) << what << " lane " << k;
-      if (std::fabs(f.depth) <= tol) continue;
-      ASSERT_EQ(h.count > 0, f.depth > 0) << what << " lane " << k << " depth_ref " << f.depth << " got "
-                                          << (h.count > 0 ? h.depth : 0.0) << path;
-      if (f.depth <= 0) continue;
-      if (is_simd) {
-        ++st.hits;
-        st.multi += h.count > 1;
-        ++st.counts[h.count];
-      }
-      const double dd = std::fabs(h.depth - f.depth);
-      st.worst_depth = std::max(st.worst_depth, dd / L);
-      EXPECT_LE(dd, tol) << what << " lane " << k << " depth " << h.depth << " ref " << f.depth << path;
-      ASSERT_TRUE(h.n.allFinite()) << what << " lane " << k;
-      EXPECT_NEAR(h.n.norm(), 1.0, 1e-6) << what << " lane " << k;
-      // (c) as good a separating direction as the reference's, and the same where unique
-      EXPECT_LE(overlap_along(q, h.n), f.depth + tol) << what << " lane " << k << path;
-      if (f.unique) {
-        const double ang = angle(h.n, f.n);
-        if (is_simd) ++st.normals_checked, st.worst_angle = std::max(st.worst_angle, ang);
-        EXPECT_LE(ang, f.angle_tol) << what << " lane " << k << " n " << h.n.transpose() << " ref "
-                                    << f.n.transpose() << path;
-      }
-      check_points(q, h, ptol, what, k, path);
-    }
-    // (e) the paths give the same bytes (the same IEEE operations, no contraction)
-    EXPECT_TRUE(same_bytes(simd[k], scal[k])) << what << " lane " << k << ": the SIMD and scalar paths differ";
-    // the translation check, by the gap alone
-    const test::PairResult& h = simd[k];
-    if (h.count > 0 && h.depth > 20 * tol) {
-      const double d = 0.05 * h.depth;
-      const double apart = gap(q, (h.depth + d) * h.n);
-      EXPECT_GE(apart, d - 2 * tol) << what << " lane " << k << ": moved by n (depth + d) not apart by d";
-      const double meets = gap(q, (h.depth - d) * h.n);
-      EXPECT_LT(meets, 0.0) << what << " lane " << k << ": moved by n (depth - d) already apart";
-    }
-  }
+  static const test::PairModel<Query> model{
+      .rel = kRel,
+      .reference = reference,
+      .size = size_of,
+      .coord_ulp = coord_ulp,
+      .overlap = overlap_along,
+      .sd_a = box_sd,
+      .sd_b = [](const Query& q, const Vec3d& x) { return cyl_sd(q, x); },
+      .apart = [](const Query& q, const Vec3d& shift) { return gap(q, shift); }};
+  const Stats st =
+      test::check_lanes(model, qs, run(qs, KernelPath::kSimd), run(qs, KernelPath::kScalar), what);
   if (out_stats != nullptr) *out_stats = st;
-  std::printf(
-      "  %-28s lanes %4d hits %4d points 1/2/3/4 %d/%d/%d/%d normals %4d | worst |depth-ref| %.2g L, "
-      "angle %.2g rad\n",
-      what, st.lanes, st.hits, st.counts[1], st.counts[2], st.counts[3], st.counts[4],
-      st.normals_checked, st.worst_depth, st.worst_angle);
 }
 
 // --- inputs -----------------------------------------------------------------------------------
-
-Vec3d random_unit(std::mt19937& g) {
-  std::normal_distribution<double> d;
-  for (;;) {
-    const Vec3d v(d(g), d(g), d(g));
-    if (v.norm() > 1e-3) return v.normalized();
-  }
-}
-
-Mat3d columns(const Vec3d& a, const Vec3d& b, const Vec3d& c) {
-  Mat3d m;
-  m.col(0) = a, m.col(1) = b, m.col(2) = c;
-  return m;
-}
-
-Mat3d rot(double a, const Vec3d& axis) {
-  return Eigen::AngleAxisd(a, axis.normalized()).toRotationMatrix();
-}
-
-/// The rotation about from x to (not opposite) that turns `from` onto `to`.
-Mat3d turn_to(const Vec3d& from, const Vec3d& to) {
-  const Vec3d a = from.normalized(), b = to.normalized();
-  return rot(angle(a, b), a.cross(b));
-}
 
 /// A random pair at size `size`, `offset` from the origin, the box centre within
 /// `spread` (of the pair's reach) of the cylinder's.
@@ -468,7 +298,7 @@ Query random_query(std::mt19937& g, double size, double offset, double spread) {
   q.Q = test::random_rotation(g);
   q.e = size * Vec3d(0.1 + 0.9 * uni(g), 0.1 + 0.9 * uni(g), 0.1 + 0.9 * uni(g));
   const double reach = q.e.norm() + std::hypot(q.rc, q.h);
-  q.c = q.p + spread * reach * uni(g) * random_unit(g);
+  q.c = q.p + spread * reach * uni(g) * test::random_unit_vector(g);
   return rounded(q);
 }
 
@@ -525,13 +355,6 @@ void vertex_box(std::mt19937& g, const Vec3d& v, const Vec3d& n, const Vec3d& ha
   *c = v - *Qb * s.cwiseProduct(half);
 }
 
-Vec3d radial(double a) {
-  return {std::cos(a), std::sin(a), 0.0};
-}
-Vec3d tangential(double a) {
-  return {-std::sin(a), std::cos(a), 0.0};
-}
-
 /// Whether x lies (across the cylinder's axis) at a corner of the box's face across that
 /// axis (box axes 0 and 1) inside the cap's disk, or on the rim within that face: the
 /// vertices of the face clipped to the disk.
@@ -553,10 +376,6 @@ double spread(const test::PairResult& r) {
 }
 
 // ---------------------------------------------------------------------------------------------
-
-TEST(BoxCylinder, RegisteredForTheBucket) {
-  EXPECT_EQ(pair_kernel(kLeafBox, kLeafCylinder), &collide_box_cylinder);
-}
 
 /// The references against closed forms: point distances; a box beside the side, on the
 /// cap, an edge and a vertex off a rim (apart), an edge across a rim, a level box through
@@ -636,7 +455,7 @@ TEST(BoxCylinder, ReferenceMatchesClosedForms) {
     Vec3d x;
     const double d = gap(w, Vec3d::Zero(), &x);
     if (d <= 1e-3) continue;
-    const nref::PairResult s = nref::solve_pair(box_shape(w), cylinder_shape(w), {}, dense_options());
+    const nref::PairResult s = nref::solve_pair(box_shape(w), cylinder_shape(w), {}, nref::dense_options());
     // (the float-rounded rotations are orthonormal to ~1e-8: the point distances read
     // all of R and Q, nref's cylinder only the axis)
     EXPECT_NEAR(s.s, -d, 1e-7) << i;
@@ -659,9 +478,7 @@ TEST_P(BoxCylinderScales, RandomPosesAgainstReference) {
   EXPECT_GT(st.normals_checked, st.hits / 2);
 }
 
-INSTANTIATE_TEST_SUITE_P(Scales, BoxCylinderScales,
-                         ::testing::Values(std::make_tuple(1.0, 0.0), std::make_tuple(1e-4, 0.0),
-                                           std::make_tuple(1e4, 0.0), std::make_tuple(1.0, 1e5)));
+INSTANTIATE_TEST_SUITE_P(Scales, BoxCylinderScales, ::testing::ValuesIn(test::kernel_scales()));
 
 TEST(BoxCylinder, DeepBoxes) {
   std::mt19937 g(29);
@@ -1145,21 +962,11 @@ TEST(BoxCylinder, Touching) {
     }
   }
   std::mt19937 g(43);
-  std::vector<Query> qs;
-  for (int i = 0; i < 400 && static_cast<int>(qs.size()) < static_cast<int>(test::scaled(40)); ++i) {
-    Query q = random_query(g, 1.0, 0.0, 0.5);
-    const Ref f = reference(q);
-    if (f.depth <= 1e-3) continue;
-    q.p = test::round_to_float(Vec3d(q.p + f.depth * f.n));
-    qs.push_back(q);
-  }
-  const auto res = run(qs, KernelPath::kSimd);
-  for (size_t k = 0; k < qs.size(); ++k) {
-    const double tol = 4 * kRel * size_of(qs[k]);
-    if (res[k].count > 0) {
-      EXPECT_LE(res[k].depth, tol) << k;
-    }
-  }
+  test::expect_touching_after_push(
+      g, static_cast<int>(test::scaled(40)), 400,
+      [](std::mt19937& gg) { return random_query(gg, 1.0, 0.0, 0.5); }, reference,
+      [](Query& q, const Vec3d& s) { q.p = test::round_to_float(Vec3d(q.p + s)); },
+      [](const std::vector<Query>& qs) { return run(qs, KernelPath::kSimd); }, size_of, kRel);
 }
 
 /// Needles and pancakes (1e-4 proportions) of both shapes: boxes 1 x 1e-4 x 1e-4 and
@@ -1185,7 +992,7 @@ TEST(BoxCylinder, NeedlesAndPancakes) {
         break;  // pancake cylinder (a disk)
     }
     const double reach = q.e.norm() + std::hypot(q.rc, q.h);
-    q.c = q.p + 0.3 * reach * random_unit(g);
+    q.c = q.p + 0.3 * reach * test::random_unit_vector(g);
     qs.push_back(rounded(q));
   }
   Stats st;
@@ -1204,7 +1011,7 @@ TEST(BoxCylinder, Symmetries) {
     const Query q = random_query(g, 1.0, 0.0, 0.7);
     base.push_back(q);
     const Mat3d turn = test::random_rotation(g);
-    const Vec3d move = random_unit(g);
+    const Vec3d move = test::random_unit_vector(g);
     Query t = q;
     t.c = test::round_to_float(Vec3d(turn * q.c + move));
     t.p = test::round_to_float(Vec3d(turn * q.p + move));
@@ -1241,73 +1048,6 @@ TEST(BoxCylinder, Symmetries) {
     }
   }
   EXPECT_GT(compared, static_cast<int>(base.size()) / 4);
-}
-
-/// Any partition of a bucket's range gives the same bytes, nothing outside the range is
-/// written (the output lanes start poisoned), and a lane's bytes do not depend on which
-/// lanes share its block (a shuffled bucket).
-TEST(BoxCylinder, RangePartitionsAndTail) {
-  std::mt19937 g(61);
-  const std::vector<Query> qs = random_queries(g, 37, 1.0, 0.0);
-  for (KernelPath path : {KernelPath::kSimd, KernelPath::kScalar}) {
-    test::ManifoldLanes all(37);
-    const auto whole = run(qs, path, nullptr, 0, 37, &all);
-    int hits = 0;
-    for (uint32_t k = 0; k < 37; ++k) hits += all.count[k] > 0 && all.count[k] <= 4;
-    EXPECT_GT(hits, 5);
-    for (uint32_t cut : {1u, 3u, 8u, 11u, 36u}) {
-      test::ManifoldLanes lo(37), hi(37);
-      run(qs, path, nullptr, 0, cut, &lo);
-      run(qs, path, nullptr, cut, 37, &hi);
-      for (uint32_t k = 0; k < 37; ++k) {
-        const test::ManifoldLanes& m = k < cut ? lo : hi;
-        const test::ManifoldLanes& other = k < cut ? hi : lo;
-        EXPECT_EQ(other.count[k], 0xff) << "lane " << k << " written outside its range";
-        EXPECT_TRUE(std::isnan(other.depth[k])) << "lane " << k << " written outside its range";
-        for (int i = 0; i < 3; ++i) EXPECT_TRUE(std::isnan(other.n[i][k])) << "lane " << k;
-        for (int j = 0; j < 4; ++j) EXPECT_TRUE(std::isnan(other.pd[j][k])) << "lane " << k;
-        ASSERT_EQ(m.count[k], all.count[k]) << cut << " " << k;
-        if (m.count[k] == 0) continue;
-        EXPECT_EQ(std::memcmp(&m.depth[k], &all.depth[k], 4), 0) << k;
-        for (int i = 0; i < 3; ++i) EXPECT_EQ(std::memcmp(&m.n[i][k], &all.n[i][k], 4), 0) << k;
-        for (uint32_t j = 0; j < m.count[k]; ++j) {
-          EXPECT_EQ(std::memcmp(&m.pd[j][k], &all.pd[j][k], 4), 0) << k;
-          for (int i = 0; i < 3; ++i) EXPECT_EQ(std::memcmp(&m.pt[j][i][k], &all.pt[j][i][k], 4), 0) << k;
-        }
-      }
-    }
-    // shuffled: every lane in other company
-    std::vector<uint32_t> perm(qs.size());
-    std::iota(perm.begin(), perm.end(), 0u);
-    std::shuffle(perm.begin(), perm.end(), g);
-    std::vector<Query> sh;
-    for (uint32_t i : perm) sh.push_back(qs[i]);
-    const auto shuffled = run(sh, path);
-    for (size_t i = 0; i < perm.size(); ++i)
-      EXPECT_TRUE(same_bytes(shuffled[i], whole[perm[i]])) << "lane " << perm[i] << " moved to " << i;
-  }
-}
-
-/// The general GJK / EPA path on the same lanes: same hits away from touching (1e-3 L),
-/// depth within 1e-3 L, normal within 0.02 rad where unique.
-TEST(BoxCylinder, AgreesWithGjkEpa) {
-  std::mt19937 g(67);
-  const std::vector<Query> qs = random_queries(g, static_cast<int>(test::scaled(240)), 1.0, 0.0);
-  const auto mine = run(qs, KernelPath::kSimd), gjk = run(qs, KernelPath::kSimd, &gjk_kernel);
-  int compared = 0;
-  for (size_t k = 0; k < qs.size(); ++k) {
-    const Ref f = reference(qs[k]);
-    const double L = size_of(qs[k]);
-    if (std::fabs(f.depth) < 1e-3 * L) continue;
-    ASSERT_EQ(mine[k].count > 0, gjk[k].count > 0) << k << " depth_ref " << f.depth;
-    if (mine[k].count == 0) continue;
-    ++compared;
-    EXPECT_NEAR(mine[k].depth, gjk[k].depth, 1e-3 * L) << k;
-    if (f.unique) {
-      EXPECT_LT(angle(mine[k].n, gjk[k].n), 0.02) << k;
-    }
-  }
-  EXPECT_GT(compared, static_cast<int>(qs.size()) / 5);
 }
 
 }  // namespace

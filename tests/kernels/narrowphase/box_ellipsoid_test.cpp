@@ -1,6 +1,6 @@
 // collide_box_ellipsoid (kernels/narrowphase/pairs/box/box_ellipsoid.cpp) on both paths against
 // independent double-precision references, the sphere-box kernel where the ellipsoid is
-// round, and the general GJK / EPA path (collide_gjk_epa) on the same lanes.
+// round.
 //
 // References (double, no piece enumeration, no secular-equation solve by steps):
 //  - the support overlap h_A(n) + h_B(-n) minimised over densely sampled directions and
@@ -30,8 +30,9 @@
 // needles and pancakes (ratios 1e-3, 1e-4) through boxes, lying on them, inside them,
 // poking out at a vertex or an edge; flat, needle and point boxes (extents 1e-4 .. 0);
 // large boxes against small ellipsoids; coincident centres; analytic cases (dyadic);
-// a round ellipsoid against sphere-box; relabelled box axes (symmetry); range partitions
-// and block composition; GJK / EPA.
+// a round ellipsoid against sphere-box; relabelled box axes (symmetry).
+// Registration, range partitions, shuffled buckets and the agreement with GJK / EPA:
+// contract_test.cpp (every bucket of the table).
 #include <gtest/gtest.h>
 
 #include <Eigen/Core>
@@ -46,10 +47,12 @@
 
 #include "kernels/narrowphase/pair_kernels.h"
 #include "support/ellipsoid_reference.h"
+#include "support/kernel_checks.h"
 #include "support/lane_checks.h"
 #include "support/leaf_lanes.h"
 #include "support/narrow_reference.h"
 #include "support/random_input.h"
+#include "support/shape_geometry.h"
 #include "support/test_support.h"
 
 namespace impact::kernels {
@@ -58,15 +61,12 @@ namespace {
 using Vec3d = Eigen::Vector3d;
 using Mat3d = Eigen::Matrix3d;
 namespace nref = test::nref;
+using test::angle;
 
 constexpr double kRel = 1e-5;       // depth tolerance, of L
 constexpr double kAngleTol = 1e-4;  // rad, where the minimum is well conditioned
 /// A few float ulps of the overlap at size L (4 x 2^-24): its evaluation's rounding.
 constexpr double kRoundingSlack = 2.4e-7;
-
-double angle(const Vec3d& a, const Vec3d& b) {
-  return std::atan2(a.cross(b).norm(), a.dot(b));
-}
 
 struct Posed {
   Vec3d p;
@@ -77,12 +77,6 @@ struct Posed {
 struct Query {
   Posed a;  // box
   Posed b;  // ellipsoid
-};
-
-struct Hit {
-  uint32_t count = 0;
-  Vec3d n = Vec3d::Zero(), pt = Vec3d::Zero();
-  double depth = 0, pd = 0;
 };
 
 Posed rounded(Posed s) {
@@ -99,57 +93,22 @@ double size_of(const Query& q) {
   return std::max(q.b.e.maxCoeff(), q.a.e.norm());
 }
 
-/// Runs `kern` on all queries as one bucket (full SIMD blocks and a tail).
-std::vector<Hit> run(const std::vector<Query>& qs, KernelPath path, PairKernel kern, uint32_t begin = 0,
-                     uint32_t end = ~0u) {
-  const size_t n = qs.size();
-  end = std::min<uint32_t>(end, static_cast<uint32_t>(n));
-  std::vector<float> ap[3], ar[9], ae[3], bp[3], br[9], be[3];
-  for (const Query& q : qs) {
-    for (int i = 0; i < 3; ++i) {
-      ap[i].push_back(float(q.a.p[i]));
-      ae[i].push_back(float(q.a.e[i]));
-      bp[i].push_back(float(q.b.p[i]));
-      be[i].push_back(float(q.b.e[i]));
-    }
-    for (int i = 0; i < 9; ++i) {
-      ar[i].push_back(float(q.a.R(i / 3, i % 3)));
-      br[i].push_back(float(q.b.R(i / 3, i % 3)));
-    }
-  }
-  LeafSoA a{}, b{};
-  for (int i = 0; i < 3; ++i) {
-    a.p[i] = ap[i].data(), a.e[i] = ae[i].data();
-    b.p[i] = bp[i].data(), b.e[i] = be[i].data();
-  }
-  for (int i = 0; i < 9; ++i) a.r[i] = ar[i].data(), b.r[i] = br[i].data();
-  test::ManifoldLanes o(static_cast<uint32_t>(n));
-  NarrowConfig cfg;
-  cfg.path = path;
-  kern(a, b, o.view(), Range{begin, end}, cfg);
-  std::vector<Hit> out(n);
-  for (uint32_t k = begin; k < end; ++k) {
-    const test::PairResult r = o.result(k);
-    Hit& h = out[k];
-    h.count = r.count;
-    if (h.count == 0) continue;
-    h.n = r.n;
-    h.pt = r.pt[0];
-    h.depth = r.depth;
-    h.pd = r.pd[0];
-  }
-  return out;
+/// Runs `kern` on lanes [begin, end) of all queries as one bucket (full SIMD blocks and a tail).
+std::vector<test::PairResult> run(const std::vector<Query>& qs, KernelPath path, PairKernel kern,
+                                  uint32_t begin = 0, uint32_t end = ~0u) {
+  return test::run_queries(
+      kern, qs, path,
+      [](const Query& q) {
+        return std::pair{test::posed_leaf(kLeafBox, q.a.p, q.a.R, q.a.e),
+                         test::posed_leaf(kLeafEllipsoid, q.b.p, q.b.R, q.b.e)};
+      },
+      begin, end);
 }
 
-std::vector<Hit> run(const std::vector<Query>& qs, KernelPath path) {
+std::vector<test::PairResult> run(const std::vector<Query>& qs, KernelPath path) {
   const PairKernel k = pair_kernel(kLeafBox, kLeafEllipsoid);
   EXPECT_EQ(k, &collide_box_ellipsoid);
   return run(qs, path, k);
-}
-
-void gjk_kernel(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out, Range r,
-                const NarrowConfig& cfg) {
-  collide_gjk_epa(a, b, out, r, cfg, kLeafBox, kLeafEllipsoid);
 }
 
 // ---------------------------------------------------------------------------------------
@@ -161,9 +120,7 @@ double sd_ellipsoid(const Posed& b, const Vec3d& x) {
 }
 
 double sd_box(const Posed& a, const Vec3d& x) {
-  const Vec3d q = (a.R.transpose() * (x - a.p)).cwiseAbs() - a.e;
-  const double inside = q.maxCoeff();
-  return inside > 0 ? q.cwiseMax(0.0).norm() : inside;
+  return test::box_sd(a.p, a.R, a.e, x);
 }
 
 /// The least signed distance to the ellipsoid over the solid box (convex: nested
@@ -184,53 +141,6 @@ double box_minimum(const Query& q, int iters) {
   return test::golden_section_min(over_vw, -a.e[0], a.e[0], iters, &u);
 }
 
-nref::Shape posed_shape(const Posed& s, LeafType t) {
-  nref::Shape r;
-  r.type = t;
-  r.p = {s.p.x(), s.p.y(), s.p.z()};
-  for (int i = 0; i < 9; ++i) r.r[i] = s.R(i / 3, i % 3);
-  for (int i = 0; i < 3; ++i) r.e[i] = s.e[i];
-  return r;
-}
-
-nref::V3 to_nref(const Vec3d& v) {
-  return {v.x(), v.y(), v.z()};
-}
-Vec3d to_eigen(nref::V3 v) {
-  return {v.x, v.y, v.z};
-}
-
-nref::Options dense_options() {
-  nref::Options o;
-  o.samples = 6000;
-  o.starts = 8;
-  return o;
-}
-
-/// The least rise of the overlap over its minimum s along the ring 3e-3 rad around n:
-/// 64 samples, the best 4 refined by golden-section search on the ring's angle.
-double ring_rise(const nref::Shape& a, const nref::Shape& b, nref::V3 n) {
-  nref::V3 t1, t2;
-  nref::detail::tangent_basis(n, t1, t2);
-  const double th = std::tan(3e-3), s = nref::overlap(a, b, n);
-  auto f = [&](double ang) {
-    return nref::overlap(a, b, nref::normalized(n + th * std::cos(ang) * t1 + th * std::sin(ang) * t2)) - s;
-  };
-  std::vector<std::pair<double, double>> samples;
-  for (int i = 0; i < 64; ++i) samples.push_back({f(2 * M_PI * i / 64), 2 * M_PI * i / 64});
-  std::partial_sort(samples.begin(), samples.begin() + 4, samples.end());
-  double best = samples[0].first;
-  for (int k = 0; k < 4; ++k) {
-    double lo = samples[k].second - 2 * M_PI / 64, hi = samples[k].second + 2 * M_PI / 64;
-    for (int it = 0; it < 40; ++it) {
-      const double m1 = lo + 0.381966 * (hi - lo), m2 = lo + 0.618034 * (hi - lo);
-      (f(m1) < f(m2) ? hi : lo) = f(m1) < f(m2) ? m2 : m1;
-    }
-    best = std::min(best, f(0.5 * (lo + hi)));
-  }
-  return best;
-}
-
 struct Ref {
   double s;  // depth (> 0 overlapping)
   Vec3d n;   // A to B
@@ -238,18 +148,20 @@ struct Ref {
 };
 
 double overlap(const Query& q, const Vec3d& n) {
-  return nref::overlap(posed_shape(q.a, kLeafBox), posed_shape(q.b, kLeafEllipsoid), to_nref(n.normalized()));
+  return nref::overlap(test::posed_shape(kLeafBox, q.a.p, q.a.R, q.a.e),
+                       test::posed_shape(kLeafEllipsoid, q.b.p, q.b.R, q.b.e), test::v3(n.normalized()));
 }
 
 Ref reference(const Query& q) {
-  const nref::Shape a = posed_shape(q.a, kLeafBox), b = posed_shape(q.b, kLeafEllipsoid);
-  const nref::PairResult r = nref::solve_pair(a, b, {}, dense_options());
+  const nref::Shape a = test::posed_shape(kLeafBox, q.a.p, q.a.R, q.a.e),
+                    b = test::posed_shape(kLeafEllipsoid, q.b.p, q.b.R, q.b.e);
+  const nref::PairResult r = nref::solve_pair(a, b, {}, nref::dense_options());
   const double L = size_of(q);
   Ref f;
   f.s = r.s;
-  f.n = to_eigen(r.n);
+  f.n = test::ev(r.n);
   f.conditioned = r.s > 0 && r.unique(kRel * L);
-  if (f.conditioned) f.conditioned = ring_rise(a, b, r.n) >= 1e-6 * L;
+  if (f.conditioned) f.conditioned = nref::ring_rise(a, b, r.n) >= 1e-6 * L;
   return f;
 }
 
@@ -257,104 +169,61 @@ Ref reference(const Query& q) {
 // The per-lane check
 // ---------------------------------------------------------------------------------------
 
-struct Stats {
-  int lanes = 0, hits = 0, normal_checked = 0;
-  double worst_depth = 0, worst_angle = 0, worst_path_depth = 0, worst_path_angle = 0;
-};
-
 double coord_ulp(const Query& q) {
   const double m = std::max(q.a.p.cwiseAbs().maxCoeff(), q.b.p.cwiseAbs().maxCoeff());
   return (m + size_of(q)) * std::ldexp(1.0, -23);
 }
 
-void check_all(const std::vector<Query>& qs, const char* what, Stats* st_out = nullptr) {
-  SCOPED_TRACE(what);
-  const std::vector<Hit> simd = run(qs, KernelPath::kSimd), scal = run(qs, KernelPath::kScalar);
-  Stats st;
-  for (size_t k = 0; k < qs.size(); ++k) {
-    const Query& q = qs[k];
-    const Ref f = reference(q);
-    const double L = size_of(q), tol = kRel * L;
-    ++st.lanes;
-    if (std::fabs(f.s) <= tol) continue;
-    for (const Hit* hp : {&simd[k], &scal[k]}) {
-      const Hit& h = *hp;
-      const char* path = hp == &simd[k] ? " simd" : " scalar";
-      ASSERT_EQ(h.count > 0, f.s > 0)
-          << what << " lane " << k << " depth_ref " << f.s << " got " << h.depth << path;
-      if (f.s <= 0) continue;
-      ASSERT_EQ(h.count, 1u);
-      if (hp == &simd[k]) ++st.hits;
-      const double dd = std::fabs(h.depth - f.s);
-      st.worst_depth = std::max(st.worst_depth, dd / L);
-      EXPECT_LE(dd, tol) << what << " lane " << k << path << " depth " << h.depth << " ref " << f.s << " e "
-                         << q.b.e.transpose() << " h " << q.a.e.transpose();
-      EXPECT_EQ(h.pd, h.depth);
-      ASSERT_TRUE(h.n.allFinite());
-      EXPECT_NEAR(h.n.norm(), 1.0, 1e-6);
-      EXPECT_LE(overlap(q, h.n), f.s + tol) << what << " lane " << k << path;
-      const double slack = tol + coord_ulp(q);
-      const Vec3d on_a = h.pt + h.n * (0.5 * h.depth), on_b = h.pt - h.n * (0.5 * h.depth);
-      EXPECT_NEAR(sd_ellipsoid(q.b, on_b), 0.0, slack) << what << " lane " << k << path;
-      if (f.conditioned) {
-        // The box's point: on its surface up to the slide of the ellipsoid's support
-        // point under the normal's error (rho per rad, rho = e_max^2 / e_min the largest
-        // radius of curvature; the error: the angle to the reference's normal plus 1e-6).
-        const double rho = q.b.e.maxCoeff() * q.b.e.maxCoeff() / q.b.e.minCoeff();
-        const double ang = angle(h.n, f.n);
-        EXPECT_NEAR(sd_box(q.a, on_a), 0.0, slack + (ang + 1e-6) * rho) << what << " lane " << k << path;
-        st.worst_angle = std::max(st.worst_angle, ang);
-        // A normal farther than kAngleTol is accepted only when it is as good a separating
-        // direction as the reference's up to the overlap's float rounding (kRoundingSlack
-        // L), and within 10 kAngleTol: the overlap then rises by less than its rounding over
-        // that angle (seen: 3.1e-4 rad, 6.9e-8 L worse, 1 lane in ~1600 at intensity 10).
-        const bool as_good = overlap(q, h.n) <= f.s + kRoundingSlack * L;
-        EXPECT_TRUE(ang <= kAngleTol || (as_good && ang <= 10 * kAngleTol))
-            << what << " lane " << k << path << " angle " << ang << " n " << h.n.transpose() << " ref "
-            << f.n.transpose() << " overlap - ref " << overlap(q, h.n) - f.s;
-      }
-    }
-    if (f.s > tol && f.conditioned) ++st.normal_checked;
-    if (simd[k].count && scal[k].count) {
-      const double pd = std::fabs(simd[k].depth - scal[k].depth), pa = angle(simd[k].n, scal[k].n);
-      st.worst_path_depth = std::max(st.worst_path_depth, pd / L);
-      if (f.conditioned) st.worst_path_angle = std::max(st.worst_path_angle, pa);
-      EXPECT_LE(pd, tol) << what << " lane " << k;
-      if (f.conditioned) {
-        EXPECT_LE(pa, kAngleTol) << what << " lane " << k;
-      }
-    }
-  }
-  std::printf(
-      "  %-30s lanes %5d hits %5d normals %5d | worst depth %.2g L, angle %.2g; simd-scalar %.2g L, %.2g\n",
-      what, st.lanes, st.hits, st.normal_checked, st.worst_depth, st.worst_angle, st.worst_path_depth,
-      st.worst_path_angle);
-  if (st_out != nullptr) *st_out = st;
+using Stats = test::LaneStats;
+
+/// The pair for test::check_lanes: the references above and the distance of the moved pair
+/// for the translation check.
+void check_all(const std::vector<Query>& qs, const char* what, Stats* out_stats = nullptr) {
+  // The ellipsoid's point on its surface; the box's where conditioned, up to the slide
+  // of the ellipsoid's support point under the normal's error (rho per rad, rho =
+  // e_max^2 / e_min the largest radius of curvature; the error: the angle to the
+  // reference's normal plus 1e-6).
+  // A normal farther than kAngleTol is accepted only when it is as good a separating
+  // direction as the reference's up to the overlap's float rounding (kRoundingSlack L),
+  // and within 10 kAngleTol: the overlap then rises by less than its rounding over that
+  // angle (seen: 3.1e-4 rad, 6.9e-8 L worse, 1 lane in ~1600 at intensity 10).
+  static const test::PairModel<Query> model{
+      .rel = kRel,
+      .max_points = 1,
+      .reference =
+          [](const Query& q) {
+            const Ref f = reference(q);
+            return test::LaneRef{f.s, f.n, f.conditioned, kAngleTol, false};
+          },
+      .size = size_of,
+      .coord_ulp = coord_ulp,
+      .overlap = overlap,
+      .points =
+          [](const Query& q, const test::LaneRef& f, const test::PairResult& h, double, double ptol,
+             const std::string& where) {
+            EXPECT_EQ(h.pd[0], h.depth) << where;
+            const Vec3d on_a = h.pt[0] + h.n * (0.5 * h.depth), on_b = h.pt[0] - h.n * (0.5 * h.depth);
+            EXPECT_NEAR(sd_ellipsoid(q.b, on_b), 0.0, ptol) << where;
+            if (f.unique) {
+              const double rho = q.b.e.maxCoeff() * q.b.e.maxCoeff() / q.b.e.minCoeff();
+              EXPECT_NEAR(sd_box(q.a, on_a), 0.0, ptol + (angle(h.n, f.n) + 1e-6) * rho) << where;
+            }
+          },
+      .normal_ok =
+          [](const Query& q, const test::LaneRef& f, const test::PairResult& h, double ang) {
+            const bool as_good = overlap(q, h.n) <= f.depth + kRoundingSlack * size_of(q);
+            return ang <= kAngleTol || (as_good && ang <= 10 * kAngleTol);
+          },
+      .same_bytes_paths = false,
+      .point_ulps = 1};
+  const Stats st =
+      test::check_lanes(model, qs, run(qs, KernelPath::kSimd), run(qs, KernelPath::kScalar), what);
+  if (out_stats != nullptr) *out_stats = st;
 }
 
 // ---------------------------------------------------------------------------------------
 // Generators
 // ---------------------------------------------------------------------------------------
-
-Vec3d random_unit(std::mt19937& g) {
-  std::normal_distribution<double> d;
-  for (;;) {
-    const Vec3d v(d(g), d(g), d(g));
-    if (v.norm() > 1e-3) return v.normalized();
-  }
-}
-
-/// A rotation taking +z to the unit vector m (then a random turn about it).
-Mat3d frame_with_z(std::mt19937& g, const Vec3d& m) {
-  const Vec3d t = m.unitOrthogonal();
-  const double a = std::uniform_real_distribution<double>(0, 2 * M_PI)(g);
-  const Vec3d x = std::cos(a) * t + std::sin(a) * m.cross(t);
-  Mat3d R;
-  R.col(0) = x;
-  R.col(1) = m.cross(x);
-  R.col(2) = m;
-  return R;
-}
 
 /// Random poses around a box of half extents in [0.2, 1] * size at `offset` from the
 /// origin: ellipsoids from deep through it to well outside, about half touching.
@@ -369,8 +238,10 @@ std::vector<Query> random_queries(std::mt19937& g, int n, double size, double of
     const Vec3d v(u(g), u(g), u(g));
     // Half near the box's surface (its corner region scaled by 1.1 plus the radii), half
     // anywhere within reach.
-    const Vec3d c = k % 2 ? Vec3d(p + q.a.R * v.cwiseProduct(q.a.e) * 1.1 + random_unit(g) * (0.8 * e.mean()))
-                          : Vec3d(p + v * (1.6 * size));
+    const Vec3d c =
+        k % 2
+            ? Vec3d(p + q.a.R * v.cwiseProduct(q.a.e) * 1.1 + test::random_unit_vector(g) * (0.8 * e.mean()))
+            : Vec3d(p + v * (1.6 * size));
     q.b = Posed{c, test::random_rotation(g), e};
     qs.push_back(rounded(q));
   }
@@ -381,18 +252,14 @@ std::vector<Query> random_queries(std::mt19937& g, int n, double size, double of
 /// x + f m with -m in the piece's cone: a face (the box above the tangent plane), an
 /// edge across m (its two faces tilted away), or a vertex (its three edges rising from
 /// it): depth = -f, n = -m (box to ellipsoid).
-struct Touch {
-  Query q;
-  double depth;
-  Vec3d n;
-};
+using Touch = test::Built<Query>;
 std::vector<Touch> touching_queries(std::mt19937& g, int n) {
   std::uniform_real_distribution<double> u(-1, 1), s(0.2, 1.0), f(-1e-3, 1e-3), w(0.15, 1.0);
   std::vector<Touch> out;
   for (int k = 0; k < n; ++k) {
     Query q;
     q.b = Posed{Vec3d(u(g), u(g), u(g)), test::random_rotation(g), Vec3d(s(g), s(g), s(g))};
-    const Vec3d dir = random_unit(g);
+    const Vec3d dir = test::random_unit_vector(g);
     const Vec3d xs = dir / std::sqrt(test::eref::level(q.b.e, dir));
     const Vec3d m = q.b.R * xs.cwiseQuotient(q.b.e.cwiseProduct(q.b.e)).normalized();
     const Vec3d x = q.b.p + q.b.R * xs;
@@ -414,7 +281,7 @@ std::vector<Touch> touching_queries(std::mt19937& g, int n) {
         break;
     }
     // D with D ml = m: a rotation taking ml to m, turned about m at random.
-    const Mat3d A = frame_with_z(g, m), B = frame_with_z(g, ml);
+    const Mat3d A = test::frame_with_z(g, m), B = test::frame_with_z(g, ml);
     const Mat3d D = A * B.transpose();
     Vec3d centre_local = h;  // the corner at the origin of t
     if (k % 3 == 0) centre_local = Vec3d(0, 0, h[2]);
@@ -527,7 +394,8 @@ TEST(BoxEllipsoidReference, ReferencesAgree) {
   int compared = 0;
   for (const Query& q : random_queries(g, static_cast<int>(test::scaled(40)), 1.0, 0.0)) {
     const nref::PairResult r =
-        nref::solve_pair(posed_shape(q.a, kLeafBox), posed_shape(q.b, kLeafEllipsoid), {}, dense_options());
+        nref::solve_pair(test::posed_shape(kLeafBox, q.a.p, q.a.R, q.a.e),
+                         test::posed_shape(kLeafEllipsoid, q.b.p, q.b.R, q.b.e), {}, nref::dense_options());
     if (!(r.s < -1e-3)) continue;
     const double sd = box_minimum(q, 28);
     EXPECT_NEAR(r.s, -sd, 1e-6) << compared;
@@ -545,41 +413,18 @@ TEST_P(BoxEllipsoid, RandomPosesAgainstDoubleReference) {
   Stats st;
   check_all(random_queries(g, n, size, offset), "random", &st);
   EXPECT_GT(st.hits, n / 4);
-  EXPECT_GT(st.normal_checked, st.hits / 3);
+  EXPECT_GT(st.normals_checked, st.hits / 3);
 }
 
-INSTANTIATE_TEST_SUITE_P(Scales, BoxEllipsoid,
-                         ::testing::Values(std::make_tuple(1.0, 0.0), std::make_tuple(1e-4, 0.0),
-                                           std::make_tuple(1e4, 0.0), std::make_tuple(1.0, 1e5)));
+INSTANTIATE_TEST_SUITE_P(Scales, BoxEllipsoid, ::testing::ValuesIn(test::kernel_scales()));
 
 TEST(BoxEllipsoidCases, ConstructedTouching) {
   std::mt19937 g(29);
   const std::vector<Touch> ts = touching_queries(g, static_cast<int>(test::scaled(300)));
-  std::vector<Query> qs;
-  for (const Touch& t : ts) qs.push_back(t.q);
   for (KernelPath path : {KernelPath::kSimd, KernelPath::kScalar}) {
-    const std::vector<Hit> hs = run(qs, path);
-    int hits = 0;
-    double worst = 0, worst_angle = 0;
-    for (size_t k = 0; k < ts.size(); ++k) {
-      const double L = size_of(qs[k]), tol = kRel * L;
-      const Hit& h = hs[k];
-      if (std::fabs(ts[k].depth) <= tol) {
-        if (h.count) {
-          EXPECT_LE(h.depth, tol) << k;
-        }
-        continue;
-      }
-      ASSERT_EQ(h.count > 0, ts[k].depth > 0) << k << " depth " << ts[k].depth;
-      if (!h.count) continue;
-      ++hits;
-      worst = std::max(worst, std::fabs(h.depth - ts[k].depth) / L);
-      worst_angle = std::max(worst_angle, angle(h.n, ts[k].n));
-      EXPECT_NEAR(h.depth, ts[k].depth, tol) << k << " kind " << k % 3;
-      EXPECT_LE(angle(h.n, ts[k].n), kAngleTol)
-          << k << " kind " << k % 3 << " n " << h.n.transpose() << " want " << ts[k].n.transpose();
-    }
-    std::printf("  touching: hits %d, worst depth %.2g L, angle %.2g\n", hits, worst, worst_angle);
+    const int hits = test::expect_built(
+        ts, run(test::queries_of(ts), path), kRel, size_of, [](size_t, double) { return kAngleTol; },
+        "touching");
     EXPECT_GT(hits, static_cast<int>(ts.size()) / 4);
   }
 }
@@ -625,12 +470,12 @@ TEST(BoxEllipsoidCases, Analytic) {
     const Vec3d p = box.p;
     // A pancake resting 1/16 deep on the top face (z = 0.5): n = +z, depth 1/16; the
     // point midway: 1/32 below the face, above the pancake's lower pole.
-    Hit h = one(Query{
+    test::PairResult h = one(Query{
         box, Posed{p + Vec3d(0.25, 0.5, 0.5 + 0.125 - 0.0625), Mat3d::Identity(), Vec3d(1, 0.75, 0.125)}});
     ASSERT_EQ(h.count, 1u);
     EXPECT_NEAR(h.depth, 0.0625, 1e-6);
     EXPECT_LT((h.n - Vec3d(0, 0, 1)).norm(), 1e-6) << h.n.transpose();
-    EXPECT_LT((h.pt - (p + Vec3d(0.25, 0.5, 0.5 - 0.03125))).norm(), 1e-6) << h.pt.transpose();
+    EXPECT_LT((h.pt[0] - (p + Vec3d(0.25, 0.5, 0.5 - 0.03125))).norm(), 1e-6) << h.pt[0].transpose();
     // A sphere-like ellipsoid over the +x+y+z vertex along the diagonal, 1/8 inside:
     // n = the diagonal direction... use a sphere of radius 1 centred on the diagonal.
     {
@@ -679,26 +524,15 @@ TEST(BoxEllipsoidCases, RoundEllipsoidIsSphereBox) {
     q.b = Posed{q.a.p + Vec3d(u(g), u(g), u(g)) * 1.5, test::random_rotation(g), Vec3d::Constant(r)};
     qs.push_back(rounded(q));
   }
-  const std::vector<Hit> mine = run(qs, KernelPath::kSimd);
+  const std::vector<test::PairResult> mine = run(qs, KernelPath::kSimd);
   const size_t n = qs.size();
-  std::vector<float> sp[3], se[3], bp[3], br[9], be[3];
-  for (const Query& q : qs) {
-    for (int i = 0; i < 3; ++i) {
-      sp[i].push_back(float(q.b.p[i]));
-      se[i].push_back(i == 0 ? float(q.b.e[0]) : 0.0f);
-      bp[i].push_back(float(q.a.p[i]));
-      be[i].push_back(float(q.a.e[i]));
-    }
-    for (int i = 0; i < 9; ++i) br[i].push_back(float(q.a.R(i / 3, i % 3)));
-  }
-  LeafSoA a{}, b{};
-  for (int i = 0; i < 3; ++i) {
-    a.p[i] = sp[i].data(), a.e[i] = se[i].data();
-    b.p[i] = bp[i].data(), b.e[i] = be[i].data();
-  }
-  for (int i = 0; i < 9; ++i) b.r[i] = br[i].data();
-  test::ManifoldLanes o(static_cast<uint32_t>(n));
-  collide_sphere_box(a, b, o.view(), Range{0, static_cast<uint32_t>(n)}, NarrowConfig{});
+  test::ManifoldLanes o;
+  test::run_queries(
+      &collide_sphere_box, qs, KernelPath::kSimd,
+      [](const Query& q) {
+        return std::pair{test::sphere_leaf(q.b.p, q.b.e[0]), test::posed_leaf(kLeafBox, q.a.p, q.a.R, q.a.e)};
+      },
+      0, ~0u, &o);
   int hits = 0;
   for (uint32_t k = 0; k < n; ++k) {
     const test::PairResult r = o.result(k);
@@ -713,7 +547,7 @@ TEST(BoxEllipsoidCases, RoundEllipsoidIsSphereBox) {
     // inside the box on a medial plane.
     if (sd_box(qs[k].a, qs[k].b.p) > 1e-3) {
       EXPECT_LT(angle(mine[k].n, -r.n), 1e-5) << k;
-      EXPECT_LT((mine[k].pt - r.pt[0]).norm(), 1e-5) << k;
+      EXPECT_LT((mine[k].pt[0] - r.pt[0]).norm(), 1e-5) << k;
     }
   }
   EXPECT_GT(hits, 30);
@@ -724,7 +558,7 @@ TEST(BoxEllipsoidCases, RelabelledBoxAxes) {
   // solid, so the same depth and, where unique, the same normal.
   std::mt19937 g(19);
   const std::vector<Query> qs = random_queries(g, 120, 1.0, 0.0);
-  const std::vector<Hit> h0 = run(qs, KernelPath::kSimd);
+  const std::vector<test::PairResult> h0 = run(qs, KernelPath::kSimd);
   std::vector<Query> other = qs;
   for (Query& q : other) {
     Mat3d R;
@@ -732,7 +566,7 @@ TEST(BoxEllipsoidCases, RelabelledBoxAxes) {
     q.a.R = R;
     q.a.e = Vec3d(q.a.e[1], q.a.e[2], q.a.e[0]);
   }
-  const std::vector<Hit> h1 = run(other, KernelPath::kSimd);
+  const std::vector<test::PairResult> h1 = run(other, KernelPath::kSimd);
   for (size_t k = 0; k < qs.size(); ++k) {
     const double L = size_of(qs[k]);
     if (h0[k].count != h1[k].count) {
@@ -745,45 +579,6 @@ TEST(BoxEllipsoidCases, RelabelledBoxAxes) {
       EXPECT_LT(angle(h0[k].n, h1[k].n), kAngleTol) << k;
     }
   }
-}
-
-TEST(BoxEllipsoidCases, RangePartitionsAndBlockComposition) {
-  std::mt19937 g(41);
-  std::vector<Query> qs = random_queries(g, 57, 1.0, 0.0);
-  const std::vector<Query> thin = thin_queries(g, 40);
-  qs.insert(qs.end(), thin.begin(), thin.end());
-  const PairKernel kern = pair_kernel(kLeafBox, kLeafEllipsoid);
-  auto same = [](const Hit& x, const Hit& y) {
-    return x.count == y.count && (x.count == 0 || (x.depth == y.depth && x.n == y.n && x.pt == y.pt));
-  };
-  for (KernelPath path : {KernelPath::kSimd, KernelPath::kScalar}) {
-    const auto run_path = [&](const std::vector<Query>& q, uint32_t begin, uint32_t end) {
-      return run(q, path, kern, begin, end);
-    };
-    test::expect_partition_invariant(qs, {1u, 5u, 8u, 13u, 36u, 61u, 90u}, run_path, same, g);
-  }
-}
-
-/// The general GJK / EPA path on the same lanes (overlaps of at least 1e-3 L): same
-/// hits, depth within 1e-3 L, normal within 0.02 rad where well conditioned.
-TEST(BoxEllipsoidCases, AgreesWithGjkEpa) {
-  std::mt19937 g(23);
-  std::vector<Query> qs = random_queries(g, static_cast<int>(test::scaled(150)), 1.0, 0.0);
-  const std::vector<Hit> mine = run(qs, KernelPath::kSimd), gjk = run(qs, KernelPath::kSimd, &gjk_kernel);
-  int compared = 0;
-  for (size_t k = 0; k < qs.size(); ++k) {
-    const double L = size_of(qs[k]);
-    const Ref f = reference(qs[k]);
-    if (std::fabs(f.s) < 1e-3 * L) continue;
-    ASSERT_EQ(mine[k].count, gjk[k].count) << k << " depth " << f.s;
-    if (mine[k].count == 0) continue;
-    ++compared;
-    EXPECT_NEAR(mine[k].depth, gjk[k].depth, 1e-3 * L) << k;
-    if (f.conditioned) {
-      EXPECT_LT(angle(mine[k].n, gjk[k].n), 0.02) << k;
-    }
-  }
-  EXPECT_GT(compared, static_cast<int>(qs.size()) / 5);
 }
 
 }  // namespace

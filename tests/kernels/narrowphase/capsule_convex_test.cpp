@@ -30,8 +30,8 @@
 // direction where a face axis and edge axes tie exactly: the face wins), the capsule-box
 // kernel's points for capsules lying on a box hull's face, nearly coplanar faces (plane
 // distances tied up to float rounding), zero-length cores (sphere-hull's answers), a
-// hull view without edge adjacency (the GJK / EPA fallback, same bytes as that path),
-// range partitions.
+// hull view without edge adjacency (the GJK / EPA fallback, same bytes as that path).
+// Registration and range partitions: contract_test.cpp.
 #include <gtest/gtest.h>
 
 #include <Eigen/Core>
@@ -72,66 +72,34 @@ struct Pair {
   uint32_t hull;  // index in Hulls
 };
 
-struct Bucket {
-  uint32_t n = 0;
-  std::vector<float> ap[3], ar[9], ae[2], bp[3], br[9];
-  std::vector<uint32_t> ref;
-  explicit Bucket(const std::vector<Pair>& v) : n(static_cast<uint32_t>(v.size())) {
-    for (const Pair& q : v) {
-      for (int j = 0; j < 3; ++j) ap[j].push_back(q.c[j]), bp[j].push_back(q.p[j]);
-      for (int j = 0; j < 9; ++j) ar[j].push_back(q.Ra[j]), br[j].push_back(q.R[j]);
-      ae[0].push_back(q.r);
-      ae[1].push_back(q.h);
-      ref.push_back(q.hull);
-    }
-  }
-  k::LeafSoA a() const {
-    k::LeafSoA s{};
-    for (int j = 0; j < 3; ++j) s.p[j] = ap[j].data();
-    for (int j = 0; j < 9; ++j) s.r[j] = ar[j].data();
-    s.e[0] = ae[0].data();
-    s.e[1] = ae[1].data();
-    return s;
-  }
-  k::LeafSoA b() const {
-    k::LeafSoA s{};
-    for (int j = 0; j < 3; ++j) s.p[j] = bp[j].data();
-    for (int j = 0; j < 9; ++j) s.r[j] = br[j].data();
-    s.ref = ref.data();
-    return s;
-  }
-};
-
-/// The bytes the contract defines for lane i.
-std::vector<uint32_t> lane_bits(const ManifoldLanes& o, uint32_t i) {
-  std::vector<uint32_t> b{o.count[i]};
-  if (o.count[i] == 0 || o.count[i] > 4) return b;
-  for (const auto& v : o.n) b.push_back(std::bit_cast<uint32_t>(v[i]));
-  b.push_back(std::bit_cast<uint32_t>(o.depth[i]));
-  for (uint32_t j = 0; j < o.count[i]; ++j) {
-    for (const auto& v : o.pt[j]) b.push_back(std::bit_cast<uint32_t>(v[i]));
-    b.push_back(std::bit_cast<uint32_t>(o.pd[j][i]));
-  }
-  return b;
+/// The capsule and the hull of a lane.
+std::pair<test::Leaf, test::Leaf> leaves(const Pair& q) {
+  test::Leaf a, b;
+  a.t = k::kLeafCapsule, b.t = k::kLeafConvex;
+  std::copy(q.c, q.c + 3, a.p);
+  std::copy(q.Ra, q.Ra + 9, a.r);
+  a.e[0] = q.r, a.e[1] = q.h;
+  std::copy(q.p, q.p + 3, b.p);
+  std::copy(q.R, q.R + 9, b.r);
+  b.ref = q.hull;
+  return {a, b};
 }
 
+struct Bucket : test::BucketLanes {
+  explicit Bucket(const std::vector<Pair>& v) : BucketLanes(v, leaves) {}
+};
+
 ManifoldLanes run(k::PairKernel kern, const Bucket& bk, const k::HullView& hv, k::KernelPath path) {
-  ManifoldLanes o(bk.n);
-  k::NarrowConfig cfg;
-  cfg.path = path;
-  cfg.hulls = hv;
-  const k::LeafSoA a = bk.a(), b = bk.b();
-  kern(a, b, o.view(), k::Range{0, bk.n}, cfg);
-  return o;
+  return bk.run(kern, hv, path);
 }
 
 ManifoldLanes run_gjk(const Bucket& bk, const k::HullView& hv) {
-  ManifoldLanes o(bk.n);
-  k::NarrowConfig cfg;
-  cfg.hulls = hv;
-  const k::LeafSoA a = bk.a(), b = bk.b();
-  k::collide_gjk_epa(a, b, o.view(), k::Range{0, bk.n}, cfg, k::kLeafCapsule, k::kLeafConvex);
-  return o;
+  return bk.run(
+      [](const k::LeafSoA& a, const k::LeafSoA& b, const k::ManifoldSoA& o, k::Range r,
+         const k::NarrowConfig& cfg) {
+        k::collide_gjk_epa(a, b, o, r, cfg, k::kLeafCapsule, k::kLeafConvex);
+      },
+      hv, k::KernelPath::kSimd);
 }
 
 // --- the reference ---------------------------------------------------------------------------
@@ -278,7 +246,7 @@ Stats check_pairs(const std::string& name, const std::vector<Pair>& pairs, const
     SCOPED_TRACE("lane " + std::to_string(i) + ": " + lane_text(q) + "; depth_ref=" + std::to_string(ref.depth) +
                  (ref.meets ? " (core meets)" : " (core outside)"));
 
-    EXPECT_EQ(lane_bits(simd, i), lane_bits(scalar, i)) << "paths differ";
+    EXPECT_EQ(simd.lane_bits(i), scalar.lane_bits(i)) << "paths differ";
     const PairResult res = simd.result(i);
     EXPECT_LE(res.count, 2u);
     if (std::fabs(ref.depth) > tol) {
@@ -360,35 +328,12 @@ std::vector<Pair> random_pairs(Rng& g, const Hulls& hulls, uint32_t h0, uint32_t
     q.h = static_cast<float>(scale * (g() % 8 == 0 ? 0.0 : uni(g, 0.0, 1.0)));
     const HullData& h = hulls.data[q.hull];
     const double reach = q.r + q.h;
-    D3 c;
-    switch (g() % 4) {
-      case 0:
-        c = to_world(q, Eigen::Vector3f::Zero()) +
-            D3{uni(g, -2 * scale, 2 * scale), uni(g, -2 * scale, 2 * scale), uni(g, -2 * scale, 2 * scale)};
-        break;
-      case 1:
-        c = to_world(q, h.vertices[g() % h.vertices.size()]) + (reach * uni(g, 0.0, 1.3)) * random_unit(g);
-        break;
-      case 2: {
-        const auto& f = h.faces[g() % h.faces.size()];
-        const size_t j = g() % f.size();
-        const D3 a = to_world(q, h.vertices[f[j]]), b = to_world(q, h.vertices[f[(j + 1) % f.size()]]);
-        c = a + uni(g, 0, 1) * (b - a) + (reach * uni(g, 0.0, 1.3)) * random_unit(g);
-        break;
-      }
-      default: {
-        const size_t fi = g() % h.faces.size();
-        const auto& f = h.faces[fi];
-        D3 m;
-        for (uint32_t v : f) m = m + to_world(q, h.vertices[v]);
-        m = (1.0 / static_cast<double>(f.size())) * m;
-        const D3 nw = to_world(q, h.face_normals[fi]) - to_world(q, Eigen::Vector3f::Zero());
-        c = m + (reach * uni(g, -1.3, 1.3)) * nw;
-        // Half of these lie (nearly) parallel to the face.
-        if (g() & 1) axis_rotation(cross(nw, random_unit(g)) + uni(g, -0.03, 0.03) * nw, q.Ra);
-        break;
-      }
-    }
+    Near where;
+    D3 nw;
+    const D3 c = point_near_hull(g, h, q, scale, reach, 1.3, &where, &nw);
+    // Half of those near a face lie (nearly) parallel to it.
+    if (where == Near::kFace && (g() & 1))
+      axis_rotation(cross(nw, random_unit(g)) + uni(g, -0.03, 0.03) * nw, q.Ra);
     set_c(&q, c);
     out.push_back(q);
   }
@@ -396,10 +341,6 @@ std::vector<Pair> random_pairs(Rng& g, const Hulls& hulls, uint32_t h0, uint32_t
 }
 
 // --- tests ------------------------------------------------------------------------------------
-
-TEST(CapsuleConvex, RegisteredForTheBucket) {
-  EXPECT_EQ(k::pair_kernel(k::kLeafCapsule, k::kLeafConvex), &k::collide_capsule_convex);
-}
 
 TEST(CapsuleConvex, RandomPosesAgreeWithReference) {
   Rng g(12345);
@@ -416,32 +357,13 @@ TEST(CapsuleConvex, RandomPosesAgreeWithReference) {
   RecordProperty("worst_depth_rel", std::to_string(st.worst_depth));
 }
 
-TEST(CapsuleConvex, TinyHugeAndFarScales) {
-  for (const double scale : {1e-4, 1e4}) {
-    Rng g(777 + static_cast<uint32_t>(scale > 1));
-    Hulls hulls;
-    add_random_hulls(g, &hulls, 12, scale);
-    const Stats st = check_pairs("scale " + std::to_string(scale),
-                                 random_pairs(g, hulls, 0, 12, scaled(800), scale, 0.0), hulls);
-    EXPECT_GT(st.hits, 100u);
-    EXPECT_GT(st.misses, 100u);
-  }
-  Rng g(4242);
-  Hulls hulls;
-  add_random_hulls(g, &hulls, 12, 1.0);
-  const Stats st = check_pairs("far 1e5", random_pairs(g, hulls, 0, 12, scaled(800), 1.0, 1e5), hulls);
-  EXPECT_GT(st.hits, 100u);
-  EXPECT_GT(st.misses, 100u);
-}
-
-TEST(CapsuleConvex, ManyFaceHull) {
-  Rng g(99);
-  Hulls hulls;
-  hulls.add(ellipsoid_points(g, 400, 1.0));
-  ASSERT_GT(hulls.data[0].faces.size(), 500u);
-  const Stats st = check_pairs("400-point hull", random_pairs(g, hulls, 0, 1, scaled(300), 1.0, 3.0), hulls);
-  EXPECT_GT(st.hits, 50u);
-  EXPECT_GT(st.misses, 30u);
+TEST(CapsuleConvex, TinyHugeFarAndManyFaceHulls) {
+  check_scale_suites([](Rng& g, const Hulls& h, uint32_t hulls, uint32_t n, double scale,
+                        double offset) { return random_pairs(g, h, 0, hulls, scaled(n), scale, offset); },
+                     [](const std::string& what, const std::vector<Pair>& pairs, const Hulls& h) {
+                       return check_pairs(what, pairs, h);
+                     },
+                     300u, 50u, 30u);
 }
 
 /// A capsule lane in a box hull's frame (identity rotation, hull at p).
@@ -537,37 +459,6 @@ TEST(CapsuleConvex, ExactFeaturesOnABox) {
   ASSERT_EQ(o.count[9], 2);
   EXPECT_EQ(o.n[1][9], -1.0f);
   EXPECT_NEAR(o.depth[9], r + 1.0 / 16, 1e-6);
-}
-
-/// HullData from vertices and convex polygons given in cyclic order (either
-/// orientation): planes by Newell's method in double, polygons turned counter-clockwise
-/// seen from outside, offsets = the largest n.v over the hull (sphere_convex_test.cpp).
-HullData hull_from_polygons(const std::vector<Eigen::Vector3f>& v, std::vector<std::vector<uint32_t>> polys) {
-  HullData h;
-  h.vertices = v;
-  D3 centre;
-  for (const auto& q : v) centre = centre + D3{q.x(), q.y(), q.z()};
-  centre = (1.0 / static_cast<double>(v.size())) * centre;
-  auto at = [&](uint32_t i) { return D3{v[i].x(), v[i].y(), v[i].z()}; };
-  for (auto& poly : polys) {
-    D3 nn, m;
-    for (size_t i = 0; i < poly.size(); ++i) {
-      nn = nn + cross(at(poly[i]), at(poly[(i + 1) % poly.size()]));
-      m = m + at(poly[i]);
-    }
-    m = (1.0 / static_cast<double>(poly.size())) * m;
-    if (dot(nn, m - centre) < 0) {
-      std::reverse(poly.begin(), poly.end());
-      nn = -1.0 * nn;
-    }
-    nn = unit(nn);
-    double off = -1e300;
-    for (uint32_t i = 0; i < v.size(); ++i) off = std::max(off, dot(nn, at(i)));
-    h.faces.push_back(poly);
-    h.face_normals.emplace_back(static_cast<float>(nn.x), static_cast<float>(nn.y), static_cast<float>(nn.z));
-    h.face_offsets.push_back(static_cast<float>(off));
-  }
-  return h;
 }
 
 TEST(CapsuleConvex, NearlyCoplanarFaces) {
@@ -689,36 +580,10 @@ TEST(CapsuleConvex, WithoutEdgeAdjacencyTakesTheGeneralPath) {
   const ManifoldLanes gjk = run_gjk(bk, no_adj);
   uint32_t hits = 0;
   for (uint32_t i = 0; i < bk.n; ++i) {
-    EXPECT_EQ(lane_bits(o, i), lane_bits(gjk, i)) << i;
+    EXPECT_EQ(o.lane_bits(i), gjk.lane_bits(i)) << i;
     hits += o.count[i] > 0 ? 1 : 0;
   }
   EXPECT_GT(hits, 50u);
-}
-
-TEST(CapsuleConvex, RangePartitionAndPadding) {
-  Rng g(5);
-  Hulls hulls;
-  add_random_hulls(g, &hulls, 6, 1.0);
-  const auto pairs = random_pairs(g, hulls, 0, 6, 200, 1.0, 0.0);
-  const Bucket bk(pairs);
-  const k::HullView hv = hulls.store.view();
-  const ManifoldLanes whole = run(&k::collide_capsule_convex, bk, hv, k::KernelPath::kSimd);
-  ManifoldLanes part(bk.n);
-  k::NarrowConfig cfg;
-  cfg.hulls = hv;
-  const k::LeafSoA a = bk.a(), b = bk.b();
-  const uint32_t cuts[] = {0, 1, 7, 8, 50, 133, 199, 200};
-  for (size_t i = 0; i + 1 < std::size(cuts); ++i) {
-    if (i == 3) continue;  // [8, 50) left out: must stay untouched
-    k::collide_capsule_convex(a, b, part.view(), k::Range{cuts[i], cuts[i + 1]}, cfg);
-  }
-  for (uint32_t i = 0; i < bk.n; ++i) {
-    if (i >= 8 && i < 50) {
-      EXPECT_EQ(part.count[i], 0xff) << i;
-    } else {
-      EXPECT_EQ(lane_bits(whole, i), lane_bits(part, i)) << i;
-    }
-  }
 }
 
 }  // namespace

@@ -1,6 +1,5 @@
 // collide_convex_cylinder (kernels/narrowphase/pairs/convex/convex_cylinder.cpp) on both paths against an
-// independent double-precision reference, and against the general GJK / EPA route
-// (collide_gjk_epa, which ran the hull-cylinder bucket before) on the same lanes.
+// independent double-precision reference.
 //
 // Reference (double, the inputs as the kernel sees them, no candidate enumeration): the
 // support overlap h_A(n) + h_B(-n) minimised over densely sampled directions and refined by
@@ -28,11 +27,6 @@
 //  (e) the scalar and SIMD paths agree: the count away from touching, depth within tol,
 //      the normal within kAngleTol (or both as good as the reference's) (not their
 //      bytes: the shared helpers' multiply-adds fuse differently at the two widths);
-//  (f) collide_gjk_epa on the same lanes: the count away from touching, depth within EPA's
-//      own tolerance (cfg.epa_tolerance of both leaf sizes) plus tol and never more than
-//      EPA's plus tol (EPA's is an upper bound), the normal within 0.02 rad where unique;
-//  (g) SIMD runs over range partitions, lane by lane and over a shuffled bucket give the
-//      same bytes per pair, and write nothing outside their range.
 // Scenarios: random poses (about half meeting) at sizes 1, 1e-4, 1e4 and 1e5 from the
 // origin, with point-cloud hulls (8-40 points, and the bench's 24), boxes and flat hulls;
 // built in the cylinder's frame and posed at random: a hull face resting on a cap
@@ -41,8 +35,10 @@
 // the side, an edge across a rim (apart and meeting), a vertex just inside near a rim, a
 // vertex off a rim (apart, count 0); deep pairs and coincident centres; needle (radius 1e-3
 // of the length) and pancake (half length 1e-3 of the radius) cylinders; flat hulls (1e-3
-// thick boxes); the dispatch table; hulls the kernel leaves to GJK / EPA (open faces, so no
-// edge adjacency; 400 vertices; a view without adjacency): the same bytes as GJK / EPA.
+// thick boxes); hulls the kernel leaves to GJK / EPA (open faces, so no edge adjacency;
+// 400 vertices; a view without adjacency): the same bytes as GJK / EPA.
+// Registration, range partitions, shuffled buckets and the agreement with GJK / EPA:
+// contract_test.cpp (every bucket of the table).
 // Sizes scale with IMPACT_TEST_INTENSITY (about 2.5 s at 1 in a Release build).
 #include <gtest/gtest.h>
 
@@ -145,17 +141,6 @@ bool same_bytes(const test::ManifoldLanes& x, uint32_t k, const test::ManifoldLa
     for (int i = 0; i < 3; ++i) same = same && eq(x.pt[s][i][k], y.pt[s][i][j]);
   }
   return same;
-}
-
-/// Lane k still holds the poison of test::ManifoldLanes (nothing written).
-bool untouched(const test::ManifoldLanes& x, uint32_t k) {
-  bool u = x.count[k] == 0xff && std::isnan(x.depth[k]);
-  for (int i = 0; i < 3; ++i) u = u && std::isnan(x.n[i][k]);
-  for (int s = 0; s < 4; ++s) {
-    u = u && std::isnan(x.pd[s][k]);
-    for (int i = 0; i < 3; ++i) u = u && std::isnan(x.pt[s][i][k]);
-  }
-  return u;
 }
 
 // --- the reference -------------------------------------------------------------------------
@@ -580,24 +565,6 @@ Features* ConvexCylinder::features_ = nullptr;
 
 // --- tests ---------------------------------------------------------------------------------
 
-TEST_F(ConvexCylinder, RegisteredForTheBucket) {
-  EXPECT_EQ(pair_kernel(kLeafConvex, kLeafCylinder), &collide_convex_cylinder);
-  // Through the table once: the same bytes as the kernel under test.
-  hi::Rng g(3);
-  Case c;
-  random_pairs(g, *hulls_, unit_pool(), 1.0, 0.0, 40, 0, c);
-  Lanes x(c), y(c);
-  const HullView hv = hulls_->store.view();
-  x.go(pair_kernel(kLeafConvex, kLeafCylinder), hv, KernelPath::kSimd, Range{0, x.n()});
-  y.go(under_test(), hv, KernelPath::kSimd, Range{0, y.n()});
-  int hits = 0;
-  for (uint32_t k = 0; k < x.n(); ++k) {
-    EXPECT_TRUE(same_bytes(x.out, k, y.out, k)) << k;
-    hits += x.out.count[k] > 0;
-  }
-  EXPECT_GT(hits, 5);
-}
-
 TEST_F(ConvexCylinder, RandomPosesUnitSize) {
   hi::Rng g(11);
   Case c;
@@ -739,43 +706,6 @@ TEST_F(ConvexCylinder, DeepAndCoincident) {
   EXPECT_EQ(r.st.hits, r.st.lanes);  // every lane checked meets
 }
 
-/// The general GJK / EPA route on the same lanes.
-TEST_F(ConvexCylinder, AgreesWithGjkEpa) {
-  hi::Rng g(19);
-  Case c;
-  random_pairs(g, *hulls_, unit_pool(), 1.0, 0.0, count_of(160), 3, c);
-  for (uint32_t i = 0; i < count_of(20); ++i)
-    build(g, *hulls_, *features_, unit_pool()[i % 17], i % 2 ? Built::kFaceOnCap : Built::kFaceOnSide, 0, c);
-  Lanes run(c), gj(c);
-  const HullView hv = hulls_->store.view();
-  run.go(under_test(), hv, KernelPath::kSimd, Range{0, run.n()});
-  gj.go(&gjk_kernel, hv, KernelPath::kSimd, Range{0, gj.n()});
-  const NarrowConfig cfg;
-  int compared = 0;
-  double worst = 0;
-  for (uint32_t k = 0; k < run.n(); ++k) {
-    const Ref f = reference(run, *hulls_, k);
-    const test::PairResult x = run.out.result(k), y = gj.out.result(k);
-    const double tol = cfg.epa_tolerance * f.scale + f.tol;
-    SCOPED_TRACE(::testing::Message() << "lane " << k << " depth_ref " << f.r.s << " kernel " << x.count
-                                      << " " << x.depth << " gjk/epa " << y.count << " " << y.depth);
-    if (x.count != y.count && (x.count == 0 || y.count == 0)) {
-      EXPECT_LE(std::fabs(f.r.s), tol);
-      continue;
-    }
-    if (x.count == 0) continue;
-    ++compared;
-    worst = std::max(worst, std::fabs(x.depth - y.depth) / f.L);
-    EXPECT_NEAR(x.depth, y.depth, tol);
-    EXPECT_LE(x.depth, y.depth + f.tol);  // EPA's depth is an upper bound
-    if (f.unique()) {
-      EXPECT_LT(nref::angle({x.n.x(), x.n.y(), x.n.z()}, {y.n.x(), y.n.y(), y.n.z()}), 0.02);
-    }
-  }
-  std::printf("  against GJK / EPA: %d lanes compared, worst |depth difference| %.2g L\n", compared, worst);
-  EXPECT_GT(compared, static_cast<int>(run.n()) / 3);
-}
-
 /// A hull without edge adjacency (open faces) and one of 400 vertices go to GJK / EPA, in
 /// a bucket with hulls the kernel takes: the same bytes as collide_gjk_epa on their lanes.
 TEST_F(ConvexCylinder, OpenAndBigHullsTakeGjkEpa) {
@@ -800,58 +730,6 @@ TEST_F(ConvexCylinder, OpenAndBigHullsTakeGjkEpa) {
     EXPECT_GT(general, static_cast<int>(x.n()) / 3);
     EXPECT_GT(hits, 5);
   }
-}
-
-/// Range partitions, lane-by-lane runs and a shuffled bucket give the same bytes per
-/// pair, and a run writes nothing outside its range.
-TEST_F(ConvexCylinder, PartitionsSingleLanesAndShuffleGiveTheSameBytes) {
-  hi::Rng g(21);
-  Case c;
-  random_pairs(g, *hulls_, unit_pool(), 1.0, 0.0, count_of(100), 3, c);
-  random_pairs(g, *hulls_, {24, 25}, 1.0, 0.0, 10, 0, c);
-  for (uint32_t i = 0; i < 20; ++i)
-    build(g, *hulls_, *features_, unit_pool()[i % 17], static_cast<Built>(i % 6), 0.02, c);
-  const HullView hv = hulls_->store.view();
-  const uint32_t n = c.size();
-  Lanes whole(c);
-  whole.go(under_test(), hv, KernelPath::kSimd, Range{0, n});
-  int hits = 0, multi = 0;
-  for (uint32_t k = 0; k < n; ++k) {
-    ASSERT_NE(whole.out.count[k], 0xff) << "lane " << k << " not written";
-    hits += whole.out.count[k] > 0;
-    multi += whole.out.count[k] > 1;
-  }
-  EXPECT_GT(hits, 20);
-  EXPECT_GT(multi, 5);
-  for (uint32_t cut : {1u, 7u, 8u, 9u, 31u, 64u, n - 1}) {
-    Lanes lo(c), up(c);
-    lo.go(under_test(), hv, KernelPath::kSimd, Range{0, cut});
-    up.go(under_test(), hv, KernelPath::kSimd, Range{cut, n});
-    for (uint32_t k = 0; k < n; ++k) {
-      const Lanes& in = k < cut ? lo : up;
-      const Lanes& out = k < cut ? up : lo;
-      EXPECT_TRUE(same_bytes(in.out, k, whole.out, k)) << "cut " << cut << " lane " << k;
-      EXPECT_TRUE(untouched(out.out, k)) << "cut " << cut << " lane " << k << " written outside its range";
-    }
-  }
-  Lanes single(c);
-  for (uint32_t k = 0; k < n; ++k) {
-    single.go(under_test(), hv, KernelPath::kSimd, Range{k, k + 1});
-    if (k + 1 < n) {
-      EXPECT_TRUE(untouched(single.out, k + 1)) << "lane " << k + 1 << " written by lane " << k;
-    }
-  }
-  for (uint32_t k = 0; k < n; ++k)
-    EXPECT_TRUE(same_bytes(single.out, k, whole.out, k)) << "single lane " << k;
-  std::vector<uint32_t> perm(n);
-  std::iota(perm.begin(), perm.end(), 0u);
-  std::shuffle(perm.begin(), perm.end(), g);
-  Case cs;
-  for (uint32_t k : perm) cs.add(c.a[k], c.b[k]);
-  Lanes shuf(cs);
-  shuf.go(under_test(), hv, KernelPath::kSimd, Range{0, n});
-  for (uint32_t j = 0; j < n; ++j)
-    EXPECT_TRUE(same_bytes(shuf.out, j, whole.out, perm[j])) << "shuffled lane " << j;
 }
 
 /// A hull view without edge adjacency at all (adj_begin null, as sphere_convex_test,

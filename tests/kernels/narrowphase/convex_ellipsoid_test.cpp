@@ -1,6 +1,6 @@
 // collide_convex_ellipsoid (kernels/narrowphase/pairs/convex/convex_ellipsoid.cpp) on both paths against
 // an independent double-precision reference, the sphere-hull kernel where the ellipsoid is
-// round, the box-ellipsoid kernel where the hull is a box, and GJK / EPA on the same lanes.
+// round and the box-ellipsoid kernel where the hull is a box.
 //
 // Reference (double, no piece enumeration, no secular-equation solve by steps): the support
 // overlap h_A(n) + h_B(-n) minimised over densely sampled directions and refined by
@@ -20,7 +20,9 @@
 // origin; constructed touching at a face, an edge (its normal-cone bisector) and a vertex,
 // and the same pushed in (shallow and deep); needle and pancake ellipsoids (1e-4); flat
 // hulls (1e-4 thick boxes); coincident centres; a round ellipsoid against sphere-hull; a
-// box hull against box-ellipsoid; GJK / EPA; range partitions and shuffled lanes.
+// box hull against box-ellipsoid.
+// Registration, range partitions, shuffled buckets and the agreement with GJK / EPA:
+// contract_test.cpp (every bucket of the table).
 #include <gtest/gtest.h>
 
 #include <Eigen/Core>
@@ -238,10 +240,6 @@ uint32_t count_of(uint32_t n) {
   return static_cast<uint32_t>(n * test::intensity());
 }
 
-TEST_F(ConvexEllipsoid, Registered) {
-  EXPECT_EQ(pair_kernel(kLeafConvex, kLeafEllipsoid), &collide_convex_ellipsoid);
-}
-
 TEST_F(ConvexEllipsoid, RandomPosesUnitSize) {
   hi::Rng g(11);
   Case c;
@@ -410,33 +408,6 @@ TEST_F(ConvexEllipsoid, BoxHullMatchesBoxEllipsoid) {
   EXPECT_GT(hits, 50);
 }
 
-TEST_F(ConvexEllipsoid, AgreesWithGjkEpa) {
-  hi::Rng g(18);
-  Case c;
-  random_pairs(g, hulls, 0, 12, 1.0, 0.0, count_of(300), 0, c);
-  Lanes run(c), gj(c);
-  const HullView hv = hulls.store.view();
-  run.go(&collide_convex_ellipsoid, hv, KernelPath::kSimd, Range{0, run.n()});
-  NarrowConfig cfg;
-  cfg.hulls = hv;
-  collide_gjk_epa(gj.la.soa(), gj.lb.soa(), gj.out.view(), Range{0, gj.n()}, cfg, kLeafConvex,
-                  kLeafEllipsoid);
-  int hits = 0;
-  for (uint32_t k = 0; k < run.n(); ++k) {
-    const test::PairResult x = run.out.result(k), y = gj.out.result(k);
-    const double tol = 1e-3;
-    if (x.count != y.count) {
-      EXPECT_LE(std::max(std::fabs(x.depth), std::fabs(y.depth)), tol) << k;
-      continue;
-    }
-    if (x.count == 0) continue;
-    ++hits;
-    EXPECT_LE(x.depth, y.depth + 1e-4) << k;  // GJK / EPA's depth is an upper bound up to its tolerance
-    EXPECT_NEAR(x.depth, y.depth, tol) << k;
-  }
-  EXPECT_GT(hits, 60);
-}
-
 /// A hull beyond the kernel's stack limits (more than 256 vertices) goes through
 /// GJK / EPA for its lanes: the same bytes as collide_gjk_epa, and still right.
 TEST_F(ConvexEllipsoid, LargeHullsFallBackToGjkEpa) {
@@ -464,38 +435,6 @@ TEST_F(ConvexEllipsoid, LargeHullsFallBackToGjkEpa) {
   }
   EXPECT_GT(large, static_cast<int>(run.n()) / 4);
   EXPECT_GT(hits, 0);
-}
-
-TEST_F(ConvexEllipsoid, PartitionsAndShuffledLanesGiveTheSameBytes) {
-  hi::Rng g(19);
-  Case c;
-  random_pairs(g, hulls, 0, 12, 1.0, 0.0, count_of(257), 4, c);
-  const HullView hv = hulls.store.view();
-  Lanes whole(c);
-  whole.go(&collide_convex_ellipsoid, hv, KernelPath::kSimd, Range{0, whole.n()});
-  Lanes parts(c);
-  const uint32_t cuts[] = {0, 1, 7, 100, 101, whole.n()};
-  for (int i = 0; i + 1 < 6; ++i)
-    parts.go(&collide_convex_ellipsoid, hv, KernelPath::kSimd, Range{cuts[i], cuts[i + 1]});
-  std::vector<uint32_t> perm(whole.n());
-  std::iota(perm.begin(), perm.end(), 0u);
-  std::shuffle(perm.begin(), perm.end(), g);
-  Case cs;
-  for (uint32_t k : perm) cs.add(c.a[k], c.b[k]);
-  Lanes shuf(cs);
-  shuf.go(&collide_convex_ellipsoid, hv, KernelPath::kSimd, Range{0, shuf.n()});
-  auto same = [](const test::PairResult& x, const test::PairResult& y) {
-    if (x.count != y.count) return false;
-    if (x.count == 0) return true;
-    return std::memcmp(x.n.data(), y.n.data(), sizeof(double) * 3) == 0 && x.depth == y.depth &&
-           std::memcmp(x.pt[0].data(), y.pt[0].data(), sizeof(double) * 3) == 0 && x.pd[0] == y.pd[0];
-  };
-  for (uint32_t k = 0; k < whole.n(); ++k) {
-    EXPECT_TRUE(same(whole.out.result(k), parts.out.result(k))) << k;
-  }
-  for (uint32_t j = 0; j < whole.n(); ++j) {
-    EXPECT_TRUE(same(whole.out.result(perm[j]), shuf.out.result(j))) << j;
-  }
 }
 
 }  // namespace

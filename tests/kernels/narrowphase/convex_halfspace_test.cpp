@@ -9,8 +9,8 @@
 // random (about half touching), 1e5 from the origin, deep (entirely below), touching,
 // planes exactly through a face and a vertex. Also: the SIMD path against the scalar
 // path and against collide_support_halfspace (the per-pair routine it replaces: the same
-// rule), and range partitions and a shuffled bucket give the same bytes per lane.
-// (No GJK/EPA comparison: collide_gjk_epa takes no half-spaces.)
+// rule). Registration, range partitions and shuffled buckets, and the agreement with the
+// general route (collide_support_halfspace): contract_test.cpp.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -404,33 +404,6 @@ std::vector<uint8_t> lane_bytes(const test::ManifoldLanes& o, uint32_t k) {
   }
   return b;
 }
-
-TEST(ConvexHalfspace, PartitionsAndShuffledBucketsGiveTheSameBytes) {
-  const auto cs = random_cases(test::scaled(403), 21);
-  const auto n = static_cast<uint32_t>(cs.size());
-  std::mt19937 g(3);
-  for (KernelPath path : {KernelPath::kSimd, KernelPath::kScalar}) {
-    const test::ManifoldLanes whole = run(cs, path);
-    for (int rep = 0; rep < 4; ++rep) {
-      std::vector<uint32_t> cuts;
-      for (uint32_t c = 1 + static_cast<uint32_t>(g() % 9); c < n; c += 1 + static_cast<uint32_t>(g() % 13)) cuts.push_back(c);
-      const test::ManifoldLanes parts = run(cs, path, false, cuts);
-      std::vector<uint32_t> perm(n);
-      std::iota(perm.begin(), perm.end(), 0u);
-      std::shuffle(perm.begin(), perm.end(), g);
-      std::vector<Case> sh;
-      for (uint32_t i : perm) sh.push_back(cs[i]);
-      const test::ManifoldLanes shuffled = run(sh, path);
-      for (uint32_t k = 0; k < n; ++k) {
-        ASSERT_EQ(lane_bytes(parts, k), lane_bytes(whole, k)) << "partition, lane " << k;
-      }
-      for (uint32_t i = 0; i < n; ++i) {
-        ASSERT_EQ(lane_bytes(shuffled, i), lane_bytes(whole, perm[i])) << "shuffle, lane " << perm[i];
-      }
-    }
-  }
-}
-
 
 /// The kernel lists the touching lanes of a chunk and runs the picks over groups of
 /// them: buckets where no lane touches, where every lane does (deep), where they

@@ -35,8 +35,8 @@
 // vertices, slivers of height 1e-3 .. 1e-7): their answers are the segment's or the
 // point's (GJK / EPA's and the brute force's without the normal axes); needle and
 // pancake hulls (1 x 1e-4); a hull with 80-gon faces (no clip: one point); the winding
-// of the triangle (same answer); range partitions (same bytes); a hull view without
-// edge adjacency (the GJK / EPA fallback, same bytes as that path).
+// of the triangle (same answer); a hull view without edge adjacency (the GJK / EPA
+// fallback, same bytes as that path). Registration and range partitions: contract_test.cpp.
 #include <gtest/gtest.h>
 
 #include <Eigen/Core>
@@ -81,61 +81,34 @@ struct Pair {
   float v[3][3];  // triangle vertices (world)
 };
 
-struct Bucket {
-  uint32_t n = 0;
-  std::vector<float> ap[3], ar[9], bp[3], bw[6];
-  std::vector<uint32_t> ref;
-  explicit Bucket(const std::vector<Pair>& v) : n(static_cast<uint32_t>(v.size())) {
-    for (const Pair& q : v) {
-      for (int j = 0; j < 3; ++j) ap[j].push_back(q.p[j]), bp[j].push_back(q.v[0][j]);
-      for (int j = 0; j < 9; ++j) ar[j].push_back(q.R[j]);
-      for (int j = 0; j < 3; ++j) bw[j].push_back(q.v[1][j]), bw[3 + j].push_back(q.v[2][j]);
-      ref.push_back(q.hull);
-    }
-  }
-  k::LeafSoA a() const {
-    k::LeafSoA s{};
-    for (int j = 0; j < 3; ++j) s.p[j] = ap[j].data();
-    for (int j = 0; j < 9; ++j) s.r[j] = ar[j].data();
-    s.ref = ref.data();
-    return s;
-  }
-  k::LeafSoA b() const {
-    k::LeafSoA s{};
-    for (int j = 0; j < 3; ++j) s.p[j] = bp[j].data();
-    for (int j = 0; j < 6; ++j) s.w[j] = bw[j].data();
-    return s;
-  }
-};
-
-/// The bytes the contract defines for lane i.
-std::vector<uint32_t> lane_bits(const ManifoldLanes& o, uint32_t i) {
-  std::vector<uint32_t> b{o.count[i]};
-  if (o.count[i] == 0 || o.count[i] > 4) return b;
-  for (const auto& v : o.n) b.push_back(std::bit_cast<uint32_t>(v[i]));
-  b.push_back(std::bit_cast<uint32_t>(o.depth[i]));
-  for (uint32_t j = 0; j < o.count[i]; ++j) {
-    for (const auto& v : o.pt[j]) b.push_back(std::bit_cast<uint32_t>(v[i]));
-    b.push_back(std::bit_cast<uint32_t>(o.pd[j][i]));
-  }
-  return b;
+/// The hull and the triangle of a lane.
+std::pair<test::Leaf, test::Leaf> leaves(const Pair& q) {
+  test::Leaf a, b;
+  a.t = k::kLeafConvex, b.t = k::kLeafTriangle;
+  std::copy(q.p, q.p + 3, a.p);
+  std::copy(q.R, q.R + 9, a.r);
+  a.ref = q.hull;
+  std::copy(q.v[0], q.v[0] + 3, b.p);
+  std::copy(q.v[1], q.v[1] + 3, b.w);
+  std::copy(q.v[2], q.v[2] + 3, b.w + 3);
+  return {a, b};
 }
 
+struct Bucket : test::BucketLanes {
+  explicit Bucket(const std::vector<Pair>& v) : BucketLanes(v, leaves) {}
+};
+
 ManifoldLanes run(const Bucket& bk, const k::HullView& hv, k::KernelPath path) {
-  ManifoldLanes o(bk.n);
-  k::NarrowConfig cfg;
-  cfg.path = path;
-  cfg.hulls = hv;
-  k::collide_convex_triangle(bk.a(), bk.b(), o.view(), k::Range{0, bk.n}, cfg);
-  return o;
+  return bk.run(&k::collide_convex_triangle, hv, path);
 }
 
 ManifoldLanes run_gjk(const Bucket& bk, const k::HullView& hv) {
-  ManifoldLanes o(bk.n);
-  k::NarrowConfig cfg;
-  cfg.hulls = hv;
-  k::collide_gjk_epa(bk.a(), bk.b(), o.view(), k::Range{0, bk.n}, cfg, k::kLeafConvex, k::kLeafTriangle);
-  return o;
+  return bk.run(
+      [](const k::LeafSoA& a, const k::LeafSoA& b, const k::ManifoldSoA& o, k::Range r,
+         const k::NarrowConfig& cfg) {
+        k::collide_gjk_epa(a, b, o, r, cfg, k::kLeafConvex, k::kLeafTriangle);
+      },
+      hv, k::KernelPath::kSimd);
 }
 
 // --- the reference ---------------------------------------------------------------------------
@@ -305,7 +278,7 @@ Stats check_pairs(const std::string& name, const std::vector<Pair>& pairs, const
 
     // Both paths against the reference (they may round differently where FMAs fuse
     // differently: nearly tied candidates can go either way, each a valid answer).
-    st.same_bytes += lane_bits(simd, i) == lane_bits(scalar, i) ? 1 : 0;
+    st.same_bytes += simd.lane_bits(i) == scalar.lane_bits(i) ? 1 : 0;
     for (const ManifoldLanes* path : {&simd, &scalar}) {
       SCOPED_TRACE(path == &simd ? "simd path" : "scalar path");
       const PairResult res = path->result(i);
@@ -476,10 +449,6 @@ Hulls& shared_hulls() {
 constexpr uint32_t kHullsRandom = 24, kTetra = 24;
 
 // --- tests ------------------------------------------------------------------------------------
-
-TEST(ConvexTriangle, RegisteredForTheBucket) {
-  EXPECT_EQ(k::pair_kernel(k::kLeafConvex, k::kLeafTriangle), &k::collide_convex_triangle);
-}
 
 TEST(ConvexTriangle, RandomPosesAgreeWithReference) {
   Rng g(2024);
@@ -842,34 +811,6 @@ TEST(ConvexTriangle, WindingDoesNotMatter) {
   }
 }
 
-TEST(ConvexTriangle, RangePartitionsGiveTheSameBytes) {
-  Rng g(39);
-  const Hulls& hulls = shared_hulls();
-  const auto pairs = random_pairs(g, hulls, 0, kHullsRandom + 1, 301, 1.0, 0.0);
-  const Bucket bk(pairs);
-  k::NarrowConfig cfg;
-  cfg.hulls = hulls.store.view();
-  for (const k::KernelPath path : {k::KernelPath::kSimd, k::KernelPath::kScalar}) {
-    cfg.path = path;
-    ManifoldLanes whole(bk.n), parts(bk.n);
-    k::collide_convex_triangle(bk.a(), bk.b(), whole.view(), k::Range{0, bk.n}, cfg);
-    for (uint32_t b = 0; b < bk.n;) {
-      const uint32_t e = std::min(bk.n, b + 1 + (b * 7) % 9);
-      k::collide_convex_triangle(bk.a(), bk.b(), parts.view(), k::Range{b, e}, cfg);
-      b = e;
-    }
-    for (uint32_t i = 0; i < bk.n; ++i) EXPECT_EQ(lane_bits(whole, i), lane_bits(parts, i)) << "lane " << i;
-    // Nothing outside the range is written.
-    ManifoldLanes some(bk.n);
-    k::collide_convex_triangle(bk.a(), bk.b(), some.view(), k::Range{10, 20}, cfg);
-    for (uint32_t i = 0; i < bk.n; ++i) {
-      if (i < 10 || i >= 20) {
-        EXPECT_EQ(some.count[i], 0xff) << "lane " << i;
-      }
-    }
-  }
-}
-
 TEST(ConvexTriangle, HullWithoutAdjacencyTakesGjkEpa) {
   Rng g(40);
   const Hulls& hulls = shared_hulls();
@@ -879,7 +820,7 @@ TEST(ConvexTriangle, HullWithoutAdjacencyTakesGjkEpa) {
   hv.adj_begin = nullptr;
   const ManifoldLanes x = run(bk, hv, k::KernelPath::kSimd);
   const ManifoldLanes y = run_gjk(bk, hv);
-  for (uint32_t i = 0; i < bk.n; ++i) EXPECT_EQ(lane_bits(x, i), lane_bits(y, i)) << "lane " << i;
+  for (uint32_t i = 0; i < bk.n; ++i) EXPECT_EQ(x.lane_bits(i), y.lane_bits(i)) << "lane " << i;
 }
 
 TEST(ConvexTriangle, BruteForceAgreesWithTheSampledReference) {

@@ -1,6 +1,5 @@
 // collide_cylinder_cylinder (kernels/narrowphase/pairs/cylinder/cylinder_cylinder.cpp) on both paths
-// against independent double-precision references, and against the general GJK / EPA
-// path (collide_gjk_epa) on the same lanes.
+// against independent double-precision references.
 //
 // References (double, the inputs rounded to float as the kernel sees them; no candidate
 // enumeration, no root solve by steps):
@@ -48,9 +47,9 @@
 // (2 points: the side line clipped to the disk), side by side (2 points: the overlap of
 // the heights); near-parallel tilts (0..1e-2 rad) of those; exactly touching (count 0);
 // needles and pancakes (1e-4); symmetries (a rigid motion of the whole pair, A and B
-// swapped, an axis reversed); range partitions and shuffled buckets (same bytes,
-// nothing written outside the range); agreement with GJK / EPA. Lane counts scale with
-// IMPACT_TEST_INTENSITY; a sanitizer build runs a quarter of them.
+// swapped, an axis reversed). Registration, range partitions, shuffled buckets and the agreement with GJK /
+// EPA: contract_test.cpp (every bucket of the table). Lane counts scale with IMPACT_TEST_INTENSITY; a
+// sanitizer build runs a quarter of them.
 #include <gtest/gtest.h>
 
 #include <Eigen/Core>
@@ -67,9 +66,11 @@
 #include <vector>
 
 #include "kernels/narrowphase/pair_kernels.h"
+#include "support/kernel_checks.h"
 #include "support/leaf_lanes.h"
 #include "support/narrow_reference.h"
 #include "support/random_input.h"
+#include "support/shape_geometry.h"
 #include "support/test_support.h"
 
 namespace impact::kernels {
@@ -78,16 +79,14 @@ namespace {
 using Vec3d = Eigen::Vector3d;
 using Mat3d = Eigen::Matrix3d;
 namespace nref = test::nref;
+using test::angle, test::columns, test::rot, test::radial, test::tangential, test::frame_of, test::v3,
+    test::ev;
 
 constexpr double kRel = 1e-5;       // depth tolerance, of L
 constexpr double kAngleTol = 1e-4;  // rad, where the minimum is unique and conditioned
 /// Golden-section steps per level of the solid minimum: brackets of 0.618^40 ~ 4e-9 of
 /// a cylinder's length or diameter.
 constexpr int kGoldenIters = 40;
-
-double angle(const Vec3d& a, const Vec3d& b) {
-  return std::atan2(a.cross(b).norm(), a.dot(b));
-}
 
 /// Lanes per scenario: base scaled by IMPACT_TEST_INTENSITY; under the sanitizers a
 /// quarter (at least 2): the double references dominate the run time there, and the
@@ -135,64 +134,31 @@ double coord_ulp(const Query& q) {
 
 // --- running the kernel -----------------------------------------------------------------------
 
-/// A cylinder as test::LeafLanes reads it (e0 = radius, e1 = half length).
-struct LeafOf {
-  Vec3d p;
-  Mat3d R;
-  Vec3d e;
-  uint32_t hull = 0;
-};
-
-LeafOf leaf_of(const Cyl& c) {
-  return {c.p, c.R, Vec3d(c.r, c.h, 0.0)};
+/// A cylinder as the kernel reads it (e0 = radius, e1 = half length).
+test::Leaf leaf_of(const Cyl& c) {
+  return test::posed_leaf(kLeafCylinder, c.p, c.R, Vec3d(c.r, c.h, 0.0));
 }
 
 /// Runs `kern` (the kernel under test unless given) on lanes [begin, end) of one bucket.
 std::vector<test::PairResult> run(const std::vector<Query>& qs, KernelPath path, PairKernel kern = nullptr,
-                                  uint32_t begin = 0, uint32_t end = ~0u,
-                                  test::ManifoldLanes* keep = nullptr) {
-  if (kern == nullptr) kern = &collide_cylinder_cylinder;
-  const uint32_t n = static_cast<uint32_t>(qs.size());
-  end = std::min(end, n);
-  test::LeafLanes la, lb;
-  for (const Query& q : qs) la.push(leaf_of(q.a)), lb.push(leaf_of(q.b));
-  test::ManifoldLanes o(n);
-  NarrowConfig cfg;
-  cfg.path = path;
-  kern(la.soa(), lb.soa(), o.view(), Range{begin, end}, cfg);
-  std::vector<test::PairResult> out(n);
-  for (uint32_t k = begin; k < end; ++k) out[k] = o.result(k);
-  if (keep != nullptr) *keep = o;
-  return out;
-}
-
-void gjk_kernel(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out, Range r,
-                const NarrowConfig& cfg) {
-  collide_gjk_epa(a, b, out, r, cfg, kLeafCylinder, kLeafCylinder);
+                                  uint32_t begin = 0, uint32_t end = ~0u) {
+  return test::run_queries(
+      kern != nullptr ? kern : &collide_cylinder_cylinder, qs, path,
+      [](const Query& q) {
+        return std::pair{leaf_of(q.a), leaf_of(q.b)};
+      },
+      begin, end);
 }
 
 // --- references -------------------------------------------------------------------------------
 
-/// Signed distance of l (in the cylinder's frame) to the solid cylinder of radius r and
-/// half length h about the z axis (< 0 inside).
-double local_sd(const Vec3d& l, double r, double h) {
-  const double dr = std::sqrt(l.x() * l.x() + l.y() * l.y()) - r, dz = std::fabs(l.z()) - h;
-  if (dr <= 0 && dz <= 0) return std::max(dr, dz);
-  const double er = std::max(dr, 0.0), ez = std::max(dz, 0.0);
-  return std::sqrt(er * er + ez * ez);
-}
-
 /// Signed distance of x to the solid cylinder c moved by `shift` (< 0 inside).
 double cyl_sd(const Cyl& c, const Vec3d& x, const Vec3d& shift = Vec3d::Zero()) {
-  return local_sd(c.R.transpose() * (x - c.p - shift), c.r, c.h);
+  return test::cylinder_sd(c.p + shift, c.R, c.r, c.h, x);
 }
 
-/// The closest point of the solid cylinder c to an outside point x.
 Vec3d cyl_closest(const Cyl& c, const Vec3d& x) {
-  const Vec3d l = c.R.transpose() * (x - c.p);
-  const double rho = std::hypot(l.x(), l.y());
-  const double s = rho > c.r ? c.r / rho : 1.0;
-  return c.p + c.R * Vec3d(l.x() * s, l.y() * s, std::clamp(l.z(), -c.h, c.h));
+  return test::cylinder_closest(c.p, c.R, c.r, c.h, x);
 }
 
 /// The least signed distance to B (moved by `shift`) over the solid A: A's point
@@ -209,8 +175,8 @@ double solid_minimum(const Query& q, const Vec3d& shift = Vec3d::Zero(), Vec3d* 
   auto over_v = [&](const Vec3d& base, double u, double* v_at) {
     const double w = std::sqrt(std::max(0.0, a.r * a.r - u * u));
     const Vec3d bu = base + u * mu;
-    return test::golden_section_min([&](double v) { return local_sd(bu + v * mv, b.r, b.h); }, -w, w,
-                                    kGoldenIters, v_at);
+    return test::golden_section_min([&](double v) { return test::cylinder_sd_local(bu + v * mv, b.r, b.h); },
+                                    -w, w, kGoldenIters, v_at);
   };
   auto over_uv = [&](double t, double* u_at, double* v_at) {
     const Vec3d base = o + t * mt;
@@ -234,32 +200,13 @@ double solid_minimum(const Query& q, const Vec3d& shift = Vec3d::Zero(), Vec3d* 
   return best;
 }
 
-nref::V3 v3(const Vec3d& v) {
-  return {v.x(), v.y(), v.z()};
-}
-Vec3d ev(const nref::V3& v) {
-  return {v.x, v.y, v.z};
-}
 nref::Shape shape_of(const Cyl& c) {
-  nref::Shape s;
-  s.type = kLeafCylinder;
-  s.p = v3(c.p);
-  for (int i = 0; i < 9; ++i) s.r[i] = c.R(i / 3, i % 3);
-  s.e[0] = c.r;
-  s.e[1] = c.h;
-  return s;
+  return test::posed_shape(kLeafCylinder, c.p, c.R, Vec3d(c.r, c.h, 0));
 }
 
 /// The support overlap of A and B along n.
 double overlap_along(const Query& q, const Vec3d& n) {
   return nref::overlap(shape_of(q.a), shape_of(q.b), v3(n.normalized()));
-}
-
-nref::Options dense_options() {
-  nref::Options o;
-  o.samples = 6000;
-  o.starts = 8;
-  return o;
 }
 
 /// Whether n_ref is the only minimiser within 0.02 rad: every direction outside that
@@ -296,15 +243,14 @@ bool unique_minimum(const Query& q, const Vec3d& n_ref, double depth, double sec
   return ring(3e-3, 96) - depth >= 1e-6 * size_of(q);
 }
 
-struct Ref {
-  double depth = 0;  // > 0: penetration depth; else minus the distance
-  Vec3d n = Vec3d::UnitZ();
-  bool apart = false;
-  bool unique = false;  // the normal is unique at this tolerance
-};
+/// The reference (test::LaneRef): depth (> 0 penetration, else minus the distance), the
+/// normal, apart (the distance in closed form), unique and, where unique, the angle a
+/// normal may be off.
+using Ref = test::LaneRef;
 
 Ref reference(const Query& q) {
   Ref f;
+  f.angle_tol = kAngleTol;
   Vec3d x = q.a.p;
   const double m = solid_minimum(q, Vec3d::Zero(), &x);
   const double tol = kRel * size_of(q);
@@ -315,7 +261,7 @@ Ref reference(const Query& q) {
     f.unique = m > 1e-3 * size_of(q);
     return f;
   }
-  const nref::PairResult s = nref::solve_pair(shape_of(q.a), shape_of(q.b), {}, dense_options());
+  const nref::PairResult s = nref::solve_pair(shape_of(q.a), shape_of(q.b), {}, nref::dense_options());
   f.depth = s.s;
   f.n = ev(s.n);
   f.unique = s.unique(2 * tol) && unique_minimum(q, f.n, s.s, s.second, tol);
@@ -324,132 +270,27 @@ Ref reference(const Query& q) {
 
 // --- the per-lane check -----------------------------------------------------------------------
 
-struct Stats {
-  int lanes = 0, hits = 0, normals_checked = 0;
-  int counts[5] = {0, 0, 0, 0, 0};
-  double worst_depth = 0, worst_angle = 0;
-};
+using Stats = test::LaneStats;
 
-bool same_bytes(const test::PairResult& x, const test::PairResult& y) {
-  bool same = x.count == y.count;
-  if (same && x.count > 0) {
-    same = std::memcmp(&x.depth, &y.depth, sizeof x.depth) == 0 && std::memcmp(&x.n, &y.n, sizeof x.n) == 0;
-    for (uint32_t i = 0; i < x.count; ++i)
-      same = same && std::memcmp(&x.pt[i], &y.pt[i], sizeof x.pt[i]) == 0 &&
-             std::memcmp(&x.pd[i], &y.pd[i], sizeof x.pd[i]) == 0;
-  }
-  return same;
-}
-
-/// Checks a lane's points: on both surfaces, 0 < pdepth <= depth + tol, the deepest
-/// carries the depth.
-void check_points(const Query& q, const test::PairResult& h, double tol, double ptol, const char* what,
-                  size_t k, const char* path) {
-  double deepest = -std::numeric_limits<double>::infinity();
-  for (uint32_t i = 0; i < h.count; ++i) {
-    ASSERT_TRUE(h.pt[i].allFinite()) << what << " lane " << k;
-    EXPECT_GT(h.pd[i], 0.0) << what << " lane " << k << " point " << i << path;
-    EXPECT_LE(h.pd[i], h.depth + tol) << what << " lane " << k << " point " << i << path;
-    deepest = std::max(deepest, h.pd[i]);
-    const Vec3d on_a = h.pt[i] + 0.5 * h.pd[i] * h.n, on_b = h.pt[i] - 0.5 * h.pd[i] * h.n;
-    EXPECT_LE(std::fabs(cyl_sd(q.a, on_a)), ptol) << what << " lane " << k << " point " << i << path;
-    EXPECT_LE(std::fabs(cyl_sd(q.b, on_b)), ptol) << what << " lane " << k << " point " << i << path;
-  }
-  EXPECT_GE(deepest, h.depth - tol) << what << " lane " << k << ": no point carries the depth" << path;
-}
-
-/// Checks (a)-(e) and the translation check for every lane of qs (already rounded).
+/// The pair for test::check_lanes: the references above and the distance of the moved pair
+/// for the translation check.
 void check_all(const std::vector<Query>& qs, const char* what, Stats* out_stats = nullptr) {
-  SCOPED_TRACE(what);
-  const auto simd = run(qs, KernelPath::kSimd), scal = run(qs, KernelPath::kScalar);
-  Stats st;
-  for (size_t k = 0; k < qs.size(); ++k) {
-    const Query& q = qs[k];
-    const Ref f = reference(q);
-    const double L = size_of(q), tol = kRel * L, ptol = tol + 4 * coord_ulp(q);
-    ++st.lanes;
-    // (a)-(d) on one path; an ASSERT ends that path's checks of the lane
-    auto check_path = [&](const test::PairResult& h, bool is_simd) {
-      const char* path = is_simd ? " simd" : " scalar";
-      ASSERT_LE(h.count, 4u) << what << " lane " << k << path;
-      if (std::fabs(f.depth) <= tol) return;
-      ASSERT_EQ(h.count > 0, f.depth > 0) << what << " lane " << k << " depth_ref " << f.depth << " got "
-                                          << (h.count > 0 ? h.depth : 0.0) << path;
-      if (f.depth <= 0) return;
-      if (is_simd) {
-        ++st.hits;
-        ++st.counts[h.count];
-      }
-      const double dd = std::fabs(h.depth - f.depth);
-      st.worst_depth = std::max(st.worst_depth, dd / L);
-      EXPECT_LE(dd, tol) << what << " lane " << k << " depth " << h.depth << " ref " << f.depth << path;
-      ASSERT_TRUE(h.n.allFinite()) << what << " lane " << k << path;
-      EXPECT_NEAR(h.n.norm(), 1.0, 1e-6) << what << " lane " << k << path;
-      // (c) as good a separating direction as the reference's, and the same where unique
-      EXPECT_LE(overlap_along(q, h.n), f.depth + tol) << what << " lane " << k << path;
-      if (f.unique) {
-        const double ang = angle(h.n, f.n);
-        if (is_simd) ++st.normals_checked, st.worst_angle = std::max(st.worst_angle, ang);
-        EXPECT_LE(ang, kAngleTol) << what << " lane " << k << " n " << h.n.transpose() << " ref "
-                                  << f.n.transpose() << path;
-      }
-      check_points(q, h, tol, ptol, what, k, path);
-    };
-    check_path(simd[k], true);
-    check_path(scal[k], false);
-    // (e) the paths give the same bytes (the same IEEE operations, no contraction)
-    EXPECT_TRUE(same_bytes(simd[k], scal[k]))
-        << what << " lane " << k << ": the SIMD and scalar paths differ";
-    // the translation check, by the solid minimum alone
-    const test::PairResult& h = simd[k];
-    if (h.count > 0 && h.depth > 20 * tol) {
-      const double d = 0.05 * h.depth;
-      const double apart = solid_minimum(q, (h.depth + d) * h.n);
-      EXPECT_GE(apart, d - 2 * tol) << what << " lane " << k << ": moved by n (depth + d) not apart by d";
-      const double meets = solid_minimum(q, (h.depth - d) * h.n);
-      EXPECT_LT(meets, 0.0) << what << " lane " << k << ": moved by n (depth - d) already apart";
-    }
-  }
+  static const test::PairModel<Query> model{
+      .rel = kRel,
+      .carries = test::Carries::kDeepestWithinTol,
+      .reference = reference,
+      .size = size_of,
+      .coord_ulp = coord_ulp,
+      .overlap = overlap_along,
+      .sd_a = [](const Query& q, const Vec3d& x) { return cyl_sd(q.a, x); },
+      .sd_b = [](const Query& q, const Vec3d& x) { return cyl_sd(q.b, x); },
+      .apart = [](const Query& q, const Vec3d& shift) { return solid_minimum(q, shift); }};
+  const Stats st =
+      test::check_lanes(model, qs, run(qs, KernelPath::kSimd), run(qs, KernelPath::kScalar), what);
   if (out_stats != nullptr) *out_stats = st;
-  std::printf(
-      "  %-28s lanes %4d hits %4d points 1/2/3/4 %d/%d/%d/%d normals %4d | worst |depth-ref| %.2g L, "
-      "angle %.2g rad\n",
-      what, st.lanes, st.hits, st.counts[1], st.counts[2], st.counts[3], st.counts[4], st.normals_checked,
-      st.worst_depth, st.worst_angle);
 }
 
 // --- inputs -----------------------------------------------------------------------------------
-
-Vec3d random_unit(std::mt19937& g) {
-  std::normal_distribution<double> d;
-  for (;;) {
-    const Vec3d v(d(g), d(g), d(g));
-    if (v.norm() > 1e-3) return v.normalized();
-  }
-}
-
-Mat3d columns(const Vec3d& a, const Vec3d& b, const Vec3d& c) {
-  Mat3d m;
-  m.col(0) = a, m.col(1) = b, m.col(2) = c;
-  return m;
-}
-
-Mat3d rot(double a, const Vec3d& axis) {
-  return Eigen::AngleAxisd(a, axis.normalized()).toRotationMatrix();
-}
-
-/// A rotation with column 2 = u (unit), turned by `spin` about it.
-Mat3d frame_of(const Vec3d& u, double spin) {
-  const Vec3d x = rot(spin, u) * u.unitOrthogonal();
-  return columns(x, u.cross(x), u);
-}
-
-Vec3d radial(double a) {
-  return {std::cos(a), std::sin(a), 0.0};
-}
-Vec3d tangential(double a) {
-  return {-std::sin(a), std::cos(a), 0.0};
-}
 
 Cyl random_cyl(std::mt19937& g, double size) {
   std::uniform_real_distribution<double> uni(0, 1);
@@ -469,7 +310,7 @@ Query random_query(std::mt19937& g, double size, double offset, double spread) {
   q.b.p = Vec3d(offset, -offset, 0.5 * offset) + size * Vec3d(uni(g) - 0.5, uni(g) - 0.5, uni(g) - 0.5);
   q.a = random_cyl(g, size);
   const double reach = std::hypot(q.a.r, q.a.h) + std::hypot(q.b.r, q.b.h);
-  q.a.p = q.b.p + spread * reach * uni(g) * random_unit(g);
+  q.a.p = q.b.p + spread * reach * uni(g) * test::random_unit_vector(g);
   return rounded(q);
 }
 
@@ -670,10 +511,6 @@ void disk_overlap(double r1, double r2, double D, double* area, double* diameter
 
 // ---------------------------------------------------------------------------------------------
 
-TEST(CylinderCylinder, RegisteredForTheBucket) {
-  EXPECT_EQ(pair_kernel(kLeafCylinder, kLeafCylinder), &collide_cylinder_cylinder);
-}
-
 /// The references against closed forms: point distances; the solid minimum of pairs
 /// apart (caps, sides, crossed sides, coplanar rims, rims in perpendicular planes) and of
 /// one inside the other; the full reference on those and on meeting pairs (cap on cap,
@@ -764,7 +601,7 @@ TEST(CylinderCylinder, ReferenceMatchesClosedForms) {
     Vec3d x;
     const double d = solid_minimum(w, Vec3d::Zero(), &x);
     if (d <= 1e-3) continue;
-    const nref::PairResult s = nref::solve_pair(shape_of(w.a), shape_of(w.b), {}, dense_options());
+    const nref::PairResult s = nref::solve_pair(shape_of(w.a), shape_of(w.b), {}, nref::dense_options());
     // (the float-rounded rotations are orthonormal to ~1e-8: the point distances read
     // all of R, nref's cylinder only the axis)
     EXPECT_NEAR(s.s, -d, 1e-7) << i;
@@ -787,9 +624,7 @@ TEST_P(CylinderCylinderScales, RandomPosesAgainstReference) {
   EXPECT_GT(st.normals_checked, st.hits / 2);
 }
 
-INSTANTIATE_TEST_SUITE_P(Scales, CylinderCylinderScales,
-                         ::testing::Values(std::make_tuple(1.0, 0.0), std::make_tuple(1e-4, 0.0),
-                                           std::make_tuple(1e4, 0.0), std::make_tuple(1.0, 1e5)));
+INSTANTIATE_TEST_SUITE_P(Scales, CylinderCylinderScales, ::testing::ValuesIn(test::kernel_scales()));
 
 /// Deep pairs: coincident centres (any axes), one wholly inside the other (both ways),
 /// a long thin one through the middle of a fat one (both ways).
@@ -1099,21 +934,10 @@ TEST(CylinderCylinder, Touching) {
       EXPECT_EQ(run({swapped(q)}, path)[0].count, 0u) << cs.what;
     }
   std::mt19937 g(43);
-  std::vector<Query> qs;
-  for (int i = 0; i < 10 * lanes(40) && static_cast<int>(qs.size()) < lanes(40); ++i) {
-    Query q = random_query(g, 1.0, 0.0, 0.5);
-    const Ref f = reference(q);
-    if (f.depth <= 1e-3) continue;
-    q.b.p = test::round_to_float(Vec3d(q.b.p + f.depth * f.n));
-    qs.push_back(q);
-  }
-  const auto res = run(qs, KernelPath::kSimd);
-  for (size_t k = 0; k < qs.size(); ++k) {
-    const double tol = 4 * kRel * size_of(qs[k]);
-    if (res[k].count > 0) {
-      EXPECT_LE(res[k].depth, tol) << k;
-    }
-  }
+  test::expect_touching_after_push(
+      g, lanes(40), 10 * lanes(40), [](std::mt19937& gg) { return random_query(gg, 1.0, 0.0, 0.5); },
+      reference, [](Query& q, const Vec3d& s) { q.b.p = test::round_to_float(Vec3d(q.b.p + s)); },
+      [](const std::vector<Query>& qs) { return run(qs, KernelPath::kSimd); }, size_of, kRel);
 }
 
 /// Needles and pancakes (1e-4 proportions) of either cylinder or both: radius 1e-4 of
@@ -1145,7 +969,7 @@ TEST(CylinderCylinder, NeedlesAndPancakes) {
         break;  // two disks
     }
     const double reach = std::hypot(q.a.r, q.a.h) + std::hypot(q.b.r, q.b.h);
-    q.a.p = q.b.p + 0.3 * reach * random_unit(g);
+    q.a.p = q.b.p + 0.3 * reach * test::random_unit_vector(g);
     qs.push_back(rounded(q));
   }
   Stats st;
@@ -1177,8 +1001,8 @@ TEST(CylinderCylinder, CoinsWithTheMostRimBracketsFillABucket) {
   check_all(qs, "coins, 6 brackets per rim pair");
   const auto simd = run(qs, KernelPath::kSimd), scal = run(qs, KernelPath::kScalar);
   for (size_t k = 1; k < qs.size(); ++k) {
-    EXPECT_TRUE(same_bytes(simd[k], simd[0])) << "lane " << k;
-    EXPECT_TRUE(same_bytes(scal[k], scal[0])) << "lane " << k;
+    EXPECT_TRUE(test::same_bytes(simd[k], simd[0])) << "lane " << k;
+    EXPECT_TRUE(test::same_bytes(scal[k], scal[0])) << "lane " << k;
   }
 }
 
@@ -1193,7 +1017,7 @@ TEST(CylinderCylinder, Symmetries) {
     const Query q = random_query(g, 1.0, 0.0, 0.7);
     base.push_back(q);
     const Mat3d turn = test::random_rotation(g);
-    const Vec3d move = random_unit(g);
+    const Vec3d move = test::random_unit_vector(g);
     Query t = q;
     for (Cyl* c : {&t.a, &t.b}) {
       c->p = turn * c->p + move;
@@ -1234,76 +1058,6 @@ TEST(CylinderCylinder, Symmetries) {
     }
   }
   EXPECT_GT(compared, static_cast<int>(base.size()) / 4);
-}
-
-/// Any partition of a bucket's range gives the same bytes, nothing outside the range is
-/// written (the output lanes start poisoned: count 0xff, NaN floats), and a lane's bytes
-/// do not depend on which lanes share its block (a shuffled bucket).
-TEST(CylinderCylinder, RangePartitionsAndTail) {
-  std::mt19937 g(61);
-  const std::vector<Query> qs = random_queries(g, 37, 1.0, 0.0);
-  for (KernelPath path : {KernelPath::kSimd, KernelPath::kScalar}) {
-    test::ManifoldLanes all(37);
-    const auto whole = run(qs, path, nullptr, 0, 37, &all);
-    int hits = 0;
-    for (uint32_t k = 0; k < 37; ++k) hits += all.count[k] > 0 && all.count[k] <= 4;
-    EXPECT_GT(hits, 5);
-    for (uint32_t cut : {1u, 3u, 8u, 11u, 36u}) {
-      test::ManifoldLanes lo(37), hi(37);
-      run(qs, path, nullptr, 0, cut, &lo);
-      run(qs, path, nullptr, cut, 37, &hi);
-      for (uint32_t k = 0; k < 37; ++k) {
-        const test::ManifoldLanes& m = k < cut ? lo : hi;
-        const test::ManifoldLanes& other = k < cut ? hi : lo;
-        EXPECT_EQ(other.count[k], 0xff) << "lane " << k << " written outside its range";
-        EXPECT_TRUE(std::isnan(other.depth[k])) << "lane " << k << " written outside its range";
-        for (int i = 0; i < 3; ++i) EXPECT_TRUE(std::isnan(other.n[i][k])) << "lane " << k;
-        for (int j = 0; j < 4; ++j) {
-          EXPECT_TRUE(std::isnan(other.pd[j][k])) << "lane " << k;
-          for (int i = 0; i < 3; ++i) EXPECT_TRUE(std::isnan(other.pt[j][i][k])) << "lane " << k;
-        }
-        ASSERT_EQ(m.count[k], all.count[k]) << cut << " " << k;
-        if (m.count[k] == 0) continue;
-        EXPECT_EQ(std::memcmp(&m.depth[k], &all.depth[k], 4), 0) << k;
-        for (int i = 0; i < 3; ++i) EXPECT_EQ(std::memcmp(&m.n[i][k], &all.n[i][k], 4), 0) << k;
-        for (uint32_t j = 0; j < m.count[k]; ++j) {
-          EXPECT_EQ(std::memcmp(&m.pd[j][k], &all.pd[j][k], 4), 0) << k;
-          for (int i = 0; i < 3; ++i) EXPECT_EQ(std::memcmp(&m.pt[j][i][k], &all.pt[j][i][k], 4), 0) << k;
-        }
-      }
-    }
-    // shuffled: every lane in other company
-    std::vector<uint32_t> perm(qs.size());
-    std::iota(perm.begin(), perm.end(), 0u);
-    std::shuffle(perm.begin(), perm.end(), g);
-    std::vector<Query> sh;
-    for (uint32_t i : perm) sh.push_back(qs[i]);
-    const auto shuffled = run(sh, path);
-    for (size_t i = 0; i < perm.size(); ++i)
-      EXPECT_TRUE(same_bytes(shuffled[i], whole[perm[i]])) << "lane " << perm[i] << " moved to " << i;
-  }
-}
-
-/// The general GJK / EPA path on the same lanes: same hits away from touching (1e-3 L),
-/// depth within 1e-3 L, normal within 0.02 rad where unique.
-TEST(CylinderCylinder, AgreesWithGjkEpa) {
-  std::mt19937 g(67);
-  const std::vector<Query> qs = random_queries(g, lanes(200), 1.0, 0.0);
-  const auto mine = run(qs, KernelPath::kSimd), gjk = run(qs, KernelPath::kSimd, &gjk_kernel);
-  int compared = 0;
-  for (size_t k = 0; k < qs.size(); ++k) {
-    const Ref f = reference(qs[k]);
-    const double L = size_of(qs[k]);
-    if (std::fabs(f.depth) < 1e-3 * L) continue;
-    ASSERT_EQ(mine[k].count > 0, gjk[k].count > 0) << k << " depth_ref " << f.depth;
-    if (mine[k].count == 0) continue;
-    ++compared;
-    EXPECT_NEAR(mine[k].depth, gjk[k].depth, 1e-3 * L) << k;
-    if (f.unique) {
-      EXPECT_LT(angle(mine[k].n, gjk[k].n), 0.02) << k;
-    }
-  }
-  EXPECT_GT(compared, static_cast<int>(qs.size()) / 5);
 }
 
 }  // namespace

@@ -1,6 +1,5 @@
 // collide_cylinder_ellipsoid (kernels/narrowphase/pairs/cylinder/cylinder_ellipsoid.cpp) on both paths
-// against independent double-precision references, and against the general GJK / EPA
-// path (collide_gjk_epa) on the same lanes.
+// against independent double-precision references.
 //
 // References (double, the inputs rounded to float as the kernel sees them; nothing of
 // the kernel's candidate scheme):
@@ -70,10 +69,11 @@
 // ellipsoid: several local minima along the rim); spheres (equal radii) against the
 // closed form rho - sd_A(centre); symmetries (a rigid motion of the whole pair, the
 // cylinder's axis reversed, the ellipsoid's axes permuted / negated with its radii);
-// range partitions and shuffled buckets (same bytes, nothing written outside the
-// range); NaN-free outputs on degenerate but valid inputs; agreement with GJK / EPA
-// (1e-3 L). A failing lane prints itself as a C++ literal (lane(...), below). Lane
-// counts scale with IMPACT_TEST_INTENSITY; a sanitizer build runs a quarter of them.
+// range partitions and shuffled buckets of ring and thin lanes (same bytes);
+// NaN-free outputs on degenerate but valid inputs. Registration, the general
+// partitions and the agreement with GJK / EPA: contract_test.cpp. A failing lane prints itself as a C++
+// literal (lane(...), below). Lane counts scale with IMPACT_TEST_INTENSITY; a sanitizer build runs a quarter
+// of them.
 #include <gtest/gtest.h>
 
 #include <Eigen/Core>
@@ -93,9 +93,12 @@
 
 #include "kernels/narrowphase/pair_kernels.h"
 #include "support/ellipsoid_reference.h"
+#include "support/kernel_checks.h"
+#include "support/lane_checks.h"
 #include "support/leaf_lanes.h"
 #include "support/narrow_reference.h"
 #include "support/random_input.h"
+#include "support/shape_geometry.h"
 #include "support/test_support.h"
 
 namespace impact::kernels {
@@ -104,6 +107,8 @@ namespace {
 using Vec3d = Eigen::Vector3d;
 using Mat3d = Eigen::Matrix3d;
 namespace nref = test::nref;
+using test::angle, test::columns, test::rot, test::radial, test::tangential, test::frame_of, test::v3,
+    test::ev;
 
 constexpr double kRel = 1e-5;       // depth tolerance, of L
 constexpr double kAngleTol = 1e-3;  // rad, where the minimum is unique and conditioned
@@ -111,10 +116,6 @@ constexpr double kAngleTol = 1e-3;  // rad, where the minimum is unique and cond
 /// the unit ball's chord.
 constexpr int kGoldenIters = 40;
 constexpr double kInf = std::numeric_limits<double>::infinity();
-
-double angle(const Vec3d& a, const Vec3d& b) {
-  return std::atan2(a.cross(b).norm(), a.dot(b));
-}
 
 /// Lanes per scenario: base scaled by IMPACT_TEST_INTENSITY; under the sanitizers a
 /// quarter (at least 2): the double references dominate the run time there.
@@ -208,67 +209,35 @@ std::string literal(const Query& q) {
 
 // --- running the kernel -----------------------------------------------------------------------
 
-/// A leaf as test::LeafLanes reads it (cylinder: e0 = radius, e1 = half length).
-struct LeafOf {
-  Vec3d p;
-  Mat3d R;
-  Vec3d e;
-  uint32_t hull = 0;
-};
-
-LeafOf leaf_of(const Cyl& c) {
-  return {c.p, c.R, Vec3d(c.r, c.h, 0.0)};
+/// The leaves as the kernel reads them (cylinder: e0 = radius, e1 = half length).
+test::Leaf leaf_of(const Cyl& c) {
+  return test::posed_leaf(kLeafCylinder, c.p, c.R, Vec3d(c.r, c.h, 0.0));
 }
-LeafOf leaf_of(const Ell& s) {
-  return {s.p, s.R, s.e};
+test::Leaf leaf_of(const Ell& s) {
+  return test::posed_leaf(kLeafEllipsoid, s.p, s.R, s.e);
 }
 
-/// Runs `kern` (the kernel under test unless given) on lanes [begin, end) of one bucket.
+/// Runs `kern` (the kernel under test unless given) on lanes [begin, end) of one bucket;
+/// `keep`, if given, receives the output lanes.
 std::vector<test::PairResult> run(const std::vector<Query>& qs, KernelPath path, PairKernel kern = nullptr,
                                   uint32_t begin = 0, uint32_t end = ~0u,
                                   test::ManifoldLanes* keep = nullptr) {
-  if (kern == nullptr) kern = &collide_cylinder_ellipsoid;
-  const uint32_t n = static_cast<uint32_t>(qs.size());
-  end = std::min(end, n);
-  test::LeafLanes la, lb;
-  for (const Query& q : qs) la.push(leaf_of(q.a)), lb.push(leaf_of(q.b));
-  test::ManifoldLanes o(n);
-  NarrowConfig cfg;
-  cfg.path = path;
-  kern(la.soa(), lb.soa(), o.view(), Range{begin, end}, cfg);
-  std::vector<test::PairResult> out(n);
-  for (uint32_t k = begin; k < end; ++k) out[k] = o.result(k);
-  if (keep != nullptr) *keep = o;
-  return out;
-}
-
-void gjk_kernel(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out, Range r,
-                const NarrowConfig& cfg) {
-  collide_gjk_epa(a, b, out, r, cfg, kLeafCylinder, kLeafEllipsoid);
+  return test::run_queries(
+      kern != nullptr ? kern : &collide_cylinder_ellipsoid, qs, path,
+      [](const Query& q) {
+        return std::pair{leaf_of(q.a), leaf_of(q.b)};
+      },
+      begin, end, keep);
 }
 
 // --- references -------------------------------------------------------------------------------
 
-/// Signed distance of l (in the cylinder's frame) to the solid cylinder of radius r and
-/// half length h about the z axis (< 0 inside).
-double local_sd(const Vec3d& l, double r, double h) {
-  const double dr = std::sqrt(l.x() * l.x() + l.y() * l.y()) - r, dz = std::fabs(l.z()) - h;
-  if (dr <= 0 && dz <= 0) return std::max(dr, dz);
-  const double er = std::max(dr, 0.0), ez = std::max(dz, 0.0);
-  return std::sqrt(er * er + ez * ez);
-}
-
-/// Signed distance of x to the solid cylinder c (< 0 inside).
 double cyl_sd(const Cyl& c, const Vec3d& x) {
-  return local_sd(c.R.transpose() * (x - c.p), c.r, c.h);
+  return test::cylinder_sd(c.p, c.R, c.r, c.h, x);
 }
 
-/// The closest point of the solid cylinder c to an outside point x.
 Vec3d cyl_closest(const Cyl& c, const Vec3d& x) {
-  const Vec3d l = c.R.transpose() * (x - c.p);
-  const double rho = std::hypot(l.x(), l.y());
-  const double s = rho > c.r ? c.r / rho : 1.0;
-  return c.p + c.R * Vec3d(l.x() * s, l.y() * s, std::clamp(l.z(), -c.h, c.h));
+  return test::cylinder_closest(c.p, c.R, c.r, c.h, x);
 }
 
 /// Signed distance of x to the ellipsoid's surface (< 0 inside), by bisection of the
@@ -291,8 +260,8 @@ double solid_minimum(const Query& q, const Vec3d& shift = Vec3d::Zero(), Vec3d* 
   auto over_v = [&](const Vec3d& base, double chord, double u, double* v_at) {
     const double w = std::sqrt(std::max(0.0, chord * chord - u * u));
     const Vec3d bu = base + u * mu;
-    return test::golden_section_min([&](double v) { return local_sd(bu + v * mv, a.r, a.h); }, -w, w,
-                                    kGoldenIters, v_at);
+    return test::golden_section_min([&](double v) { return test::cylinder_sd_local(bu + v * mv, a.r, a.h); },
+                                    -w, w, kGoldenIters, v_at);
   };
   auto over_uv = [&](double t, double* u_at, double* v_at) {
     const Vec3d base = o + t * mt;
@@ -317,30 +286,12 @@ double solid_minimum(const Query& q, const Vec3d& shift = Vec3d::Zero(), Vec3d* 
   return best;
 }
 
-nref::V3 v3(const Vec3d& v) {
-  return {v.x(), v.y(), v.z()};
-}
-Vec3d ev(const nref::V3& v) {
-  return {v.x, v.y, v.z};
-}
-
 nref::Shape cyl_shape(const Cyl& c) {
-  nref::Shape s;
-  s.type = kLeafCylinder;
-  s.p = v3(c.p);
-  for (int i = 0; i < 9; ++i) s.r[i] = c.R(i / 3, i % 3);
-  s.e[0] = c.r;
-  s.e[1] = c.h;
-  return s;
+  return test::posed_shape(kLeafCylinder, c.p, c.R, Vec3d(c.r, c.h, 0));
 }
 
 nref::Shape ell_shape(const Ell& b) {
-  nref::Shape s;
-  s.type = kLeafEllipsoid;
-  s.p = v3(b.p);
-  for (int i = 0; i < 9; ++i) s.r[i] = b.R(i / 3, i % 3);
-  for (int i = 0; i < 3; ++i) s.e[i] = b.e[i];
-  return s;
+  return test::posed_shape(kLeafEllipsoid, b.p, b.R, b.e);
 }
 
 /// The support overlap of A and B along n.
@@ -516,23 +467,6 @@ Ref reference(const Query& q, bool want_unique = true) {
 
 // --- the per-lane check -----------------------------------------------------------------------
 
-struct Stats {
-  int lanes = 0, hits = 0, normals_checked = 0, improved = 0;
-  double worst_depth = 0, worst_angle = 0;
-  size_t worst_depth_lane = 0, worst_angle_lane = 0;
-};
-
-bool same_bytes(const test::PairResult& x, const test::PairResult& y) {
-  bool same = x.count == y.count;
-  if (same && x.count > 0) {
-    same = std::memcmp(&x.depth, &y.depth, sizeof x.depth) == 0 && std::memcmp(&x.n, &y.n, sizeof x.n) == 0;
-    for (uint32_t i = 0; i < x.count && i < kMaxManifoldPoints; ++i)
-      same = same && std::memcmp(&x.pt[i], &y.pt[i], sizeof x.pt[i]) == 0 &&
-             std::memcmp(&x.pd[i], &y.pd[i], sizeof x.pd[i]) == 0;
-  }
-  return same;
-}
-
 /// A lane's output, for failure messages (%.9g: the floats exactly).
 std::string describe(const test::PairResult& r) {
   char buf[256];
@@ -545,131 +479,62 @@ std::string describe(const test::PairResult& r) {
 
 /// (d): point[0] -+ n depth/2 on B's and A's surfaces, the support planes along n
 /// depth/2 either side, pdepth == depth.
-void check_point(const Query& q, const test::PairResult& h, double ptol, const char* what, size_t k,
-                 const char* path) {
-  ASSERT_TRUE(h.pt[0].allFinite()) << what << " lane " << k << path;
-  EXPECT_EQ(h.pd[0], h.depth) << what << " lane " << k << path;
+void check_point(const Query& q, const test::LaneRef&, const test::PairResult& h, double /*tol*/, double ptol,
+                 const std::string& where) {
+  ASSERT_TRUE(h.pt[0].allFinite()) << where;
+  EXPECT_EQ(h.pd[0], h.depth) << where;
   const Vec3d n = h.n.normalized();
   const Vec3d on_a = h.pt[0] + 0.5 * h.depth * n, on_b = h.pt[0] - 0.5 * h.depth * n;
-  EXPECT_LE(std::fabs(ell_sd(q.b, on_b)), ptol)
-      << what << " lane " << k << ": point - n depth/2 off B" << path;
+  EXPECT_LE(std::fabs(ell_sd(q.b, on_b)), ptol) << where << ": point - n depth/2 off B";
   EXPECT_LE(std::fabs(cyl_sd(q.a, on_a)), ptol + 1e-6 * curvature_radius(q.b))
-      << what << " lane " << k << ": point + n depth/2 off A" << path;
+      << where << ": point + n depth/2 off A";
   const double ha = nref::support(cyl_shape(q.a), v3(n)), hb = nref::support(ell_shape(q.b), v3(-n));
-  EXPECT_NEAR(n.dot(on_a), ha, ptol) << what << " lane " << k << ": not on A's support plane" << path;
-  EXPECT_NEAR(n.dot(on_b), -hb, ptol) << what << " lane " << k << ": not on B's support plane" << path;
+  EXPECT_NEAR(n.dot(on_a), ha, ptol) << where << ": not on A's support plane";
+  EXPECT_NEAR(n.dot(on_b), -hb, ptol) << where << ": not on B's support plane";
 }
 
 /// Checks (a)-(e) and the translation check for every lane of qs (already rounded).
+using Stats = test::LaneStats;
+
+/// The pair for test::check_lanes: the references above, a kernel normal scoring lower in
+/// double than the reference's minimum refining the reference from there (the sampling
+/// missed that basin; the kernel's depth must match it), one point on both support planes
+/// (check_point), and the solid minimum for the translation check (bounded on both sides).
 void check_all(const std::vector<Query>& qs, const char* what, Stats* out_stats = nullptr) {
-  SCOPED_TRACE(what);
-  const auto simd = run(qs, KernelPath::kSimd), scal = run(qs, KernelPath::kScalar);
-  Stats st;
-  for (size_t k = 0; k < qs.size(); ++k) {
-    const Query& q = qs[k];
-    SCOPED_TRACE("lane " + std::to_string(k) + " as C++: " + literal(q));
-    Ref f = reference(q);
-    const double L = size_of(q), tol = kRel * L, ptol = tol + 4 * coord_ulp(q);
-    ++st.lanes;
-    // A kernel normal that scores lower in double than the reference's minimum: the
-    // sampling missed that basin; refine from there (the kernel's depth must match it).
-    for (const auto* h : {&simd[k], &scal[k]}) {
-      if (f.apart || h->count == 0 || !h->n.allFinite() || !(h->n.norm() > 0.5)) continue;
-      const double ok = overlap_along(q, h->n);
-      if (ok < f.depth - 1e-9 * L) {
-        const nref::Shape sa = cyl_shape(q.a), sb = ell_shape(q.b);
-        const auto r = nref::detail::refine([&](const nref::V3& n) { return nref::overlap(sa, sb, n); },
-                                            v3(h->n.normalized()), ok, 1e-3);
-        f.depth = r.first, f.n = ev(r.second), f.unique = false;
-        ++st.improved;
-      }
-    }
-    // (a)-(d) on one path; an ASSERT ends that path's checks of the lane
-    auto check_path = [&](const test::PairResult& h, bool is_simd) {
-      const char* path = is_simd ? " simd" : " scalar";
-      ASSERT_LE(h.count, 1u) << what << " lane " << k << path;
-      if (std::fabs(f.depth) <= tol) return;
-      ASSERT_EQ(h.count > 0, f.depth > 0) << what << " lane " << k << " depth_ref " << f.depth << " got "
-                                          << (h.count > 0 ? h.depth : 0.0) << path;
-      if (f.depth <= 0) return;
-      if (is_simd) ++st.hits;
-      const double dd = std::fabs(h.depth - f.depth);
-      if (dd / L > st.worst_depth) st.worst_depth = dd / L, st.worst_depth_lane = k;
-      EXPECT_LE(dd, tol) << what << " lane " << k << " depth " << h.depth << " ref " << f.depth << " ("
-                         << (h.depth - f.depth) / L << " L)" << path;
-      ASSERT_TRUE(h.n.allFinite()) << what << " lane " << k << path;
-      EXPECT_NEAR(h.n.norm(), 1.0, 1e-6) << what << " lane " << k << path;
-      // (c) as good a separating direction as the reference's, and the same where unique
-      EXPECT_LE(overlap_along(q, h.n), f.depth + tol) << what << " lane " << k << path;
-      if (f.unique) {
-        const double ang = angle(h.n, f.n);
-        if (is_simd) ++st.normals_checked;
-        if (ang > st.worst_angle) st.worst_angle = ang, st.worst_angle_lane = k;
-        EXPECT_LE(ang, kAngleTol) << what << " lane " << k << " n " << h.n.transpose() << " ref "
-                                  << f.n.transpose() << path;
-      }
-      check_point(q, h, ptol, what, k, path);
-    };
-    check_path(simd[k], true);
-    check_path(scal[k], false);
-    // (e) the paths give the same bytes
-    EXPECT_TRUE(same_bytes(simd[k], scal[k]))
-        << what << " lane " << k << ": the SIMD and scalar paths differ\n simd   " << describe(simd[k])
-        << "\n scalar " << describe(scal[k]);
-    // the translation check, by the solid minimum alone
-    const test::PairResult& h = simd[k];
-    if (h.count == 1 && h.depth > 20 * tol && h.n.allFinite()) {
-      const double d = 0.05 * h.depth;
-      const Vec3d n = h.n.normalized();
-      const double apart = solid_minimum(q, (h.depth + d) * n);
-      EXPECT_GE(apart, d - 2 * tol) << what << " lane " << k << ": moved by n (depth + d) not apart by d";
-      EXPECT_LE(apart, d + 2 * tol) << what << " lane " << k
-                                    << ": moved by n (depth + d) apart by more than d";
-      const double meets = solid_minimum(q, (h.depth - d) * n);
-      EXPECT_LT(meets, 0.0) << what << " lane " << k << ": moved by n (depth - d) already apart";
-    }
-  }
+  static const test::PairModel<Query> model{
+      .rel = kRel,
+      .max_points = 1,
+      .reference =
+          [](const Query& q) {
+            const Ref f = reference(q);
+            test::LaneRef r{f.depth, f.n, f.unique, kAngleTol, false};
+            r.apart = f.apart;
+            return r;
+          },
+      .size = size_of,
+      .coord_ulp = coord_ulp,
+      .overlap = overlap_along,
+      .apart = [](const Query& q, const Vec3d& shift) { return solid_minimum(q, shift); },
+      .points = check_point,
+      .improve =
+          [](const Query& q, test::LaneRef& f, const test::PairResult& h, Stats& st) {
+            if (f.apart || h.count == 0 || !h.n.allFinite() || !(h.n.norm() > 0.5)) return;
+            const double ok = overlap_along(q, h.n);
+            if (!(ok < f.depth - 1e-9 * size_of(q))) return;
+            const nref::Shape sa = cyl_shape(q.a), sb = ell_shape(q.b);
+            const auto r = nref::detail::refine([&](const nref::V3& n) { return nref::overlap(sa, sb, n); },
+                                                v3(h.n.normalized()), ok, 1e-3);
+            f.depth = r.first, f.n = ev(r.second), f.unique = false;
+            ++st.improved;
+          },
+      .literal = literal,
+      .apart_at_most_d = true};
+  const Stats st =
+      test::check_lanes(model, qs, run(qs, KernelPath::kSimd), run(qs, KernelPath::kScalar), what);
   if (out_stats != nullptr) *out_stats = st;
-  std::printf(
-      "  %-24s lanes %4d hits %4d normals %4d ref improved %d | worst |depth-ref| %.2g L (lane %zu), angle "
-      "%.2g "
-      "rad (lane %zu)\n",
-      what, st.lanes, st.hits, st.normals_checked, st.improved, st.worst_depth, st.worst_depth_lane,
-      st.worst_angle, st.worst_angle_lane);
 }
 
 // --- inputs -----------------------------------------------------------------------------------
-
-Vec3d random_unit(std::mt19937& g) {
-  std::normal_distribution<double> d;
-  for (;;) {
-    const Vec3d v(d(g), d(g), d(g));
-    if (v.norm() > 1e-3) return v.normalized();
-  }
-}
-
-Mat3d columns(const Vec3d& a, const Vec3d& b, const Vec3d& c) {
-  Mat3d m;
-  m.col(0) = a, m.col(1) = b, m.col(2) = c;
-  return m;
-}
-
-Mat3d rot(double a, const Vec3d& axis) {
-  return Eigen::AngleAxisd(a, axis.normalized()).toRotationMatrix();
-}
-
-/// A rotation with column 2 = u (unit), turned by `spin` about it.
-Mat3d frame_of(const Vec3d& u, double spin) {
-  const Vec3d x = rot(spin, u) * u.unitOrthogonal();
-  return columns(x, u.cross(x), u);
-}
-
-Vec3d radial(double a) {
-  return {std::cos(a), std::sin(a), 0.0};
-}
-Vec3d tangential(double a) {
-  return {-std::sin(a), std::cos(a), 0.0};
-}
 
 /// Column 2 = +x: a rotation exact in float.
 Mat3d along_x() {
@@ -725,7 +590,7 @@ Query random_query(std::mt19937& g, double size, double offset, bool round = tru
   q.a = random_cyl(g, size);
   q.a.p = Vec3d(offset, -offset, 0.5 * offset) + size * Vec3d(uni(g) - 0.5, uni(g) - 0.5, uni(g) - 0.5);
   q.b = random_ell(g, size);
-  place(q, random_unit(g), 0.6 + 0.8 * uni(g));
+  place(q, test::random_unit_vector(g), 0.6 + 0.8 * uni(g));
   return round ? rounded(q) : q;
 }
 
@@ -801,7 +666,7 @@ Built build(Piece pa, std::mt19937& g, int i) {
       break;
   }
   const Vec3d e(mag(0.2, 1.0), mag(0.2, 1.0), mag(0.2, 1.0));
-  const Ell b = ellipsoid_at(xa - delta * n, -n, e, random_unit(g), M_PI * uni(g));
+  const Ell b = ellipsoid_at(xa - delta * n, -n, e, test::random_unit_vector(g), M_PI * uni(g));
   Built out;
   out.q = posed(g, ra, ha, b);
   out.delta = delta;
@@ -945,7 +810,7 @@ std::vector<Query> sphere_queries(std::mt19937& g, int n, bool round = true) {
     q.a.p = Vec3d(uni(g), uni(g), uni(g)) - Vec3d::Constant(0.5);
     q.b.R = test::random_rotation(g);
     q.b.e = Vec3d::Constant(0.1 + 0.9 * uni(g));
-    place(q, random_unit(g), (i % 4 == 0 ? 0.2 : 0.6) + 0.8 * uni(g));
+    place(q, test::random_unit_vector(g), (i % 4 == 0 ? 0.2 : 0.6) + 0.8 * uni(g));
     qs.push_back(round ? rounded(q) : q);
   }
   return qs;
@@ -994,7 +859,7 @@ std::vector<Query> thin_queries(std::mt19937& g, int n) {
     const int axis = static_cast<int>(g() % 3);
     if (needle_b) q.b.e = Vec3d::Constant(1e-4 * big), q.b.e[axis] = big;
     if (pancake_b) q.b.e = Vec3d::Constant(big), q.b.e[axis] = 1e-4 * big;
-    place(q, random_unit(g), 0.2 + uni(g));
+    place(q, test::random_unit_vector(g), 0.2 + uni(g));
     qs.push_back(rounded(q));
   }
   return qs;
@@ -1075,10 +940,6 @@ std::vector<Query> near_parallel_queries(std::mt19937& g, int reps) {
 }
 
 // ---------------------------------------------------------------------------------------------
-
-TEST(CylinderEllipsoid, RegisteredForTheBucket) {
-  EXPECT_EQ(pair_kernel(kLeafCylinder, kLeafEllipsoid), &collide_cylinder_ellipsoid);
-}
 
 /// The references against closed forms: point distances to the cylinder and the
 /// ellipsoid; the analytic lanes (solid minimum of the apart ones, the full reference of
@@ -1254,9 +1115,7 @@ TEST_P(CylinderEllipsoidScales, RandomPosesAgainstReference) {
   EXPECT_GT(st.normals_checked, st.hits / 2);
 }
 
-INSTANTIATE_TEST_SUITE_P(Scales, CylinderEllipsoidScales,
-                         ::testing::Values(std::make_tuple(1.0, 0.0), std::make_tuple(1e-4, 0.0),
-                                           std::make_tuple(1e4, 0.0), std::make_tuple(1.0, 1e5)));
+INSTANTIATE_TEST_SUITE_P(Scales, CylinderEllipsoidScales, ::testing::ValuesIn(test::kernel_scales()));
 
 /// Deep pairs: coincident centres, the ellipsoid inside the cylinder, the cylinder
 /// inside the ellipsoid, a long thin cylinder through a fat ellipsoid, a needle
@@ -1421,7 +1280,7 @@ TEST(CylinderEllipsoid, Symmetries) {
     const Query q = random_query(g, 1.0, 0.0);
     base.push_back(q);
     const Mat3d turn = test::random_rotation(g);
-    const Vec3d move = random_unit(g);
+    const Vec3d move = test::random_unit_vector(g);
     Query t = q;
     t.a.p = turn * q.a.p + move, t.a.R = turn * q.a.R;
     t.b.p = turn * q.b.p + move, t.b.R = turn * q.b.R;
@@ -1468,52 +1327,31 @@ TEST(CylinderEllipsoid, Symmetries) {
 /// Any partition of a bucket's range gives the same bytes, nothing outside the range is
 /// written (the output lanes start poisoned: count 0xff, NaN floats), and a lane's bytes
 /// do not depend on which lanes share its block (a shuffled bucket).
-TEST(CylinderEllipsoid, RangePartitionsAndTail) {
+/// The ring and thin lanes (the solve's rim pieces and its flattest valleys) among random
+/// ones: every split of the range and a shuffled bucket give each lane its bytes, and
+/// nothing is written outside the range (the table-wide check, contract_test.cpp, draws
+/// no rings).
+TEST(CylinderEllipsoid, RingAndThinLanesPartitionsAndShuffle) {
   std::mt19937 g(71);
   std::vector<Query> qs = random_queries(g, 25, 1.0, 0.0);
   for (const Query& q : thin_queries(g, 8)) qs.push_back(q);
   for (const Query& q : ring_queries(g, 8)) qs.push_back(q);
   const uint32_t n = static_cast<uint32_t>(qs.size());
   for (KernelPath path : {KernelPath::kSimd, KernelPath::kScalar}) {
-    test::ManifoldLanes all(n);
-    const auto whole = run(qs, path, nullptr, 0, n, &all);
     int hits = 0;
-    for (uint32_t k = 0; k < n; ++k) hits += all.count[k] == 1;
+    for (const test::PairResult& r : run(qs, path)) hits += r.count == 1;
     EXPECT_GT(hits, 5);
-    for (uint32_t cut : {1u, 3u, 8u, 11u, 16u, 23u, n - 1}) {
-      test::ManifoldLanes lo(n), hi(n);
-      run(qs, path, nullptr, 0, cut, &lo);
-      run(qs, path, nullptr, cut, n, &hi);
+    const auto run_range = [&](const std::vector<Query>& q, uint32_t begin, uint32_t end) {
+      test::ManifoldLanes o(n);
+      const auto r = run(q, path, nullptr, begin, end, &o);
       for (uint32_t k = 0; k < n; ++k) {
-        const test::ManifoldLanes& m = k < cut ? lo : hi;
-        const test::ManifoldLanes& other = k < cut ? hi : lo;
-        EXPECT_EQ(other.count[k], 0xff) << "lane " << k << " written outside its range";
-        EXPECT_TRUE(std::isnan(other.depth[k])) << "lane " << k << " written outside its range";
-        for (int i = 0; i < 3; ++i) EXPECT_TRUE(std::isnan(other.n[i][k])) << "lane " << k;
-        for (int j = 0; j < 4; ++j) {
-          EXPECT_TRUE(std::isnan(other.pd[j][k])) << "lane " << k;
-          for (int i = 0; i < 3; ++i) EXPECT_TRUE(std::isnan(other.pt[j][i][k])) << "lane " << k;
-        }
-        ASSERT_EQ(m.count[k], all.count[k]) << cut << " " << k << " as C++: " << literal(qs[k]);
-        if (m.count[k] == 0) continue;
-        EXPECT_EQ(std::memcmp(&m.depth[k], &all.depth[k], 4), 0) << k;
-        for (int i = 0; i < 3; ++i) EXPECT_EQ(std::memcmp(&m.n[i][k], &all.n[i][k], 4), 0) << k;
-        for (uint32_t j = 0; j < m.count[k] && j < 4; ++j) {
-          EXPECT_EQ(std::memcmp(&m.pd[j][k], &all.pd[j][k], 4), 0) << k;
-          for (int i = 0; i < 3; ++i) EXPECT_EQ(std::memcmp(&m.pt[j][i][k], &all.pt[j][i][k], 4), 0) << k;
+        if (k < begin || k >= end) {
+          EXPECT_TRUE(o.untouched(k)) << "lane " << k << " written outside its range";
         }
       }
-    }
-    // shuffled: every lane in other company
-    std::vector<uint32_t> perm(qs.size());
-    std::iota(perm.begin(), perm.end(), 0u);
-    std::shuffle(perm.begin(), perm.end(), g);
-    std::vector<Query> sh;
-    for (uint32_t i : perm) sh.push_back(qs[i]);
-    const auto shuffled = run(sh, path);
-    for (size_t i = 0; i < perm.size(); ++i)
-      EXPECT_TRUE(same_bytes(shuffled[i], whole[perm[i]]))
-          << "lane " << perm[i] << " moved to " << i << " as C++: " << literal(qs[perm[i]]);
+      return r;
+    };
+    test::expect_partition_invariant(qs, {1u, 3u, 8u, 11u, 16u, 23u, n - 1}, run_range, test::same_bytes, g);
   }
 }
 
@@ -1582,33 +1420,10 @@ TEST(CylinderEllipsoid, FiniteOutputsOnDegenerateInputs) {
       EXPECT_GT(r->depth, 0.0) << k;
       EXPECT_EQ(r->pd[0], r->depth) << k;
     }
-    EXPECT_TRUE(same_bytes(simd[k], scal[k])) << k << ": the SIMD and scalar paths differ\n simd   "
-                                              << describe(simd[k]) << "\n scalar " << describe(scal[k]);
+    EXPECT_TRUE(test::same_bytes(simd[k], scal[k])) << k << ": the SIMD and scalar paths differ\n simd   "
+                                                    << describe(simd[k]) << "\n scalar " << describe(scal[k]);
   }
   EXPECT_GT(hits, static_cast<int>(qs.size()) / 2);
-}
-
-/// The general GJK / EPA path on the same lanes: same hits away from touching (1e-3 L),
-/// depth within 1e-3 L, normal within 0.02 rad where unique.
-TEST(CylinderEllipsoid, AgreesWithGjkEpa) {
-  std::mt19937 g(79);
-  const std::vector<Query> qs = random_queries(g, lanes(240), 1.0, 0.0);
-  const auto mine = run(qs, KernelPath::kSimd), gjk = run(qs, KernelPath::kSimd, &gjk_kernel);
-  int compared = 0;
-  for (size_t k = 0; k < qs.size(); ++k) {
-    SCOPED_TRACE("lane " + std::to_string(k) + " as C++: " + literal(qs[k]));
-    const Ref f = reference(qs[k]);
-    const double L = size_of(qs[k]);
-    if (std::fabs(f.depth) < 1e-3 * L) continue;
-    ASSERT_EQ(mine[k].count > 0, gjk[k].count > 0) << k << " depth_ref " << f.depth;
-    if (mine[k].count == 0) continue;
-    ++compared;
-    EXPECT_NEAR(mine[k].depth, gjk[k].depth, 1e-3 * L) << k;
-    if (f.unique) {
-      EXPECT_LT(angle(mine[k].n, gjk[k].n), 0.02) << k;
-    }
-  }
-  EXPECT_GT(compared, static_cast<int>(qs.size()) / 5);
 }
 
 }  // namespace

@@ -1,6 +1,5 @@
 // collide_ellipsoid_ellipsoid (kernels/narrowphase/pairs/ellipsoid/ellipsoid_ellipsoid.cpp) on both paths
-// against an independent double-precision reference, and against the general GJK / EPA
-// path (collide_gjk_epa) on the same lanes.
+// against an independent double-precision reference.
 //
 // Reference (double, world frame): f(n) = sqrt(n^T M_A n) + sqrt(n^T M_B n) - n.d, M =
 // R diag(e^2) R^T, d = c_B - c_A; depth = min over unit n of f. Dense Fibonacci sampling
@@ -30,8 +29,9 @@
 // 1e-4) against each other and against round and random ellipsoids at random angles and
 // at exactly parallel / perpendicular axes; coincident centres; deep; near touching
 // (the reference's depth +-1e-3 L); spheres as ellipsoids (analytic sphere-sphere);
-// swapped order (depth kept, normal flipped); GJK / EPA agreement; every partition of a
-// range and a shuffled bucket give the same bytes per pair.
+// swapped order (depth kept, normal flipped).
+// Registration, range partitions, shuffled buckets and the agreement with GJK / EPA:
+// contract_test.cpp (every bucket of the table).
 #include <gtest/gtest.h>
 
 #include <Eigen/Core>
@@ -150,10 +150,6 @@ Output run(const std::vector<Query>& qs, KernelPath path, PairKernel kern, uint3
 }
 
 Output run(const std::vector<Query>& qs, KernelPath path) { return run(qs, path, &collide_ellipsoid_ellipsoid); }
-
-void gjk_kernel(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out, Range r, const NarrowConfig& cfg) {
-  collide_gjk_epa(a, b, out, r, cfg, kLeafEllipsoid, kLeafEllipsoid);
-}
 
 // ---------------------------------------------------------------------------------------
 // Reference
@@ -418,10 +414,6 @@ void check(const std::vector<Query>& qs, const char* what, Checked* out = nullpt
 
 uint32_t lanes(uint32_t base) { return test::scaled(base, 8); }
 
-TEST(EllipsoidEllipsoid, Registered) {
-  EXPECT_EQ(pair_kernel(kLeafEllipsoid, kLeafEllipsoid), &collide_ellipsoid_ellipsoid);
-}
-
 TEST(EllipsoidEllipsoid, RandomPosesAgainstReference) {
   Checked c;
   check(random_queries(lanes(600), 11, 1.0, Vec3d::Zero()), "random", &c);
@@ -518,50 +510,6 @@ TEST(EllipsoidEllipsoid, SwappedOrderFlipsNormal) {
     if (ref.second > ref.depth + 10 * tol && ref.hmin > 1e-2 * largest(qs[k])) {
       EXPECT_LT(angle(o.hits[k].n, -s.hits[k].n), kAngleTol) << k;
     }
-  }
-}
-
-TEST(EllipsoidEllipsoid, AgreesWithGjkEpa) {
-  const std::vector<Query> qs = random_queries(lanes(300), 71, 1.0, Vec3d::Zero());
-  const Output mine = run(qs, KernelPath::kSimd), gjk = run(qs, KernelPath::kSimd, &gjk_kernel);
-  int compared = 0;
-  for (size_t k = 0; k < qs.size(); ++k) {
-    const double L = largest(qs[k]);
-    if (mine.hits[k].count == 0 || mine.hits[k].depth < 1e-3 * L) {
-      if (mine.hits[k].count == 0 && gjk.hits[k].count > 0) {
-        EXPECT_LT(gjk.hits[k].depth, 1e-3 * L) << k;
-      }
-      continue;
-    }
-    ASSERT_GT(gjk.hits[k].count, 0u) << k;
-    EXPECT_NEAR(mine.hits[k].depth, gjk.hits[k].depth, 1e-3 * L) << k;
-    ++compared;
-  }
-  EXPECT_GT(compared, static_cast<int>(qs.size()) / 5);
-}
-
-TEST(EllipsoidEllipsoid, PartitionsAndShuffleGiveSameBytes) {
-  std::vector<Query> qs = random_queries(37, 81, 1.0, Vec3d::Zero());
-  const std::vector<Query> thin = thin_queries(40, 82);
-  qs.insert(qs.end(), thin.begin(), thin.end());
-  const uint32_t n = static_cast<uint32_t>(qs.size());
-  for (KernelPath path : {KernelPath::kSimd, KernelPath::kScalar}) {
-    const Output whole = run(qs, path);
-    for (uint32_t split : {1u, 3u, 5u, 8u, 13u, 40u}) {
-      const Output lo = run(qs, path, &collide_ellipsoid_ellipsoid, 0, split);
-      const Output hi = run(qs, path, &collide_ellipsoid_ellipsoid, split, n);
-      for (uint32_t k = 0; k < n; ++k) {
-        const Bytes& b = k < split ? lo.bytes[k] : hi.bytes[k];
-        EXPECT_TRUE(b == whole.bytes[k]) << "split " << split << " lane " << k;
-      }
-    }
-    std::vector<uint32_t> perm(n);
-    std::iota(perm.begin(), perm.end(), 0u);
-    std::shuffle(perm.begin(), perm.end(), std::mt19937(83));
-    std::vector<Query> sh(n);
-    for (uint32_t k = 0; k < n; ++k) sh[k] = qs[perm[k]];
-    const Output s = run(sh, path);
-    for (uint32_t k = 0; k < n; ++k) EXPECT_TRUE(s.bytes[k] == whole.bytes[perm[k]]) << "shuffled lane " << k;
   }
 }
 

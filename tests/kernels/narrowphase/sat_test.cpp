@@ -9,7 +9,8 @@
 // manifold point midway between the two surfaces), GJK/EPA and the general route, on
 // random poses, coincident centres, deep, touching, needle / pancake boxes and hulls,
 // 1e-4 / 1e4 boxes, 1e5 offsets, hull edges parallel and near parallel to a box axis,
-// parallel faces; SIMD and scalar paths, range partitions, shuffled buckets.
+// parallel faces; SIMD and scalar paths. Range partitions and shuffled buckets of every
+// bucket: contract_test.cpp.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -680,51 +681,6 @@ TEST(SatBoxHull, ParallelAndNearParallelFeatures) {
       }
     }
   }
-}
-
-TEST(SatBoxHull, PathsPartitionsAndShuffledBuckets) {
-  // A bucket of box-hull lanes: the SIMD and scalar paths, any partition of the range,
-  // and any order of the lanes give the same bytes per lane.
-  std::mt19937 g(24);
-  const uint32_t n = 97;
-  std::vector<Shape> as, bs;
-  for (uint32_t i = 0; i < n; ++i) {
-    as.push_back(random_box(g, Vec3d::Zero()));
-    Shape b = random_hull(g, i % kRandomHulls, Vec3d::Zero());
-    b.p = random_unit(g) * (0.3 + 0.01 * i);
-    bs.push_back(b);
-  }
-  auto run_bucket = [&](const std::vector<uint32_t>& order, KernelPath path, uint32_t chunk) {
-    Lanes la, lb;
-    for (uint32_t i : order) la.push(as[i]), lb.push(bs[i]);
-    test::ManifoldLanes out(n);
-    NarrowConfig cfg = config(true);
-    cfg.path = path;
-    const PairKernel k = pair_kernel(kLeafBox, kLeafConvex);
-    for (uint32_t b0 = 0; b0 < n; b0 += chunk) k(la.soa(), lb.soa(), out.view(), Range{b0, std::min(n, b0 + chunk)}, cfg);
-    std::vector<test::PairResult> r(n);
-    for (uint32_t j = 0; j < n; ++j) r[order[j]] = out.result(j);
-    return r;
-  };
-  std::vector<uint32_t> id(n);
-  for (uint32_t i = 0; i < n; ++i) id[i] = i;
-  const auto ref = run_bucket(id, KernelPath::kSimd, n);
-  std::vector<uint32_t> sh = id;
-  std::shuffle(sh.begin(), sh.end(), g);
-  uint32_t hits = 0;
-  for (const auto& [order, path, chunk] : {std::tuple{id, KernelPath::kScalar, n}, std::tuple{id, KernelPath::kSimd, 7u},
-                                           std::tuple{sh, KernelPath::kSimd, 13u}}) {
-    const auto r = run_bucket(order, path, chunk);
-    for (uint32_t i = 0; i < n; ++i) {
-      ASSERT_EQ(r[i].count, ref[i].count) << i;
-      if (ref[i].count == 0) continue;
-      EXPECT_EQ(r[i].n, ref[i].n) << i;
-      EXPECT_EQ(r[i].depth, ref[i].depth) << i;
-      for (uint32_t j = 0; j < ref[i].count; ++j) EXPECT_EQ(r[i].pt[j], ref[i].pt[j]) << i;
-    }
-  }
-  for (const auto& r : ref) hits += r.count > 0;
-  EXPECT_GT(hits, n / 4);
 }
 
 }  // namespace

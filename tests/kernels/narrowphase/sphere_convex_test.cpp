@@ -47,6 +47,7 @@
 #include "host/narrowphase/shape_store.h"
 #include "kernels/narrowphase/pair_kernels.h"
 #include "support/hull_input.h"
+#include "support/leaf_lanes.h"
 #include "support/random_input.h"
 #include "support/test_support.h"
 
@@ -68,81 +69,31 @@ struct Pair {
   uint32_t hull;  // index in Hulls
 };
 
-struct Bucket {
-  uint32_t n = 0;
-  std::vector<float> ap[3], ae0, bp[3], br[9];
-  std::vector<uint32_t> ref;
-  explicit Bucket(const std::vector<Pair>& v) : n(static_cast<uint32_t>(v.size())) {
-    for (const Pair& q : v) {
-      for (int j = 0; j < 3; ++j) ap[j].push_back(q.c[j]), bp[j].push_back(q.p[j]);
-      for (int j = 0; j < 9; ++j) br[j].push_back(q.R[j]);
-      ae0.push_back(q.r);
-      ref.push_back(q.hull);
-    }
-  }
-  k::LeafSoA a() const {
-    k::LeafSoA s{};
-    for (int j = 0; j < 3; ++j) s.p[j] = ap[j].data();
-    s.e[0] = ae0.data();
-    return s;
-  }
-  k::LeafSoA b() const {
-    k::LeafSoA s{};
-    for (int j = 0; j < 3; ++j) s.p[j] = bp[j].data();
-    for (int j = 0; j < 9; ++j) s.r[j] = br[j].data();
-    s.ref = ref.data();
-    return s;
-  }
-};
-
-struct Out {
-  std::vector<uint8_t> count;
-  std::vector<float> n[3], depth, pt[3], pd;
-  explicit Out(uint32_t cap) {
-    count.assign(cap, 0xee);
-    for (auto& v : n) v.assign(cap, NAN);
-    depth.assign(cap, NAN);
-    for (auto& v : pt) v.assign(cap, NAN);
-    pd.assign(cap, NAN);
-  }
-  k::ManifoldSoA view() {
-    k::ManifoldSoA m{};
-    m.count = count.data();
-    for (int j = 0; j < 3; ++j) m.n[j] = n[j].data();
-    m.depth = depth.data();
-    for (int j = 0; j < 3; ++j) m.point[0][j] = pt[j].data();
-    m.pdepth[0] = pd.data();
-    return m;
-  }
-  /// The bytes the contract defines for lane i.
-  std::vector<uint32_t> bits(uint32_t i) const {
-    std::vector<uint32_t> b{count[i]};
-    if (count[i] == 0) return b;
-    for (auto& v : n) b.push_back(std::bit_cast<uint32_t>(v[i]));
-    b.push_back(std::bit_cast<uint32_t>(depth[i]));
-    for (auto& v : pt) b.push_back(std::bit_cast<uint32_t>(v[i]));
-    b.push_back(std::bit_cast<uint32_t>(pd[i]));
-    return b;
-  }
-};
-
-Out run_kernel(k::PairKernel kern, const Bucket& bk, const k::HullView& hv, k::KernelPath path) {
-  Out o(bk.n);
-  k::NarrowConfig cfg;
-  cfg.path = path;
-  cfg.hulls = hv;
-  const k::LeafSoA a = bk.a(), b = bk.b();
-  kern(a, b, o.view(), k::Range{0, bk.n}, cfg);
-  return o;
+/// The sphere and the hull of a lane.
+std::pair<test::Leaf, test::Leaf> leaves(const Pair& q) {
+  test::Leaf a, b;
+  a.t = k::kLeafSphere, b.t = k::kLeafConvex;
+  std::copy(q.c, q.c + 3, a.p);
+  a.e[0] = q.r;
+  std::copy(q.p, q.p + 3, b.p);
+  std::copy(q.R, q.R + 9, b.r);
+  b.ref = q.hull;
+  return {a, b};
 }
 
-Out run_gjk(const Bucket& bk, const k::HullView& hv) {
-  Out o(bk.n);
-  k::NarrowConfig cfg;
-  cfg.hulls = hv;
-  const k::LeafSoA a = bk.a(), b = bk.b();
-  k::collide_gjk_epa(a, b, o.view(), k::Range{0, bk.n}, cfg, k::kLeafSphere, k::kLeafConvex);
-  return o;
+struct Bucket : test::BucketLanes {
+  explicit Bucket(const std::vector<Pair>& v) : BucketLanes(v, leaves) {}
+};
+
+ManifoldLanes run_kernel(k::PairKernel kern, const Bucket& bk, const k::HullView& hv, k::KernelPath path) {
+  return bk.run(kern, hv, path);
+}
+
+ManifoldLanes run_gjk(const Bucket& bk, const k::HullView& hv) {
+  return bk.run(
+      [](const k::LeafSoA& a, const k::LeafSoA& b, const k::ManifoldSoA& o, k::Range r,
+         const k::NarrowConfig& cfg) { k::collide_gjk_epa(a, b, o, r, cfg, k::kLeafSphere, k::kLeafConvex); },
+      hv, k::KernelPath::kSimd);
 }
 
 // --- the reference ---------------------------------------------------------------------------
@@ -246,9 +197,9 @@ Stats check_pairs(const std::string& name, const std::vector<Pair>& pairs, const
   const k::HullView hv = view_override != nullptr ? *view_override : hulls.store.view();
   const k::PairKernel kern = k::pair_kernel(k::kLeafSphere, k::kLeafConvex);
   EXPECT_EQ(kern, &k::collide_sphere_convex);
-  const Out simd = run_kernel(kern, bk, hv, k::KernelPath::kSimd);
-  const Out scalar = run_kernel(kern, bk, hv, k::KernelPath::kScalar);
-  const Out gjk = run_gjk(bk, hulls.store.view());
+  const ManifoldLanes simd = run_kernel(kern, bk, hv, k::KernelPath::kSimd);
+  const ManifoldLanes scalar = run_kernel(kern, bk, hv, k::KernelPath::kScalar);
+  const ManifoldLanes gjk = run_gjk(bk, hulls.store.view());
   int failures = 0;
   for (uint32_t i = 0; i < bk.n && failures < 10; ++i) {
     const Pair& q = pairs[i];
@@ -263,7 +214,7 @@ Stats check_pairs(const std::string& name, const std::vector<Pair>& pairs, const
     SCOPED_TRACE("lane " + std::to_string(i) + ": " + lane_text(q) +
                  "; depth_ref=" + std::to_string(depth_ref));
 
-    EXPECT_EQ(simd.bits(i), scalar.bits(i)) << "paths differ";
+    EXPECT_EQ(simd.lane_bits(i), scalar.lane_bits(i)) << "paths differ";
     const uint32_t count = simd.count[i];
     EXPECT_LE(count, 1u);
     if (std::fabs(depth_ref) > tol) {
@@ -284,7 +235,7 @@ Stats check_pairs(const std::string& name, const std::vector<Pair>& pairs, const
                                                  << ref.n.z << (ref.inside ? " (inside)" : " (outside)");
       }
       // Point midway between the surfaces.
-      const D3 pw{simd.pt[0][i], simd.pt[1][i], simd.pt[2][i]};
+      const D3 pw{simd.pt[0][0][i], simd.pt[0][1][i], simd.pt[0][2][i]};
       const double ulp = std::max({std::fabs(pw.x), std::fabs(pw.y), std::fabs(pw.z)}) * 0x1p-23;
       const D3 pt = pw - H.origin;
       // The sphere reaches depth past the hull's surface along n: its surface point is
@@ -292,7 +243,7 @@ Stats check_pairs(const std::string& name, const std::vector<Pair>& pairs, const
       const D3 on_sphere = pt + (0.5 * depth) * n, on_hull = pt - (0.5 * depth) * n;
       EXPECT_NEAR(norm(on_sphere - c), r, tol + 2 * ulp) << "point not midway (sphere side)";
       EXPECT_NEAR(signed_distance(H, on_hull), 0.0, tol + 2 * ulp) << "point not midway (hull side)";
-      EXPECT_EQ(std::bit_cast<uint32_t>(simd.pd[i]), std::bit_cast<uint32_t>(simd.depth[i]));
+      EXPECT_EQ(std::bit_cast<uint32_t>(simd.pd[0][i]), std::bit_cast<uint32_t>(simd.depth[i]));
     } else {
       ++st.misses;
     }
@@ -342,34 +293,7 @@ std::vector<Pair> random_pairs(Rng& g, const Hulls& hulls, uint32_t h0, uint32_t
     q.p[0] = static_cast<float>(p.x), q.p[1] = static_cast<float>(p.y), q.p[2] = static_cast<float>(p.z);
     q.r = static_cast<float>(scale * uni(g, 0.05, 1.0));
     const HullData& h = hulls.data[q.hull];
-    D3 c;
-    switch (g() % 4) {
-      case 0:  // anywhere in a box around the hull
-        c = to_world(q, Eigen::Vector3f::Zero()) +
-            D3{uni(g, -2 * scale, 2 * scale), uni(g, -2 * scale, 2 * scale), uni(g, -2 * scale, 2 * scale)};
-        break;
-      case 1:  // near a vertex
-        c = to_world(q, h.vertices[g() % h.vertices.size()]) + (q.r * uni(g, 0.0, 1.5)) * random_unit(g);
-        break;
-      case 2: {  // near an edge
-        const auto& f = h.faces[g() % h.faces.size()];
-        const size_t j = g() % f.size();
-        const D3 a = to_world(q, h.vertices[f[j]]), b = to_world(q, h.vertices[f[(j + 1) % f.size()]]);
-        c = a + uni(g, 0, 1) * (b - a) + (q.r * uni(g, 0.0, 1.5)) * random_unit(g);
-        break;
-      }
-      default: {  // near a face, along its normal
-        const size_t fi = g() % h.faces.size();
-        const auto& f = h.faces[fi];
-        D3 m;
-        for (uint32_t v : f) m = m + to_world(q, h.vertices[v]);
-        m = (1.0 / static_cast<double>(f.size())) * m;
-        const Eigen::Vector3f& fl = h.face_normals[fi];
-        const D3 nw = to_world(q, fl) - to_world(q, Eigen::Vector3f::Zero());
-        c = m + (q.r * uni(g, -1.5, 1.5)) * nw;
-        break;
-      }
-    }
+    const D3 c = point_near_hull(g, h, q, scale, q.r, 1.5);
     q.c[0] = static_cast<float>(c.x), q.c[1] = static_cast<float>(c.y), q.c[2] = static_cast<float>(c.z);
     out.push_back(q);
   }
@@ -377,10 +301,6 @@ std::vector<Pair> random_pairs(Rng& g, const Hulls& hulls, uint32_t h0, uint32_t
 }
 
 // --- tests ------------------------------------------------------------------------------------
-
-TEST(SphereConvex, RegisteredForTheBucket) {
-  EXPECT_EQ(k::pair_kernel(k::kLeafSphere, k::kLeafConvex), &k::collide_sphere_convex);
-}
 
 TEST(SphereConvex, RandomPosesAgreeWithReference) {
   Rng g(12345);
@@ -395,32 +315,13 @@ TEST(SphereConvex, RandomPosesAgreeWithReference) {
   RecordProperty("worst_depth_rel", std::to_string(st.worst_depth));
 }
 
-TEST(SphereConvex, TinyHugeAndFarScales) {
-  for (const double scale : {1e-4, 1e4}) {
-    Rng g(777 + static_cast<uint32_t>(scale > 1));
-    Hulls hulls;
-    add_random_hulls(g, &hulls, 12, scale);
-    const Stats st = check_pairs("scale " + std::to_string(scale),
-                                 random_pairs(g, hulls, 0, 12, scaled(800), scale, 0.0), hulls);
-    EXPECT_GT(st.hits, 100u);
-    EXPECT_GT(st.misses, 100u);
-  }
-  Rng g(4242);
-  Hulls hulls;
-  add_random_hulls(g, &hulls, 12, 1.0);
-  const Stats st = check_pairs("far 1e5", random_pairs(g, hulls, 0, 12, scaled(800), 1.0, 1e5), hulls);
-  EXPECT_GT(st.hits, 100u);
-  EXPECT_GT(st.misses, 100u);
-}
-
-TEST(SphereConvex, ManyFaceHull) {
-  Rng g(99);
-  Hulls hulls;
-  hulls.add(ellipsoid_points(g, 400, 1.0));
-  ASSERT_GT(hulls.data[0].faces.size(), 500u);
-  const Stats st = check_pairs("400-point hull", random_pairs(g, hulls, 0, 1, scaled(600), 1.0, 3.0), hulls);
-  EXPECT_GT(st.hits, 100u);
-  EXPECT_GT(st.misses, 50u);
+TEST(SphereConvex, TinyHugeFarAndManyFaceHulls) {
+  check_scale_suites([](Rng& g, const Hulls& h, uint32_t hulls, uint32_t n, double scale,
+                        double offset) { return random_pairs(g, h, 0, hulls, scaled(n), scale, offset); },
+                     [](const std::string& what, const std::vector<Pair>& pairs, const Hulls& h) {
+                       return check_pairs(what, pairs, h);
+                     },
+                     600u, 100u, 50u);
 }
 
 TEST(SphereConvex, WithoutEdgeAdjacency) {
@@ -462,8 +363,8 @@ TEST(SphereConvex, ExactFeaturesAndTouching) {
   const Stats st = check_pairs("exact features", pairs, hulls);
   EXPECT_EQ(st.hits, 7u);
   const Bucket bk(pairs);
-  const Out o = run_kernel(k::pair_kernel(k::kLeafSphere, k::kLeafConvex), bk, hulls.store.view(),
-                           k::KernelPath::kSimd);
+  const ManifoldLanes o = run_kernel(k::pair_kernel(k::kLeafSphere, k::kLeafConvex), bk, hulls.store.view(),
+                                     k::KernelPath::kSimd);
   // On the face plane: depth r exactly, normal -x (into the hull).
   ASSERT_EQ(o.count[0], 1);
   EXPECT_EQ(o.depth[0], static_cast<float>(r));
@@ -531,45 +432,6 @@ TEST(SphereConvex, RandomHullFeatures) {
   EXPECT_EQ(st.hits, pairs.size());  // on or in the hull: always a hit of depth >= r
 }
 
-/// HullData from vertices and convex polygons given in cyclic order (either
-/// orientation): planes by Newell's method in double, polygons turned counter-clockwise
-/// seen from outside, offsets = the largest n.v over the hull (every vertex behind).
-HullData hull_from_polygons(const std::vector<Eigen::Vector3f>& v, std::vector<std::vector<uint32_t>> polys) {
-  HullData h;
-  h.vertices = v;
-  D3 centre;
-  for (const auto& q : v) centre = centre + D3{q.x(), q.y(), q.z()};
-  centre = (1.0 / static_cast<double>(v.size())) * centre;
-  auto at = [&](uint32_t i) { return D3{v[i].x(), v[i].y(), v[i].z()}; };
-  for (auto& poly : polys) {
-    D3 nn, m;
-    for (size_t i = 0; i < poly.size(); ++i) {
-      nn = nn + cross(at(poly[i]), at(poly[(i + 1) % poly.size()]));
-      m = m + at(poly[i]);
-    }
-    m = (1.0 / static_cast<double>(poly.size())) * m;
-    if (dot(nn, m - centre) < 0) {
-      std::reverse(poly.begin(), poly.end());
-      nn = -1.0 * nn;
-    }
-    nn = unit(nn);
-    double off = -1e300;
-    for (uint32_t i = 0; i < v.size(); ++i) off = std::max(off, dot(nn, at(i)));
-    h.faces.push_back(poly);
-    h.face_normals.emplace_back(static_cast<float>(nn.x), static_cast<float>(nn.y), static_cast<float>(nn.z));
-    h.face_offsets.push_back(static_cast<float>(off));
-    for (size_t i = 0; i < poly.size(); ++i) {
-      const D3 ed = unit(at(poly[(i + 1) % poly.size()]) - at(poly[i]));
-      bool dup = false;
-      for (const auto& x : h.edge_dirs) dup = dup || std::fabs(dot(ed, D3{x.x(), x.y(), x.z()})) > 1 - 1e-12;
-      if (!dup)
-        h.edge_dirs.emplace_back(static_cast<float>(ed.x), static_cast<float>(ed.y),
-                                 static_cast<float>(ed.z));
-    }
-  }
-  return h;
-}
-
 TEST(SphereConvex, NearlyCoplanarFaces) {
   // A cube whose top corner (1, 1, 1) is raised by 2^-22: the top becomes two triangles
   // with a ridge along the diagonal (-1, -1, 1)..(1, 1, 1 + 2^-22), whose planes differ
@@ -592,34 +454,6 @@ TEST(SphereConvex, NearlyCoplanarFaces) {
   }
   const Stats st = check_pairs("nearly coplanar", pairs, hulls);
   EXPECT_GT(st.hits, 200u);
-}
-
-TEST(SphereConvex, RangePartitionAndPadding) {
-  // Any partition of the bucket gives the same bytes, and nothing outside the range
-  // is written.
-  Rng g(5);
-  Hulls hulls;
-  add_random_hulls(g, &hulls, 6, 1.0);
-  const auto pairs = random_pairs(g, hulls, 0, 6, 200, 1.0, 0.0);
-  const Bucket bk(pairs);
-  const k::HullView hv = hulls.store.view();
-  const Out whole = run_kernel(&k::collide_sphere_convex, bk, hv, k::KernelPath::kSimd);
-  Out part(bk.n);
-  k::NarrowConfig cfg;
-  cfg.hulls = hv;
-  const k::LeafSoA a = bk.a(), b = bk.b();
-  const uint32_t cuts[] = {0, 1, 7, 8, 50, 133, 199, 200};
-  for (size_t i = 0; i + 1 < std::size(cuts); ++i) {
-    if (i == 3) continue;  // [8, 50) left out: must stay untouched
-    k::collide_sphere_convex(a, b, part.view(), k::Range{cuts[i], cuts[i + 1]}, cfg);
-  }
-  for (uint32_t i = 0; i < bk.n; ++i) {
-    if (i >= 8 && i < 50) {
-      EXPECT_EQ(part.count[i], 0xee) << i;
-    } else {
-      EXPECT_EQ(whole.bits(i), part.bits(i)) << i;
-    }
-  }
 }
 
 }  // namespace

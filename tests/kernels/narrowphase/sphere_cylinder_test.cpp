@@ -6,14 +6,14 @@
 // cap, rim, centre on the axis, centre at the cylinder's centre, exactly touching).
 #include <gtest/gtest.h>
 
+#include <Eigen/Core>
+#include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
 #include <random>
 
-#include <Eigen/Core>
-#include <Eigen/Geometry>
-
 #include "kernels/narrowphase/pair_kernels.h"
+#include "support/kernel_checks.h"
 #include "support/leaf_lanes.h"
 #include "support/random_input.h"
 #include "support/test_support.h"
@@ -145,9 +145,7 @@ TEST_P(SphereCylinder, RandomPosesAgainstDoubleReference) {
   EXPECT_GT(inside, trials / 50);
 }
 
-INSTANTIATE_TEST_SUITE_P(Scales, SphereCylinder,
-                         ::testing::Values(std::make_tuple(1.0, 0.0), std::make_tuple(1e-4, 0.0),
-                                           std::make_tuple(1e4, 0.0), std::make_tuple(1.0, 1e5)));
+INSTANTIATE_TEST_SUITE_P(Scales, SphereCylinder, ::testing::ValuesIn(test::kernel_scales()));
 
 TEST(SphereCylinderAnalytic, SideCapRimAxisAndTouching) {
   Cyl cy{Vec3d(3, -2, 1), Mat3d::Identity(), 1.0, 2.0};

@@ -1,6 +1,5 @@
 // collide_sphere_ellipsoid (kernels/narrowphase/pairs/sphere/sphere_ellipsoid.cpp) on both paths
-// against an independent double-precision reference, and against the general GJK / EPA
-// path (collide_gjk_epa) on the same lanes.
+// against an independent double-precision reference.
 //
 // Reference (double, in the ellipsoid's frame, radii sorted;
 // tests/support/ellipsoid_reference.h): the closest surface point
@@ -26,8 +25,8 @@
 // centres near their thin parts, rims and tips; centres exactly on principal planes and
 // axes, and within 1e-7 .. 1e-20 of them; the centre at the ellipsoid's centre (depth r +
 // the smallest radius along that axis; ties: the lowest axis index); exactly touching
-// (count 0); a round ellipsoid against sphere-sphere; a block of lanes with every
-// partition of its range.
+// (count 0); a round ellipsoid against sphere-sphere. Range partitions and the agreement
+// with GJK / EPA: contract_test.cpp.
 #include <gtest/gtest.h>
 
 #include <Eigen/Core>
@@ -41,8 +40,10 @@
 
 #include "kernels/narrowphase/pair_kernels.h"
 #include "support/ellipsoid_reference.h"
+#include "support/kernel_checks.h"
 #include "support/leaf_lanes.h"
 #include "support/random_input.h"
+#include "support/shape_geometry.h"
 #include "support/test_support.h"
 
 namespace impact::kernels {
@@ -50,18 +51,13 @@ namespace {
 
 using Vec3d = Eigen::Vector3d;
 using Mat3d = Eigen::Matrix3d;
+using test::angle;
 using test::eref::closest_local;
 using test::eref::level;
 
 constexpr double kRel = 1e-5;       // depth tolerance, of L
 constexpr double kAngleTol = 1e-3;  // rad, where the nearest point is well conditioned
 constexpr double kPathAngleTol = 1e-4;
-
-/// The angle between two directions (atan2 of |a x b| and a.b: exact near 0, where
-/// acos of a float-unit dot product is not).
-double angle(const Vec3d& a, const Vec3d& b) {
-  return std::atan2(a.cross(b).norm(), a.dot(b));
-}
 
 struct Ell {
   Vec3d p;
@@ -73,12 +69,6 @@ struct Query {
   Vec3d c;  // sphere centre
   double r;
   Ell b;
-};
-
-struct Hit {
-  uint32_t count = 0;
-  Vec3d n = Vec3d::Zero(), pt = Vec3d::Zero();
-  double depth = 0, pd = 0;
 };
 
 /// The query as the kernel sees it: every input rounded to float.
@@ -95,52 +85,21 @@ double largest(const Query& q) {
   return std::max(q.b.e.maxCoeff(), q.r);
 }
 
-/// Runs `kern` on all queries as one bucket (full SIMD blocks and a tail).
-std::vector<Hit> run(const std::vector<Query>& qs, KernelPath path, PairKernel kern, uint32_t begin = 0,
-                     uint32_t end = ~0u) {
-  const size_t n = qs.size();
-  end = std::min<uint32_t>(end, static_cast<uint32_t>(n));
-  std::vector<float> ap[3], ae[3], bp[3], br[9], be[3];
-  for (const Query& q : qs) {
-    for (int i = 0; i < 3; ++i) {
-      ap[i].push_back(float(q.c[i]));
-      ae[i].push_back(i == 0 ? float(q.r) : 0.0f);
-      bp[i].push_back(float(q.b.p[i]));
-      be[i].push_back(float(q.b.e[i]));
-    }
-    for (int i = 0; i < 9; ++i) br[i].push_back(float(q.b.R(i / 3, i % 3)));
-  }
-  LeafSoA a{}, b{};
-  for (int i = 0; i < 3; ++i)
-    a.p[i] = ap[i].data(), a.e[i] = ae[i].data(), b.p[i] = bp[i].data(), b.e[i] = be[i].data();
-  for (int i = 0; i < 9; ++i) b.r[i] = br[i].data();
-  test::ManifoldLanes o(static_cast<uint32_t>(n));
-  NarrowConfig cfg;
-  cfg.path = path;
-  kern(a, b, o.view(), Range{begin, end}, cfg);
-  std::vector<Hit> out(n);
-  for (uint32_t k = begin; k < end; ++k) {
-    const test::PairResult r = o.result(k);
-    Hit& h = out[k];
-    h.count = r.count;
-    if (h.count == 0) continue;
-    h.n = r.n;
-    h.pt = r.pt[0];
-    h.depth = r.depth;
-    h.pd = r.pd[0];
-  }
-  return out;
+/// Runs `kern` on lanes [begin, end) of all queries as one bucket (full SIMD blocks and a tail).
+std::vector<test::PairResult> run(const std::vector<Query>& qs, KernelPath path, PairKernel kern,
+                                  uint32_t begin = 0, uint32_t end = ~0u) {
+  return test::run_queries(
+      kern, qs, path,
+      [](const Query& q) {
+        return std::pair{test::sphere_leaf(q.c, q.r), test::posed_leaf(kLeafEllipsoid, q.b.p, q.b.R, q.b.e)};
+      },
+      begin, end);
 }
 
-std::vector<Hit> run(const std::vector<Query>& qs, KernelPath path) {
+std::vector<test::PairResult> run(const std::vector<Query>& qs, KernelPath path) {
   const PairKernel k = pair_kernel(kLeafSphere, kLeafEllipsoid);
   EXPECT_EQ(k, &collide_sphere_ellipsoid);
   return run(qs, path, k);
-}
-
-void gjk_kernel(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out, Range r,
-                const NarrowConfig& cfg) {
-  collide_gjk_epa(a, b, out, r, cfg, kLeafSphere, kLeafEllipsoid);
 }
 
 // ---------------------------------------------------------------------------------------
@@ -241,15 +200,15 @@ double coord_ulp(const Query& q) {
 /// Checks (a)-(e) for every lane of qs (already rounded to float).
 void check_all(const std::vector<Query>& qs, const char* what, Stats* st_out = nullptr) {
   SCOPED_TRACE(what);
-  const std::vector<Hit> simd = run(qs, KernelPath::kSimd), scal = run(qs, KernelPath::kScalar);
+  const std::vector<test::PairResult> simd = run(qs, KernelPath::kSimd), scal = run(qs, KernelPath::kScalar);
   Stats st;
   for (size_t k = 0; k < qs.size(); ++k) {
     const Query& q = qs[k];
     const Ref f = reference(q);
     const double L = largest(q), tol = kRel * L;
     ++st.lanes;
-    for (const Hit* hp : {&simd[k], &scal[k]}) {
-      const Hit& h = *hp;
+    for (const test::PairResult* hp : {&simd[k], &scal[k]}) {
+      const test::PairResult& h = *hp;
       const bool is_simd = hp == &simd[k];
       if (std::fabs(f.depth) <= tol) continue;
       ASSERT_EQ(h.count > 0, f.depth > 0) << what << " lane " << k << " depth_ref " << f.depth << " got "
@@ -264,12 +223,12 @@ void check_all(const std::vector<Query>& qs, const char* what, Stats* st_out = n
       st.worst_depth = std::max(st.worst_depth, dd / L);
       EXPECT_LE(dd, tol) << what << " lane " << k << " depth " << h.depth << " ref " << f.depth
                          << (f.inside ? " inside" : " outside") << " e " << q.b.e.transpose() << " r " << q.r;
-      EXPECT_EQ(h.pd, h.depth);
+      EXPECT_EQ(h.pd[0], h.depth);
       ASSERT_TRUE(h.n.allFinite());
       EXPECT_NEAR(h.n.norm(), 1.0, 1e-6);
       // (d) the point, half the depth from each surface
       const double slack = tol + coord_ulp(q);
-      const Vec3d on_a = h.pt + h.n * (0.5 * h.depth), on_b = h.pt - h.n * (0.5 * h.depth);
+      const Vec3d on_a = h.pt[0] + h.n * (0.5 * h.depth), on_b = h.pt[0] - h.n * (0.5 * h.depth);
       EXPECT_NEAR((on_a - q.c).norm(), q.r, slack) << what << " lane " << k;
       EXPECT_NEAR(signed_distance(q.b, on_b), 0.0, slack) << what << " lane " << k;
     }
@@ -280,7 +239,7 @@ void check_all(const std::vector<Query>& qs, const char* what, Stats* st_out = n
       if (!ok) ++st.ill_conditioned;
       if (ok && simd[k].count) {
         ++st.normal_checked;
-        for (const Hit* hp : {&simd[k], &scal[k]}) {
+        for (const test::PairResult* hp : {&simd[k], &scal[k]}) {
           const double ang = angle(hp->n, f.n);
           st.worst_angle = std::max(st.worst_angle, ang);
           EXPECT_LE(ang, kAngleTol) << what << " lane " << k << " n " << hp->n.transpose() << " ref "
@@ -464,9 +423,7 @@ TEST_P(SphereEllipsoid, RandomPosesAgainstDoubleReference) {
   EXPECT_GT(st.normal_checked, st.hits * 9 / 10);
 }
 
-INSTANTIATE_TEST_SUITE_P(Scales, SphereEllipsoid,
-                         ::testing::Values(std::make_tuple(1.0, 0.0), std::make_tuple(1e-4, 0.0),
-                                           std::make_tuple(1e4, 0.0), std::make_tuple(1.0, 1e5)));
+INSTANTIATE_TEST_SUITE_P(Scales, SphereEllipsoid, ::testing::ValuesIn(test::kernel_scales()));
 
 TEST(SphereEllipsoidCases, TouchingNeedlePancakeAndPlanes) {
   std::mt19937 g(29);
@@ -496,14 +453,14 @@ TEST(SphereEllipsoidCases, CentreAtTheCentreTakesTheSmallestAxis) {
       q.r = 0.25;
       q = rounded(q);
       for (KernelPath path : {KernelPath::kSimd, KernelPath::kScalar}) {
-        const Hit h = run({q}, path)[0];
+        const test::PairResult h = run({q}, path)[0];
         ASSERT_EQ(h.count, 1u);
         EXPECT_NEAR(h.depth, q.r + q.b.e[c.axis], 1e-6) << c.e.transpose();
         const Vec3d want = -q.b.R.col(c.axis);
         EXPECT_LT((h.n - want).norm(), 1e-6) << c.e.transpose() << " n " << h.n.transpose();
-        EXPECT_TRUE(h.pt.allFinite());
+        EXPECT_TRUE(h.pt[0].allFinite());
         // midway between c + n r and the surface point c - n e_axis
-        EXPECT_LT((h.pt - (q.c + h.n * (0.5 * (q.r - q.b.e[c.axis])))).norm(), 0.02);
+        EXPECT_LT((h.pt[0] - (q.c + h.n * (0.5 * (q.r - q.b.e[c.axis])))).norm(), 0.02);
       }
     }
   }
@@ -514,11 +471,11 @@ TEST(SphereEllipsoidCases, AnalyticAxesRoundAndTouching) {
   for (KernelPath path : {KernelPath::kSimd, KernelPath::kScalar}) {
     auto one = [&](const Vec3d& c, double r) { return run({Query{c, r, b}}, path)[0]; };
     // beyond the x tip, 0.25 deep: n = -x
-    Hit h = one(b.p + Vec3d(2.75, 0, 0), 1.0);
+    test::PairResult h = one(b.p + Vec3d(2.75, 0, 0), 1.0);
     ASSERT_EQ(h.count, 1u);
     EXPECT_NEAR(h.depth, 0.25, 1e-6);
     EXPECT_LT((h.n - Vec3d(-1, 0, 0)).norm(), 1e-6);
-    EXPECT_LT((h.pt - (b.p + Vec3d(1.875, 0, 0))).norm(), 1e-6);
+    EXPECT_LT((h.pt[0] - (b.p + Vec3d(1.875, 0, 0))).norm(), 1e-6);
     // above the z pole, 0.1 deep: n = -z
     h = one(b.p + Vec3d(0, 0, 0.9), 0.5);
     ASSERT_EQ(h.count, 1u);
@@ -560,7 +517,7 @@ TEST(SphereEllipsoidCases, AnalyticAxesRoundAndTouching) {
             Ell{Vec3d(u(g), u(g), u(g)), test::random_rotation(g), Vec3d::Constant(0.6)}};
     q = rounded(q);
     const double dist = (q.b.p - q.c).norm();
-    const Hit h = run({q}, KernelPath::kSimd)[0];
+    const test::PairResult h = run({q}, KernelPath::kSimd)[0];
     if (std::fabs(q.r + 0.6 - dist) < 1e-5) continue;
     ASSERT_EQ(h.count > 0, q.r + 0.6 > dist);
     if (h.count == 0) continue;
@@ -569,48 +526,6 @@ TEST(SphereEllipsoidCases, AnalyticAxesRoundAndTouching) {
       EXPECT_LT((h.n - (q.b.p - q.c) / dist).norm(), 1e-5);
     }
   }
-}
-
-TEST(SphereEllipsoidCases, RangePartitionsAndTail) {
-  std::mt19937 g(41);
-  const std::vector<Query> qs = random_queries(g, 37, 1.0, 0.0);
-  const PairKernel kern = pair_kernel(kLeafSphere, kLeafEllipsoid);
-  const std::vector<Hit> all = run(qs, KernelPath::kSimd, kern);
-  for (uint32_t cut : {1u, 5u, 8u, 13u, 36u}) {
-    const std::vector<Hit> lo = run(qs, KernelPath::kSimd, kern, 0, cut);
-    const std::vector<Hit> hi = run(qs, KernelPath::kSimd, kern, cut, 37);
-    for (uint32_t k = 0; k < 37; ++k) {
-      const Hit& h = k < cut ? lo[k] : hi[k];
-      ASSERT_EQ(h.count, all[k].count) << cut << " " << k;
-      if (h.count == 0) continue;
-      EXPECT_EQ(h.depth, all[k].depth);
-      EXPECT_EQ(h.n, all[k].n);
-      EXPECT_EQ(h.pt, all[k].pt);
-    }
-  }
-}
-
-/// The general GJK / EPA path on the same lanes (non-degenerate shapes, overlaps of at
-/// least 1e-3 L): same hits, depth within 1e-3 L, normal within 0.02 rad where the
-/// nearest point is well conditioned.
-TEST(SphereEllipsoidCases, AgreesWithGjkEpa) {
-  std::mt19937 g(23);
-  std::vector<Query> qs = random_queries(g, static_cast<int>(test::scaled(400)), 1.0, 0.0);
-  const std::vector<Hit> mine = run(qs, KernelPath::kSimd), gjk = run(qs, KernelPath::kSimd, &gjk_kernel);
-  int compared = 0;
-  for (size_t k = 0; k < qs.size(); ++k) {
-    const Ref f = reference(qs[k]);
-    const double L = largest(qs[k]);
-    if (std::fabs(f.depth) < 1e-3 * L) continue;
-    ASSERT_EQ(mine[k].count, gjk[k].count) << k << " depth_ref " << f.depth;
-    if (mine[k].count == 0) continue;
-    ++compared;
-    EXPECT_NEAR(mine[k].depth, gjk[k].depth, 1e-3 * L) << k;
-    if (normal_sensitivity(qs[k], f.n) < 1e-2) {
-      EXPECT_LT(angle(mine[k].n, gjk[k].n), 0.02) << k;
-    }
-  }
-  EXPECT_GT(compared, static_cast<int>(qs.size()) / 5);
 }
 
 }  // namespace

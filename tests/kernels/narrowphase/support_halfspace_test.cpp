@@ -7,16 +7,16 @@
 // and capsules.
 #include <gtest/gtest.h>
 
+#include <Eigen/Core>
+#include <Eigen/Geometry>
 #include <cmath>
 #include <random>
 #include <vector>
 
-#include <Eigen/Core>
-#include <Eigen/Geometry>
-
 #include "host/narrowphase/convex_hull.h"
 #include "host/narrowphase/shape_store.h"
 #include "kernels/narrowphase/pair_kernels.h"
+#include "support/kernel_checks.h"
 #include "support/leaf_lanes.h"
 #include "support/random_input.h"
 #include "support/test_support.h"
@@ -262,9 +262,7 @@ TEST_P(SupportHalfspace, DeepestPointAndManifoldAgreeWithClosedForms) {
   }
 }
 
-INSTANTIATE_TEST_SUITE_P(Scales, SupportHalfspace,
-                         ::testing::Values(std::make_tuple(1.0, 0.0), std::make_tuple(1e-4, 0.0),
-                                           std::make_tuple(1e4, 0.0), std::make_tuple(1.0, 1e5)));
+INSTANTIATE_TEST_SUITE_P(Scales, SupportHalfspace, ::testing::ValuesIn(test::kernel_scales()));
 
 void resting_shapes(KernelPath path) {
   SCOPED_TRACE(path == KernelPath::kSimd ? "simd" : "scalar");

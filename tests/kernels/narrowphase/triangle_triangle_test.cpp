@@ -1,6 +1,5 @@
 // collide_triangle_triangle (kernels/narrowphase/pairs/triangle/triangle_triangle.cpp) on both
-// paths against independent double-precision references, and against the general
-// GJK / EPA path (collide_gjk_epa) on the same lanes.
+// paths against independent double-precision references.
 //
 // References (double, on the kernel's float inputs):
 //   - depth and normal: tests/support/narrow_reference.h (the minimum over unit
@@ -30,7 +29,9 @@
 // (tilts 1e-6 .. 1e-2 rad); edges within 0 .. 1e-3 rad of parallel crossing each other;
 // slivers (height 1e-3 .. 1e-7 of the base) and degenerate triangles (collinear, two or
 // three coincident vertices: finite output); the face tie rule (A's normal on a mirror-
-// symmetric crossing); swap symmetry; SIMD == scalar; agreement with GJK / EPA.
+// symmetric crossing); swap symmetry. The two paths (depth within 1e-6 L, normals within
+// 1e-5 rad, the same points), range partitions and the agreement with GJK / EPA:
+// contract_test.cpp.
 #include <gtest/gtest.h>
 
 #include <Eigen/Core>
@@ -55,8 +56,7 @@ namespace {
 
 namespace nref = test::nref;
 using Vec3d = Eigen::Vector3d;
-using test::ManifoldLanes;
-using test::PairResult;
+using test::ManifoldLanes, test::PairResult;
 
 constexpr double kRel = 1e-5;       // depth / point tolerance, of L
 constexpr double kAngleTol = 1e-3;  // rad, where the reference's minimum is unique
@@ -105,10 +105,6 @@ struct Case {
 // ---------------------------------------------------------------------------------------
 
 using Kernel = void (*)(const LeafSoA&, const LeafSoA&, const ManifoldSoA&, Range, const NarrowConfig&);
-
-void gjk_triangles(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& o, Range r, const NarrowConfig& cfg) {
-  collide_gjk_epa(a, b, o, r, cfg, kLeafTriangle, kLeafTriangle);
-}
 
 ManifoldLanes run(const std::vector<Case>& cases, KernelPath path, bool swap = false,
                   Kernel kern = &collide_triangle_triangle) {
@@ -841,81 +837,6 @@ TEST(TriangleTriangle, SwapSymmetry) {
         EXPECT_LE(o, refs[i].r.s + tol) << "lane " << i;
       }
     }
-  }
-}
-
-TEST(TriangleTriangle, SimdMatchesScalar) {
-  std::mt19937 g(101);
-  std::vector<Case> cases;
-  std::vector<Ref> refs;
-  for (double scale : {1.0, 1e-4, 1e4}) random_cases(g, test::scaled(200), scale, 0.0, 0.0, 1.1, cases, refs);
-  random_cases(g, test::scaled(100), 1.0, 1e5, 0.0, 1.1, cases, refs);
-  const ManifoldLanes s = run(cases, KernelPath::kScalar), v = run(cases, KernelPath::kSimd);
-  for (uint32_t i = 0; i < cases.size(); ++i) {
-    const PairResult x = s.result(i), y = v.result(i);
-    const double L = refs[i].L;
-    ASSERT_EQ(x.count, y.count) << "lane " << i;
-    if (x.count == 0) continue;
-    EXPECT_NEAR(x.depth, y.depth, 1e-6 * L) << "lane " << i;
-    EXPECT_LT(angle(x.n, y.n), 1e-5) << "lane " << i;
-    // points: the two paths may contract a*b+c differently, and a crossing of nearly
-    // parallel projected edges amplifies that (measured <= 2.5e-6 L)
-    const double slack = 1e-5 * L + std::max(coord_mag(cases[i].a), coord_mag(cases[i].b)) * std::ldexp(1.0, -22);
-    for (uint32_t q = 0; q < x.count; ++q) {
-      EXPECT_LE((x.pt[q] - y.pt[q]).norm(), slack) << "lane " << i << " point " << q;
-      EXPECT_NEAR(x.pd[q], y.pd[q], 1e-5 * L) << "lane " << i << " point " << q;
-    }
-  }
-}
-
-TEST(TriangleTriangle, AgreesWithGjkEpa) {
-  std::mt19937 g(111);
-  std::vector<Case> cases;
-  std::vector<Ref> refs;
-  random_cases(g, test::scaled(300), 1.0, 0.0, 0.0, 1.1, cases, refs);
-  random_cases(g, test::scaled(400), 1.0, 0.0, 0.0, 0.05, cases, refs);
-  const ManifoldLanes t = run(cases, KernelPath::kSimd);
-  const ManifoldLanes e = run(cases, KernelPath::kScalar, false, &gjk_triangles);
-  uint32_t compared = 0;
-  for (uint32_t i = 0; i < cases.size(); ++i) {
-    const double tol = kGjkRel * refs[i].L;
-    if (std::fabs(refs[i].r.s) <= tol) continue;
-    const PairResult x = t.result(i), y = e.result(i);
-    EXPECT_EQ(x.count > 0, y.count > 0) << "lane " << i << "\n" << literal(cases[i]);
-    if (x.count > 0 && y.count > 0) {
-      EXPECT_NEAR(x.depth, y.depth, tol) << "lane " << i << "\n" << literal(cases[i]);
-      ++compared;
-    }
-  }
-  EXPECT_GT(compared, cases.size() / 3);
-}
-
-TEST(TriangleTriangle, RangePartitionsAndTail) {
-  std::mt19937 g(121);
-  std::vector<Case> cases;
-  std::vector<Ref> refs;
-  random_cases(g, 37, 1.0, 0.0, 0.0, 1.1, cases, refs);
-  test::LeafLanes la, lb;
-  for (const Case& c : cases) {
-    la.push(c.a);
-    lb.push(c.b);
-  }
-  const uint32_t n = static_cast<uint32_t>(cases.size());
-  ManifoldLanes whole(n);
-  collide_triangle_triangle(la.soa(), lb.soa(), whole.view(), Range{0, n}, NarrowConfig{});
-  for (uint32_t cut : {1u, 3u, 8u, 9u, 17u}) {
-    ManifoldLanes part(n + 3);  // lanes past n must stay poisoned
-    collide_triangle_triangle(la.soa(), lb.soa(), part.view(), Range{0, cut}, NarrowConfig{});
-    collide_triangle_triangle(la.soa(), lb.soa(), part.view(), Range{cut, n}, NarrowConfig{});
-    for (uint32_t i = 0; i < n; ++i) {
-      const PairResult x = whole.result(i), y = part.result(i);
-      ASSERT_EQ(x.count, y.count) << "cut " << cut << " lane " << i;
-      if (x.count == 0) continue;
-      EXPECT_EQ(x.depth, y.depth) << "cut " << cut << " lane " << i;
-      EXPECT_EQ(x.n, y.n) << "cut " << cut << " lane " << i;
-      for (uint32_t q = 0; q < x.count; ++q) EXPECT_EQ(x.pt[q], y.pt[q]) << "cut " << cut << " lane " << i;
-    }
-    for (uint32_t i = n; i < n + 3; ++i) EXPECT_EQ(part.count[i], 0xff) << "wrote past the range";
   }
 }
 
