@@ -403,22 +403,30 @@ struct LaneQueue {
   }
 };
 
-/// Defines the PairKernel `name` over the lane template `block<F>(a, b, out, k)`
-/// writing P point slots: the one-lane scalar path for KernelPath::kScalar, the
-/// kPairWidth-lane path otherwise.
-#define IMPACT_LANE_KERNEL(name, block, P)                                                                  \
-  void name(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out, Range r, const NarrowConfig& cfg) { \
-    if (cfg.path == KernelPath::kScalar) {                                                                  \
-      for_each_block<simd::Float1, P>(                                                                      \
-          a, b, out, r, [](const LeafSoA& aa, const LeafSoA& bb, const ManifoldSoA& o, uint32_t k) {        \
-            block<simd::Float1>(aa, bb, o, k);                                                              \
-          });                                                                                               \
-    } else {                                                                                                \
-      for_each_block<simd::FloatP, P>(                                                                      \
-          a, b, out, r, [](const LeafSoA& aa, const LeafSoA& bb, const ManifoldSoA& o, uint32_t k) {        \
-            block<simd::FloatP>(aa, bb, o, k);                                                              \
-          });                                                                                               \
-    }                                                                                                       \
+/// The body of a lane kernel's PairKernel over its block template `block<F>(a, b, out, k)`
+/// writing P point slots: for_each_block at simd::Float1 (one lane, the reference path)
+/// for KernelPath::kScalar, else at simd::FloatP (kPairWidth lanes). Every pair function
+/// is defined by its own name and forwards here, e.g.
+///   void collide_sphere_sphere(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out,
+///                              Range r, const NarrowConfig& cfg) {
+///     IMPACT_LANE_KERNEL_BODY(sphere_sphere_block, 1);
+///   }
+/// A macro, not a function template, because `block` is a function template (and the
+/// lambdas must stay in the pair function for its inlining); it reads the PairKernel
+/// parameters a, b, out, r and cfg.
+#define IMPACT_LANE_KERNEL_BODY(block, P)                                                                  \
+  {                                                                                                       \
+    if (cfg.path == KernelPath::kScalar) {                                                                \
+      for_each_block<simd::Float1, P>(                                                                    \
+          a, b, out, r, [](const LeafSoA& aa, const LeafSoA& bb, const ManifoldSoA& o, uint32_t k) {      \
+            block<simd::Float1>(aa, bb, o, k);                                                            \
+          });                                                                                             \
+    } else {                                                                                              \
+      for_each_block<simd::FloatP, P>(                                                                    \
+          a, b, out, r, [](const LeafSoA& aa, const LeafSoA& bb, const ManifoldSoA& o, uint32_t k) {      \
+            block<simd::FloatP>(aa, bb, o, k);                                                            \
+          });                                                                                             \
+    }                                                                                                     \
   }
 
 // ---------------------------------------------------------------------------------------

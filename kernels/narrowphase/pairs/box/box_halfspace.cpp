@@ -82,6 +82,9 @@ IMPACT_INLINE void box_halfspace_block(const LeafSoA& a, const LeafSoA& b, const
 
 }  // namespace
 
-IMPACT_LANE_KERNEL(collide_box_halfspace, box_halfspace_block, 4)
+void collide_box_halfspace(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out, Range r,
+                           const NarrowConfig& cfg) {
+  IMPACT_LANE_KERNEL_BODY(box_halfspace_block, 4);
+}
 
 }  // namespace impact::kernels

@@ -304,6 +304,9 @@ IMPACT_INLINE void box_triangle_block(const LeafSoA& a, const LeafSoA& b, const 
 
 }  // namespace
 
-IMPACT_LANE_KERNEL(collide_box_triangle, box_triangle_block, 4)
+void collide_box_triangle(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out, Range r,
+                          const NarrowConfig& cfg) {
+  IMPACT_LANE_KERNEL_BODY(box_triangle_block, 4);
+}
 
 }  // namespace impact::kernels

@@ -225,6 +225,9 @@ IMPACT_INLINE void capsule_box_block(const LeafSoA& a, const LeafSoA& b, const M
 
 }  // namespace
 
-IMPACT_LANE_KERNEL(collide_capsule_box, capsule_box_block, 2)
+void collide_capsule_box(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out, Range r,
+                         const NarrowConfig& cfg) {
+  IMPACT_LANE_KERNEL_BODY(capsule_box_block, 2);
+}
 
 }  // namespace impact::kernels

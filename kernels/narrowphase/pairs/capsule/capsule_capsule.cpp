@@ -125,6 +125,9 @@ IMPACT_INLINE void capsule_capsule_block(const LeafSoA& a, const LeafSoA& b, con
 
 }  // namespace
 
-IMPACT_LANE_KERNEL(collide_capsule_capsule, capsule_capsule_block, 2)
+void collide_capsule_capsule(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out, Range r,
+                             const NarrowConfig& cfg) {
+  IMPACT_LANE_KERNEL_BODY(capsule_capsule_block, 2);
+}
 
 }  // namespace impact::kernels

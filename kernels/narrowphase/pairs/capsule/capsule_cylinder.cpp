@@ -334,6 +334,9 @@ IMPACT_INLINE void capsule_cylinder_block(const LeafSoA& a, const LeafSoA& b, co
 
 }  // namespace
 
-IMPACT_LANE_KERNEL(collide_capsule_cylinder, capsule_cylinder_block, 2)
+void collide_capsule_cylinder(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out, Range r,
+                              const NarrowConfig& cfg) {
+  IMPACT_LANE_KERNEL_BODY(capsule_cylinder_block, 2);
+}
 
 }  // namespace impact::kernels

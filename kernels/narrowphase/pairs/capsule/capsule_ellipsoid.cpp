@@ -180,6 +180,9 @@ IMPACT_INLINE void capsule_ellipsoid_block(const LeafSoA& a, const LeafSoA& b, c
 
 }  // namespace
 
-IMPACT_LANE_KERNEL(collide_capsule_ellipsoid, capsule_ellipsoid_block, 1)
+void collide_capsule_ellipsoid(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out, Range r,
+                               const NarrowConfig& cfg) {
+  IMPACT_LANE_KERNEL_BODY(capsule_ellipsoid_block, 1);
+}
 
 }  // namespace impact::kernels

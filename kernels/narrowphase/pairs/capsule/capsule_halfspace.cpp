@@ -57,6 +57,9 @@ IMPACT_INLINE void capsule_halfspace_block(const LeafSoA& a, const LeafSoA& b, c
 
 }  // namespace
 
-IMPACT_LANE_KERNEL(collide_capsule_halfspace, capsule_halfspace_block, 2)
+void collide_capsule_halfspace(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out, Range r,
+                               const NarrowConfig& cfg) {
+  IMPACT_LANE_KERNEL_BODY(capsule_halfspace_block, 2);
+}
 
 }  // namespace impact::kernels

@@ -208,6 +208,9 @@ IMPACT_INLINE void capsule_triangle_block(const LeafSoA& a, const LeafSoA& b, co
 
 }  // namespace
 
-IMPACT_LANE_KERNEL(collide_capsule_triangle, capsule_triangle_block, 2)
+void collide_capsule_triangle(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out, Range r,
+                              const NarrowConfig& cfg) {
+  IMPACT_LANE_KERNEL_BODY(capsule_triangle_block, 2);
+}
 
 }  // namespace impact::kernels

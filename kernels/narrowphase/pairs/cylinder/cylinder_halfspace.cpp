@@ -89,6 +89,9 @@ IMPACT_INLINE void cylinder_halfspace_block(const LeafSoA& a, const LeafSoA& b, 
 
 }  // namespace
 
-IMPACT_LANE_KERNEL(collide_cylinder_halfspace, cylinder_halfspace_block, 4)
+void collide_cylinder_halfspace(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out, Range r,
+                                const NarrowConfig& cfg) {
+  IMPACT_LANE_KERNEL_BODY(cylinder_halfspace_block, 4);
+}
 
 }  // namespace impact::kernels

@@ -572,6 +572,9 @@ IMPACT_INLINE void cylinder_triangle_block(const LeafSoA& a, const LeafSoA& b, c
 
 }  // namespace
 
-IMPACT_LANE_KERNEL(collide_cylinder_triangle, cylinder_triangle_block, 4)
+void collide_cylinder_triangle(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out, Range r,
+                               const NarrowConfig& cfg) {
+  IMPACT_LANE_KERNEL_BODY(cylinder_triangle_block, 4);
+}
 
 }  // namespace impact::kernels

@@ -56,6 +56,9 @@ IMPACT_INLINE void ellipsoid_halfspace_block(const LeafSoA& a, const LeafSoA& b,
 
 }  // namespace
 
-IMPACT_LANE_KERNEL(collide_ellipsoid_halfspace, ellipsoid_halfspace_block, 1)
+void collide_ellipsoid_halfspace(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out, Range r,
+                                 const NarrowConfig& cfg) {
+  IMPACT_LANE_KERNEL_BODY(ellipsoid_halfspace_block, 1);
+}
 
 }  // namespace impact::kernels

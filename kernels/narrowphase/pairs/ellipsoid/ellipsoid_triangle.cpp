@@ -216,6 +216,9 @@ IMPACT_INLINE void ellipsoid_triangle_block(const LeafSoA& a, const LeafSoA& b, 
 
 }  // namespace
 
-IMPACT_LANE_KERNEL(collide_ellipsoid_triangle, ellipsoid_triangle_block, 1)
+void collide_ellipsoid_triangle(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out, Range r,
+                                const NarrowConfig& cfg) {
+  IMPACT_LANE_KERNEL_BODY(ellipsoid_triangle_block, 1);
+}
 
 }  // namespace impact::kernels

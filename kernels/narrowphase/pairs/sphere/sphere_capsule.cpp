@@ -43,6 +43,9 @@ IMPACT_INLINE void sphere_capsule_block(const LeafSoA& a, const LeafSoA& b, cons
 
 }  // namespace
 
-IMPACT_LANE_KERNEL(collide_sphere_capsule, sphere_capsule_block, 1)
+void collide_sphere_capsule(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out, Range r,
+                            const NarrowConfig& cfg) {
+  IMPACT_LANE_KERNEL_BODY(sphere_capsule_block, 1);
+}
 
 }  // namespace impact::kernels

@@ -141,6 +141,9 @@ IMPACT_INLINE void sphere_ellipsoid_block(const LeafSoA& a, const LeafSoA& b, co
 
 }  // namespace
 
-IMPACT_LANE_KERNEL(collide_sphere_ellipsoid, sphere_ellipsoid_block, 1)
+void collide_sphere_ellipsoid(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out, Range r,
+                              const NarrowConfig& cfg) {
+  IMPACT_LANE_KERNEL_BODY(sphere_ellipsoid_block, 1);
+}
 
 }  // namespace impact::kernels

@@ -39,6 +39,9 @@ IMPACT_INLINE void sphere_halfspace_block(const LeafSoA& a, const LeafSoA& b, co
 
 }  // namespace
 
-IMPACT_LANE_KERNEL(collide_sphere_halfspace, sphere_halfspace_block, 1)
+void collide_sphere_halfspace(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out, Range r,
+                              const NarrowConfig& cfg) {
+  IMPACT_LANE_KERNEL_BODY(sphere_halfspace_block, 1);
+}
 
 }  // namespace impact::kernels

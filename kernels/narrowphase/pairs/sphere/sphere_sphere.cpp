@@ -37,6 +37,9 @@ IMPACT_INLINE void sphere_sphere_block(const LeafSoA& a, const LeafSoA& b, const
 
 }  // namespace
 
-IMPACT_LANE_KERNEL(collide_sphere_sphere, sphere_sphere_block, 1)
+void collide_sphere_sphere(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out, Range r,
+                           const NarrowConfig& cfg) {
+  IMPACT_LANE_KERNEL_BODY(sphere_sphere_block, 1);
+}
 
 }  // namespace impact::kernels

@@ -49,6 +49,9 @@ IMPACT_INLINE void sphere_triangle_block(const LeafSoA& a, const LeafSoA& b, con
 
 }  // namespace
 
-IMPACT_LANE_KERNEL(collide_sphere_triangle, sphere_triangle_block, 1)
+void collide_sphere_triangle(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out, Range r,
+                             const NarrowConfig& cfg) {
+  IMPACT_LANE_KERNEL_BODY(sphere_triangle_block, 1);
+}
 
 }  // namespace impact::kernels

@@ -63,6 +63,9 @@ IMPACT_INLINE void triangle_halfspace_block(const LeafSoA& a, const LeafSoA& b, 
 
 }  // namespace
 
-IMPACT_LANE_KERNEL(collide_triangle_halfspace, triangle_halfspace_block, 3)
+void collide_triangle_halfspace(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out, Range r,
+                                const NarrowConfig& cfg) {
+  IMPACT_LANE_KERNEL_BODY(triangle_halfspace_block, 3);
+}
 
 }  // namespace impact::kernels

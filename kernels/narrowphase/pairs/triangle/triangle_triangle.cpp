@@ -417,6 +417,9 @@ IMPACT_INLINE void triangle_triangle_block(const LeafSoA& a, const LeafSoA& b, c
 
 }  // namespace
 
-IMPACT_LANE_KERNEL(collide_triangle_triangle, triangle_triangle_block, 4)
+void collide_triangle_triangle(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out, Range r,
+                               const NarrowConfig& cfg) {
+  IMPACT_LANE_KERNEL_BODY(triangle_triangle_block, 4);
+}
 
 }  // namespace impact::kernels
