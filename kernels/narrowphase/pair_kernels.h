@@ -183,14 +183,20 @@ void collide_triangle_triangle(const LeafSoA& a, const LeafSoA& b, const Manifol
 void collide_triangle_halfspace(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out, Range r,
                                 const NarrowConfig& cfg);
 
-// --- general convex -----------------------------------------------------------------------
+// --- general/ and the routes of pair_kernels.cpp -----------------------------------------
 /// GJK + EPA for any two convex leaf types ta <= tb (neither a half-space), one pair
-/// per lane; polytope pairs (box, convex, triangle) get a clipped face manifold. Small
-/// box / hull pairs take the separating axis test instead (sat.cpp,
-/// NarrowConfig::sat_max_vertices); box-hull there runs an exact route with the box in
-/// closed form (held to the specialised kernels' tolerance by the matrix test).
+/// per lane, then the face manifold (general/gjk_epa.cpp, general/face_manifold.cpp):
+/// polytope pairs (box, convex, triangle) get a clipped face manifold.
 void collide_gjk_epa(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out, Range r,
                      const NarrowConfig& cfg, LeafType ta, LeafType tb);
+/// Two polytopes (box, convex hull; ta <= tb), lane by lane: the separating axis test
+/// (cvx::collide_sat_lane, general/sat.cpp; box-hull by an exact route with the box in
+/// closed form) where it applies and the two vertex counts sum to at most
+/// cfg.sat_max_vertices (cvx::sat_vertex_count), else GJK + EPA (cvx::collide_convex_lane);
+/// the face manifold either way. The route of the box-hull and hull-hull buckets
+/// (pair_kernels.cpp).
+void collide_sat_or_gjk_epa(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out, Range r,
+                            const NarrowConfig& cfg, LeafType ta, LeafType tb);
 /// Any convex leaf type ta against a half-space (B): the deepest point by the support
 /// function, and for polytopes up to 4 manifold points below the plane, one pair at a
 /// time (every type has a lane kernel in pair_kernel(); collide_convex_halfspace sends
