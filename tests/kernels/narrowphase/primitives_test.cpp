@@ -1,4 +1,4 @@
-// The specialised narrow-phase kernels (kernels/narrowphase/primitives_*.cpp), called
+// The specialised narrow-phase kernels (kernels/narrowphase/pairs/), called
 // directly on hand-built LeafSoA buckets:
 //   SimdMatchesScalar  SIMD vs scalar path on thousands of random lanes per pair type
 //                      (about half overlapping): same counts, same data within a

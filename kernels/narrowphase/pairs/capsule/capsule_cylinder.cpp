@@ -79,7 +79,9 @@
 #include <cstdint>
 
 #include "kernels/narrowphase/pair_kernels.h"
-#include "kernels/narrowphase/lanes/primitives.h"
+#include "kernels/narrowphase/lanes/block_driver.h"
+#include "kernels/narrowphase/lanes/lane_geometry.h"
+#include "kernels/narrowphase/lanes/lane_io.h"
 #include "kernels/narrowphase/solvers/rim_solve.h"
 
 // No FMA contraction in this file (see no_contract.h).
