@@ -111,16 +111,17 @@ inline double kernel_rel_tolerance(LeafType a, LeafType b) {
 }
 
 /// The general route of a bucket, as pair_kernels.cpp takes it where no specialised
-/// kernel exists: GJK + EPA (collide_gjk_epa), or the support-function kernel against a
-/// half-space (collide_support_halfspace). cfg passes through (sat_max_vertices = 0
-/// keeps box / hull pairs on GJK + EPA).
+/// kernel exists: SAT or GJK + EPA by vertex count (collide_sat_or_gjk_epa, the route
+/// the table names), or the support-function kernel against a half-space
+/// (collide_support_halfspace). cfg passes through (sat_max_vertices = 0 keeps box /
+/// hull pairs on GJK + EPA).
 inline void collide_general(LeafType a, LeafType b, const kernels::LeafSoA& la, const kernels::LeafSoA& lb,
                             const kernels::ManifoldSoA& out, kernels::Range r,
                             const kernels::NarrowConfig& cfg) {
   if (b == kernels::kLeafHalfSpace)
     kernels::collide_support_halfspace(la, lb, out, r, cfg, a);
   else
-    kernels::collide_gjk_epa(la, lb, out, r, cfg, a, b);
+    kernels::collide_sat_or_gjk_epa(la, lb, out, r, cfg, a, b);
 }
 
 /// "sphere_box": the bucket's name as a test name.

@@ -1,10 +1,12 @@
 // Internals of the general convex path (gjk_epa.cpp), exposed for tests: GJK on the
 // leaves' cores, EPA on the cores, and the one-lane contact routine behind
-// collide_gjk_epa. Coordinates are relative to the origin the leaves were loaded with.
+// collide_gjk_epa (its manifold: face_manifold.h). Coordinates are relative to the
+// origin the leaves were loaded with.
 #pragma once
 
 #include <cstdint>
 
+#include "kernels/narrowphase/general/lane_contact.h"
 #include "kernels/narrowphase/general/support.h"
 
 namespace impact::kernels::cvx {
@@ -64,44 +66,7 @@ struct EpaResult {
 EpaResult epa_cores(const Leaf& A, const Leaf& B, const Simplex& start, float scale,
                     uint32_t max_iterations, float tolerance);
 
-/// The collision data of one lane (points relative to the origin of the leaves).
-struct LaneContact {
-  uint32_t count = 0;
-  V3 n{0, 1, 0};
-  float depth = 0.0f;
-  V3 point[kMaxManifoldPoints]{};
-  float pdepth[kMaxManifoldPoints]{};
-  uint32_t gjk_iterations = 0, epa_iterations = 0;
-  bool used_epa = false;
-  int epa_status = 0;
-};
-
 /// GJK + EPA + manifold for one pair of convex leaves (neither a half-space).
 void collide_convex_lane(const Leaf& A, const Leaf& B, const NarrowConfig& cfg, LaneContact* out);
-
-/// The manifold of a touching pair (depth > 0) given its normal n (unit, A to B) and
-/// witness points pa, pb on the cores: the clipped faces when both sides offer a flat
-/// feature along n (reference face within ~26 degrees of n), else one point midway
-/// between the surfaces. Sets out's count, n, depth, points and point depths.
-void contact_manifold(const Leaf& A, const Leaf& B, V3 n, float depth, V3 pa, V3 pb, LaneContact* out);
-
-/// Lane k of out from one lane's collision data (points relative to origin, moved back).
-void write_lane(const ManifoldSoA& out, uint32_t k, const LaneContact& c, V3 origin);
-
-/// Keeps at most 4 of n (point, depth) entries in place: the deepest, the farthest from
-/// it, then the two that add most area (normal n). Returns the new count.
-uint32_t reduce_manifold(V3* pts, float* depth, uint32_t n, V3 normal);
-
-/// Face clipping can miss the deepest point: the incident face (the one most aligned
-/// with the normal) need not hold the incident side's support point, and a cylinder's
-/// cap is clipped as an inscribed polygon. Where no clipped point carries (1 - this) of
-/// the pair's depth, the witnesses' midpoint (depth apart along the normal) joins with
-/// the whole depth, if each witness lies in the other shape once moved by the depth,
-/// within kWitnessReach of the depth (contact_manifold, the box-hull and the
-/// hull-triangle manifolds). "Carries" allows this times the depth plus the pair's size
-/// (EPA's depth on a curved side is that close to the clipped points'), so the witness
-/// joins only real misses.
-inline constexpr float kWitnessJoin = 1e-5f;
-inline constexpr float kWitnessReach = 1e-3f;
 
 }  // namespace impact::kernels::cvx

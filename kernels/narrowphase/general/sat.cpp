@@ -3,7 +3,7 @@
 // What: collide_sat_lane computes one lane's collision data (leaf.h: count, unit normal
 // A->B, depth = the smallest separating translation, up to 4 points midway between the
 // surfaces with their own depth) for two polytopes, as collide_convex_lane does with
-// GJK + EPA, and through the same manifold routine (contact_manifold, gjk_epa.cpp).
+// GJK + EPA, and through the same manifold routine (contact_manifold, face_manifold.cpp).
 // Method (D. Gregorius, "The Separating Axis Test between Convex Polyhedra", GDC 2013):
 // the penetration of two polytopes is the largest separation over the face normals of
 // the Minkowski difference A - B: (1) the faces of A, (2) the faces of B, (3) the cross
@@ -76,6 +76,7 @@
 #include <cmath>
 #include <initializer_list>
 
+#include "kernels/narrowphase/general/face_manifold.h"
 #include "kernels/simd/lanes.h"
 
 namespace impact::kernels::cvx {
@@ -307,11 +308,11 @@ struct BoxHullScratch {
 // --- the box-hull route's manifold, in A's frame -------------------------------------------
 
 /// Faces of up to this many vertices are clipped into a manifold (more: the witness point
-/// alone). As contact_manifold (gjk_epa.cpp); 32 until 2026-11-28, when a 64-gon prism
+/// alone). As contact_manifold (face_manifold.cpp); 32 until 2026-11-28, when a 64-gon prism
 /// (a cylinder as a hull) lying on a box got one point. Stack only: ~27 KB per call.
 constexpr uint32_t kMaxFaceVerts = 256;
 constexpr uint32_t kMaxClip = 2 * kMaxFaceVerts + 8;
-constexpr float kChordParallel = 1e-5f;  // as gjk_epa.cpp's chord
+constexpr float kChordParallel = 1e-5f;  // as face_manifold.cpp's chord
 
 struct LocalFace {
   V3 v[kMaxFaceVerts];
@@ -327,7 +328,7 @@ IMPACT_INLINE void chord_plane(float c, float slack, float tol, float* t_in, flo
   else if (slack < -tol) *t_in = INFINITY;  // parallel and outside
 }
 
-/// contact_manifold (gjk_epa.cpp) for box A and hull B, in A's frame (A's centre at 0,
+/// contact_manifold (face_manifold.cpp) for box A and hull B, in A's frame (A's centre at 0,
 /// B's vertices, face normals and offsets already there in S; t: B's centre): the same
 /// reference face choice, clipping, chords through the reference shape and reduction,
 /// without moving the hull's face or the chords' planes to the world.

@@ -1,10 +1,11 @@
 // The separating axis test for pairs of polytopes (box, convex hull), one lane at a
-// time, behind collide_gjk_epa (kernels/narrowphase/general/gjk_epa.cpp). See sat.cpp.
+// time, behind collide_sat_or_gjk_epa (kernels/narrowphase/pair_kernels.cpp). See sat.cpp.
 #pragma once
 
 #include <cstdint>
 
-#include "kernels/narrowphase/general/gjk_epa.h"
+#include "kernels/narrowphase/general/lane_contact.h"
+#include "kernels/narrowphase/general/support.h"
 
 namespace impact::kernels::cvx {
 

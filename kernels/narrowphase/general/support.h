@@ -1,6 +1,6 @@
 // Support functions of the convex leaf types (kernels/narrowphase/leaf/leaf.h), one lane at a
-// time, for the general convex path (GJK / EPA in gjk_epa.cpp, half-spaces in
-// support_halfspace.cpp).
+// time, for the general convex path (GJK / EPA in gjk_epa.cpp, SAT in sat.cpp, the face
+// manifold in face_manifold.cpp, half-spaces in support_halfspace.cpp).
 //
 // What: support(d) = argmax_{x in shape} d.x for sphere, capsule, box, convex hull
 // (HullView), cylinder, ellipsoid and triangle, in the world frame shifted by an

@@ -39,7 +39,7 @@
 
 #include <cfloat>
 
-#include "kernels/narrowphase/lanes/primitives.h"
+#include "kernels/narrowphase/lanes/lane_geometry.h"
 
 namespace impact::kernels::ellip {
 

@@ -33,7 +33,7 @@
 // Hyperellipsoid", Geometric Tools, 2013.
 #pragma once
 
-#include "kernels/narrowphase/lanes/primitives.h"
+#include "kernels/narrowphase/lanes/lane_geometry.h"
 
 namespace impact::kernels::rim {
 

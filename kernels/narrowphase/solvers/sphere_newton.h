@@ -28,7 +28,7 @@
 
 #include <bit>
 
-#include "kernels/narrowphase/lanes/primitives.h"
+#include "kernels/narrowphase/lanes/lane_geometry.h"
 
 namespace impact::kernels::newton {
 

@@ -23,7 +23,7 @@
 //  (d) 1 <= count <= 4, every value finite; each pdepth in (0, depth + tol]; each point
 //      - n pdepth/2 in the cylinder and point + n pdepth/2 in the hull; the deepest pdepth
 //      within tol of depth, plus the margin by which contact_manifold lets clipped points
-//      stand for it (cvx::kWitnessJoin of depth + both leaf sizes, gjk_epa.h);
+//      stand for it (cvx::kWitnessJoin of depth + both leaf sizes, face_manifold.h);
 //  (e) the scalar and SIMD paths agree: the count away from touching, depth within tol,
 //      the normal within kAngleTol (or both as good as the reference's) (not their
 //      bytes: the shared helpers' multiply-adds fuse differently at the two widths);
@@ -53,6 +53,7 @@
 #include <random>
 #include <vector>
 
+#include "kernels/narrowphase/general/face_manifold.h"
 #include "kernels/narrowphase/general/gjk_epa.h"
 #include "kernels/narrowphase/pair_kernels.h"
 #include "support/hull_input.h"

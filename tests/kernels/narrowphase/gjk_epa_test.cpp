@@ -75,13 +75,25 @@ NarrowConfig config() {
 
 using Result = test::PairResult;
 
-/// Runs collide_gjk_epa (or the half-space kernel) on one pair, A's type <= B's.
+/// The general route of bucket (ta, tb): collide_sat_or_gjk_epa for two polytopes (box,
+/// hull: SAT up to cfg.sat_max_vertices, as pair_kernel() routes box-hull and hull-hull),
+/// else collide_gjk_epa.
+void general_route(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out, Range r, const NarrowConfig& cfg,
+                   LeafType ta, LeafType tb) {
+  const auto polytope = [](LeafType t) { return t == kLeafBox || t == kLeafConvex; };
+  if (polytope(ta) && polytope(tb))
+    collide_sat_or_gjk_epa(a, b, out, r, cfg, ta, tb);
+  else
+    collide_gjk_epa(a, b, out, r, cfg, ta, tb);
+}
+
+/// Runs the general route on one pair, A's type <= B's.
 Result run_pair(const Shape& a, const Shape& b, const NarrowConfig& cfg = config()) {
   Lanes la, lb;
   la.push(a);
   lb.push(b);
   Out o(1);
-  collide_gjk_epa(la.soa(), lb.soa(), o.view(), Range{0, 1}, cfg, a.type, b.type);
+  general_route(la.soa(), lb.soa(), o.view(), Range{0, 1}, cfg, a.type, b.type);
   return o.result();
 }
 
@@ -996,9 +1008,9 @@ TEST(GjkEpa, DeterministicAcrossPartitions) {
       }
       Out o1(m), o2(m);
       const NarrowConfig cfg = config();
-      collide_gjk_epa(la.soa(), lb.soa(), o1.view(), Range{0, m}, cfg, ta, tb);
+      general_route(la.soa(), lb.soa(), o1.view(), Range{0, m}, cfg, ta, tb);
       for (uint32_t b0 = 0; b0 < m; b0 += 7)
-        collide_gjk_epa(la.soa(), lb.soa(), o2.view(), Range{b0, std::min(m, b0 + 7)}, cfg, ta, tb);
+        general_route(la.soa(), lb.soa(), o2.view(), Range{b0, std::min(m, b0 + 7)}, cfg, ta, tb);
       for (uint32_t k = 0; k < m; ++k) {
         ASSERT_EQ(o1.count[k], o2.count[k]);
         if (o1.count[k] == 0) continue;

@@ -359,7 +359,9 @@ INSTANTIATE_TEST_SUITE_P(DISABLED_KnownFailing, PairMatrix, ::testing::ValuesIn(
 GTEST_ALLOW_UNINSTANTIATED_PARAMETERIZED_TEST(PairMatrix);
 
 // ---------------------------------------------------------------------------------------
-// Boxes three ways: SAT (pair_kernel), collide_gjk_epa, and 8-vertex hulls through GJK.
+// Boxes three ways: the box-box kernel (pair_kernel), the general polytope route
+// (collide_sat_or_gjk_epa: cvx SAT at the default sat_max_vertices), and 8-vertex hulls
+// (pair_kernel: the same route).
 // ---------------------------------------------------------------------------------------
 
 TEST(NarrowMatrix, BoxesThroughSatGjkAndHullAgree) {
@@ -378,11 +380,13 @@ TEST(NarrowMatrix, BoxesThroughSatGjkAndHullAgree) {
     hl.push_back(make_lane(a, b, w));
   }
   auto gjk_boxes = [](const k::LeafSoA& a, const k::LeafSoA& b, const k::ManifoldSoA& o, k::Range r,
-                      const k::NarrowConfig& cfg) { k::collide_gjk_epa(a, b, o, r, cfg, k::kLeafBox, k::kLeafBox); };
+                      const k::NarrowConfig& cfg) {
+    k::collide_sat_or_gjk_epa(a, b, o, r, cfg, k::kLeafBox, k::kLeafBox);
+  };
   std::printf("boxes three ways\n");
   check_all(k::pair_kernel(k::kLeafBox, k::kLeafBox), lanes, w, 1e-4, "box-box SAT");
-  check_all(gjk_boxes, lanes, w, 1e-3, "box-box GJK/EPA");
-  check_all(k::pair_kernel(k::kLeafConvex, k::kLeafConvex), hl, w, 1e-3, "box hulls GJK/EPA");
+  check_all(gjk_boxes, lanes, w, 1e-3, "box-box general route");
+  check_all(k::pair_kernel(k::kLeafConvex, k::kLeafConvex), hl, w, 1e-3, "box hulls general route");
   const ManifoldLanes sat = run(k::pair_kernel(k::kLeafBox, k::kLeafBox), lanes, w, k::KernelPath::kScalar);
   const ManifoldLanes gjk = run(gjk_boxes, lanes, w, k::KernelPath::kScalar);
   const ManifoldLanes hul =

@@ -108,7 +108,7 @@ Result run(const Shape& a, const Shape& b, const NarrowConfig& cfg) {
   if (a.type == kLeafBox && b.type == kLeafBox && cfg.sat_max_vertices == 0xffffffffu)
     collide_box_box(la.soa(), lb.soa(), out.view(), Range{0, 1}, cfg);  // the specialised kernel
   else
-    collide_gjk_epa(la.soa(), lb.soa(), out.view(), Range{0, 1}, cfg, a.type, b.type);
+    collide_sat_or_gjk_epa(la.soa(), lb.soa(), out.view(), Range{0, 1}, cfg, a.type, b.type);
   return out.result();
 }
 

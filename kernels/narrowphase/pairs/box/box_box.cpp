@@ -48,7 +48,11 @@
 #include <cstdint>
 
 #include "kernels/narrowphase/pair_kernels.h"
-#include "kernels/narrowphase/lanes/primitives.h"
+#include "kernels/narrowphase/lanes/block_driver.h"
+#include "kernels/narrowphase/lanes/lane_geometry.h"
+#include "kernels/narrowphase/lanes/lane_io.h"
+#include "kernels/narrowphase/lanes/live_lanes.h"
+#include "kernels/narrowphase/lanes/manifold_reduce.h"
 
 namespace impact::kernels {
 namespace {
@@ -97,7 +101,7 @@ struct BoxSat {
   float point[3];   // edge axis: step 4's contact point, relative to A's centre
 };
 
-/// closest_segment_segment (primitives.h) in double, for directions ua, ub that are unit
+/// closest_segment_segment (lanes/lane_geometry.h) in double, for directions ua, ub that are unit
 /// only to float precision (a box's float columns): the terms in |ua|^2 and |ub|^2 are
 /// kept, because for near-parallel edges the crossing moves by (|t| * 1e-7) / |ua x ub|^2
 /// when they are dropped (100 m needles 1.7e-4 rad apart, t ~ 58 m: the crossing moved

@@ -54,7 +54,9 @@
 
 #include "kernels/narrowphase/solvers/ellipsoid_pieces.h"
 #include "kernels/narrowphase/pair_kernels.h"
-#include "kernels/narrowphase/lanes/primitives.h"
+#include "kernels/narrowphase/lanes/lane_geometry.h"
+#include "kernels/narrowphase/lanes/lane_io.h"
+#include "kernels/narrowphase/lanes/live_lanes.h"
 
 namespace impact::kernels {
 namespace {

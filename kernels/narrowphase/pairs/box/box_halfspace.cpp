@@ -16,7 +16,8 @@
 #include <cstdint>
 
 #include "kernels/narrowphase/pair_kernels.h"
-#include "kernels/narrowphase/lanes/primitives.h"
+#include "kernels/narrowphase/lanes/block_driver.h"
+#include "kernels/narrowphase/lanes/lane_io.h"
 
 namespace impact::kernels {
 namespace {
@@ -82,6 +83,9 @@ IMPACT_INLINE void box_halfspace_block(const LeafSoA& a, const LeafSoA& b, const
 
 }  // namespace
 
-IMPACT_LANE_KERNEL(collide_box_halfspace, box_halfspace_block, 4)
+void collide_box_halfspace(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out, Range r,
+                           const NarrowConfig& cfg) {
+  IMPACT_LANE_KERNEL_BODY(box_halfspace_block, 4);
+}
 
 }  // namespace impact::kernels

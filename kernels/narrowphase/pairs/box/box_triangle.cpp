@@ -35,7 +35,10 @@
 #include <cstdint>
 
 #include "kernels/narrowphase/pair_kernels.h"
-#include "kernels/narrowphase/lanes/primitives.h"
+#include "kernels/narrowphase/lanes/block_driver.h"
+#include "kernels/narrowphase/lanes/lane_geometry.h"
+#include "kernels/narrowphase/lanes/lane_io.h"
+#include "kernels/narrowphase/lanes/manifold_reduce.h"
 
 namespace impact::kernels {
 namespace {
@@ -304,6 +307,9 @@ IMPACT_INLINE void box_triangle_block(const LeafSoA& a, const LeafSoA& b, const 
 
 }  // namespace
 
-IMPACT_LANE_KERNEL(collide_box_triangle, box_triangle_block, 4)
+void collide_box_triangle(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out, Range r,
+                          const NarrowConfig& cfg) {
+  IMPACT_LANE_KERNEL_BODY(box_triangle_block, 4);
+}
 
 }  // namespace impact::kernels

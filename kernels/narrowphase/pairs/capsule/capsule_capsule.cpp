@@ -14,7 +14,9 @@
 #include <cstdint>
 
 #include "kernels/narrowphase/pair_kernels.h"
-#include "kernels/narrowphase/lanes/primitives.h"
+#include "kernels/narrowphase/lanes/block_driver.h"
+#include "kernels/narrowphase/lanes/lane_geometry.h"
+#include "kernels/narrowphase/lanes/lane_io.h"
 #include "kernels/narrowphase/pairs/capsule/capsule_lanes.h"
 
 namespace impact::kernels {
@@ -125,6 +127,9 @@ IMPACT_INLINE void capsule_capsule_block(const LeafSoA& a, const LeafSoA& b, con
 
 }  // namespace
 
-IMPACT_LANE_KERNEL(collide_capsule_capsule, capsule_capsule_block, 2)
+void collide_capsule_capsule(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out, Range r,
+                             const NarrowConfig& cfg) {
+  IMPACT_LANE_KERNEL_BODY(capsule_capsule_block, 2);
+}
 
 }  // namespace impact::kernels

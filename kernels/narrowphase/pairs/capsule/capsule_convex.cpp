@@ -522,7 +522,7 @@ IMPACT_INLINE EdgeAxis sat_edges(const HullView& h, uint32_t ab, uint32_t ae, V3
 
 /// Distance from the core point at axial parameter t (|t| <= hl) along unit n (s =
 /// n.u) to the capsule's surface: through the cylinder, or an end cap where the
-/// cylinder exit lies beyond the core (prim::capsule_exit, lanes/primitives.h).
+/// cylinder exit lies beyond the core (prim::capsule_exit, lanes/lane_geometry.h).
 IMPACT_INLINE float capsule_exit(float t, float s, float r, float hl) {
   const float c2 = simd::fmax_nn(1.0f - s * s, 1e-12f);
   const float lc = r / std::sqrt(c2);

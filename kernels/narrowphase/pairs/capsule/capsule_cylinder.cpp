@@ -79,7 +79,9 @@
 #include <cstdint>
 
 #include "kernels/narrowphase/pair_kernels.h"
-#include "kernels/narrowphase/lanes/primitives.h"
+#include "kernels/narrowphase/lanes/block_driver.h"
+#include "kernels/narrowphase/lanes/lane_geometry.h"
+#include "kernels/narrowphase/lanes/lane_io.h"
 #include "kernels/narrowphase/solvers/rim_solve.h"
 
 // No FMA contraction in this file (see no_contract.h).
@@ -334,6 +336,9 @@ IMPACT_INLINE void capsule_cylinder_block(const LeafSoA& a, const LeafSoA& b, co
 
 }  // namespace
 
-IMPACT_LANE_KERNEL(collide_capsule_cylinder, capsule_cylinder_block, 2)
+void collide_capsule_cylinder(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out, Range r,
+                              const NarrowConfig& cfg) {
+  IMPACT_LANE_KERNEL_BODY(capsule_cylinder_block, 2);
+}
 
 }  // namespace impact::kernels

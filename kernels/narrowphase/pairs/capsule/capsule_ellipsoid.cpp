@@ -59,7 +59,9 @@
 
 #include "kernels/narrowphase/solvers/ellipsoid_solve.h"
 #include "kernels/narrowphase/pair_kernels.h"
-#include "kernels/narrowphase/lanes/primitives.h"
+#include "kernels/narrowphase/lanes/block_driver.h"
+#include "kernels/narrowphase/lanes/lane_geometry.h"
+#include "kernels/narrowphase/lanes/lane_io.h"
 
 namespace impact::kernels {
 namespace {
@@ -180,6 +182,9 @@ IMPACT_INLINE void capsule_ellipsoid_block(const LeafSoA& a, const LeafSoA& b, c
 
 }  // namespace
 
-IMPACT_LANE_KERNEL(collide_capsule_ellipsoid, capsule_ellipsoid_block, 1)
+void collide_capsule_ellipsoid(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out, Range r,
+                               const NarrowConfig& cfg) {
+  IMPACT_LANE_KERNEL_BODY(capsule_ellipsoid_block, 1);
+}
 
 }  // namespace impact::kernels

@@ -3,7 +3,7 @@
 // the two-point result. Internal to kernels/narrowphase/pairs/capsule.
 #pragma once
 
-#include "kernels/narrowphase/lanes/primitives.h"
+#include "kernels/narrowphase/lanes/lane_io.h"
 
 namespace impact::kernels::capsule_lanes {
 

@@ -86,10 +86,11 @@
 #include <cmath>
 #include <cstdint>
 
+#include "kernels/narrowphase/general/face_manifold.h"
 #include "kernels/narrowphase/general/gjk_epa.h"
 #include "kernels/narrowphase/general/hull_scan.h"
 #include "kernels/narrowphase/pair_kernels.h"
-#include "kernels/narrowphase/lanes/primitives.h"
+#include "kernels/narrowphase/lanes/lane_geometry.h"
 #include "kernels/narrowphase/solvers/rim_solve.h"
 
 // No FMA contraction in this file (see no_contract.h).

@@ -65,7 +65,7 @@
 #include "kernels/narrowphase/solvers/ellipsoid_pieces.h"
 #include "kernels/narrowphase/general/hull_scan.h"
 #include "kernels/narrowphase/pair_kernels.h"
-#include "kernels/narrowphase/lanes/primitives.h"
+#include "kernels/narrowphase/lanes/lane_geometry.h"
 
 namespace impact::kernels {
 namespace {

@@ -83,7 +83,8 @@
 #include <cstdint>
 
 #include "kernels/narrowphase/pair_kernels.h"
-#include "kernels/narrowphase/lanes/primitives.h"
+#include "kernels/narrowphase/lanes/lane_io.h"
+#include "kernels/narrowphase/lanes/live_lanes.h"
 
 namespace impact::kernels {
 namespace {

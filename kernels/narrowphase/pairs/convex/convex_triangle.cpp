@@ -94,6 +94,7 @@
 #include <cmath>
 #include <cstdint>
 
+#include "kernels/narrowphase/general/face_manifold.h"
 #include "kernels/narrowphase/general/gjk_epa.h"
 #include "kernels/narrowphase/general/hull_scan.h"
 #include "kernels/narrowphase/pair_kernels.h"

@@ -108,7 +108,12 @@
 #include <iterator>
 
 #include "kernels/narrowphase/pair_kernels.h"
-#include "kernels/narrowphase/lanes/primitives.h"
+#include "kernels/narrowphase/lanes/block_driver.h"
+#include "kernels/narrowphase/lanes/lane_geometry.h"
+#include "kernels/narrowphase/lanes/lane_io.h"
+#include "kernels/narrowphase/lanes/live_lanes.h"
+#include "kernels/narrowphase/lanes/manifold_reduce.h"
+#include "kernels/narrowphase/lanes/witnessed_best.h"
 #include "kernels/narrowphase/solvers/rim_solve.h"
 
 // No FMA contraction in this file (see no_contract.h).

@@ -82,7 +82,9 @@
 //
 #include "kernels/narrowphase/solvers/ellipsoid_solve.h"
 #include "kernels/narrowphase/pair_kernels.h"
-#include "kernels/narrowphase/lanes/primitives.h"
+#include "kernels/narrowphase/lanes/lane_geometry.h"
+#include "kernels/narrowphase/lanes/lane_io.h"
+#include "kernels/narrowphase/lanes/live_lanes.h"
 #include "kernels/narrowphase/solvers/sphere_newton.h"
 
 namespace impact::kernels {

@@ -27,7 +27,8 @@
 #include <cstdint>
 
 #include "kernels/narrowphase/pair_kernels.h"
-#include "kernels/narrowphase/lanes/primitives.h"
+#include "kernels/narrowphase/lanes/block_driver.h"
+#include "kernels/narrowphase/lanes/lane_io.h"
 
 namespace impact::kernels {
 namespace {
@@ -89,6 +90,9 @@ IMPACT_INLINE void cylinder_halfspace_block(const LeafSoA& a, const LeafSoA& b, 
 
 }  // namespace
 
-IMPACT_LANE_KERNEL(collide_cylinder_halfspace, cylinder_halfspace_block, 4)
+void collide_cylinder_halfspace(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out, Range r,
+                                const NarrowConfig& cfg) {
+  IMPACT_LANE_KERNEL_BODY(cylinder_halfspace_block, 4);
+}
 
 }  // namespace impact::kernels

@@ -66,11 +66,14 @@
 // Bergen, Collision Detection in Interactive 3D Environments, 2003, ch. 4); the
 // secular equation of the point-ellipse distance (Eberly, "Distance from a Point to an
 // Ellipse, an Ellipsoid, or a Hyperellipsoid", Geometric Tools, 2013); contact
-// clipping and reduction to 4 points as in the other lane kernels (primitives.h).
+// clipping and reduction to 4 points as in the other lane kernels (lanes/manifold_reduce.h).
 #include <cstdint>
 
 #include "kernels/narrowphase/pair_kernels.h"
-#include "kernels/narrowphase/lanes/primitives.h"
+#include "kernels/narrowphase/lanes/block_driver.h"
+#include "kernels/narrowphase/lanes/lane_geometry.h"
+#include "kernels/narrowphase/lanes/lane_io.h"
+#include "kernels/narrowphase/lanes/manifold_reduce.h"
 #include "kernels/narrowphase/solvers/rim_solve.h"
 
 // No FMA contraction in this file (see no_contract.h).
@@ -572,6 +575,9 @@ IMPACT_INLINE void cylinder_triangle_block(const LeafSoA& a, const LeafSoA& b, c
 
 }  // namespace
 
-IMPACT_LANE_KERNEL(collide_cylinder_triangle, cylinder_triangle_block, 4)
+void collide_cylinder_triangle(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out, Range r,
+                               const NarrowConfig& cfg) {
+  IMPACT_LANE_KERNEL_BODY(cylinder_triangle_block, 4);
+}
 
 }  // namespace impact::kernels

@@ -17,7 +17,8 @@
 #include <cstdint>
 
 #include "kernels/narrowphase/pair_kernels.h"
-#include "kernels/narrowphase/lanes/primitives.h"
+#include "kernels/narrowphase/lanes/block_driver.h"
+#include "kernels/narrowphase/lanes/lane_io.h"
 
 namespace impact::kernels {
 namespace {
@@ -56,6 +57,9 @@ IMPACT_INLINE void ellipsoid_halfspace_block(const LeafSoA& a, const LeafSoA& b,
 
 }  // namespace
 
-IMPACT_LANE_KERNEL(collide_ellipsoid_halfspace, ellipsoid_halfspace_block, 1)
+void collide_ellipsoid_halfspace(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out, Range r,
+                                 const NarrowConfig& cfg) {
+  IMPACT_LANE_KERNEL_BODY(ellipsoid_halfspace_block, 1);
+}
 
 }  // namespace impact::kernels

@@ -62,7 +62,9 @@
 
 #include "kernels/narrowphase/solvers/ellipsoid_solve.h"
 #include "kernels/narrowphase/pair_kernels.h"
-#include "kernels/narrowphase/lanes/primitives.h"
+#include "kernels/narrowphase/lanes/block_driver.h"
+#include "kernels/narrowphase/lanes/lane_geometry.h"
+#include "kernels/narrowphase/lanes/lane_io.h"
 
 namespace impact::kernels {
 namespace {
@@ -216,6 +218,9 @@ IMPACT_INLINE void ellipsoid_triangle_block(const LeafSoA& a, const LeafSoA& b, 
 
 }  // namespace
 
-IMPACT_LANE_KERNEL(collide_ellipsoid_triangle, ellipsoid_triangle_block, 1)
+void collide_ellipsoid_triangle(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out, Range r,
+                                const NarrowConfig& cfg) {
+  IMPACT_LANE_KERNEL_BODY(ellipsoid_triangle_block, 1);
+}
 
 }  // namespace impact::kernels

@@ -19,7 +19,9 @@
 #include <cstdint>
 
 #include "kernels/narrowphase/pair_kernels.h"
-#include "kernels/narrowphase/lanes/primitives.h"
+#include "kernels/narrowphase/lanes/block_driver.h"
+#include "kernels/narrowphase/lanes/lane_geometry.h"
+#include "kernels/narrowphase/lanes/lane_io.h"
 
 namespace impact::kernels {
 namespace {
@@ -70,6 +72,9 @@ IMPACT_INLINE void sphere_box_block(const LeafSoA& a, const LeafSoA& b, const Ma
 
 }  // namespace
 
-IMPACT_LANE_KERNEL(collide_sphere_box, sphere_box_block, 1)
+void collide_sphere_box(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out, Range r,
+                        const NarrowConfig& cfg) {
+  IMPACT_LANE_KERNEL_BODY(sphere_box_block, 1);
+}
 
 }  // namespace impact::kernels

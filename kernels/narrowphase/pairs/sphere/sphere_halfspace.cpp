@@ -16,7 +16,8 @@
 #include <cstdint>
 
 #include "kernels/narrowphase/pair_kernels.h"
-#include "kernels/narrowphase/lanes/primitives.h"
+#include "kernels/narrowphase/lanes/block_driver.h"
+#include "kernels/narrowphase/lanes/lane_io.h"
 
 namespace impact::kernels {
 namespace {
@@ -39,6 +40,9 @@ IMPACT_INLINE void sphere_halfspace_block(const LeafSoA& a, const LeafSoA& b, co
 
 }  // namespace
 
-IMPACT_LANE_KERNEL(collide_sphere_halfspace, sphere_halfspace_block, 1)
+void collide_sphere_halfspace(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out, Range r,
+                              const NarrowConfig& cfg) {
+  IMPACT_LANE_KERNEL_BODY(sphere_halfspace_block, 1);
+}
 
 }  // namespace impact::kernels

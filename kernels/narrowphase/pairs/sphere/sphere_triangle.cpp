@@ -17,7 +17,9 @@
 #include <cstdint>
 
 #include "kernels/narrowphase/pair_kernels.h"
-#include "kernels/narrowphase/lanes/primitives.h"
+#include "kernels/narrowphase/lanes/block_driver.h"
+#include "kernels/narrowphase/lanes/lane_geometry.h"
+#include "kernels/narrowphase/lanes/lane_io.h"
 
 namespace impact::kernels {
 namespace {
@@ -49,6 +51,9 @@ IMPACT_INLINE void sphere_triangle_block(const LeafSoA& a, const LeafSoA& b, con
 
 }  // namespace
 
-IMPACT_LANE_KERNEL(collide_sphere_triangle, sphere_triangle_block, 1)
+void collide_sphere_triangle(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out, Range r,
+                             const NarrowConfig& cfg) {
+  IMPACT_LANE_KERNEL_BODY(sphere_triangle_block, 1);
+}
 
 }  // namespace impact::kernels

@@ -15,7 +15,8 @@
 #include <cstdint>
 
 #include "kernels/narrowphase/pair_kernels.h"
-#include "kernels/narrowphase/lanes/primitives.h"
+#include "kernels/narrowphase/lanes/block_driver.h"
+#include "kernels/narrowphase/lanes/lane_io.h"
 
 namespace impact::kernels {
 namespace {
@@ -63,6 +64,9 @@ IMPACT_INLINE void triangle_halfspace_block(const LeafSoA& a, const LeafSoA& b, 
 
 }  // namespace
 
-IMPACT_LANE_KERNEL(collide_triangle_halfspace, triangle_halfspace_block, 3)
+void collide_triangle_halfspace(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out, Range r,
+                                const NarrowConfig& cfg) {
+  IMPACT_LANE_KERNEL_BODY(triangle_halfspace_block, 3);
+}
 
 }  // namespace impact::kernels

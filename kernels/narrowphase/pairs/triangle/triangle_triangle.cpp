@@ -69,7 +69,10 @@
 #include <cstdint>
 
 #include "kernels/narrowphase/pair_kernels.h"
-#include "kernels/narrowphase/lanes/primitives.h"
+#include "kernels/narrowphase/lanes/block_driver.h"
+#include "kernels/narrowphase/lanes/lane_geometry.h"
+#include "kernels/narrowphase/lanes/lane_io.h"
+#include "kernels/narrowphase/lanes/manifold_reduce.h"
 
 namespace impact::kernels {
 namespace {
@@ -417,6 +420,9 @@ IMPACT_INLINE void triangle_triangle_block(const LeafSoA& a, const LeafSoA& b, c
 
 }  // namespace
 
-IMPACT_LANE_KERNEL(collide_triangle_triangle, triangle_triangle_block, 4)
+void collide_triangle_triangle(const LeafSoA& a, const LeafSoA& b, const ManifoldSoA& out, Range r,
+                               const NarrowConfig& cfg) {
+  IMPACT_LANE_KERNEL_BODY(triangle_triangle_block, 4);
+}
 
 }  // namespace impact::kernels
