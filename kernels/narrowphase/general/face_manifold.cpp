@@ -34,9 +34,6 @@ using simd::fmax_nn;
 using simd::fmin_nn;
 
 
-/// Faces of up to this many vertices are clipped into a manifold (more: the witness point
-/// alone); 32 until 2026-11-28 (a 64-gon prism on a box got one point). Stack only.
-constexpr uint32_t kMaxFaceVerts = 256;
 constexpr uint32_t kMaxClip = 2 * kMaxFaceVerts + 8;
 
 /// Types whose supporting feature can be a flat face (or a straight line).
@@ -319,7 +316,7 @@ uint32_t clip_faces(const Face& ref, const Face& inc, const Leaf& ref_leaf, V3 n
 /// the planes, not the ray's chord through l: beside a sharp vertex the chord's end
 /// moves by a witness's rounding times the cotangent of the vertex's half angle, so a
 /// real vertex contact failed the chord form by 2e-7 of 9e-6 (a hull vertex just inside
-/// a cylinder's rim, IMPACT_TEST_INTENSITY=30, 2026-11-29), while the planes' distance
+/// a cylinder's rim, found at IMPACT_TEST_INTENSITY=30), while the planes' distance
 /// moves by the rounding alone.
 bool reaches_at(const Leaf& l, V3 x, V3 dir, float depth, float tol) {
   const V3 q = x + dir * depth - l.p;

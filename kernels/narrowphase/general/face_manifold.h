@@ -10,6 +10,10 @@
 
 namespace impact::kernels::cvx {
 
+/// Faces of up to this many vertices are clipped into a manifold (more: the witness
+/// point alone); large enough for a 64-gon prism (a cylinder as a hull) lying on a box.
+inline constexpr uint32_t kMaxFaceVerts = 256;
+
 /// The manifold of a touching pair (depth > 0) given its normal n (unit, A to B) and
 /// witness points pa, pb on the cores: the clipped faces when both sides offer a flat
 /// feature along n (reference face within ~26 degrees of n), else one point midway

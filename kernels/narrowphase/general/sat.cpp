@@ -307,10 +307,7 @@ struct BoxHullScratch {
 
 // --- the box-hull route's manifold, in A's frame -------------------------------------------
 
-/// Faces of up to this many vertices are clipped into a manifold (more: the witness point
-/// alone). As contact_manifold (face_manifold.cpp); 32 until 2026-11-28, when a 64-gon prism
-/// (a cylinder as a hull) lying on a box got one point. Stack only: ~27 KB per call.
-constexpr uint32_t kMaxFaceVerts = 256;
+/// Clip buffers for faces of up to kMaxFaceVerts (face_manifold.h). Stack only: ~27 KB per call.
 constexpr uint32_t kMaxClip = 2 * kMaxFaceVerts + 8;
 constexpr float kChordParallel = 1e-5f;  // as face_manifold.cpp's chord
 
