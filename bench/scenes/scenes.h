@@ -1,6 +1,6 @@
 // Benchmark scenes: deterministic body and plane sets shared by the throughput tool
-// (bench/scenes/throughput.cpp) and the Google Benchmark micro-benchmarks
-// (bench/broadphase_bench.cpp).
+// (bench/scenes/throughput.cpp), the rigid-body peers tool (bench/rigid_peers.cpp) and
+// the Google Benchmark micro-benchmarks (bench/broadphase_bench.cpp).
 //
 // Every scene is a pure function of (name, body count, seed): positions come from a
 // counter-based generator (SplitMix64), not <random> distributions, whose output is
