@@ -1,6 +1,6 @@
 // Benchmark scenes: deterministic body and plane sets shared by the throughput tool
-// (bench/scenes/throughput.cpp) and the Google Benchmark micro-benchmarks
-// (bench/broadphase_bench.cpp).
+// (bench/scenes/throughput.cpp), the rigid-body peers tool (bench/rigid_peers.cpp) and
+// the Google Benchmark micro-benchmarks (bench/broadphase_bench.cpp).
 //
 // Every scene is a pure function of (name, body count, seed): positions come from a
 // counter-based generator (SplitMix64), not <random> distributions, whose output is
@@ -49,28 +49,83 @@ inline constexpr uint64_t kDefaultSeed = 0x1badb002u;
 inline constexpr float kMinRadius = 0.25f;
 inline constexpr float kMaxRadius = 0.5f;
 
+/// The geometry of one shape of a scene (the ShapeSet::add_* arguments). Only the
+/// fields of its type are read.
+struct SceneShape {
+  ShapeType type = ShapeType::kBox;  ///< kSphere, kCapsule, kBox, kConvex, kCylinder or kMesh
+  Eigen::Vector3f half_extents{0.5f, 0.5f, 0.5f};  ///< kBox, m
+  float radius = 0.5f;       ///< kSphere, kCapsule, kCylinder, m
+  float half_length = 0.5f;  ///< kCapsule, kCylinder (along local z), m
+  std::vector<Eigen::Vector3f> points;  ///< kConvex: the point cloud; kMesh: the vertices, m
+  std::vector<uint32_t> indices;        ///< kMesh: three vertex indices per triangle
+};
+
 /// A scene ready to be loaded into a World.
 struct Scene {
   std::string name;
+  /// Shapes the bodies refer to: a body's BodyDesc::shape.index is a position in this
+  /// list (load_scene adds them, in order, to the new world's empty ShapeSet, where
+  /// they get those same ids). Empty for the sphere scenes.
+  std::vector<SceneShape> shapes;
   std::vector<BodyDesc> bodies;
   std::vector<PlaneDesc> planes;
   Eigen::Vector3f gravity{0.0f, -9.81f, 0.0f};  ///< m/s^2
+  /// Bodies that rotate and rub (boxes, hulls, ...): the scene means to be run with
+  /// the soft-step solver (SolverKind::kSoftStep), which impact_bench picks for it
+  /// unless told otherwise. The sphere scenes are frictionless and leave it false.
+  bool rigid = false;
 };
 
 /// Names accepted by make_scene(), in the order --help lists them.
 std::span<const std::string_view> scene_names();
 /// One line describing a scene, for --help.
 std::string_view scene_summary(std::string_view name);
+/// The body count a scene is documented at (100000 for the sphere scenes; 1240 for
+/// "pyramid", ...; see make_scene); 0 for an unknown name.
+uint32_t scene_default_bodies(std::string_view name);
 
-/// Builds a scene:
+/// Builds a scene. Sphere scenes (`bodies` spheres):
 ///  - "box":     frictionless spheres (r in [0.25, 0.5] m, restitution in [0, 0.5]) on a jittered grid
 ///               above the floor of an open box (5 static planes), falling under gravity.
 ///  - "rain":    the same box; spheres start higher and sparser, already moving down
 ///               at 4..12 m/s with some sideways drift.
 ///  - "uniform": spheres uniformly at random in a cube sized for about one overlapping
 ///               pair per body; no gravity, no planes.
+/// Stacks of 1 m cubes (1 kg, friction 0.6, restitution 0) standing at rest on a floor
+/// plane y = 0 (friction 0.6): neighbours in a layer kStackGap apart, each box
+/// kStackOverlap into the one below (or the floor), so every resting contact exists
+/// from the first step and nothing falls. Each is the largest complete structure of at
+/// most `bodies` boxes (at least one layer / pyramid):
+///  - "pyramid":  square pyramid, layer k (from the top, k >= 1) k x k boxes centred on
+///                the y axis; 15 layers = 1240 boxes (the default).
+///  - "wall":     a pyramid in the x-y plane (z = 0), row k from the top k boxes;
+///                100 rows = 5050 boxes (the default).
+///  - "pyramids": floor(bodies / 55) square pyramids of 5 layers (55 boxes) on a
+///                square grid 8 m apart, row by row; 196 = 14 x 14 = 10780 boxes (the default).
+///  - "column":   `bodies` boxes in one vertical column (default 20).
+/// Piles dropped into the open box of "box" (same grid layout, 1.1 m pitch, random
+/// orientations), density 1 kg/m^3, friction 0.6, restitution 0:
+///  - "hulls":    `bodies` convex hulls of kHullPoints random points each (within a
+///                0.48 m ball, squashed per axis, moved to put the centre of mass at
+///                the origin; at most 0.5 m from it), each its own shape (default 5000).
+///  - "mixed":    `bodies` bodies cycling box, capsule, hull, cylinder, sphere with
+///                random sizes (bounding radius <= 0.5 m), dropped on a static
+///                triangle-mesh floor of random heights in [-0.15, 0.15] m (one extra
+///                static body, the last), walls as in "box" and a backstop floor plane
+///                at y = -1 m under the mesh (default 10000 dynamic bodies).
 /// Fails with kInvalidArgument for an unknown name or bodies == 0.
 Status make_scene(std::string_view name, uint32_t bodies, uint64_t seed, Scene* out);
+
+/// Horizontal gap between neighbouring boxes of the stacking scenes, m.
+inline constexpr float kStackGap = 0.005f;
+/// How far each box of the stacking scenes starts inside its support, m.
+inline constexpr float kStackOverlap = 0.001f;
+/// Points of each hull of the "hulls" and "mixed" scenes.
+inline constexpr uint32_t kHullPoints = 32;
+
+/// Adds the scene's shapes to `shapes` in order; fails unless they get the ids
+/// 0, 1, 2, ... (shapes must then start empty) or when the set rejects one.
+Status add_scene_shapes(const Scene& scene, ShapeSet* shapes);
 
 /// Creates a world from desc (gravity taken from the scene) and loads the scene into it.
 Status load_scene(const Scene& scene, WorldDesc desc, std::unique_ptr<World>* out);

@@ -36,7 +36,7 @@ constexpr int kExitUsage = 2;
 
 struct Options {
   std::string scene = "box";
-  uint32_t bodies = 100000;
+  std::optional<uint32_t> bodies;  // unset: the scene's default (scene_default_bodies)
   uint32_t steps = 300;
   uint32_t threads = 0;  // 0 = all hardware threads
   impact::Backend backend = impact::Backend::kDefault;
@@ -55,17 +55,22 @@ void print_usage(std::FILE* f) {
                "Steps a built-in scene and reports time per step and per pass.\n\n"
                "  --scene NAME         scene to run (default box):\n");
   for (std::string_view name : impact::bench::scene_names())
-    std::fprintf(f, "                         %-8.*s %.*s\n", static_cast<int>(name.size()), name.data(),
+    std::fprintf(f, "                         %-9.*s %.*s\n", static_cast<int>(name.size()), name.data(),
                  static_cast<int>(impact::bench::scene_summary(name).size()),
                  impact::bench::scene_summary(name).data());
   std::fprintf(f,
-               "  --bodies N           number of spheres, >= 1 (default 100000)\n"
+               "  --bodies N           bodies, >= 1 (default: the scene's, 100000 for box, rain and\n"
+               "                       uniform); pyramid, wall and pyramids build the largest\n"
+               "                       complete structure of at most N boxes (pyramids: N / 55 of\n"
+               "                       them, at least one); mixed adds its static mesh floor\n"
                "  --steps N            fixed steps of 1/60 s, >= 1 (default 300)\n"
                "  --threads N          worker threads, 0 = all hardware threads (default 0)\n"
                "  --backend NAME       default | tbb | openmp | serial (default: the build's)\n"
                "  --broadphase NAME    grid | lbvh | sap | brute (default grid)\n"
-               "  --iterations N       solver velocity iterations (default: library default)\n"
-               "  --solver NAME        jacobi | soft (default: library default, jacobi)\n"
+               "  --iterations N       jacobi velocity iterations (default: library default)\n"
+               "  --solver NAME        jacobi | soft (default: soft for the rigid scenes pyramid,\n"
+               "                       wall, pyramids, column, hulls and mixed, which need rotation\n"
+               "                       and friction; otherwise the library default)\n"
                "  --seed N             scene seed (default %" PRIu64
                ")\n"
                "  --json FILE          also write every figure as JSON to FILE\n"
@@ -128,7 +133,9 @@ int parse_args(int argc, char** argv, Options* o) {
     if (arg == "--help" || arg == "-h") {
       return -1;
     } else if (arg == "--bodies") {
-      if (int r = number(&o->bodies, 1)) return r;
+      uint32_t n = 0;
+      if (int r = number(&n, 1)) return r;
+      o->bodies = n;
     } else if (arg == "--steps") {
       if (int r = number(&o->steps, 1)) return r;
     } else if (arg == "--threads") {
@@ -297,14 +304,19 @@ int main(int argc, char** argv) {
   // --- setup -------------------------------------------------------------------------
   const Clock::time_point t_setup = Clock::now();
   Scene scene;
-  if (impact::Status s = impact::bench::make_scene(opt.scene, opt.bodies, opt.seed, &scene); !s.ok())
+  const uint32_t requested = opt.bodies.value_or(impact::bench::scene_default_bodies(opt.scene));
+  if (impact::Status s = impact::bench::make_scene(opt.scene, requested, opt.seed, &scene); !s.ok())
     return library_error("make_scene", s);
+  const auto bodies = static_cast<uint32_t>(scene.bodies.size());
   impact::WorldDesc desc;
   desc.backend = opt.backend;
   desc.threads = opt.threads;
   desc.broad_phase = opt.broad_phase;
   if (opt.iterations) desc.solver.velocity_iterations = *opt.iterations;
-  if (opt.solver) desc.solver.kind = *opt.solver;
+  if (opt.solver)
+    desc.solver.kind = *opt.solver;
+  else if (scene.rigid)
+    desc.solver.kind = impact::SolverKind::kSoftStep;
   std::unique_ptr<impact::World> world;
   if (impact::Status s = impact::bench::load_scene(scene, desc, &world); !s.ok())
     return library_error("world setup", s);
@@ -344,12 +356,12 @@ int main(int argc, char** argv) {
   // --- report ------------------------------------------------------------------------
   const double n_steps = opt.steps;
   const double med = median(step_ms);
-  const double body_steps_per_s = med > 0.0 ? opt.bodies / (med * 1e-3) : 0.0;
+  const double body_steps_per_s = med > 0.0 ? bodies / (med * 1e-3) : 0.0;
   const char* backend = impact::to_string(world->backend());
   const char* broad_name = impact::to_string(opt.broad_phase);
   const uint32_t iterations = world->desc().solver.velocity_iterations;
   std::printf("impact_bench %d.%d.%d: scene %s, %u bodies, %zu planes, %u steps of %.6g s\n",
-              IMPACT_VERSION_MAJOR, IMPACT_VERSION_MINOR, IMPACT_VERSION_PATCH, opt.scene.c_str(), opt.bodies,
+              IMPACT_VERSION_MAJOR, IMPACT_VERSION_MINOR, IMPACT_VERSION_PATCH, opt.scene.c_str(), bodies,
               scene.planes.size(), opt.steps, static_cast<double>(desc.fixed_dt));
   const bool soft = world->desc().solver.kind == impact::SolverKind::kSoftStep;
   std::printf("  backend %s, threads %u (hardware %u), broad phase %s, solver %s, %s %u\n", backend, threads,
@@ -367,7 +379,7 @@ int main(int argc, char** argv) {
               contacts / n_steps, plane_contacts / n_steps);
   std::printf("  throughput       %.4g body-steps/s (bodies / median step time)\n", body_steps_per_s);
   std::printf("  state_hash       %016" PRIx64 "\n", hash);
-  std::printf("csv: %u,%u,%u,%.4f,%016" PRIx64 "\n", threads, opt.bodies, opt.steps, med, hash);
+  std::printf("csv: %u,%u,%u,%.4f,%016" PRIx64 "\n", threads, bodies, opt.steps, med, hash);
   std::fflush(stdout);
 
   if (!opt.json_path.empty()) {
@@ -392,7 +404,9 @@ int main(int argc, char** argv) {
                  "  \"threads\": %u,\n"
                  "  \"hardware_threads\": %u,\n"
                  "  \"broad_phase\": \"%s\",\n"
+                 "  \"solver\": \"%s\",\n"
                  "  \"velocity_iterations\": %u,\n"
+                 "  \"substeps\": %u,\n"
                  "  \"setup_ms\": %.6g,\n"
                  "  \"ms_per_step\": {\"median\": %.6g, \"mean\": %.6g, \"min\": %.6g, \"max\": %.6g},\n"
                  "  \"pass_ms_median\": {\"integrate\": %.6g, \"bounds\": %.6g, \"broad_phase\": %.6g, "
@@ -405,9 +419,9 @@ int main(int argc, char** argv) {
                  "\"\n"
                  "}\n",
                  IMPACT_VERSION_MAJOR, IMPACT_VERSION_MINOR, IMPACT_VERSION_PATCH,
-                 json_escape(opt.scene).c_str(), opt.seed, opt.bodies, scene.planes.size(), opt.steps,
+                 json_escape(opt.scene).c_str(), opt.seed, bodies, scene.planes.size(), opt.steps,
                  static_cast<double>(desc.fixed_dt), backend, threads, impact::hardware_threads(), broad_name,
-                 iterations, setup_ms, med, mean(step_ms), *std::min_element(step_ms.begin(), step_ms.end()),
+                 soft ? "soft" : "jacobi", iterations, world->desc().solver.substeps, setup_ms, med, mean(step_ms), *std::min_element(step_ms.begin(), step_ms.end()),
                  *std::max_element(step_ms.begin(), step_ms.end()), median(integrate), median(bounds),
                  median(broad), median(narrow), median(solve), median(total), pairs / n_steps,
                  contacts / n_steps, plane_contacts / n_steps, body_steps_per_s, hash);
