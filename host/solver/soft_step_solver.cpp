@@ -56,8 +56,44 @@ void SoftStepSolver::for_each_colour(const Executor& exec, Fn&& fn) const {
       fn(kernels::Range{b + cb, b + ce});
     });
   }
-  const uint32_t ob = colour_start_[kernels::kOverflowColour], oe = colour_start_[kernels::kOverflowColour + 1];
+  const uint32_t ob = colour_start_[kernels::kOverflowColour], oe = colour_start_[kernels::kDeepColour];
   if (ob != oe) fn(kernels::Range{ob, oe});  // in order, on this thread
+}
+
+void SoftStepSolver::gather_deep(const kernels::ContactManifoldArrays& c, uint32_t manifolds) {
+  const uint8_t* colour = colour_.data();
+  const uint32_t md = colour_start_[kernels::kDeepColour + 1] - colour_start_[kernels::kDeepColour];
+  uint32_t pd = 0;
+  for (uint32_t m = 0; m < manifolds; ++m)
+    if (colour[m] == kernels::kDeepColour) pd += c.count[m];
+  const bool plain = c.child_a == nullptr && c.feature == nullptr;
+  deep_.resize(md, pd, c.first_point == nullptr, plain);
+  uint32_t* rows = scratch(deep_rows_, pd);
+  uint32_t i = 0, k = 0;
+  for (uint32_t m = 0; m < manifolds; ++m) {
+    if (colour[m] != kernels::kDeepColour) continue;
+    deep_.pair[i] = c.pair[m];
+    deep_.a[i] = c.a[m];
+    deep_.b[i] = c.b[m];
+    deep_.b_is_plane[i] = c.b_is_plane[m];
+    if (!plain) {
+      deep_.child_a[i] = kernels::child_a_of(c, m);
+      deep_.child_b[i] = kernels::child_b_of(c, m);
+    }
+    for (int d = 0; d < 3; ++d) deep_.normal[d][i] = c.normal[d][m];
+    deep_.depth[i] = c.depth[m];
+    deep_.count[i] = c.count[m];
+    if (c.first_point != nullptr) deep_.first_point[i] = k;
+    const uint32_t row0 = kernels::first_point_of(c, m);
+    for (uint32_t j = 0; j < c.count[m]; ++j, ++k) {
+      const uint32_t row = row0 + j;
+      rows[k] = row;
+      for (int d = 0; d < 3; ++d) deep_.point[d][k] = c.point[d][row];
+      deep_.point_depth[k] = c.point_depth[row];
+      if (!plain) deep_.feature[k] = kernels::feature_of(c, m, row);
+    }
+    ++i;
+  }
 }
 
 void SoftStepSolver::step(const Executor& exec, const WorldDesc& desc, const ContactManifolds& contacts, BodyStore& s,
@@ -71,37 +107,26 @@ void SoftStepSolver::step(const Executor& exec, const WorldDesc& desc, const Con
   p.max_push_speed = sd.max_push_speed;
   p.restitution_threshold = sd.restitution_threshold;
   p.warm_start = sd.warm_start;
-
-  kernels::BodyForces forces{};
-  kernels::BodyDamping damping{};
-  const kernels::SoftBodyInput in = body_input(s, desc, &forces, &damping);
-  kernels::SolverBody* bodies = scratch(bodies_, static_cast<size_t>(n) + 1);
-  kernels::BodyDrive* drive = scratch(drive_, n);
-  kernels::Sym3* ii = scratch(inv_inertia_, n);
-  kernels::Vec3* com = scratch(com_, n);
-  const kernels::Vec3 g{desc.gravity.x(), desc.gravity.y(), desc.gravity.z()};
-  exec.for_each_chunk(n, kBodyGrain, [&](uint32_t b, uint32_t e, uint32_t) {
-    kernels::prepare_bodies(p, g, in, bodies, drive, ii, com, {b, e});
-  });
-  bodies[n] = kernels::SolverBody{};
-  bodies[n].dq = {0.0f, 0.0f, 0.0f, 1.0f};
-
-  kernels::ContactConstraint* cons = nullptr;
-  kernels::ContactPoint* pts = nullptr;
   const kernels::ContactManifoldArrays c = contacts.view();
+
+  // Colour, then order the constraints by colour (stable: manifold order within one).
+  // The deep manifolds (the last colour) go to the recovery solve now, before the
+  // bodies' velocities are read.
+  deep_.clear();
+  uint32_t ns = 0;  // constraints the soft step solves: colours 0 .. overflow
   if (nm > 0) {
-    // Colour, then order the constraints by colour (stable: manifold order within one).
     uint32_t* masks = scratch(body_masks_, n);
     std::memset(masks, 0, sizeof(uint32_t) * n);
     uint8_t* colour = scratch(colour_, nm);
-    uint32_t counts[kernels::kColourCount + 1];
-    kernels::colour_manifolds(c, s.inv_mass.data(), nm, masks, colour, counts);
-    uint32_t next[kernels::kColourCount + 1];
+    uint32_t counts[kernels::kDeepColour + 1];
+    kernels::colour_manifolds(c, s.inv_mass.data(), nm, sd.max_push_speed * dt, masks, colour, counts);
+    uint32_t next[kernels::kDeepColour + 1];
     colour_start_[0] = 0;
-    for (uint32_t k = 0; k <= kernels::kColourCount; ++k) {
+    for (uint32_t k = 0; k <= kernels::kDeepColour; ++k) {
       next[k] = colour_start_[k];
       colour_start_[k + 1] = colour_start_[k] + counts[k];
     }
+    ns = colour_start_[kernels::kDeepColour];
     uint32_t* order = scratch(order_, nm);
     for (uint32_t m = 0; m < nm; ++m) order[next[colour[m]]++] = m;
     uint32_t* first = scratch(first_, nm);
@@ -110,7 +135,32 @@ void SoftStepSolver::step(const Executor& exec, const WorldDesc& desc, const Con
       first[i] = run;
       run += c.count[order[i]];
     }
+    if (ns < nm) {
+      gather_deep(c, nm);
+      recovery_.solve_velocities(exec, sd, deep_, s, planes.restitution.data());
+    } else {
+      recovery_.clear_impulses();
+    }
+  }
 
+  kernels::BodyForces forces{};
+  kernels::BodyDamping damping{};
+  const kernels::SoftBodyInput in = body_input(s, desc, &forces, &damping);
+  kernels::SolverBody* bodies = scratch(bodies_, static_cast<size_t>(n) + 1);
+  kernels::BodyDrive* drive = scratch(drive_, n);
+  kernels::Sym3* ii = scratch(inv_inertia_, n);
+  kernels::Vec3* com = scratch(com_, n);
+  kernels::GyroBody* gyro = in.rotating && in.gyroscopic ? scratch(gyro_, n) : nullptr;
+  const kernels::Vec3 g{desc.gravity.x(), desc.gravity.y(), desc.gravity.z()};
+  exec.for_each_chunk(n, kBodyGrain, [&](uint32_t b, uint32_t e, uint32_t) {
+    kernels::prepare_bodies(p, g, in, bodies, drive, ii, com, gyro, {b, e});
+  });
+  bodies[n] = kernels::SolverBody{};
+  bodies[n].dq = {0.0f, 0.0f, 0.0f, 1.0f};
+
+  kernels::ContactConstraint* cons = nullptr;
+  kernels::ContactPoint* pts = nullptr;
+  if (nm > 0) {
     // Last step's impulses of the same contacts (a, b, plane, feature).
     uint64_t* keys = scratch(keys_, np);
     exec.for_each_chunk(nm, kPointGrain, [&](uint32_t b, uint32_t e, uint32_t) {
@@ -130,7 +180,9 @@ void SoftStepSolver::step(const Executor& exec, const WorldDesc& desc, const Con
                                         planes.friction.data(), planes.restitution.data()};
     cons = scratch(cons_, nm);
     pts = scratch(points_, np);
-    exec.for_each_chunk(nm, kConstraintGrain, [&](uint32_t b, uint32_t e, uint32_t) {
+    const uint32_t* order = order_.data();
+    const uint32_t* first = first_.data();
+    exec.for_each_chunk(ns, kConstraintGrain, [&](uint32_t b, uint32_t e, uint32_t) {
       kernels::prepare_contacts(p, c, order, first, bodies, ii, com, n, mat, warm, cons, pts, {b, e});
     });
   }
@@ -139,26 +191,35 @@ void SoftStepSolver::step(const Executor& exec, const WorldDesc& desc, const Con
     exec.for_each_chunk(n, kBodyGrain, [&](uint32_t b, uint32_t e, uint32_t) {
       kernels::integrate_substep_velocities(drive, bodies, {b, e});
     });
-    if (nm > 0) {
+    if (ns > 0) {
       for_each_colour(exec, [&](kernels::Range r) { kernels::warm_start_contacts(cons, pts, bodies, r); });
       for_each_colour(exec, [&](kernels::Range r) { kernels::solve_contacts(p, true, cons, pts, bodies, r); });
     }
     exec.for_each_chunk(n, kBodyGrain, [&](uint32_t b, uint32_t e, uint32_t) {
-      kernels::integrate_substep_positions(p.h, bodies, {b, e});
+      kernels::integrate_substep_positions(p.h, gyro, bodies, {b, e});
     });
-    if (nm > 0)
+    if (ns > 0)
       for_each_colour(exec, [&](kernels::Range r) { kernels::solve_contacts(p, false, cons, pts, bodies, r); });
   }
 
   if (nm > 0) {
     for_each_colour(exec, [&](kernels::Range r) { kernels::restitute_contacts(p, cons, pts, bodies, r); });
-    // Keep (key, values) for the next step's warm start; the public impulses.
+    // Keep (key, values) for the next step's warm start; the public impulses. Deep
+    // points keep no warm-start value (their impulses are the recovery solver's).
     kernels::WarmPoint* stored = scratch(stored_, np);
     float* out = scratch(impulse_out_, np);
     const uint32_t* order = order_.data();
-    exec.for_each_chunk(nm, kConstraintGrain, [&](uint32_t b, uint32_t e, uint32_t) {
+    exec.for_each_chunk(ns, kConstraintGrain, [&](uint32_t b, uint32_t e, uint32_t) {
       kernels::store_contacts(c, order, cons, pts, stored, out, {b, e});
     });
+    if (ns < nm) {
+      const std::span<const float> deep_impulse = recovery_.impulses();
+      const uint32_t* rows = deep_rows_.data();
+      for (uint32_t k = 0; k < deep_.points; ++k) {
+        stored[rows[k]] = kernels::WarmPoint{-1.0f, 0, 0, 0, 0, 0, 0, 0};
+        out[rows[k]] = deep_impulse[k];
+      }
+    }
     uint64_t* pk = scratch(prev_keys_, np);
     uint32_t* pi = scratch(prev_index_, np);
     std::memcpy(pk, keys_.data(), sizeof(uint64_t) * np);
@@ -174,15 +235,18 @@ void SoftStepSolver::step(const Executor& exec, const WorldDesc& desc, const Con
   } else {
     prev_count_ = 0;
     impulse_out_.clear();
+    recovery_.clear_impulses();
   }
 
   exec.for_each_chunk(n, kBodyGrain, [&](uint32_t b, uint32_t e, uint32_t) {
     kernels::finish_bodies(in, bodies, com, {b, e});
   });
+  if (deep_.manifolds > 0) recovery_.correct_positions(exec, sd, deep_, s, dt);
 }
 
 void SoftStepSolver::remap_bodies(const Executor& exec, const uint32_t* inv_perm, uint32_t n) {
   impulse_out_.clear();
+  recovery_.remap_bodies(exec, inv_perm, n);
   if (prev_count_ == 0) return;
   exec.for_each_chunk(prev_count_, kPointGrain, [&](uint32_t b, uint32_t e, uint32_t) {
     kernels::remap_pair_keys(inv_perm, prev_keys_.data(), {b, e});

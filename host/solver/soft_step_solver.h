@@ -4,12 +4,24 @@
 // warm starting, and it integrates the bodies itself, substep by substep: in a soft
 // step the integrate and correct stages of the Jacobi solver do nothing.
 //
-// Per step: prepare bodies -> colour the manifolds (kernels/solver/graph_colouring.h)
-// -> order constraints by colour -> match last step's impulses by contact key ->
-// prepare constraints -> substeps -> restitution -> store -> write the bodies back.
+// Per step: colour the manifolds (kernels/solver/graph_colouring.h) -> recovery
+// velocity solve of the deep ones -> prepare bodies -> order constraints by colour ->
+// match last step's impulses by contact key -> prepare constraints -> substeps ->
+// restitution -> store -> write the bodies back -> recovery position correction.
+//
+// Deep overlaps: a manifold deeper than max_push_speed * dt cannot be pushed out by
+// the soft bias within the step, and a body in hundreds of them (bodies created at
+// one point, a fast body found far inside another) would sum hundreds of capped
+// pushes into a large velocity. Those manifolds skip the soft step and go to the
+// Jacobi solver (host/solver/contact_solver.h) instead: its velocity solve stops
+// their approach (with restitution) before the substeps, and its position correction
+// moves them apart after, on displacements, so the recovery adds no kinetic energy.
+// It is linear (no angular terms, no friction): a recovery mode, not the solver.
+// A scene without deep manifolds pays one comparison per manifold for it.
+//
 // Cost: O(bodies) per substep for integration, O(points) per pass, 3 passes a
 // substep (warm start, solve, relax), one parallel loop per colour and pass; the
-// colouring and the overflow colour are serial.
+// colouring, the overflow colour and the copy of the deep manifolds are serial.
 #pragma once
 
 #include <cstdint>
@@ -21,6 +33,7 @@
 #include "host/parallel.h"
 #include "host/plane_store.h"
 #include "host/radix_sort.h"
+#include "host/solver/contact_solver.h"
 #include "impact/world.h"
 #include "kernels/solver/graph_colouring.h"
 #include "kernels/solver/soft_contact.h"
@@ -36,21 +49,32 @@ class SoftStepSolver {
   /// Body slots were permuted (inv_perm[old slot] = new slot, n bodies).
   void remap_bodies(const Executor& exec, const uint32_t* inv_perm, uint32_t n);
   /// Slots were removed or reused: last step's impulses no longer apply.
-  void forget() { prev_count_ = 0; }
+  void forget() {
+    prev_count_ = 0;
+    recovery_.forget();
+  }
   /// This step has no contact results.
-  void clear_impulses() { impulse_out_.clear(); }
+  void clear_impulses() {
+    impulse_out_.clear();
+    recovery_.clear_impulses();
+  }
+  /// Manifolds of the last step that took the recovery path.
+  uint32_t deep_manifolds() const { return static_cast<uint32_t>(deep_.manifolds); }
   /// Accumulated normal impulse per contact point of the last step, N s.
   std::span<const float> impulses() const { return {impulse_out_.data(), impulse_out_.size()}; }
 
  private:
   template <class Fn>
   void for_each_colour(const Executor& exec, Fn&& fn) const;
+  // Copies the manifolds of colour kDeepColour into deep_ (rows into deep_rows_).
+  void gather_deep(const kernels::ContactManifoldArrays& c, uint32_t manifolds);
 
   RadixSorter sorter_;
   Buffer<kernels::SolverBody> bodies_;  // entry n: the zero body of planes
   Buffer<kernels::BodyDrive> drive_;
   Buffer<kernels::Sym3> inv_inertia_;
   Buffer<kernels::Vec3> com_;
+  Buffer<kernels::GyroBody> gyro_;             // when rotating bodies take the gyroscopic term
   Buffer<uint32_t> body_masks_;
   Buffer<uint8_t> colour_;
   Buffer<uint32_t> order_, first_;             // constraint -> manifold, first point
@@ -64,8 +88,11 @@ class SoftStepSolver {
   Buffer<uint32_t> prev_start_;                // per body a: range in prev_keys_
   Buffer<kernels::WarmPoint> prev_values_;
   Buffer<float> impulse_out_;
+  ContactManifolds deep_;                      // this step's deep manifolds
+  Buffer<uint32_t> deep_rows_;                 // their points' rows in the step's manifolds
+  ContactSolver recovery_;                     // the Jacobi solver, on deep_ only
   uint32_t prev_count_ = 0, prev_body_count_ = 0;
-  uint32_t colour_start_[kernels::kColourCount + 2] = {};
+  uint32_t colour_start_[kernels::kDeepColour + 2] = {};
 };
 
 }  // namespace impact::host

@@ -24,7 +24,9 @@ enum class SolverKind : uint8_t {
   /// solve with a soft bias, integrate positions, relax without bias; then one
   /// restitution pass. Gauss-Seidel over a deterministic graph colouring of the
   /// contacts; angular terms, Coulomb friction at a central anchor per manifold,
-  /// twist and rolling resistance (Box2D v3 / Box3D's scheme).
+  /// twist and rolling resistance (Box2D v3 / Box3D's scheme). Manifolds deeper than
+  /// max_push_speed * dt take a recovery path: kJacobi's velocity solve and position
+  /// correction (position_iterations, position_correction), which add no energy.
   kSoftStep,
   /// Normal impulses only, no rotation or friction: Jacobi iteration with mass
   /// splitting, then position correction (the solver before rigid bodies).
@@ -33,22 +35,24 @@ enum class SolverKind : uint8_t {
 
 /// Accuracy knobs of the contact solver (docs/solver.md has their measured cost and error).
 struct SolverDesc {
-  /// kJacobi stays the default until the soft step handles deep pile-ups (docs/solver.md).
-  SolverKind kind = SolverKind::kJacobi;
+  SolverKind kind = SolverKind::kSoftStep;
   /// kSoftStep: substeps per step, >= 1. More = stiffer stacks and smaller errors.
   uint32_t substeps = 4;
   /// kSoftStep: stiffness of contacts, Hz (> 0; capped at a quarter of the substep
   /// rate), and their damping ratio (>= 0).
   float contact_hertz = 30.0f;
   float contact_damping_ratio = 10.0f;
-  /// kSoftStep: the fastest a contact pushes overlapping bodies apart, m/s (> 0).
+  /// kSoftStep: the fastest a contact pushes overlapping bodies apart, m/s (> 0); an
+  /// overlap deeper than max_push_speed * dt takes the recovery path instead.
   float max_push_speed = 3.0f;
   /// kJacobi: velocity iterations. 1 is exact for an isolated pair; stacks and piles
   /// need more, or warm starting to spread work over steps.
   uint32_t velocity_iterations = 8;
-  /// kJacobi: position-correction iterations; 0 turns position correction off.
+  /// kJacobi, and kSoftStep's deep overlaps: position-correction iterations; 0 turns
+  /// position correction off.
   uint32_t position_iterations = 4;
-  /// kJacobi: fraction of the penetration beyond slop removed per step, in [0, 1].
+  /// kJacobi, and kSoftStep's deep overlaps: fraction of the penetration beyond slop
+  /// removed per step, in [0, 1].
   float position_correction = 0.8f;
   /// Penetration left uncorrected, m, >= 0; keeps resting contacts persistent (the
   /// narrow phase reports overlaps only, so a contact pushed to zero depth would be
@@ -75,8 +79,9 @@ struct WorldDesc {
   uint32_t reorder_interval = 32;
   /// Keep last step's positions so interpolated_positions() can blend (costs 12 B/body).
   bool interpolation = false;
-  /// Bodies that rotate take the gyroscopic torque -w x (I w) by an implicit step
-  /// (stable at any spin; a T-handle spun about its middle axis flips as it should).
+  /// Bodies that rotate take the gyroscopic torque -w x (I w) (stable at any spin; a
+  /// T-handle spun about its middle axis flips as it should): kSoftStep keeps the
+  /// world angular momentum of each substep, kJacobi takes an implicit Euler step.
   /// false: angular velocity changes only by contacts and torques (cheaper, but a
   /// torque-free body's angular momentum then drifts as it turns).
   bool gyroscopic = true;

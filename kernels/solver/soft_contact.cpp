@@ -36,6 +36,31 @@ IMPACT_INLINE Sym3 inverse(const Sym3& m) {
 
 IMPACT_INLINE Sym3 add(const Sym3& a, const Sym3& b) { return a + b; }
 
+// Double-precision rotation helpers of the gyroscopic update.
+struct DVec {
+  double x, y, z;
+};
+struct DQuat {
+  double x, y, z, w;
+};
+IMPACT_INLINE DQuat unit(Quat q) {
+  const double x = q.x, y = q.y, z = q.z, w = q.w;
+  const double inv = 1.0 / std::sqrt(x * x + y * y + z * z + w * w);
+  return {x * inv, y * inv, z * inv, w * inv};
+}
+IMPACT_INLINE DVec cross_d(DVec a, DVec b) { return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x}; }
+IMPACT_INLINE DVec rotate_d(DQuat q, DVec v) {
+  const DVec u{q.x, q.y, q.z};
+  const DVec c = cross_d(u, v);
+  const DVec t{2.0 * c.x, 2.0 * c.y, 2.0 * c.z};
+  const DVec e = cross_d(u, t);
+  return {v.x + q.w * t.x + e.x, v.y + q.w * t.y + e.y, v.z + q.w * t.z + e.z};
+}
+IMPACT_INLINE DVec rotate_inv_d(DQuat q, DVec v) { return rotate_d({-q.x, -q.y, -q.z, q.w}, v); }
+IMPACT_INLINE DVec rotate_inv_d(DQuat q, Vec3 v) { return rotate_inv_d(q, DVec{v.x, v.y, v.z}); }
+IMPACT_INLINE DVec mul_d(Vec3 a, DVec b) { return {a.x * b.x, a.y * b.y, a.z * b.z}; }
+
+
 // Applies linear impulse P at anchors ra, rb: a gets -P, b gets +P.
 IMPACT_INLINE void push(const ContactConstraint& k, Vec3 P, Vec3 ra, Vec3 rb, Vec3& va, Vec3& wa, Vec3& vb,
                         Vec3& wb) {
@@ -75,7 +100,7 @@ SoftParams soft_params(float dt, uint32_t substeps, float hertz, float zeta) {
 
 void prepare_bodies(const SoftParams& p, Vec3 g, const SoftBodyInput& in, SolverBody* IMPACT_RESTRICT out,
                     BodyDrive* IMPACT_RESTRICT drive, Sym3* IMPACT_RESTRICT inv_inertia, Vec3* IMPACT_RESTRICT com,
-                    Range r) {
+                    GyroBody* IMPACT_RESTRICT gyro, Range r) {
   const RigidBodies& b = in.rigid;
   for (uint32_t i = r.begin; i < r.end; ++i) {
     const float m = b.inv_mass[i];
@@ -93,8 +118,12 @@ void prepare_bodies(const SoftParams& p, Vec3 g, const SoftBodyInput& in, Solver
       const Quat rp = principal_orientation(b, i);
       const Vec3 d_inv{b.iix[i], b.iiy[i], b.iiz[i]};
       if (m > 0.0f) ii = rotate_diagonal(to_matrix(rp), d_inv);
-      if (m > 0.0f && in.gyroscopic && d_inv.x > 0.0f && d_inv.y > 0.0f && d_inv.z > 0.0f)
-        s.w = rotate(rp, gyroscopic_step(rotate_inv(rp, s.w), {1.0f / d_inv.x, 1.0f / d_inv.y, 1.0f / d_inv.z}, p.dt));
+      if (gyro != nullptr) {
+        GyroBody gb{rp, {0, 0, 0}, d_inv};
+        if (m > 0.0f && d_inv.x > 0.0f && d_inv.y > 0.0f && d_inv.z > 0.0f)
+          gb.moments = {1.0f / d_inv.x, 1.0f / d_inv.y, 1.0f / d_inv.z};
+        gyro[i] = gb;
+      }
     }
     if (m > 0.0f) {
       Vec3 accel = g;
@@ -209,11 +238,31 @@ void integrate_substep_velocities(const BodyDrive* IMPACT_RESTRICT drive, Solver
   }
 }
 
-void integrate_substep_positions(float h, SolverBody* IMPACT_RESTRICT b, Range r) {
+void integrate_substep_positions(float h, const GyroBody* IMPACT_RESTRICT gyro, SolverBody* IMPACT_RESTRICT b,
+                                 Range r) {
   for (uint32_t i = r.begin; i < r.end; ++i) {
     SolverBody& s = b[i];
     s.dp = s.dp + h * s.v;
-    if (s.w.x != 0.0f || s.w.y != 0.0f || s.w.z != 0.0f) s.dq = integrate(s.dq, s.w, h);
+    if (s.w.x == 0.0f && s.w.y == 0.0f && s.w.z == 0.0f) continue;
+    Quat dq = integrate(s.dq, s.w, h);
+    if (gyro != nullptr && gyro[i].moments.x > 0.0f) {
+      // L = R I R^T w at the old frame R = dq frame; w' = R' I^-1 R'^T L at the new
+      // frame R', first turned by w, then again by the mean of w and that w'.
+      const GyroBody& g = gyro[i];
+      // In double: float rotations of near-unit quaternions scale the part of v
+      // across the axis by 1 + O(eps) with a bias that |L| would accumulate.
+      const DQuat r0 = unit(s.dq * g.frame);
+      const DVec l = rotate_d(r0, mul_d(g.moments, rotate_inv_d(r0, s.w)));
+      auto spin_at = [&](Quat turned) {
+        const DQuat r1 = unit(turned * g.frame);
+        const DVec w = rotate_d(r1, mul_d(g.inv_moments, rotate_inv_d(r1, l)));
+        return Vec3{static_cast<float>(w.x), static_cast<float>(w.y), static_cast<float>(w.z)};
+      };
+      const Vec3 w1 = spin_at(dq);
+      dq = integrate(s.dq, 0.5f * (s.w + w1), h);
+      s.w = spin_at(dq);
+    }
+    s.dq = dq;
   }
 }
 

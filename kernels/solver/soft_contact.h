@@ -6,8 +6,8 @@
 // One step (host/solver/soft_step_solver.cpp drives it):
 //   prepare_bodies        per body: the solver state (v, w, dp = 0, dq = 1), the world
 //                         inverse inertia I_w^-1 = R diag(ii) R^T, the centre of mass,
-//                         the per-substep velocity increments (gravity, forces), and,
-//                         once per step, damping and the implicit gyroscopic step
+//                         the per-substep velocity increments (gravity, forces),
+//                         damping, and the principal frames for the gyroscopic term
 //   prepare_contacts      per manifold: anchors relative to the centres of mass, the
 //                         normal mass of each point, the friction anchor, the 2x2
 //                         tangent mass, twist and rolling masses, warm-start impulses
@@ -15,7 +15,9 @@
 //     integrate_substep_velocities  v += dv, w += dw
 //     warm_start_contacts           apply the accumulated impulses
 //     solve_contacts(bias)          normal impulses toward separation -slop, soft
-//     integrate_substep_positions   dp += h v, dq = integrate(dq, w, h)
+//     integrate_substep_positions   dp += h v, dq = integrate(dq, w, h); with the
+//                                   gyroscopic term w' = I_w(dq')^-1 I_w(dq) w (a
+//                                   torque-free substep keeps L = I_w w exactly)
 //     solve_contacts(no bias)       relax: normal impulses rigid, then friction
 //   restitute_contacts    normal impulses toward -e * (approach speed) where the
 //                         approach was faster than the threshold
@@ -66,6 +68,14 @@ static_assert(sizeof(SolverBody) == 64);
 struct BodyDrive {
   Vec3 dv;
   Vec3 dw;
+};
+
+/// Per-body data of the gyroscopic update (SoftBodyInput::gyroscopic): the principal
+/// frame at the step's start and the principal moments; moments.x == 0 for a body
+/// that takes none (static, kinematic, or with a zero moment).
+struct GyroBody {
+  Quat frame;
+  Vec3 moments, inv_moments;
 };
 
 /// What prepare_bodies reads: the body store's arrays. Angular arrays (and the
@@ -138,9 +148,10 @@ struct ContactMaterials {
   const float* plane_restitution;
 };
 
+/// gyro may be null when !in.gyroscopic or !in.rotating.
 void prepare_bodies(const SoftParams& p, Vec3 gravity, const SoftBodyInput& in, SolverBody* IMPACT_RESTRICT out,
                     BodyDrive* IMPACT_RESTRICT drive, Sym3* IMPACT_RESTRICT inv_inertia, Vec3* IMPACT_RESTRICT com,
-                    Range r);
+                    GyroBody* IMPACT_RESTRICT gyro, Range r);
 
 /// Constraints order[i] for i in r: manifold order[i] of c becomes constraint i with
 /// points first_point[i] ...; warm[k] (null: cold) is point k's value from last step
@@ -151,7 +162,17 @@ void prepare_contacts(const SoftParams& p, const ContactManifoldArrays& c, const
                       ContactConstraint* IMPACT_RESTRICT out, ContactPoint* IMPACT_RESTRICT points, Range r);
 
 void integrate_substep_velocities(const BodyDrive* IMPACT_RESTRICT drive, SolverBody* IMPACT_RESTRICT b, Range r);
-void integrate_substep_positions(float h, SolverBody* IMPACT_RESTRICT b, Range r);
+/// gyro: null, or prepare_bodies' per-body gyroscopic data.
+///
+/// The gyroscopic update conserves angular momentum instead of integrating the torque
+/// -w x I w: w is re-derived from the unchanged world momentum L at the orientation
+/// reached by turning with the mean of the old w and the w so derived at the turn by
+/// the old w (one fixed-point step of the implicit midpoint rule, second order). For a torque-free body L is kept
+/// to rounding, and the energy stays below |L|^2 / (2 I_min) (stable at any spin;
+/// the implicit Euler step of kernels/integrate/rigid_euler.h, which the Jacobi path
+/// uses, is stable too but dissipates; docs/solver.md).
+void integrate_substep_positions(float h, const GyroBody* IMPACT_RESTRICT gyro, SolverBody* IMPACT_RESTRICT b,
+                                 Range r);
 
 void warm_start_contacts(const ContactConstraint* cons, const ContactPoint* points, SolverBody* bodies, Range r);
 void solve_contacts(const SoftParams& p, bool use_bias, ContactConstraint* cons, ContactPoint* points,

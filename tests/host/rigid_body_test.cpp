@@ -74,8 +74,8 @@ Eigen::Vector3d rk4(const Eigen::Vector3d& I, const Eigen::Vector3d& w, double h
 }
 
 TEST(RigidBody, SpinAboutAPrincipalAxisTurnsByTheIntegratorsExactAngle) {
-  // q' = normalise(q + h/2 (w, 0) q) turns by 2 atan(h |w| / 2) a step about w: the
-  // scheme's exact answer, which the float state must track to rounding.
+  // q' = normalise(q + h/2 (w, 0) q) turns by 2 atan(h |w| / 2) a substep about w:
+  // the scheme's exact answer, which the float state must track to rounding.
   BodyDesc d;
   d.inv_mass = 1.0f;
   d.angular_velocity = Eigen::Vector3f(0.0f, 3.0f, 0.0f);
@@ -86,7 +86,8 @@ TEST(RigidBody, SpinAboutAPrincipalAxisTurnsByTheIntegratorsExactAngle) {
   EXPECT_NEAR(w.y(), 3.0f, 1e-5f);
   EXPECT_NEAR(w.x(), 0.0f, 1e-5f);
   EXPECT_NEAR(w.z(), 0.0f, 1e-5f);
-  const double angle = steps * 2.0 * std::atan(kH * 3.0 / 2.0);
+  const double sub = SolverDesc{}.substeps;
+  const double angle = steps * sub * 2.0 * std::atan(kH / sub * 3.0 / 2.0);
   const Eigen::Quaterniond want(Eigen::AngleAxisd(angle, Eigen::Vector3d::UnitY()));
   const Eigen::Quaterniond got = orientation(*b.world, b.h).cast<double>();
   EXPECT_LT(got.angularDistance(want), 2e-4) << "angle " << angle;
@@ -96,12 +97,11 @@ TEST(RigidBody, SpinAboutAPrincipalAxisTurnsByTheIntegratorsExactAngle) {
 }
 
 TEST(RigidBody, FreeAsymmetricBodyKeepsItsAngularMomentum) {
-  // Torque-free: the world angular momentum L = R I R^T w is constant. The implicit
-  // gyroscopic step is first order and dissipative: energy never grows, and the spin
-  // drifts toward the largest axis (here, a thin box tumbling at 2.3 rad/s for 10 s,
-  // L moves by about 9% and the energy falls by about 15%: the price of stability at
-  // any spin, docs/solver.md). Without the gyroscopic term w stays fixed in the world
-  // while the body turns, so L wanders far more.
+  // Torque-free: the world angular momentum L = R I R^T w is constant. The soft step
+  // re-derives w from L at each substep's new orientation, so L is kept to rounding
+  // (a thin box tumbling at 2.3 rad/s for 10 s: the bar is 0.1%), and the
+  // energy, which that scheme does not hold exactly, within 0.1% too. Without the
+  // gyroscopic term w stays fixed in the world while the body turns: L wanders.
   const Eigen::Vector3f half(0.6f, 0.3f, 0.1f);
   const double m = 2.0;
   const Eigen::Vector3d I = box_moments(half, m);
@@ -125,16 +125,19 @@ TEST(RigidBody, FreeAsymmetricBodyKeepsItsAngularMomentum) {
     for (int i = 0; i < 600; ++i) {
       IMPACT_ASSERT_OK(b.world->step());
       *drift = std::max(*drift, (momentum(&e) - l0).norm() / l0.norm());
-      EXPECT_LE(e, e0 * (1.0 + 1e-5)) << "step " << i << ": the energy grew";
+      if (gyroscopic) {
+        EXPECT_NEAR(e / e0, 1.0, 1e-3) << "step " << i;
+      }
     }
     *energy_ratio = e / e0;
   };
   double drift_on = 0, drift_off = 0, energy_on = 0, energy_off = 0;
   run(true, &drift_on, &energy_on);
   run(false, &drift_off, &energy_off);
-  EXPECT_LT(drift_on, 0.12) << "gyroscopic on";
-  EXPECT_GT(energy_on, 0.8) << "the implicit step's dissipation over 10 s";
-  EXPECT_GT(drift_off, 5.0 * drift_on) << "gyroscopic off: L is not conserved";
+  std::printf("[ measure ] free body 10 s: L drift %.3g (gyroscopic) / %.3g (off), energy ratio %.6f / %.6f\n",
+              drift_on, drift_off, energy_on, energy_off);
+  EXPECT_LT(drift_on, 1e-3) << "gyroscopic on";
+  EXPECT_GT(drift_off, 0.1) << "gyroscopic off: L is not conserved";
 }
 
 TEST(RigidBody, IntermediateAxisSpinFlipsLikeEulersEquations) {

@@ -11,11 +11,14 @@
 //   5. near-degenerate geometry: coincident and nearly coincident centres,
 //      exact touching, a 0.1 mm sphere on a floor, a radius ratio of 1e4;
 //   6. 1000 spheres released at one point.
+// Every test runs for both solvers (SolverKind::kSoftStep, the default, and kJacobi);
+// where their designs give different bounds, the check says which and why.
 // Figures worth tracking (overlaps, errors, times) are printed as "[ measure ]"
 // lines. Tolerances are stated next to each check, with the physics behind them.
 // Where a check encodes a known limitation of the solver design (Jacobi with mass
 // splitting and warm starting, position correction by iterations on displacements,
-// discrete collision detection) its comment says so with "LIMITATION".
+// the soft step's recovery path for deep overlaps, discrete collision detection)
+// its comment says so with "LIMITATION".
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -62,7 +65,17 @@ void add_floor(World& w, double height, float restitution = 0.0f) {
   ASSERT_TRUE(test::IsOk(w.create_planes(std::span(&floor, 1), std::span(&ph, 1))));
 }
 
-Scene make_bodies(const WorldDesc& d, const std::vector<BodyDesc>& bodies) {
+// The solver the running test uses (set by the fixture): every test runs for both.
+SolverKind g_kind = SolverKind::kSoftStep;
+[[maybe_unused]] bool soft() { return g_kind == SolverKind::kSoftStep; }
+
+class Extremes : public ::testing::TestWithParam<SolverKind> {
+ protected:
+  void SetUp() override { g_kind = GetParam(); }
+};
+
+Scene make_bodies(WorldDesc d, const std::vector<BodyDesc>& bodies) {
+  d.solver.kind = g_kind;
   Scene s;
   s.world = test::make_world(d);
   s.h.resize(bodies.size());
@@ -108,6 +121,7 @@ Scene make_reference_scene(double s, const Vec3d& offset) {
   d.gravity = Eigen::Vector3f(0.0f, static_cast<float>(-kG * s), 0.0f);
   d.solver.penetration_slop = static_cast<float>(0.001 * s);
   d.solver.restitution_threshold = static_cast<float>(0.5 * s);
+  d.solver.max_push_speed = static_cast<float>(3.0 * s);
   std::vector<BodyDesc> b(kSceneBodies);
   for (int i = 0; i < kStack; ++i) {
     b[i].position = (offset + s * Vec3d(0.0, 0.5 + i, 0.0)).cast<float>();
@@ -156,7 +170,7 @@ std::vector<Vec3d> run_scaled_scene(double s, bool* ball_bounced) {
   return scene_state(sc, s, Vec3d::Zero());
 }
 
-TEST(Extremes, ScaleInvariance) {
+TEST_P(Extremes, ScaleInvariance) {
   bool ref_bounced = false;
   const std::vector<Vec3d> p_ref = run_scaled_scene(1.0, &ref_bounced);
   expect_reference_sane(p_ref);
@@ -188,7 +202,7 @@ TEST(Extremes, ScaleInvariance) {
 // step) moves in ulp-sized jerks. Physics must not otherwise depend on D: the
 // stack must rest on the translated floor, nothing may fall through, and the
 // state relative to D must match the run at the origin within a few ulp(D).
-TEST(Extremes, FarFromOrigin) {
+TEST_P(Extremes, FarFromOrigin) {
   const Vec3d origin = Vec3d::Zero();
   Scene ref = make_reference_scene(1.0, origin);
   double ref_lowest = 1e30;  // lowest end-of-step height of the bottom sphere's centre
@@ -230,8 +244,9 @@ TEST(Extremes, FarFromOrigin) {
                 dist, ulp, max_stack_err, max_stack_err / ulp, max_ball_err, max_ball_err / ulp);
     // The stack is re-anchored by its contacts every step, so its quantisation
     // error does not accumulate: a few ulp (4) cover rounding of the rest height
-    // through three contacts.
-    EXPECT_LE(max_stack_err, 4.0 * ulp);
+    // through three contacts. The soft step's contacts are springs that answer the
+    // quantised depth with a push over later steps (measured 5.4 ulp at 1e4): 8.
+    EXPECT_LE(max_stack_err, (soft() ? 8.0 : 4.0) * ulp);
     // The ball's x += v dt is rounded every step (<= ulp/2), and that error adds
     // up over its flight: kSceneSteps * ulp / 2 = 60 ulp in the worst case. The
     // roundings of successive steps mostly cancel (measured: 0.3 ulp at 1e4,
@@ -299,7 +314,7 @@ TwoStackResult run_two_stack(double m_bottom, double m_top) {
 // 0.16 m/s gained); 0.05 m/s is the bar of stacking_test. The end-of-step overlap
 // of a resting contact stays near the slop (measured ~1 mm); 5% of the radius
 // (25 mm) is the bar of stacking_test.
-TEST(Extremes, LightOnHeavyRests) {
+TEST_P(Extremes, LightOnHeavyRests) {
   for (double ratio : {1e3, 1e6}) {
     const TwoStackResult r = run_two_stack(ratio, 1.0);
     EXPECT_LT(r.speed_bottom, 0.05) << "ratio " << ratio;
@@ -327,7 +342,7 @@ TEST(Extremes, LightOnHeavyRests) {
 //   and neither body leaves the floor's half-space beyond the resting overlap
 //   (heavy) or its own radius (light).
 // DISABLED_HeavyOnLightWithinFivePercent below holds the physical target.
-TEST(Extremes, HeavyOnLightRests) {
+TEST_P(Extremes, HeavyOnLightRests) {
   {
     const TwoStackResult r = run_two_stack(1.0, 10.0);
     EXPECT_LT(r.speed_bottom, 0.05);
@@ -335,11 +350,25 @@ TEST(Extremes, HeavyOnLightRests) {
     EXPECT_LT(r.floor_overlap, 0.025);
     EXPECT_LT(r.pair_overlap, 0.025);
   }
+  if (soft()) {
+    // 100:1 heavy on light stands (issue 40's bar for the soft step): at rest, the
+    // light body's contacts giving under 100x its weight by 2.9 cm (measured; 7%
+    // of the radius asserted, against the 5% of lighter stacks).
+    const TwoStackResult r = run_two_stack(1.0, 100.0);
+    EXPECT_LT(r.speed_bottom, 0.05);
+    EXPECT_LT(r.speed_top, 0.05);
+    EXPECT_LT(r.floor_overlap, 0.035);
+    EXPECT_LT(r.pair_overlap, 0.035);
+  }
   for (double ratio : {1e3, 1e6}) {
     SCOPED_TRACE(::testing::Message() << "ratio " << ratio);
     const TwoStackResult r = run_two_stack(1.0, ratio);
-    EXPECT_LT(r.speed_bottom, 0.15);
-    EXPECT_LT(r.speed_top, 0.15);
+    // The soft step crushes the light body too; the crushed pair is deeper than
+    // max_push_speed * dt and takes the recovery path, whose residual speed is below
+    // two steps of gravity (measured 0.18 / 0.19 m/s at 1e3).
+    const double bound = soft() ? 2.0 * kG * kDt : 0.15;
+    EXPECT_LT(r.speed_bottom, bound);
+    EXPECT_LT(r.speed_top, bound);
     // Light body's centre stays above -r (it is not pushed through the floor).
     EXPECT_LT(r.floor_overlap, 2.0 * 0.5);
     // Heavy body: sinks at most as deep as any body resting on the floor (the
@@ -351,7 +380,7 @@ TEST(Extremes, HeavyOnLightRests) {
 // The physical target for heavy on light (see the LIMITATION above). Disabled:
 // fails today with floor and pair overlaps of 0.50 m at ratios 1e3 and 1e6.
 // Run with --gtest_also_run_disabled_tests.
-TEST(Extremes, DISABLED_HeavyOnLightWithinFivePercent) {
+TEST_P(Extremes, DISABLED_HeavyOnLightWithinFivePercent) {
   for (double ratio : {1e3, 1e6}) {
     const TwoStackResult r = run_two_stack(1.0, ratio);
     EXPECT_LT(r.floor_overlap, 0.025) << "ratio " << ratio;
@@ -365,7 +394,7 @@ TEST(Extremes, DISABLED_HeavyOnLightWithinFivePercent) {
 // exactly by one Jacobi iteration, so the only error is float rounding of the
 // effective mass 1 / (1/m1 + 1/m2) and of v += impulse / m: a few float epsilons
 // of the incoming momentum / energy.
-TEST(Extremes, ElasticCollisionMassRatio1e6) {
+TEST_P(Extremes, ElasticCollisionMassRatio1e6) {
   WorldDesc d = test::zero_gravity_desc();
   const double u = 2.0;  // m/s, above restitution_threshold
   for (bool light_moves : {true, false}) {
@@ -427,7 +456,7 @@ TEST(Extremes, ElasticCollisionMassRatio1e6) {
 
 // A sphere (r 0.5, elastic) flies along +x at a static sphere (r 0.5) at the
 // origin, from a sweep of start phases.
-TEST(Extremes, FastSphereAgainstStaticSphere) {
+TEST_P(Extremes, FastSphereAgainstStaticSphere) {
   constexpr float r = 0.5f;
   constexpr double R = 2.0 * r;
   constexpr int kPhases = 16;
@@ -486,7 +515,7 @@ TEST(Extremes, FastSphereAgainstStaticSphere) {
 // position correction takes back 80% of the depth per step (exactly, for an
 // isolated contact), so after ~10 steps it rests on the floor like any body.
 // With restitution 1 it leaves at the incoming speed, never faster.
-TEST(Extremes, FastSphereAgainstPlane) {
+TEST_P(Extremes, FastSphereAgainstPlane) {
   for (double speed : {100.0, 1000.0}) {
     for (float e : {0.0f, 1.0f}) {
       SCOPED_TRACE(::testing::Message() << "speed " << speed << " restitution " << e);
@@ -532,7 +561,7 @@ TEST(Extremes, FastSphereAgainstPlane) {
 // contact is always found on the approach side and the isolated pair is solved
 // exactly: the velocities swap (v -> -v) to float precision and the centres never
 // pass each other.
-TEST(Extremes, FastHeadOnCollisionSwapsVelocities) {
+TEST_P(Extremes, FastHeadOnCollisionSwapsVelocities) {
   for (double speed : {100.0, 1000.0}) {
     SCOPED_TRACE(::testing::Message() << "speed " << speed);
     const double radius = 1.25 * speed * kDt;
@@ -575,7 +604,7 @@ TEST(Extremes, FastHeadOnCollisionSwapsVelocities) {
 // the approach speed is 0, so no velocity impulse; position correction separates
 // them along +-y, by equal amounts (equal masses), in a few steps (80% of the
 // remaining depth per step). The midpoint (centre of mass) does not move.
-TEST(Extremes, CoincidentCentresSeparate) {
+TEST_P(Extremes, CoincidentCentresSeparate) {
   std::vector<BodyDesc> b(2);
   for (BodyDesc& x : b) x.position = {1.0f, 2.0f, 3.0f};
   Scene sc = make_bodies(test::zero_gravity_desc(), b);
@@ -591,13 +620,19 @@ TEST(Extremes, CoincidentCentresSeparate) {
   const std::vector<Eigen::Vector3f> p = positions(sc), v = velocities(sc);
   const float dist = (p[1] - p[0]).norm();
   std::printf("[ measure ] coincident centres: distance after 20 steps %.6g m (radius sum 1)\n", dist);
-  // Separated to within the slop (1 mm) plus float rounding.
-  EXPECT_GT(dist, 1.0f - 0.001f - 1e-5f);
+  // Separated to within the slop (1 mm) plus float rounding. The soft step: the
+  // recovery path takes the overlap down to max_push_speed * dt (5 cm), then the
+  // soft contact closes the rest exponentially (measured 3.9 mm left at 20 steps).
+  EXPECT_GT(dist, soft() ? 1.0f - 0.005f : 1.0f - 0.001f - 1e-5f);
   EXPECT_LT(dist, 1.0f + 1e-5f);  // and not flung apart
   for (int i = 0; i < 2; ++i) {
     EXPECT_EQ(p[i].x(), 1.0f);
     EXPECT_EQ(p[i].z(), 3.0f);
-    EXPECT_EQ(v[i].norm(), 0.0f);  // no kinetic energy from position correction
+    // No kinetic energy from position correction (the soft push leaves rounding).
+    if (soft())
+      EXPECT_LT(v[i].norm(), 1e-6f);
+    else
+      EXPECT_EQ(v[i].norm(), 0.0f);
   }
   EXPECT_NEAR(0.5f * (p[0].y() + p[1].y()), 2.0f, 1e-6f);
 }
@@ -610,7 +645,7 @@ TEST(Extremes, CoincidentCentresSeparate) {
 // and |n| = 0.99974, 1.0097 and 0.80. Taking the +y branch of
 // kernels/narrowphase/plain/sphere_sphere.cpp when d2 < FLT_MIN (instead of d2 == 0)
 // makes this pass.
-TEST(Extremes, NearlyCoincidentCentresGiveUnitNormal) {
+TEST_P(Extremes, NearlyCoincidentCentresGiveUnitNormal) {
   for (float eps : {1e-19f, 1e-20f, 1e-21f, 1e-22f, 3e-23f, 1e-25f, 1e-38f, 1e-44f}) {
     SCOPED_TRACE(::testing::Message() << "separation " << eps);
     for (const Eigen::Vector3f& dir : {Eigen::Vector3f(1, 0, 0), Eigen::Vector3f(1, 1, 1).normalized()}) {
@@ -627,7 +662,7 @@ TEST(Extremes, NearlyCoincidentCentresGiveUnitNormal) {
       run(sc, 19);
       expect_all_finite(sc);
       const std::vector<Eigen::Vector3f> p = positions(sc);
-      EXPECT_GT((p[1] - p[0]).norm(), 1.0f - 0.001f - 1e-5f);
+      EXPECT_GT((p[1] - p[0]).norm(), soft() ? 1.0f - 0.005f : 1.0f - 0.001f - 1e-5f);
     }
   }
 }
@@ -635,7 +670,7 @@ TEST(Extremes, NearlyCoincidentCentresGiveUnitNormal) {
 // Exactly touching is not a contact (contact.h: |d| < ra + rb, h < r). Sphere on
 // a plane at h == r, and two spheres at distance exactly ra + rb (all values
 // exact in float): no contact, nothing moves. One ulp closer is a contact.
-TEST(Extremes, ExactTouchingIsNoContact) {
+TEST_P(Extremes, ExactTouchingIsNoContact) {
   std::vector<BodyDesc> b(3);
   b[0].position = {0.0f, 0.5f, 0.0f};  // on the floor y = 0, h == r
   b[1].position = {5.0f, 0.75f, 0.0f};
@@ -672,7 +707,7 @@ TEST(Extremes, ExactTouchingIsNoContact) {
 // With settings scaled to the body (lengths x s, dt x sqrt(s), s = r / 0.5 m: the
 // same dimensionless problem as a 0.5 m ball at dt = 1/60 s) it meets the 5%-of-
 // radius bar of stacking_test; that is the second half.
-TEST(Extremes, TinySphereRestsOnFloor) {
+TEST_P(Extremes, TinySphereRestsOnFloor) {
   constexpr float r = 1e-4f;
   BodyDesc b;
   b.position = {0.0f, r, 0.0f};
@@ -705,6 +740,8 @@ TEST(Extremes, TinySphereRestsOnFloor) {
     d.fixed_dt = static_cast<float>(kDt * std::sqrt(s));
     d.solver.penetration_slop = static_cast<float>(0.001 * s);
     d.solver.restitution_threshold = static_cast<float>(0.5 * std::sqrt(s));  // m/s scale as sqrt(s)
+    d.solver.max_push_speed = static_cast<float>(3.0 * std::sqrt(s));
+    d.solver.contact_hertz = static_cast<float>(30.0 / std::sqrt(s));  // 1/s as 1/sqrt(s)
     Scene sc = make_bodies(d, {b});
     add_floor(*sc.world, 0.0);
     double max_overlap = 0.0;
@@ -737,7 +774,7 @@ TEST(Extremes, TinySphereRestsOnFloor) {
 // overlap), the same LIMITATION as heavy on light. Asserted: finite, at rest,
 // and neither body deeper in the floor than kRestingOverlap = 4.5 mm (= resting
 // overlap of an isolated contact, 1.7 mm, plus one step's sink g dt^2 = 2.7 mm).
-TEST(Extremes, RadiusRatio1e4) {
+TEST_P(Extremes, RadiusRatio1e4) {
   constexpr double kRestingOverlap = 0.0045;  // m
   const TwoStackResult equal = run_two_stack(1.0, 1.0);
   {
@@ -794,7 +831,7 @@ TEST(Extremes, RadiusRatio1e4) {
 // broad phase sees all boxes in one cell: 499,500 pairs, so this is also the
 // worst case of the grid (runtime printed).
 // ---------------------------------------------------------------------------------
-TEST(Extremes, ThousandSpheresAtOnePoint) {
+TEST_P(Extremes, ThousandSpheresAtOnePoint) {
   const uint32_t n = 1000;
   const int steps = test::kSanitized ? 4 : 10;
   std::vector<BodyDesc> b(n);
@@ -844,9 +881,24 @@ TEST(Extremes, ThousandSpheresAtOnePoint) {
       min_gap, ke);
   EXPECT_GT(min_gap, 0.0f);
   EXPECT_GT(prev_span, 1.0f);
-  // Inelastic, zero approach speed: position correction adds no kinetic energy.
-  EXPECT_EQ(ke, 0.0);
+  if (soft()) {
+    // Overlaps deeper than max_push_speed * dt take the recovery path (no energy);
+    // the shallower ones are pushed at most at max_push_speed each, which a body in
+    // several sums: no sphere may leave faster than twice that.
+    double fastest = 0.0;
+    for (const Eigen::Vector3f& v : velocities(sc)) fastest = std::max(fastest, double(v.norm()));
+    std::printf("[ measure ] 1000 spheres at one point, soft step: fastest %.3g m/s\n", fastest);
+    EXPECT_LT(fastest, 2.0 * SolverDesc{}.max_push_speed);
+  } else {
+    // Inelastic, zero approach speed: position correction adds no kinetic energy.
+    EXPECT_EQ(ke, 0.0);
+  }
 }
+
+INSTANTIATE_TEST_SUITE_P(Solvers, Extremes, ::testing::Values(SolverKind::kSoftStep, SolverKind::kJacobi),
+                         [](const ::testing::TestParamInfo<SolverKind>& i) {
+                           return i.param == SolverKind::kSoftStep ? "SoftStep" : "Jacobi";
+                         });
 
 }  // namespace
 }  // namespace impact
