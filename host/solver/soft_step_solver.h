@@ -58,8 +58,6 @@ class SoftStepSolver {
     impulse_out_.clear();
     recovery_.clear_impulses();
   }
-  /// Manifolds of the last step that took the recovery path.
-  uint32_t deep_manifolds() const { return static_cast<uint32_t>(deep_.manifolds); }
   /// Accumulated normal impulse per contact point of the last step, N s.
   std::span<const float> impulses() const { return {impulse_out_.data(), impulse_out_.size()}; }
 

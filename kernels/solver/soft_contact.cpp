@@ -48,7 +48,9 @@ IMPACT_INLINE DQuat unit(Quat q) {
   const double inv = 1.0 / std::sqrt(x * x + y * y + z * z + w * w);
   return {x * inv, y * inv, z * inv, w * inv};
 }
-IMPACT_INLINE DVec cross_d(DVec a, DVec b) { return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x}; }
+IMPACT_INLINE DVec cross_d(DVec a, DVec b) {
+  return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
+}
 IMPACT_INLINE DVec rotate_d(DQuat q, DVec v) {
   const DVec u{q.x, q.y, q.z};
   const DVec c = cross_d(u, v);
@@ -59,7 +61,6 @@ IMPACT_INLINE DVec rotate_d(DQuat q, DVec v) {
 IMPACT_INLINE DVec rotate_inv_d(DQuat q, DVec v) { return rotate_d({-q.x, -q.y, -q.z, q.w}, v); }
 IMPACT_INLINE DVec rotate_inv_d(DQuat q, Vec3 v) { return rotate_inv_d(q, DVec{v.x, v.y, v.z}); }
 IMPACT_INLINE DVec mul_d(Vec3 a, DVec b) { return {a.x * b.x, a.y * b.y, a.z * b.z}; }
-
 
 // Applies linear impulse P at anchors ra, rb: a gets -P, b gets +P.
 IMPACT_INLINE void push(const ContactConstraint& k, Vec3 P, Vec3 ra, Vec3 rb, Vec3& va, Vec3& wa, Vec3& vb,
