@@ -13,8 +13,8 @@
 #include "host/parallel.h"
 #include "impact/narrowphase.h"
 #include "impact/status.h"
-#include "kernels/broadphase/grid.h"
 #include "kernels/common/body_views.h"
+#include "kernels/common/pair.h"
 #include "kernels/narrowphase/leaf/leaf.h"
 
 namespace impact::host {
