@@ -2,18 +2,15 @@
 // (SortedBox: min corner + index, max corner + a spare word), and the box overlap
 // tests on it. A record is one cache line half, so a pair pass touches one line
 // per candidate instead of one per field, and its two 16-byte halves are tested
-// in one 4-lane compare each.
+// in one 4-lane compare each (simd::box_halves_overlap, kernels/simd/box_overlap.h).
 // Overlap includes touching (min <= max); inputs NaN-free.
 #pragma once
 
 #include <cstddef>
 #include <cstdint>
 
-#if defined(__SSE2__)
-#include <immintrin.h>
-#endif
-
 #include "kernels/common/kernel.h"
+#include "kernels/simd/box_overlap.h"
 
 namespace impact::kernels {
 
@@ -45,15 +42,7 @@ static_assert(sizeof(SortedBox) == 32);
 template <class A>
 IMPACT_INLINE bool records_overlap_at(const A& a, const float* b) {
   static_assert(sizeof(A) == 32 && alignof(A) >= 16);
-#if defined(__SSE2__)
-  const __m128 a_lo = _mm_load_ps(&a.min_x), a_hi = _mm_load_ps(&a.max_x);
-  const __m128 b_lo = _mm_load_ps(b), b_hi = _mm_load_ps(b + 4);
-  const __m128 le = _mm_and_ps(_mm_cmple_ps(a_lo, b_hi), _mm_cmple_ps(b_lo, a_hi));
-  return (_mm_movemask_ps(le) & 7) == 7;
-#else
-  return a.min_x <= b[4] && b[0] <= a.max_x && a.min_y <= b[5] && b[1] <= a.max_y && a.min_z <= b[6] &&
-         b[2] <= a.max_z;
-#endif
+  return simd::box_halves_overlap(&a.min_x, &a.max_x, b, b + 4);
 }
 
 template <class A, class B>
