@@ -61,9 +61,9 @@
 
 #include "bench/bench_threads.h"
 #include "bench/scenes/narrow_scenes.h"
-#include "host/narrowphase/convex_hull.h"
 #include "host/narrowphase/lane_arrays.h"
-#include "host/narrowphase/shape_store.h"
+#include "host/shapes/convex_hull.h"
+#include "host/shapes/shape_store.h"
 #include "impact/narrowphase.h"
 #include "impact/shapes.h"
 #include "kernels/narrowphase/leaf/leaf.h"
@@ -461,7 +461,7 @@ double bounding_radius(const PairScene& s, const Body& b) {
 constexpr uint32_t kHullCount = 16;
 constexpr uint32_t kHullPoints = 24;
 
-// Faces and vertices of a hull, by the library's builder (host/narrowphase/convex_hull.h).
+// Faces and vertices of a hull, by the library's builder (host/shapes/convex_hull.h).
 void build_hull_faces(Hull* h) {
   std::vector<Eigen::Vector3f> pts;
   for (const auto& p : h->points) pts.emplace_back(p[0], p[1], p[2]);

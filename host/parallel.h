@@ -4,6 +4,8 @@
 // runs once per chunk on some worker. A kernel that writes only its own chunk's
 // outputs therefore produces the same bytes on 1 or 64 threads, and per-chunk
 // partial results combined in chunk order are deterministic too.
+// Passes with a variable number of outputs build on this with the count -> scan ->
+// write helpers of host/scan.h.
 #pragma once
 
 #include <cstdint>

@@ -7,13 +7,13 @@
 #include <string>
 #include <vector>
 
-#include "host/world_impl.h"
-#include "host/world_checks.h"
+#include "host/body_inertia.h"
 #include "host/broadphase/query.h"
+#include "host/shapes/pose.h"
+#include "host/world_checks.h"
+#include "host/world_impl.h"
 #include "impact/broadphase.h"
 #include "impact/world.h"
-#include "host/body_inertia.h"
-#include "host/narrowphase/pose.h"
 
 namespace impact {
 using host::fmt_float;

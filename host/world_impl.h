@@ -15,7 +15,7 @@
 #include "host/plane_store.h"
 #include "host/solver/contact_solver.h"
 #include "impact/world.h"
-#include "kernels/broadphase/grid.h"
+#include "kernels/common/pair.h"
 
 namespace impact {
 

@@ -6,7 +6,7 @@
 #include <string>
 #include <vector>
 
-#include "host/narrowphase/pose.h"
+#include "host/shapes/pose.h"
 #include "host/world_checks.h"
 #include "impact/world.h"
 

@@ -55,7 +55,7 @@ struct Body {
 };
 
 /// A convex hull: its points (local frame) and, for the peers that need a polytope,
-/// its faces as built by host/narrowphase/convex_hull.h.
+/// its faces as built by host/shapes/convex_hull.h.
 struct Hull {
   std::vector<std::array<float, 3>> points;  ///< the input cloud (support = over these)
   std::vector<std::array<float, 3>> verts;   ///< hull vertices (empty if not built)

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <limits>
 
+#include "host/scan.h"
 #include "kernels/broadphase/bounds.h"
 #include "kernels/common/permute.h"
 

@@ -5,6 +5,7 @@
 #include <cstring>
 #include <string>
 
+#include "host/scan.h"
 #include "kernels/bvh/lbvh_build_fused.h"
 #include "kernels/bvh/lbvh_pair_cache.h"
 #include "kernels/bvh/lbvh_refit.h"

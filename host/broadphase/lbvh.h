@@ -22,12 +22,13 @@
 #include "impact/status.h"
 #include "impact/types.h"
 #include "kernels/broadphase/bounds.h"
-#include "kernels/broadphase/grid.h"
 #include "kernels/bvh/lbvh_build.h"
 #include "kernels/bvh/lbvh_build_fused.h"
 #include "kernels/bvh/lbvh_pair_cache.h"
 #include "kernels/bvh/lbvh_traverse.h"
 #include "kernels/bvh/morton.h"
+#include "kernels/common/pair.h"
+#include "kernels/common/sorted_box.h"
 
 namespace impact::host {
 

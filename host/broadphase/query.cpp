@@ -5,6 +5,7 @@
 #include <cstring>
 #include <string>
 
+#include "host/scan.h"
 #include "kernels/broadphase/grid_query.h"
 #include "kernels/broadphase/sap.h"
 #include "kernels/broadphase/sap_query.h"

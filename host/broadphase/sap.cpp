@@ -3,6 +3,7 @@
 #include <algorithm>
 
 #include "host/broadphase/broadphase.h"
+#include "host/scan.h"
 
 namespace impact::host {
 namespace {

@@ -13,8 +13,8 @@
 #include "host/radix_sort.h"
 #include "impact/status.h"
 #include "kernels/broadphase/bounds.h"
-#include "kernels/broadphase/grid.h"
 #include "kernels/broadphase/sap.h"
+#include "kernels/common/pair.h"
 
 namespace impact::host {
 

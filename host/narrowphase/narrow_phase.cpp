@@ -23,13 +23,13 @@
 #include <cmath>
 #include <string>
 
-#include "host/broadphase/broadphase.h"
 #include "host/narrowphase/lane_arrays.h"
 #include "host/narrowphase/narrow_phase.h"
-#include "host/narrowphase/pose.h"
-#include "host/narrowphase/shape_store.h"
 #include "host/parallel.h"
 #include "host/radix_sort.h"
+#include "host/scan.h"
+#include "host/shapes/pose.h"
+#include "host/shapes/shape_store.h"
 #include "impact/narrowphase.h"
 #include "kernels/narrowphase/leaf/leaf.h"
 #include "kernels/narrowphase/plain/sphere_plane.h"

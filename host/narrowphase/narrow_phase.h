@@ -9,12 +9,12 @@
 #include <Eigen/Core>
 
 #include "host/contact_manifolds.h"
-#include "host/narrowphase/shape_store.h"
 #include "host/parallel.h"
+#include "host/shapes/shape_store.h"
 #include "impact/narrowphase.h"
 #include "impact/status.h"
-#include "kernels/broadphase/grid.h"
 #include "kernels/common/body_views.h"
+#include "kernels/common/pair.h"
 #include "kernels/narrowphase/leaf/leaf.h"
 
 namespace impact::host {

@@ -1,6 +1,6 @@
 // The bounds stage: one axis-aligned box per body for the broad phase, and their
 // union and largest edge. A plain sphere's box is [p - r, p + r]; a shaped body's is
-// its shape's posed bounds (host/narrowphase/pose.h). With WorldDesc::swept_bounds
+// its shape's posed bounds (host/shapes/pose.h). With WorldDesc::swept_bounds
 // each box covers the body's motion over the step (p to p + v dt, v after gravity).
 // Finite inputs can still integrate out of range (a huge speed for long enough): the
 // stage fails, naming the body, before Inf or NaN reaches the grid's cell arithmetic
@@ -10,8 +10,8 @@
 #include <string>
 
 #include "host/broadphase/broadphase.h"
-#include "host/narrowphase/pose.h"
 #include "host/pipeline/step_context.h"
+#include "host/shapes/pose.h"
 #include "kernels/broadphase/bounds.h"
 
 namespace impact::host {

@@ -15,8 +15,8 @@
 #include <algorithm>
 #include <string>
 
-#include "host/broadphase/broadphase.h"
 #include "host/pipeline/step_context.h"
+#include "host/scan.h"
 #include "kernels/broadphase/plane_pairs.h"
 
 namespace impact::host {

@@ -21,7 +21,7 @@
 #include "impact/shapes.h"
 #include "impact/world.h"
 #include "kernels/broadphase/bounds.h"
-#include "kernels/broadphase/grid.h"
+#include "kernels/common/pair.h"
 #include "kernels/integrate/rigid_euler.h"
 
 namespace impact::host {

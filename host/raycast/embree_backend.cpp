@@ -8,7 +8,7 @@
 //                 geomID 1 = spheres, geomID 2 = capsules, geomID 3 = posed shapes.
 // Spheres and capsules are user geometry calling kernels/raycast/ray_primitives.h, and
 // posed shapes (boxes, hulls, compounds, ...) user geometry calling
-// host/narrowphase/shape_ray.h (bounds: the padded posed AABBs of SceneData), so
+// host/shapes/shape_ray.h (bounds: the padded posed AABBs of SceneData), so
 // hits follow the same rules as the LBVH path (solid shapes, per-primitive layers
 // tested in the callback). EmbreeSpheres::kBuiltin uses Embree's sphere points instead,
 // with an intersection filter for per-primitive layers when the layers differ.

@@ -14,10 +14,10 @@
 
 #include <Eigen/Geometry>
 
-#include "host/narrowphase/pose.h"
-#include "host/narrowphase/shape_ray.h"
 #include "host/raycast/embree_plain.h"
 #include "host/raycast/scene_data.h"
+#include "host/shapes/pose.h"
+#include "host/shapes/shape_ray.h"
 #include "impact/world.h"
 
 namespace impact {

@@ -10,8 +10,8 @@
 #include <Eigen/Core>
 
 #include "host/buffer.h"
-#include "host/narrowphase/shape_store.h"
 #include "host/parallel.h"
+#include "host/shapes/shape_store.h"
 #include "impact/raycast.h"
 #include "impact/shape_queries.h"
 #include "impact/status.h"
@@ -90,7 +90,7 @@ class TraceBackend {
   virtual void set_threads(uint32_t) {}
 };
 
-/// Posed shape object i against the ray (host/narrowphase/shape_ray.h), its layer
+/// Posed shape object i against the ray (host/shapes/shape_ray.h), its layer
 /// checked against q.mask: the hit distance in [0, q.tmax], or -1.
 float shape_ray_t(const SceneData& d, uint32_t i, const kernels::RayQuery& q);
 /// The same as a kernels::RayUserTest (ctx = the SceneData).

@@ -5,7 +5,7 @@
 // in NarrowPhase::collide) and gets one result in out[k]. The work runs in fixed-size
 // chunks, so results are the same bytes for every backend and thread count.
 //
-// Rules (tests/host/narrowphase/shape_queries_test.cpp checks them against a
+// Rules (tests/host/shapes/shape_queries_test.cpp checks them against a
 // double-precision reference):
 //  - Solids (every type but the mesh) contain their surface. A ray whose origin lies
 //    inside or on one hits it at t = 0 with point = origin and normal = -direction.

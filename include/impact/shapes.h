@@ -69,7 +69,7 @@ struct MassProperties {
   Eigen::Matrix3d inertia = Eigen::Matrix3d::Zero();           ///< kg m^2, about the centre of mass
 };
 
-/// The storage behind a ShapeSet (host/narrowphase/shape_store.h).
+/// The storage behind a ShapeSet (host/shapes/shape_store.h).
 struct ShapeStore;
 
 /// Owns shapes. Adding is all-or-nothing: invalid input returns an error naming the
@@ -120,7 +120,7 @@ class ShapeSet {
   /// World AABB of the shape at pose (half-spaces: kInvalidArgument, unbounded).
   Status bounds(ShapeId id, const Pose& pose, Eigen::Vector3f* min, Eigen::Vector3f* max) const;
 
-  /// Internal storage (host/narrowphase/shape_store.h).
+  /// Internal storage (host/shapes/shape_store.h).
   const ShapeStore& store() const { return *store_; }
 
  private:

@@ -92,8 +92,9 @@ struct WorldDesc {
   LbvhUpdate lbvh_update = LbvhUpdate::kRebuild;
   double lbvh_refit_sah_limit = 1.5;
   float lbvh_fat_margin = 0.2f;
-  /// Broad-phase boxes cover each sphere's motion over the step (from p to
-  /// p + v dt, v after gravity) instead of its pose at the step's start, so bodies
+  /// Broad-phase boxes cover each body's motion over the step (from p to
+  /// p + v dt, v after gravity; a plain sphere's swept sphere, a shaped body's posed
+  /// bounds joined with them moved by v dt) instead of its pose at the step's start, so bodies
   /// that meet within the step become candidate pairs even when fast. More pairs
   /// for slow scenes; the input continuous collision needs.
   bool swept_bounds = false;

@@ -49,21 +49,14 @@
 // (Le Grand, GPU Gems 3 ch. 32), with a half neighbourhood.
 #pragma once
 
-#include <cstddef>
-
-#if defined(__SSE2__)
-#include <immintrin.h>
-#endif
+#include <cstdint>
 
 #include "kernels/broadphase/bounds.h"
 #include "kernels/common/kernel.h"
+#include "kernels/common/pair.h"
+#include "kernels/common/sorted_box.h"
 
 namespace impact::kernels {
-
-struct Pair {
-  uint32_t a;
-  uint32_t b;
-};
 
 inline constexpr uint32_t kGridAxisBits = 21;
 inline constexpr uint32_t kGridMaxDim = 1u << kGridAxisBits;  // cells per axis, at most
@@ -76,68 +69,6 @@ struct GridParams {
   uint32_t table_bits;     ///< hashed mode: log2 of the bucket count
   uint32_t bucket_count;   ///< number of buckets
 };
-
-/// Overlap of two boxes (any types with min_x .. max_z), touching included.
-/// Bitwise & (not &&): one hard-to-predict branch instead of six.
-template <class A, class B>
-IMPACT_INLINE bool boxes_overlap(const A& a, const B& b) {
-  return (a.min_x <= b.max_x) & (b.min_x <= a.max_x) & (a.min_y <= b.max_y) & (b.min_y <= a.max_y) &
-         (a.min_z <= b.max_z) & (b.min_z <= a.max_z);
-}
-
-/// The pair filter of every broad phase: each body's layer is in the other's
-/// mask, and static never pairs with static.
-IMPACT_INLINE bool pair_allowed(uint32_t layer_a, uint32_t mask_a, uint8_t static_a, uint32_t layer_b,
-                                uint32_t mask_b, uint8_t static_b) {
-  return (layer_a & mask_b) != 0 && (layer_b & mask_a) != 0 && !(static_a && static_b);
-}
-
-/// Optional pair filter, per box (all null = no filter).
-struct PairFilter {
-  const uint32_t* layer;
-  const uint32_t* mask;
-  const uint8_t* is_static;
-};
-
-/// A box in sorted-slot order with its original index: 32 bytes, so the pair
-/// pass touches one cache line per candidate instead of one per field.
-struct alignas(32) SortedBox {
-  float min_x, min_y, min_z;
-  uint32_t index;
-  float max_x, max_y, max_z;
-  uint32_t pad;
-};
-static_assert(sizeof(SortedBox) == 32);
-
-/// boxes_overlap for two 32-byte box records laid out as SortedBox (min_x..min_z +
-/// a 32-bit word, max_x..max_z + a 32-bit word, 16-byte aligned halves: SortedBox,
-/// LbvhNode): one 4-lane compare per half (the 4th lane is ignored), so the test
-/// costs two compares and one branch instead of six compare-and-branches. Same
-/// result as boxes_overlap (NaN-free inputs). records_overlap_at takes the second
-/// record by address (b[0..2] min, b[4..6] max, 16-byte aligned), for code that
-/// picks among record arrays by index rather than by type.
-template <class A>
-IMPACT_INLINE bool records_overlap_at(const A& a, const float* b) {
-  static_assert(sizeof(A) == 32 && alignof(A) >= 16);
-#if defined(__SSE2__)
-  const __m128 a_lo = _mm_load_ps(&a.min_x), a_hi = _mm_load_ps(&a.max_x);
-  const __m128 b_lo = _mm_load_ps(b), b_hi = _mm_load_ps(b + 4);
-  const __m128 le = _mm_and_ps(_mm_cmple_ps(a_lo, b_hi), _mm_cmple_ps(b_lo, a_hi));
-  return (_mm_movemask_ps(le) & 7) == 7;
-#else
-  return a.min_x <= b[4] && b[0] <= a.max_x && a.min_y <= b[5] && b[1] <= a.max_y && a.min_z <= b[6] &&
-         b[2] <= a.max_z;
-#endif
-}
-
-template <class A, class B>
-IMPACT_INLINE bool records_overlap(const A& a, const B& b) {
-  static_assert(sizeof(B) == 32 && alignof(B) >= 16);
-  static_assert(offsetof(B, min_x) == 0 && offsetof(B, max_x) == 16);
-  return records_overlap_at(a, &b.min_x);
-}
-
-IMPACT_INLINE bool sorted_boxes_overlap(const SortedBox& a, const SortedBox& b) { return records_overlap(a, b); }
 
 /// Arrays in sorted-slot order, produced by grid_sort_blocks.
 struct GridSorted {

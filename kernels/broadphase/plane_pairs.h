@@ -19,7 +19,7 @@
 #pragma once
 
 #include "kernels/common/body_views.h"
-#include "kernels/broadphase/grid.h"
+#include "kernels/common/pair.h"
 
 namespace impact::kernels {
 

@@ -46,8 +46,8 @@
 #include <limits>
 
 #include "kernels/broadphase/bounds.h"
-#include "kernels/broadphase/grid.h"
 #include "kernels/common/kernel.h"
+#include "kernels/common/sorted_box.h"
 
 namespace impact::kernels {
 

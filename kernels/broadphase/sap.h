@@ -20,7 +20,7 @@
 // Pair order: by query slot s (sweep-axis min, ties by index), then by slot t
 // increasing. Each pair holds (lo, hi) original box indices. Overlap includes
 // touching (min <= max on every axis). Filter: (layer_a & mask_b) and
-// (layer_b & mask_a) nonzero, and not both static (as the grid, grid.h).
+// (layer_b & mask_a) nonzero, and not both static (pair_allowed, kernels/common/pair.h).
 // Preconditions: inputs finite with min <= max (validated at ingest); the
 // sentinels (min = +inf, max = -inf) then never overlap a box and stop every scan.
 // Layout: sorted SoA rather than 32-byte SortedBox records, so the candidate test
@@ -39,8 +39,9 @@
 #include <bit>
 
 #include "kernels/broadphase/bounds.h"
-#include "kernels/broadphase/grid.h"
 #include "kernels/common/kernel.h"
+#include "kernels/common/pair.h"
+#include "kernels/common/sorted_box.h"
 
 namespace impact::kernels {
 

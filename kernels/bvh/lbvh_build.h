@@ -33,8 +33,8 @@
 //   k-d Trees", HPG 2012, Figure 4 (determineRange / findSplit).
 #pragma once
 
-#include "kernels/broadphase/grid.h"
 #include "kernels/common/kernel.h"
+#include "kernels/common/sorted_box.h"
 
 namespace impact::kernels {
 

@@ -37,10 +37,11 @@
 #pragma once
 
 #include "kernels/broadphase/bounds.h"
-#include "kernels/broadphase/grid.h"
 #include "kernels/bvh/lbvh_build.h"
 #include "kernels/bvh/lbvh_refit.h"
 #include "kernels/common/kernel.h"
+#include "kernels/common/pair.h"
+#include "kernels/common/sorted_box.h"
 
 namespace impact::kernels {
 

@@ -38,9 +38,11 @@
 
 #include <cstdint>
 
-#include "kernels/broadphase/grid.h"
+#include "kernels/broadphase/bounds.h"
 #include "kernels/bvh/lbvh_traverse.h"
 #include "kernels/common/kernel.h"
+#include "kernels/common/pair.h"
+#include "kernels/common/sorted_box.h"
 
 namespace impact::kernels {
 

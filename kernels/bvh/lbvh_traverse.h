@@ -61,9 +61,10 @@
 //   Salmon 1987; MacDonald & Booth 1990). Area = 2 (dx dy + dy dz + dz dx) in double.
 #pragma once
 
-#include "kernels/broadphase/grid.h"
 #include "kernels/bvh/lbvh_build.h"
 #include "kernels/common/kernel.h"
+#include "kernels/common/pair.h"
+#include "kernels/common/sorted_box.h"
 
 namespace impact::kernels {
 

@@ -29,8 +29,8 @@
 #pragma once
 
 #include "kernels/broadphase/bounds.h"
-#include "kernels/broadphase/grid.h"
 #include "kernels/common/kernel.h"
+#include "kernels/common/sorted_box.h"
 
 namespace impact::kernels {
 

@@ -32,9 +32,10 @@
 //   Karras 2012.
 #pragma once
 
-#include "kernels/broadphase/grid.h"
+#include "kernels/broadphase/bounds.h"
 #include "kernels/bvh/lbvh_build.h"
 #include "kernels/common/kernel.h"
+#include "kernels/common/sorted_box.h"
 #include "kernels/raycast/ray_primitives.h"
 
 namespace impact::kernels {

@@ -25,6 +25,8 @@
 //              load_clamped<F>(p, i, n): p[i ..] with indices past n - 1 reading p[n - 1];
 //              tag / tag_index: a small index kept in a float's 5 low mantissa bits,
 //              so one max/min tree gives both the extreme and where it came from.
+//   box_halves_overlap (box_overlap.h): two boxes, each as two 16-byte halves (min,
+//              max, lane 3 spare), overlap in one 4-lane compare per half.
 //
 // Width: kSimdWidth = 8 where AVX is enabled (one ymm register), 4 elsewhere (SSE2 /
 // NEON / any target: GCC lowers the generic vectors itself), 1 with -DIMPACT_SIMD_SCALAR.

@@ -1,7 +1,7 @@
 // RayScene::set_shapes: posed shapes of every type (sphere, capsule, box, AABB, convex
 // hull, cylinder, ellipsoid, mesh, compound) traced by both backends, against a brute
 // force over impact::raycast_shapes for every object (itself checked against a double
-// reference in tests/host/narrowphase/shape_queries_test.cpp). Shapes share the scene
+// reference in tests/host/shapes/shape_queries_test.cpp). Shapes share the scene
 // with spheres, capsules, a mesh and planes: the expected closest hit is the better of
 // the shapes' brute force and a scene holding only that other geometry (checked against
 // its own double reference in tests/host/raycast_test.cpp). Also: layers, any hit,

@@ -120,4 +120,24 @@ inline double signed_distance_local(const Vec3d& e, const Vec3d& y) {
   return level(e, y) < 1 ? -d : d;
 }
 
+/// Signed distance of the world point x to the ellipsoid b (any struct with centre p,
+/// rotation R and radii e; < 0 inside).
+template <class Posed>
+double signed_distance_posed(const Posed& b, const Vec3d& x) {
+  return signed_distance_local(b.e, b.R.transpose() * (x - b.p));
+}
+
+/// The surface point of the ellipsoid b (p, R, e) along the local direction dir (non-zero)
+/// from its centre, in the world frame, and the outward unit normal there.
+struct SurfacePoint {
+  Vec3d x, m;
+};
+template <class Posed>
+SurfacePoint surface_point(const Posed& b, const Vec3d& dir) {
+  const Vec3d xs = dir / std::sqrt(level(b.e, dir));
+  const Vec3d m = b.R * xs.cwiseQuotient(b.e.cwiseProduct(b.e)).normalized();
+  const Vec3d x = b.p + b.R * xs;
+  return {x, m};
+}
+
 }  // namespace impact::test::eref

@@ -15,8 +15,8 @@
 #include <string>
 #include <vector>
 
-#include "host/narrowphase/convex_hull.h"
-#include "host/narrowphase/shape_store.h"
+#include "host/shapes/convex_hull.h"
+#include "host/shapes/shape_store.h"
 #include "support/random_input.h"
 
 namespace impact::test::hull_input {

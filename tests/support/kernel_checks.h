@@ -4,7 +4,13 @@
 //   Built<Q>       a test's pair struct with its built depth and normal
 //   expect_built   a kernel's answers against the built ones (hit, depth, normal)
 //   expect_touching_after_push  overlapping pairs moved apart by the reference: touching
+//   run_table_kernel  the pair-kernel table's entry for a bucket over a test's pairs
 //   kernel_scales  (size, offset from the origin): 1, 1e-4, 1e4, and 1 at 1e5
+//   scale_seed / random_pose_suite  one random-pose suite at one of those scales, and
+//                  the coverage it asks of its lanes (SuiteCoverage)
+//   expect_built_on_both_paths  expect_built on the SIMD and the scalar path
+//   expect_feature_pairs  a built-feature case: the feature's normal on most meeting
+//                  lanes, a contact on exactly those
 //   check_lanes    every lane of a bucket on both paths against the test's reference
 //                  (PairModel: its reference, surfaces, support overlap and distance)
 #pragma once
@@ -14,6 +20,7 @@
 #include <Eigen/Core>
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <functional>
 #include <limits>
@@ -22,6 +29,7 @@
 #include <tuple>
 #include <vector>
 
+#include "kernels/narrowphase/pair_kernels.h"
 #include "support/leaf_lanes.h"
 #include "support/shape_geometry.h"
 
@@ -100,11 +108,38 @@ void expect_touching_after_push(std::mt19937& g, int want, int attempts, Draw dr
   }
 }
 
+/// The table's kernel for the bucket (ta, tb), which must be `want`, over all of qs
+/// (run_queries: leaves(q) gives a pair's two Leafs).
+template <class Q, class Leaves>
+std::vector<PairResult> run_table_kernel(kernels::LeafType ta, kernels::LeafType tb, kernels::PairKernel want,
+                                         const std::vector<Q>& qs, kernels::KernelPath path, Leaves leaves) {
+  const kernels::PairKernel k = kernels::pair_kernel(ta, tb);
+  EXPECT_EQ(k, want);
+  return run_queries(k, qs, path, leaves);
+}
+
 /// (size, offset from the origin) of the random-pose suites: sizes 1, 1e-4 and 1e4 at the
 /// origin, and size 1 at 1e5 from it.
 inline std::vector<std::tuple<double, double>> kernel_scales() {
   return {std::make_tuple(1.0, 0.0), std::make_tuple(1e-4, 0.0), std::make_tuple(1e4, 0.0),
           std::make_tuple(1.0, 1e5)};
+}
+
+/// The seed of a random-pose suite at (size, offset): base, shifted by the size's decade
+/// and by 10 away from the origin, so each scale draws its own lanes.
+inline uint32_t scale_seed(uint32_t base, double size, double offset) {
+  return static_cast<uint32_t>(base + std::lround(std::log10(size)) + (offset > 0 ? 10 : 0));
+}
+
+/// Built pairs ts on both kernel paths: run(queries, path) against them by expect_built;
+/// each path must check more than a quarter of them as contacts.
+template <class Q, class Run, class Size, class AngleTol>
+void expect_built_on_both_paths(const std::vector<Built<Q>>& ts, Run run, double rel, Size size_of,
+                                AngleTol angle_tol, const char* what) {
+  for (kernels::KernelPath path : {kernels::KernelPath::kSimd, kernels::KernelPath::kScalar}) {
+    const int hits = expect_built(ts, run(queries_of(ts), path), rel, size_of, angle_tol, what);
+    EXPECT_GT(hits, static_cast<int>(ts.size()) / 4) << what;
+  }
 }
 
 /// A lane's reference, the test's own: depth (> 0 overlapping, else minus the distance),
@@ -128,6 +163,49 @@ struct LaneStats {
   double worst_depth = 0, worst_angle = 0;  // of L; rad
   size_t worst_depth_lane = 0, worst_angle_lane = 0;
 };
+
+/// What a random-pose suite asks of its lanes besides hits > n / 4 (0: not asked):
+/// hits < n * max_hit_tenths / 10, flagged > n / flagged_div, and normals_checked >
+/// hits / normals_div.
+struct SuiteCoverage {
+  int max_hit_tenths = 0;
+  int flagged_div = 0;
+  int normals_div = 0;
+};
+
+/// One random-pose suite: n pairs drawn by draw(g, n, size, offset) from g(seed), checked
+/// by check(pairs, "random", &stats) (the test's check_all), then the coverage c.
+template <class Draw, class Check>
+void random_pose_suite(uint32_t seed, int n, double size, double offset, Draw draw, Check check,
+                       SuiteCoverage c) {
+  std::mt19937 g(seed);
+  LaneStats st;
+  check(draw(g, n, size, offset), "random", &st);
+  EXPECT_GT(st.hits, n / 4);
+  if (c.max_hit_tenths > 0) {
+    EXPECT_LT(st.hits, n * c.max_hit_tenths / 10);
+  }
+  if (c.flagged_div > 0) {
+    EXPECT_GT(st.flagged, n / c.flagged_div);
+  }
+  if (c.normals_div > 0) {
+    EXPECT_GT(st.normals_checked, st.hits / c.normals_div);
+  }
+}
+
+/// A built-feature case: check_built(&stats, &meeting) runs pairs built to meet (or just
+/// miss) at one feature pair and returns how many meeting lanes got that pair's normal;
+/// at least 3/4 of them must, and exactly the meeting lanes must report a contact.
+/// Returns the case's stats.
+template <class CheckBuilt>
+LaneStats expect_feature_pairs(CheckBuilt check_built) {
+  LaneStats st;
+  int meeting = 0;
+  const int on = check_built(&st, &meeting);
+  EXPECT_GE(on, meeting * 3 / 4);
+  EXPECT_EQ(st.hits, meeting);
+  return st;
+}
 
 /// How a contact's points must carry the depth: a single point exactly, the deepest
 /// within tol of it, or no rule (a degenerate triangle's point may lie shallower).

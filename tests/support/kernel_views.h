@@ -11,8 +11,9 @@
 #include "host/broadphase/query.h"
 #include "host/parallel.h"
 #include "kernels/broadphase/bounds.h"
-#include "kernels/broadphase/grid.h"
 #include "kernels/bvh/lbvh_traverse.h"
+#include "kernels/common/pair.h"
+#include "kernels/common/sorted_box.h"
 #include "support/aabb_reference.h"
 #include "support/query_reference.h"
 

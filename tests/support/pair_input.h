@@ -31,7 +31,7 @@
 #include <utility>
 #include <vector>
 
-#include "host/narrowphase/shape_store.h"
+#include "host/shapes/shape_store.h"
 #include "kernels/narrowphase/pair_kernels.h"
 #include "support/leaf_lanes.h"
 #include "support/narrow_reference.h"

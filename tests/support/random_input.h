@@ -1,7 +1,7 @@
 // Random input shared by the shape, raycast and narrow-phase tests: a seeded generator of
 // uniform floats, indices, vectors, unit vectors and rotations, the double draws of the
-// narrow-phase kernel tests (a unit vector, a rotation, a frame about a given axis), and
-// a bumpy grid mesh.
+// narrow-phase kernel tests (a unit vector, a rotation, a frame about a given axis, a
+// cylinder's random pose), and a bumpy grid mesh.
 #pragma once
 
 #include <cmath>
@@ -87,6 +87,19 @@ inline Eigen::Matrix3d random_rotation(std::mt19937& rng) {
   Eigen::Quaterniond q(g(rng), g(rng), g(rng), g(rng));
   q.normalize();
   return q.toRotationMatrix();
+}
+
+/// A cylinder's random pose and size for the cylinder kernels' random-pose suites (Q has
+/// p, R, rc, h): its centre within size / 2 of (offset, -offset, offset / 2) per axis, a
+/// random rotation, radius and half height uniform in [0.1, 1] size.
+template <class Q>
+void random_cylinder(std::mt19937& g, double size, double offset, Q* q) {
+  std::uniform_real_distribution<double> uni(0, 1);
+  q->p = Eigen::Vector3d(offset, -offset, 0.5 * offset) +
+         size * Eigen::Vector3d(uni(g) - 0.5, uni(g) - 0.5, uni(g) - 0.5);
+  q->R = random_rotation(g);
+  q->rc = size * (0.1 + 0.9 * uni(g));
+  q->h = size * (0.1 + 0.9 * uni(g));
 }
 
 /// A cells x cells grid of `spacing` m squares centred on the origin in the xz plane,

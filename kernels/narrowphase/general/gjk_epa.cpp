@@ -62,14 +62,10 @@
 // Cost: GJK ~3-15 iterations of 2 supports; EPA ~5-40 iterations (curved shapes take
 // the most: cylinder pairs average ~14 at the default tolerance, ellipsoid pairs ~12
 // with the Newton finish (~23 without), hull pairs ~5-6); hull supports are
-// O(vertices). impact_narrowbench (half the pairs overlapping, 24-point hulls, loaded
-// 2-core machine): ~1.2 us per box-hull pair, 1.5 us hull-hull, 1.5 us
-// cylinder-cylinder, 1.55 us ellipsoid-ellipsoid (2.5-2.7 us before the Newton finish);
-// a lane at the EPA cap ~25-35 us (the cap refinement ~6-10 us). Deep, nearly
-// concentric lanes in a round 400-vertex hull (the worst case of the uncapped hull
-// pairs): ~28 us sphere-hull (~75 expansions), ~23 us ellipsoid-hull, ~74 us hull-hull
-// against another such hull (~130 expansions, at most ~180; ~140 us at 1000 vertices
-// each).
+// O(vertices); the worst case of the uncapped hull pairs, deep nearly concentric lanes
+// in a round 400-vertex hull, takes ~75 expansions (hull-hull ~130, at most ~180).
+// Measured per pair, with the EPA-cap and worst-case lanes, in docs/results.md
+// ("Narrow phase") and docs/history.md.
 // cfg.epa_tolerance trades depth error for time on curved pairs (polytope pairs converge
 // exactly and do not change): measured against the matrix test's double reference, the
 // worst |depth error| over its curved-pair scenarios is ~2e-5 L at 1e-5 (the default),

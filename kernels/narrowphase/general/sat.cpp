@@ -57,9 +57,8 @@
 // reduction, done in A's frame on the hull data already there (box_hull_manifold).
 // Against brute-force SAT in double it is the more exact route (sat_test.cpp
 // SatBoxHull: 1e-5 L; the general route's edge axes near a face's arc end can be off
-// by ~4e-5 L). Cost on the bench's
-// 24-point hulls: ~313-414 ns per pair against ~914-961 by the general route and FCL
-// ~1043-1084 in the same runs (loaded 2-core machine); the manifold is a third of it.
+// by ~4e-5 L). The manifold is about a third of its time (measured per pair:
+// docs/results.md, "Narrow phase").
 // Inputs: lanes loaded by load_leaf (finite, R orthonormal, positive sizes); hulls
 // with edge adjacency (HullView adj_*; sat_vertex_count() says when SAT applies).
 // Outputs: as collide_convex_lane; touching (separation >= 0) gives count 0.
@@ -929,7 +928,7 @@ void collide_sat_general_lane(const Leaf& A, const Leaf& B, LaneContact* out, Sa
     // edges per step, the pairs that pass appended (compacted) to a hit list in key
     // order (key = (i << kHitShift) | j: exact in a float); (b) the separations of
     // the listed pairs, kSimdWidth hits per step (their edge records read by
-    // simd::gather4, not 17 gathers: 766 -> 724 ns a hull-hull pair). Only ~4% of
+    // simd::gather4, not 17 gathers). Only ~4% of
     // the pairs pass on the bench's hulls, so (b) replaces a root, a division and a
     // cross product per tested pair by one per hit; the list is flushed through (b)
     // when full, so the running maximum sees the keys in order: the first maximum.

@@ -23,10 +23,7 @@
 // costs), a second lists the vertices below, and the other three picks walk that list
 // (more than 32 below: three masked passes over every vertex instead; first_max,
 // hull_below); only the chosen points are transformed to the world frame. No
-// allocation. impact_narrowbench (24-point hulls, half the pairs touching), A/B in one
-// run on a loaded machine: SIMD ~55 -> ~46 ns per pair, scalar ~115 -> ~77 (the three
-// masked passes over all vertices before; earlier ~71 on an idle machine, 78 with a
-// world-frame candidate list, 130 before that; FCL ~190, one contact point).
+// allocation. Cost: measured per pair in docs/results.md ("Narrow phase").
 #include <bit>
 #include <cmath>
 

@@ -1,5 +1,5 @@
 // Ray and point queries against one leaf shape in its own local frame: the "point"
-// and "ray/segment" columns of the proxy table (host/narrowphase/shape_queries.cpp
+// and "ray/segment" columns of the proxy table (host/shapes/shape_queries.cpp
 // poses them, walks mesh BVHs and compound children, and runs them in batches).
 //
 // What

@@ -17,7 +17,7 @@
 
 #include "kernels/common/body_views.h"
 #include "kernels/common/contact_manifolds.h"
-#include "kernels/broadphase/grid.h"
+#include "kernels/common/pair.h"
 
 namespace impact::kernels {
 

@@ -11,7 +11,7 @@
 #include <random>
 #include <vector>
 
-#include "host/narrowphase/shape_store.h"
+#include "host/shapes/shape_store.h"
 #include "impact/impact.h"
 #include "tests/support/test_support.h"
 

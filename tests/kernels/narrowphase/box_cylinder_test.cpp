@@ -291,10 +291,7 @@ void check_all(const std::vector<Query>& qs, const char* what, Stats* out_stats 
 Query random_query(std::mt19937& g, double size, double offset, double spread) {
   std::uniform_real_distribution<double> uni(0, 1);
   Query q;
-  q.p = Vec3d(offset, -offset, 0.5 * offset) + size * Vec3d(uni(g) - 0.5, uni(g) - 0.5, uni(g) - 0.5);
-  q.R = test::random_rotation(g);
-  q.rc = size * (0.1 + 0.9 * uni(g));
-  q.h = size * (0.1 + 0.9 * uni(g));
+  test::random_cylinder(g, size, offset, &q);
   q.Q = test::random_rotation(g);
   q.e = size * Vec3d(0.1 + 0.9 * uni(g), 0.1 + 0.9 * uni(g), 0.1 + 0.9 * uni(g));
   const double reach = q.e.norm() + std::hypot(q.rc, q.h);
@@ -469,13 +466,9 @@ class BoxCylinderScales : public ::testing::TestWithParam<std::tuple<double, dou
 
 TEST_P(BoxCylinderScales, RandomPosesAgainstReference) {
   const auto [size, offset] = GetParam();
-  std::mt19937 g(static_cast<uint32_t>(17 + std::lround(std::log10(size)) + 10 * (offset > 0)));
   const int n = static_cast<int>(test::scaled(offset == 0 && size == 1.0 ? 300 : 200));
-  Stats st;
-  check_all(random_queries(g, n, size, offset), "random", &st);
-  EXPECT_GT(st.hits, n / 4);
-  EXPECT_LT(st.hits, n * 9 / 10);
-  EXPECT_GT(st.normals_checked, st.hits / 2);
+  test::random_pose_suite(test::scale_seed(17, size, offset), n, size, offset, random_queries, check_all,
+                          {.max_hit_tenths = 9, .normals_div = 2});
 }
 
 INSTANTIATE_TEST_SUITE_P(Scales, BoxCylinderScales, ::testing::ValuesIn(test::kernel_scales()));
@@ -620,11 +613,8 @@ int check_built(Feature f, uint32_t seed, const char* what, Stats* st, int* meet
 /// A box edge across a rim: the minimum on the edge-rim piece of the Minkowski
 /// difference (normal perpendicular to the edge and the rim's tangent).
 TEST(BoxCylinder, EdgeAcrossARim) {
-  Stats st;
-  int meeting = 0;
-  const int on = check_built(Feature::kEdgeRim, 71, "edge across a rim", &st, &meeting);
-  EXPECT_GE(on, meeting * 3 / 4);
-  EXPECT_EQ(st.hits, meeting);
+  test::expect_feature_pairs(
+      [](Stats* s, int* m) { return check_built(Feature::kEdgeRim, 71, "edge across a rim", s, m); });
 }
 
 /// A box vertex at a rim: apart, the vertex and the rim point are the closest pair;
@@ -650,32 +640,23 @@ TEST(BoxCylinder, VertexAHairFromARim) {
 
 /// A box edge against the side, skew to the axis (normal edge x axis), some level.
 TEST(BoxCylinder, EdgeAgainstTheSide) {
-  Stats st;
-  int meeting = 0;
-  const int on = check_built(Feature::kEdgeSide, 79, "edge against the side", &st, &meeting);
-  EXPECT_GE(on, meeting * 3 / 4);
-  EXPECT_EQ(st.hits, meeting);
+  test::expect_feature_pairs(
+      [](Stats* s, int* m) { return check_built(Feature::kEdgeSide, 79, "edge against the side", s, m); });
 }
 
 /// A box vertex against the side (normal radial through the vertex).
 TEST(BoxCylinder, VertexAgainstTheSide) {
-  Stats st;
-  int meeting = 0;
-  const int on = check_built(Feature::kVertexSide, 83, "vertex against the side", &st, &meeting);
-  EXPECT_GE(on, meeting * 3 / 4);
-  EXPECT_EQ(st.hits, meeting);
+  test::expect_feature_pairs([](Stats* s, int* m) {
+    return check_built(Feature::kVertexSide, 83, "vertex against the side", s, m);
+  });
 }
 
 /// A box face against a rim (the face's normal), and a box vertex into a cap.
 TEST(BoxCylinder, FaceAgainstARimAndVertexIntoACap) {
-  Stats st;
-  int meeting = 0;
-  int on = check_built(Feature::kFaceRim, 89, "face against a rim", &st, &meeting);
-  EXPECT_GE(on, meeting * 3 / 4);
-  EXPECT_EQ(st.hits, meeting);
-  on = check_built(Feature::kVertexCap, 97, "vertex into a cap", &st, &meeting);
-  EXPECT_GE(on, meeting * 3 / 4);
-  EXPECT_EQ(st.hits, meeting);
+  test::expect_feature_pairs(
+      [](Stats* s, int* m) { return check_built(Feature::kFaceRim, 89, "face against a rim", s, m); });
+  test::expect_feature_pairs(
+      [](Stats* s, int* m) { return check_built(Feature::kVertexCap, 97, "vertex into a cap", s, m); });
 }
 
 /// The least support overlap over the closed-form directions the kernel's header lists

@@ -93,31 +93,18 @@ double size_of(const Query& q) {
   return std::max(q.b.e.maxCoeff(), q.a.e.norm());
 }
 
-/// Runs `kern` on lanes [begin, end) of all queries as one bucket (full SIMD blocks and a tail).
-std::vector<test::PairResult> run(const std::vector<Query>& qs, KernelPath path, PairKernel kern,
-                                  uint32_t begin = 0, uint32_t end = ~0u) {
-  return test::run_queries(
-      kern, qs, path,
-      [](const Query& q) {
-        return std::pair{test::posed_leaf(kLeafBox, q.a.p, q.a.R, q.a.e),
-                         test::posed_leaf(kLeafEllipsoid, q.b.p, q.b.R, q.b.e)};
-      },
-      begin, end);
+/// A pair's two leaves as the kernel reads them.
+std::pair<test::Leaf, test::Leaf> leaves(const Query& q) {
+  return {test::posed_leaf(kLeafBox, q.a.p, q.a.R, q.a.e), test::posed_leaf(kLeafEllipsoid, q.b.p, q.b.R, q.b.e)};
 }
 
 std::vector<test::PairResult> run(const std::vector<Query>& qs, KernelPath path) {
-  const PairKernel k = pair_kernel(kLeafBox, kLeafEllipsoid);
-  EXPECT_EQ(k, &collide_box_ellipsoid);
-  return run(qs, path, k);
+  return test::run_table_kernel(kLeafBox, kLeafEllipsoid, &collide_box_ellipsoid, qs, path, leaves);
 }
 
 // ---------------------------------------------------------------------------------------
 // References
 // ---------------------------------------------------------------------------------------
-
-double sd_ellipsoid(const Posed& b, const Vec3d& x) {
-  return test::eref::signed_distance_local(b.e, b.R.transpose() * (x - b.p));
-}
 
 double sd_box(const Posed& a, const Vec3d& x) {
   return test::box_sd(a.p, a.R, a.e, x);
@@ -130,8 +117,9 @@ double box_minimum(const Query& q, int iters) {
   auto point = [&](double u, double v, double w) { return Vec3d(a.p + a.R * Vec3d(u, v, w)); };
   auto over_w = [&](double u, double v) {
     double w;
-    return test::golden_section_min([&](double ww) { return sd_ellipsoid(q.b, point(u, v, ww)); }, -a.e[2],
-                                    a.e[2], iters, &w);
+    return test::golden_section_min(
+        [&](double ww) { return test::eref::signed_distance_posed(q.b, point(u, v, ww)); }, -a.e[2], a.e[2],
+        iters, &w);
   };
   auto over_vw = [&](double u) {
     double v;
@@ -203,7 +191,7 @@ void check_all(const std::vector<Query>& qs, const char* what, Stats* out_stats 
              const std::string& where) {
             EXPECT_EQ(h.pd[0], h.depth) << where;
             const Vec3d on_a = h.pt[0] + h.n * (0.5 * h.depth), on_b = h.pt[0] - h.n * (0.5 * h.depth);
-            EXPECT_NEAR(sd_ellipsoid(q.b, on_b), 0.0, ptol) << where;
+            EXPECT_NEAR(test::eref::signed_distance_posed(q.b, on_b), 0.0, ptol) << where;
             if (f.unique) {
               const double rho = q.b.e.maxCoeff() * q.b.e.maxCoeff() / q.b.e.minCoeff();
               EXPECT_NEAR(sd_box(q.a, on_a), 0.0, ptol + (angle(h.n, f.n) + 1e-6) * rho) << where;
@@ -259,10 +247,7 @@ std::vector<Touch> touching_queries(std::mt19937& g, int n) {
   for (int k = 0; k < n; ++k) {
     Query q;
     q.b = Posed{Vec3d(u(g), u(g), u(g)), test::random_rotation(g), Vec3d(s(g), s(g), s(g))};
-    const Vec3d dir = test::random_unit_vector(g);
-    const Vec3d xs = dir / std::sqrt(test::eref::level(q.b.e, dir));
-    const Vec3d m = q.b.R * xs.cwiseQuotient(q.b.e.cwiseProduct(q.b.e)).normalized();
-    const Vec3d x = q.b.p + q.b.R * xs;
+    const auto [x, m] = test::eref::surface_point(q.b, test::random_unit_vector(g));
     const double ff = (k % 5 == 0) ? 0.0 : f(g);
     const Vec3d c = x + ff * m;  // the touching feature's point
     const Vec3d h(s(g), s(g), s(g));
@@ -408,12 +393,8 @@ class BoxEllipsoid : public ::testing::TestWithParam<std::tuple<double, double>>
 
 TEST_P(BoxEllipsoid, RandomPosesAgainstDoubleReference) {
   const auto [size, offset] = GetParam();
-  std::mt19937 g(17);
   const int n = static_cast<int>(test::scaled(160));
-  Stats st;
-  check_all(random_queries(g, n, size, offset), "random", &st);
-  EXPECT_GT(st.hits, n / 4);
-  EXPECT_GT(st.normals_checked, st.hits / 3);
+  test::random_pose_suite(17, n, size, offset, random_queries, check_all, {.normals_div = 3});
 }
 
 INSTANTIATE_TEST_SUITE_P(Scales, BoxEllipsoid, ::testing::ValuesIn(test::kernel_scales()));
@@ -421,12 +402,9 @@ INSTANTIATE_TEST_SUITE_P(Scales, BoxEllipsoid, ::testing::ValuesIn(test::kernel_
 TEST(BoxEllipsoidCases, ConstructedTouching) {
   std::mt19937 g(29);
   const std::vector<Touch> ts = touching_queries(g, static_cast<int>(test::scaled(300)));
-  for (KernelPath path : {KernelPath::kSimd, KernelPath::kScalar}) {
-    const int hits = test::expect_built(
-        ts, run(test::queries_of(ts), path), kRel, size_of, [](size_t, double) { return kAngleTol; },
-        "touching");
-    EXPECT_GT(hits, static_cast<int>(ts.size()) / 4);
-  }
+  test::expect_built_on_both_paths(
+      ts, [](const std::vector<Query>& qs, KernelPath path) { return run(qs, path); }, kRel, size_of,
+      [](size_t, double) { return kAngleTol; }, "touching");
 }
 
 TEST(BoxEllipsoidCases, NeedlesPancakesOddBoxes) {

@@ -255,10 +255,7 @@ void check_all(const std::vector<Query>& qs, const char* what, Stats* out_stats 
 Query random_query(std::mt19937& g, double size, double offset, double spread) {
   std::uniform_real_distribution<double> uni(0, 1);
   Query q;
-  q.p = Vec3d(offset, -offset, 0.5 * offset) + size * Vec3d(uni(g) - 0.5, uni(g) - 0.5, uni(g) - 0.5);
-  q.R = test::random_rotation(g);
-  q.rc = size * (0.1 + 0.9 * uni(g));
-  q.h = size * (0.1 + 0.9 * uni(g));
+  test::random_cylinder(g, size, offset, &q);
   q.r = size * (0.05 + 0.55 * uni(g));
   q.hs = size * uni(g);
   q.u = test::random_unit_vector(g);
@@ -356,12 +353,9 @@ class CapsuleCylinderScales : public ::testing::TestWithParam<std::tuple<double,
 
 TEST_P(CapsuleCylinderScales, RandomPosesAgainstReference) {
   const auto [size, offset] = GetParam();
-  std::mt19937 g(static_cast<uint32_t>(17 + std::lround(std::log10(size)) + 10 * (offset > 0)));
   const int n = static_cast<int>(test::scaled(offset == 0 && size == 1.0 ? 300 : 80));
-  Stats st;
-  check_all(random_queries(g, n, size, offset), "random", &st);
-  EXPECT_GT(st.hits, n / 4);
-  EXPECT_GT(st.flagged, n / 20);
+  test::random_pose_suite(test::scale_seed(17, size, offset), n, size, offset, random_queries, check_all,
+                          {.flagged_div = 20});
 }
 
 INSTANTIATE_TEST_SUITE_P(Scales, CapsuleCylinderScales, ::testing::ValuesIn(test::kernel_scales()));

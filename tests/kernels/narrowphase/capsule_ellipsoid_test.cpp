@@ -114,31 +114,19 @@ std::pair<test::Leaf, test::Leaf> leaves(const Query& q) {
           test::posed_leaf(kLeafEllipsoid, q.b.p, q.b.R, q.b.e)};
 }
 
-/// Runs `kern` on lanes [begin, end) of all queries as one bucket (full SIMD blocks and a tail).
-std::vector<test::PairResult> run(const std::vector<Query>& qs, KernelPath path, PairKernel kern,
-                                  uint32_t begin = 0, uint32_t end = ~0u) {
-  return test::run_queries(kern, qs, path, leaves, begin, end);
-}
-
 std::vector<test::PairResult> run(const std::vector<Query>& qs, KernelPath path) {
-  const PairKernel k = pair_kernel(kLeafCapsule, kLeafEllipsoid);
-  EXPECT_EQ(k, &collide_capsule_ellipsoid);
-  return run(qs, path, k);
+  return test::run_table_kernel(kLeafCapsule, kLeafEllipsoid, &collide_capsule_ellipsoid, qs, path, leaves);
 }
 
 // ---------------------------------------------------------------------------------------
 // References
 // ---------------------------------------------------------------------------------------
 
-double sd_ellipsoid(const Ell& b, const Vec3d& x) {
-  return test::eref::signed_distance_local(b.e, b.R.transpose() * (x - b.p));
-}
-
 /// Golden-section minimum of the (convex) signed distance along the core: parameter t.
 double core_minimum(const Query& q, double* sd_out) {
   const double g = 0.5 * (std::sqrt(5.0) - 1.0);
   double lo = -q.a.h, hi = q.a.h;
-  auto f = [&](double t) { return sd_ellipsoid(q.b, q.a.p + t * q.a.u); };
+  auto f = [&](double t) { return test::eref::signed_distance_posed(q.b, q.a.p + t * q.a.u); };
   double x1 = hi - g * (hi - lo), x2 = lo + g * (hi - lo), f1 = f(x1), f2 = f(x2);
   for (int it = 0; it < 200 && hi - lo > 1e-15 * (1 + q.a.h); ++it) {
     if (f1 < f2) {
@@ -206,7 +194,7 @@ Ref reference(const Query& q, bool check_conditioning = true) {
       // (a short core across the normal: its two ends score alike), the normal rounding.
       for (int i = 0; i <= 64 && f.conditioned; ++i) {
         const double ti = q.a.h * (2.0 * i / 64 - 1);
-        const double sdi = sd_ellipsoid(q.b, q.a.p + ti * q.a.u);
+        const double sdi = test::eref::signed_distance_posed(q.b, q.a.p + ti * q.a.u);
         if (sdi <= sd + 2e-7 * L && angle(outside_reference(q, sdi, ti).n, f.n) > 0.5 * kAngleTol)
           f.conditioned = false;
       }
@@ -276,7 +264,7 @@ void check_all(const std::vector<Query>& qs, const char* what, Stats* out_stats 
             const Vec3d on_a = h.pt[0] + h.n * (0.5 * h.depth), on_b = h.pt[0] - h.n * (0.5 * h.depth);
             const double rho = q.b.e.maxCoeff() * q.b.e.maxCoeff() / q.b.e.minCoeff();
             EXPECT_NEAR(sd_capsule(q, on_a), 0.0, ptol + 1e-6 * rho) << where;
-            EXPECT_NEAR(sd_ellipsoid(q.b, on_b), 0.0, ptol) << where;
+            EXPECT_NEAR(test::eref::signed_distance_posed(q.b, on_b), 0.0, ptol) << where;
           },
       .same_bytes_paths = false,
       .point_ulps = 1};
@@ -318,10 +306,7 @@ std::vector<Touch> touching_queries(std::mt19937& g, int n) {
   for (int k = 0; k < n; ++k) {
     Query q;
     q.b = Ell{Vec3d(u(g), u(g), u(g)), test::random_rotation(g), Vec3d(s(g), s(g), s(g))};
-    const Vec3d dir = test::random_unit_vector(g);
-    const Vec3d xs = dir / std::sqrt(test::eref::level(q.b.e, dir));
-    const Vec3d m = q.b.R * xs.cwiseQuotient(q.b.e.cwiseProduct(q.b.e)).normalized();
-    const Vec3d x = q.b.p + q.b.R * xs;
+    const auto [x, m] = test::eref::surface_point(q.b, test::random_unit_vector(g));
     q.a.r = 0.05 + 0.5 * u01(g);
     q.a.h = 0.6 * u01(g);
     const double ff = (k % 5 == 0) ? 0.0 : f(g) * q.a.r;
@@ -440,13 +425,9 @@ class CapsuleEllipsoid : public ::testing::TestWithParam<std::tuple<double, doub
 
 TEST_P(CapsuleEllipsoid, RandomPosesAgainstDoubleReference) {
   const auto [size, offset] = GetParam();
-  std::mt19937 g(17);
   const int n = static_cast<int>(test::scaled(400));
-  Stats st;
-  check_all(random_queries(g, n, size, offset), "random", &st);
-  EXPECT_GT(st.hits, n / 4);
-  EXPECT_GT(st.flagged, n / 20);
-  EXPECT_GT(st.normals_checked, st.hits / 2);
+  test::random_pose_suite(17, n, size, offset, random_queries, check_all,
+                          {.flagged_div = 20, .normals_div = 2});
 }
 
 INSTANTIATE_TEST_SUITE_P(Scales, CapsuleEllipsoid, ::testing::ValuesIn(test::kernel_scales()));
@@ -461,11 +442,9 @@ TEST(CapsuleEllipsoidCases, ConstructedTouching) {
         nref::ring_rise(capsule_shape(ts[k].q), ellipsoid_shape(ts[k].q.b), test::v3(ts[k].n));
     return nref::valley_angle(kAngleTol, std::max(rise, 1e-6 * L), 3e-3, kValleyNoise * L);
   };
-  for (KernelPath path : {KernelPath::kSimd, KernelPath::kScalar}) {
-    const int hits =
-        test::expect_built(ts, run(test::queries_of(ts), path), kRel, size_of, angle_tol, "touching");
-    EXPECT_GT(hits, static_cast<int>(ts.size()) / 4);
-  }
+  test::expect_built_on_both_paths(
+      ts, [](const std::vector<Query>& qs, KernelPath path) { return run(qs, path); }, kRel, size_of,
+      angle_tol, "touching");
 }
 
 TEST(CapsuleEllipsoidCases, NeedlesPancakesAndCentres) {

@@ -49,8 +49,8 @@
 #include <string>
 #include <vector>
 
-#include "host/narrowphase/convex_hull.h"
-#include "host/narrowphase/shape_store.h"
+#include "host/shapes/convex_hull.h"
+#include "host/shapes/shape_store.h"
 #include "kernels/narrowphase/pair_kernels.h"
 #include "support/hull_input.h"
 #include "support/leaf_lanes.h"

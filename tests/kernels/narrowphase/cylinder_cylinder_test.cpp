@@ -615,13 +615,9 @@ class CylinderCylinderScales : public ::testing::TestWithParam<std::tuple<double
 
 TEST_P(CylinderCylinderScales, RandomPosesAgainstReference) {
   const auto [size, offset] = GetParam();
-  std::mt19937 g(static_cast<uint32_t>(21 + std::lround(std::log10(size)) + (offset > 0 ? 10 : 0)));
   const int n = lanes(offset == 0 && size == 1.0 ? 240 : 160);
-  Stats st;
-  check_all(random_queries(g, n, size, offset), "random", &st);
-  EXPECT_GT(st.hits, n / 4);
-  EXPECT_LT(st.hits, n * 9 / 10);
-  EXPECT_GT(st.normals_checked, st.hits / 2);
+  test::random_pose_suite(test::scale_seed(21, size, offset), n, size, offset, random_queries, check_all,
+                          {.max_hit_tenths = 9, .normals_div = 2});
 }
 
 INSTANTIATE_TEST_SUITE_P(Scales, CylinderCylinderScales, ::testing::ValuesIn(test::kernel_scales()));
@@ -674,35 +670,29 @@ TEST(CylinderCylinder, CapFaceOnCapFace) {
 /// A rim against a cap face, both ways: A's rim into B's cap (normal B's axis), B's rim
 /// into A's cap (normal A's axis).
 TEST(CylinderCylinder, RimAgainstACapFace) {
-  Stats st;
-  int meeting = 0;
-  int on = check_built(Piece::kRim, Piece::kCap, false, 73, "A's rim on B's cap", &st, &meeting);
-  EXPECT_GE(on, meeting * 3 / 4);
-  EXPECT_EQ(st.hits, meeting);
-  on = check_built(Piece::kCap, Piece::kRim, false, 79, "B's rim on A's cap", &st, &meeting);
-  EXPECT_GE(on, meeting * 3 / 4);
-  EXPECT_EQ(st.hits, meeting);
+  test::expect_feature_pairs([](Stats* s, int* m) {
+    return check_built(Piece::kRim, Piece::kCap, false, 73, "A's rim on B's cap", s, m);
+  });
+  test::expect_feature_pairs([](Stats* s, int* m) {
+    return check_built(Piece::kCap, Piece::kRim, false, 79, "B's rim on A's cap", s, m);
+  });
 }
 
 /// The sides crossed (the axes >= 0.3 rad apart): normal the axes' cross product.
 TEST(CylinderCylinder, SidesCrossed) {
-  Stats st;
-  int meeting = 0;
-  const int on = check_built(Piece::kSide, Piece::kSide, false, 83, "sides crossed", &st, &meeting);
-  EXPECT_GE(on, meeting * 3 / 4);
-  EXPECT_EQ(st.hits, meeting);
+  test::expect_feature_pairs([](Stats* s, int* m) {
+    return check_built(Piece::kSide, Piece::kSide, false, 83, "sides crossed", s, m);
+  });
 }
 
 /// A side against the other's rim, both ways (normal the side's radial direction).
 TEST(CylinderCylinder, SideAgainstARim) {
-  Stats st;
-  int meeting = 0;
-  int on = check_built(Piece::kSide, Piece::kRim, false, 89, "A's side, B's rim", &st, &meeting);
-  EXPECT_GE(on, meeting * 3 / 4);
-  EXPECT_EQ(st.hits, meeting);
-  on = check_built(Piece::kRim, Piece::kSide, false, 97, "A's rim, B's side", &st, &meeting);
-  EXPECT_GE(on, meeting * 3 / 4);
-  EXPECT_EQ(st.hits, meeting);
+  test::expect_feature_pairs([](Stats* s, int* m) {
+    return check_built(Piece::kSide, Piece::kRim, false, 89, "A's side, B's rim", s, m);
+  });
+  test::expect_feature_pairs([](Stats* s, int* m) {
+    return check_built(Piece::kRim, Piece::kSide, false, 97, "A's rim, B's side", s, m);
+  });
 }
 
 /// Rim against rim: each rim's normal 0.3..1.27 rad from its radial direction, the

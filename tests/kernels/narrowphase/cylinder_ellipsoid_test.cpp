@@ -1106,13 +1106,9 @@ class CylinderEllipsoidScales : public ::testing::TestWithParam<std::tuple<doubl
 
 TEST_P(CylinderEllipsoidScales, RandomPosesAgainstReference) {
   const auto [size, offset] = GetParam();
-  std::mt19937 g(static_cast<uint32_t>(21 + std::lround(std::log10(size)) + (offset > 0 ? 10 : 0)));
   const int n = lanes(offset == 0 && size == 1.0 ? 300 : 150);
-  Stats st;
-  check_all(random_queries(g, n, size, offset), "random", &st);
-  EXPECT_GT(st.hits, n / 4);
-  EXPECT_LT(st.hits, n * 9 / 10);
-  EXPECT_GT(st.normals_checked, st.hits / 2);
+  test::random_pose_suite(test::scale_seed(21, size, offset), n, size, offset, random_queries, check_all,
+                          {.max_hit_tenths = 9, .normals_div = 2});
 }
 
 INSTANTIATE_TEST_SUITE_P(Scales, CylinderEllipsoidScales, ::testing::ValuesIn(test::kernel_scales()));
@@ -1131,30 +1127,21 @@ TEST(CylinderEllipsoid, DeepPairs) {
 
 /// The cap face on the ellipsoid (normal = the axis), apart and meeting.
 TEST(CylinderEllipsoid, CapFaceOnTheEllipsoid) {
-  Stats st;
-  int meeting = 0;
-  const int on = check_built(Piece::kCap, 71, "cap on the ellipsoid", &st, &meeting);
-  EXPECT_GE(on, meeting * 3 / 4);
-  EXPECT_EQ(st.hits, meeting);
+  test::expect_feature_pairs(
+      [](Stats* s, int* m) { return check_built(Piece::kCap, 71, "cap on the ellipsoid", s, m); });
 }
 
 /// The side against the ellipsoid (normal across the axis), apart and meeting.
 TEST(CylinderEllipsoid, SideAgainstTheEllipsoid) {
-  Stats st;
-  int meeting = 0;
-  const int on = check_built(Piece::kSide, 73, "side against the ellipsoid", &st, &meeting);
-  EXPECT_GE(on, meeting * 3 / 4);
-  EXPECT_EQ(st.hits, meeting);
+  test::expect_feature_pairs(
+      [](Stats* s, int* m) { return check_built(Piece::kSide, 73, "side against the ellipsoid", s, m); });
 }
 
 /// A rim against the ellipsoid, the normal 0.3..1.27 rad from the rim's radial direction
 /// (strictly inside the rim's normal cone), apart and meeting.
 TEST(CylinderEllipsoid, RimAgainstTheEllipsoid) {
-  Stats st;
-  int meeting = 0;
-  const int on = check_built(Piece::kRim, 79, "rim against the ellipsoid", &st, &meeting);
-  EXPECT_GE(on, meeting * 3 / 4);
-  EXPECT_EQ(st.hits, meeting);
+  test::expect_feature_pairs(
+      [](Stats* s, int* m) { return check_built(Piece::kRim, 79, "rim against the ellipsoid", s, m); });
 }
 
 /// The analytic lanes on both paths: exact depth, normal and midway point; apart and

@@ -292,10 +292,7 @@ void random_triangle(std::mt19937& g, const Vec3d& c, double r, Vec3d (&v)[3]) {
 Query random_query(std::mt19937& g, double size, double offset, double spread) {
   std::uniform_real_distribution<double> uni(0, 1);
   Query q;
-  q.p = Vec3d(offset, -offset, 0.5 * offset) + size * Vec3d(uni(g) - 0.5, uni(g) - 0.5, uni(g) - 0.5);
-  q.R = test::random_rotation(g);
-  q.rc = size * (0.1 + 0.9 * uni(g));
-  q.h = size * (0.1 + 0.9 * uni(g));
+  test::random_cylinder(g, size, offset, &q);
   const double tr = size * (0.1 + 1.2 * uni(g));
   const double reach = std::hypot(q.rc, q.h) + tr;
   random_triangle(g, q.p + spread * reach * uni(g) * test::random_unit_vector(g), tr, q.v);
@@ -387,12 +384,9 @@ class CylinderTriangleScales : public ::testing::TestWithParam<std::tuple<double
 
 TEST_P(CylinderTriangleScales, RandomPosesAgainstReference) {
   const auto [size, offset] = GetParam();
-  std::mt19937 g(static_cast<uint32_t>(17 + std::lround(std::log10(size)) + 10 * (offset > 0)));
   const int n = static_cast<int>(test::scaled(offset == 0 && size == 1.0 ? 300 : 80));
-  Stats st;
-  check_all(random_queries(g, n, size, offset), "random", &st);
-  EXPECT_GT(st.hits, n / 4);
-  EXPECT_GT(st.flagged, n / 8);
+  test::random_pose_suite(test::scale_seed(17, size, offset), n, size, offset, random_queries, check_all,
+                          {.flagged_div = 8});
 }
 
 INSTANTIATE_TEST_SUITE_P(Scales, CylinderTriangleScales, ::testing::ValuesIn(test::kernel_scales()));

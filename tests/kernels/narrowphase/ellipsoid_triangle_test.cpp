@@ -109,25 +109,13 @@ std::pair<test::Leaf, test::Leaf> leaves(const Query& q) {
           test::triangle_leaf(q.b.v[0], q.b.v[1], q.b.v[2])};
 }
 
-/// Runs `kern` on lanes [begin, end) of all queries as one bucket (full SIMD blocks and a tail).
-std::vector<test::PairResult> run(const std::vector<Query>& qs, KernelPath path, PairKernel kern,
-                                  uint32_t begin = 0, uint32_t end = ~0u) {
-  return test::run_queries(kern, qs, path, leaves, begin, end);
-}
-
 std::vector<test::PairResult> run(const std::vector<Query>& qs, KernelPath path) {
-  const PairKernel k = pair_kernel(kLeafEllipsoid, kLeafTriangle);
-  EXPECT_EQ(k, &collide_ellipsoid_triangle);
-  return run(qs, path, k);
+  return test::run_table_kernel(kLeafEllipsoid, kLeafTriangle, &collide_ellipsoid_triangle, qs, path, leaves);
 }
 
 // ---------------------------------------------------------------------------------------
 // References
 // ---------------------------------------------------------------------------------------
-
-double sd_ellipsoid(const Ell& b, const Vec3d& x) {
-  return test::eref::signed_distance_local(b.e, b.R.transpose() * (x - b.p));
-}
 
 /// The least signed distance to the ellipsoid over the triangle (convex: nested
 /// golden-section search over the barycentric coordinates); y = where.
@@ -137,8 +125,9 @@ double triangle_minimum(const Query& q, Vec3d* where) {
     return Vec3d(t.v[0] + u * (t.v[1] - t.v[0]) + v * (t.v[2] - t.v[0]));
   };
   auto inner = [&](double u, double* v_at) {
-    return test::golden_section_min([&](double v) { return sd_ellipsoid(q.a, point(u, v)); }, 0.0, 1.0 - u,
-                                    44, v_at);
+    return test::golden_section_min(
+        [&](double v) { return test::eref::signed_distance_posed(q.a, point(u, v)); }, 0.0, 1.0 - u, 44,
+        v_at);
   };
   double u = 0, v = 0;
   const double best = test::golden_section_min(
@@ -242,7 +231,7 @@ void check_all(const std::vector<Query>& qs, const char* what, Stats* out_stats 
              const std::string& where) {
             EXPECT_EQ(h.pd[0], h.depth) << where;
             const Vec3d on_a = h.pt[0] + h.n * (0.5 * h.depth), on_b = h.pt[0] - h.n * (0.5 * h.depth);
-            EXPECT_NEAR(sd_ellipsoid(q.a, on_a), 0.0, ptol) << where;
+            EXPECT_NEAR(test::eref::signed_distance_posed(q.a, on_a), 0.0, ptol) << where;
             if (f.unique) {
               const double rho = q.a.e.maxCoeff() * q.a.e.maxCoeff() / q.a.e.minCoeff();
               EXPECT_LE(triangle_distance(q.b, on_b), ptol + 1e-6 * rho) << where;
@@ -314,10 +303,7 @@ std::vector<Touch> touching_queries(std::mt19937& g, int n) {
   for (int k = 0; k < n; ++k) {
     Query q;
     q.a = Ell{Vec3d(u(g), u(g), u(g)), test::random_rotation(g), Vec3d(s(g), s(g), s(g))};
-    const Vec3d dir = test::random_unit_vector(g);
-    const Vec3d xs = dir / std::sqrt(test::eref::level(q.a.e, dir));
-    const Vec3d m = q.a.R * xs.cwiseQuotient(q.a.e.cwiseProduct(q.a.e)).normalized();
-    const Vec3d x = q.a.p + q.a.R * xs;
+    const auto [x, m] = test::eref::surface_point(q.a, test::random_unit_vector(g));
     const double ff = (k % 5 == 0) ? 0.0 : f(g);
     const Vec3d c = x + ff * m;
     const Vec3d t1 = m.unitOrthogonal(), t2 = m.cross(t1);
@@ -466,13 +452,9 @@ class EllipsoidTriangle : public ::testing::TestWithParam<std::tuple<double, dou
 
 TEST_P(EllipsoidTriangle, RandomPosesAgainstDoubleReference) {
   const auto [size, offset] = GetParam();
-  std::mt19937 g(17);
   const int n = static_cast<int>(test::scaled(200));
-  Stats st;
-  check_all(random_queries(g, n, size, offset), "random", &st);
-  EXPECT_GT(st.hits, n / 4);
-  EXPECT_GT(st.flagged, n / 5);
-  EXPECT_GT(st.normals_checked, st.hits / 2);
+  test::random_pose_suite(17, n, size, offset, random_queries, check_all,
+                          {.flagged_div = 5, .normals_div = 2});
 }
 
 INSTANTIATE_TEST_SUITE_P(Scales, EllipsoidTriangle, ::testing::ValuesIn(test::kernel_scales()));
@@ -480,12 +462,9 @@ INSTANTIATE_TEST_SUITE_P(Scales, EllipsoidTriangle, ::testing::ValuesIn(test::ke
 TEST(EllipsoidTriangleCases, ConstructedTouching) {
   std::mt19937 g(29);
   const std::vector<Touch> ts = touching_queries(g, static_cast<int>(test::scaled(300)));
-  for (KernelPath path : {KernelPath::kSimd, KernelPath::kScalar}) {
-    const int hits = test::expect_built(
-        ts, run(test::queries_of(ts), path), kRel, size_of, [](size_t, double) { return kAngleTol; },
-        "touching");
-    EXPECT_GT(hits, static_cast<int>(ts.size()) / 4);
-  }
+  test::expect_built_on_both_paths(
+      ts, [](const std::vector<Query>& qs, KernelPath path) { return run(qs, path); }, kRel, size_of,
+      [](size_t, double) { return kAngleTol; }, "touching");
 }
 
 TEST(EllipsoidTriangleCases, TerrainNeedlesPancakesDegenerate) {

@@ -19,11 +19,11 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
-#include "host/narrowphase/convex_hull.h"
-#include "host/narrowphase/shape_store.h"
+#include "host/shapes/convex_hull.h"
+#include "host/shapes/shape_store.h"
 #include "kernels/narrowphase/general/gjk_epa.h"
-#include "kernels/narrowphase/pair_kernels.h"
 #include "kernels/narrowphase/general/sat.h"
+#include "kernels/narrowphase/pair_kernels.h"
 #include "support/leaf_lanes.h"
 #include "support/narrow_reference.h"
 #include "support/random_input.h"

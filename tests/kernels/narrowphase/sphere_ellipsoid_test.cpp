@@ -85,21 +85,13 @@ double largest(const Query& q) {
   return std::max(q.b.e.maxCoeff(), q.r);
 }
 
-/// Runs `kern` on lanes [begin, end) of all queries as one bucket (full SIMD blocks and a tail).
-std::vector<test::PairResult> run(const std::vector<Query>& qs, KernelPath path, PairKernel kern,
-                                  uint32_t begin = 0, uint32_t end = ~0u) {
-  return test::run_queries(
-      kern, qs, path,
-      [](const Query& q) {
-        return std::pair{test::sphere_leaf(q.c, q.r), test::posed_leaf(kLeafEllipsoid, q.b.p, q.b.R, q.b.e)};
-      },
-      begin, end);
+/// A pair's two leaves as the kernel reads them.
+std::pair<test::Leaf, test::Leaf> leaves(const Query& q) {
+  return {test::sphere_leaf(q.c, q.r), test::posed_leaf(kLeafEllipsoid, q.b.p, q.b.R, q.b.e)};
 }
 
 std::vector<test::PairResult> run(const std::vector<Query>& qs, KernelPath path) {
-  const PairKernel k = pair_kernel(kLeafSphere, kLeafEllipsoid);
-  EXPECT_EQ(k, &collide_sphere_ellipsoid);
-  return run(qs, path, k);
+  return test::run_table_kernel(kLeafSphere, kLeafEllipsoid, &collide_sphere_ellipsoid, qs, path, leaves);
 }
 
 // ---------------------------------------------------------------------------------------

@@ -13,8 +13,8 @@
 #include <random>
 #include <vector>
 
-#include "host/narrowphase/convex_hull.h"
-#include "host/narrowphase/shape_store.h"
+#include "host/shapes/convex_hull.h"
+#include "host/shapes/shape_store.h"
 #include "kernels/narrowphase/pair_kernels.h"
 #include "support/kernel_checks.h"
 #include "support/leaf_lanes.h"

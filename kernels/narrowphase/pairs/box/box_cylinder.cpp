@@ -70,11 +70,11 @@
 // Cost: 22 candidate directions in closed form per lane: the caps and faces (10) on
 // every lane, the edges and vertices against the side (12) only on the lanes those do
 // not certify apart, listed per chunk and run W at a time (gathered geometry and best,
-// written back per lane: ~4-10% of the kernel on the bench, 2026-11-29) (+ the point
+// written back per lane) (+ the point
 // pair where the lane is not certified to meet, + the vertex-rims where the point pair
 // did not separate it:
 // ~5% of the bench's lanes, in ~54% of its blocks; the support test above drops most
-// vertex-rims of such a block, -10% of the kernel's time), the pruned rim solves packed
+// vertex-rims of such a block), the pruned rim solves packed
 // (at most kArcIterations steps of 3 divisions and 2 square roots each; in the bench ~1.1
 // slots per lane, 2.3 before the cone bound and the point pair), the two manifold clips
 // only where a lane of the block needs them; a block whose lanes are all farther
@@ -258,8 +258,8 @@ template <uint32_t W>
 struct Chunk {
   static constexpr uint32_t kLanes = 16 * W;
   // Rows kLanes + 16 floats apart: 1088 bytes at W = 16, so a lane's rows sit in
-  // different L1 sets (1024 apart, every fourth row shared one): 98.4 -> 92.4 ns a pair,
-  // medians of 8 alternated runs (BM_Kernel/box-cylinder/simd/4096, AMD Zen 4).
+  // different L1 sets (1024 apart, every fourth row shared one; docs/narrowphase.md,
+  // "Array layout").
   static constexpr uint32_t kRow = kLanes + 16;
   // geometry: c 0..2, a 3..11, e 12..14, rc 15, h 16
   float geo[17][kRow];

@@ -75,16 +75,9 @@
 // and sphere-hull do); within a lane the face and edge passes run kSimdWidth at a time;
 // the one-lane build (IMPACT_SIMD_SCALAR) runs them with kSimdWidth = 1.
 // Cost: O(F) for lanes a face plane separates by r (43% of the bench's lanes), O(F + E)
-// for the others (a few near-minimum edges again in double). impact_narrowbench
-// BM_Kernel/capsule-convex/4096 (24-point hulls, ~44 faces and ~66 edges, half the pairs
-// overlapping, AVX-512VL machine running 8-wide, 2 shared cores): ~151-155 ns per pair,
-// against ~208-227 ns before the edge passes read ed contiguously (they gathered the
-// far end: 3 gathers per 8 edges) and ~1575-1610 ns for FCL in the same run (10.4x; the
-// old kernel 7.0-8.3x). Under two concurrent builds: ~190 vs ~237 ns. Profile (perf,
-// cpu-clock): the float edge pass ~20%, its candidates in double ~6%, the face pass
-// ~14%, the end points' face tests ~10%, the edge axes ~4%, the lane's set-up and
-// stores ~20%. A block-level midpoint-ball bound on the edge pass was tried and made
-// it slower: the 8 edges of a block rarely all lie beyond r.
+// for the others (a few near-minimum edges again in double); the edge passes read
+// each edge's start and vector contiguously (no gather). Measured per pair, with its
+// profile, in docs/results.md ("Narrow phase") and docs/history.md.
 // Method citations: Ericson, Real-Time Collision Detection (2005), 5.1.9 (closest points
 // of two segments) and 5.3.8 / Cyrus-Beck (segment against a convex polyhedron);
 // D. Gregorius, "The Separating Axis Test between Convex Polyhedra", GDC 2013 (Gauss-map

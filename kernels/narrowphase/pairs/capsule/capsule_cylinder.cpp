@@ -68,9 +68,7 @@
 // Cost: 11 candidate directions, each o(n) in closed form, and two 2D root solves of
 // kArcIterations steps (3 divisions, 2 square roots each); no branch on lane data
 // (selects) except a block whose lanes are all farther apart than their bounding
-// spheres. impact_narrowbench BM_Kernel/capsule-cylinder/simd/4096: ~85 ns per pair
-// (8 lanes, loaded 2-core machine), against ~720-840 through GJK / EPA and ~1200-1440
-// for FCL in the same runs; the one-lane path ~620.
+// spheres. Measured per pair in docs/results.md ("Narrow phase").
 // Both paths run the same template (F = FloatW, or Float1 for the scalar reference).
 // References: Minkowski-difference support functions for penetration depth (van den
 // Bergen, Collision Detection in Interactive 3D Environments, 2003, ch. 4); the

@@ -52,8 +52,7 @@
 // per 8-lane block on the bench); no branch on lane data in the arithmetic (selects),
 // no libm call. A block whose cores are all farther than r + e_max from the
 // ellipsoid's centre stops early.
-// impact_narrowbench BM_Kernel/capsule-ellipsoid/simd/4096 (8 lanes, loaded 2-core
-// machine): ~91 ns per pair, against ~980 through GJK / EPA and ~1940 for FCL (21x).
+// Measured per pair in docs/results.md ("Narrow phase").
 // Both paths run the same template (F = FloatW, or Float1 for the scalar reference).
 #include <cstdint>
 

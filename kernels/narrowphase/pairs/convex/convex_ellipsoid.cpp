@@ -50,9 +50,8 @@
 // lane for that pair.
 // Preconditions: finite inputs, positive radii, orthonormal R, hulls as HullStore builds
 // them (host-validated); no division without a guard: finite inputs give finite outputs.
-// Cost: impact_narrowbench BM_Kernel/convex-ellipsoid/simd/4096 (24-point hulls, half the
-// pairs overlapping, AVX2, loaded 2-core machine): ~1150 ns per pair (FCL ~1820 in the
-// same run); see docs/narrowphase.md.
+// Cost: one pass over the hull's faces, then the vertex and edge pieces the bounds keep,
+// solved packed 8 slots to a solve. Cost: measured per pair in docs/results.md ("Narrow phase").
 // Paths: the per-pair code is one template over the lane type: F = FloatW (kSimd) runs
 // kSimdWidth faces / vertices / edges / solves per step, Float1 (kScalar) one at a time.
 // Method citation: Eberly, "Distance from a Point to an Ellipse, an Ellipsoid, or a

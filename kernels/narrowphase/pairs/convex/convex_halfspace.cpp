@@ -38,8 +38,7 @@
 // Big hulls: a lane whose hull has more than kLaneVerts vertices is not listed and gets
 // collide_support_halfspace (one pair at a time, SIMD across its vertices) instead,
 // decided by its own hull; the listing pass notes whether the range has any, so a range
-// without them is not walked again for them (2026-11-29: 25.7 -> 25.1 ns per pair,
-// medians of 5 alternated runs, AMD EPYC).
+// without them is not walked again for them.
 // Preconditions: finite inputs, orthonormal R, unit nh (host-validated); a hull has at
 // least one vertex. Degenerate input: a hull lying in the plane (all depths 0) counts
 // 0, like exact touching; flat and needle hulls just give fewer points.
@@ -49,35 +48,12 @@
 // runs the same template and gives the SIMD path's bytes except where two vertices'
 // pick scores tie within rounding (GCC contracts the one-lane and vector code's
 // multiply-adds differently; 8 lanes in 12,000 random ones, box and needle hulls):
-// then either choice meets the pick rule. (No contraction in this file would make them
-// identical, at ~5% of the time: 26.4 -> 27.7 ns per pair, alternated, 2026-11-28.)
-// Cost: impact_narrowbench (24-point hulls, half the pairs touching, 4096 lanes; loaded
-// 2-core machine, alternated runs): SIMD ~22-23 ns per pair against ~28-29 for the
-// previous lane kernel (a block walked every lane's whole hull through
-// simd::load_transposed and ran the picks over every slot below in any lane of the
-// block); see docs/narrowphase.md for the same-run FCL figures. Per touching group:
-// 18 pose and plane rows read (GroupRows) and a gather_xyz per slot (~6 slots per group
-// on the bench, ~3.3 used per lane). Variants measured and dropped: blocks without
-// compaction (picks over the block's lanes, contiguous loads and stores: ~48 vs ~44 on
-// one loaded run), the vertices below copied into the group's slots by the listing
-// pass instead of gathered (no gain), a third pass moving the picks to the world frame
-// per block with contiguous loads (no gain), groups sorted by number of vertices below
-// (no gain).
-// At 16 lanes (kPairWidth, 2026-11-28; 2-core AVX-512 Xeon, three alternations against
-// the 8-lane build): 27.5-28.7 -> 25.4-26.3 ns per pair (1.09x), FCL 224-230 in the
-// same runs.
-// Results through prim::LiveOut (2026-11-28: the group stores its vectors in list order,
-// expanded per block by masked stores, instead of 21 scalar stores per touching lane):
-// 26.4 -> 25.5 ns (minima of 10 alternated runs; FCL 203-285 over the day's runs).
-// Slot lists built across the group's lanes (slot_lists: a set bit's index from its power
-// of two's float exponent) instead of a scalar count-trailing-zeros loop per lane
-// (2026-11-29, AMD EPYC, medians of 6 alternated runs): 24.9 -> 24.4 ns.
-// The slots' vertices by 16-byte record loads and a transpose (simd::gather_xyz) instead
-// of three 16-lane gathers per slot, which cost ~17 cycles each on this core (a probe
-// that loaded the pose contiguously instead of by its 18 gathers ran 3.2 ns faster, one
-// that loaded the vertices so 4.2 ns): 21.5 -> 19.3 ns (2026-11-29, AMD EPYC, medians
-// of 5 alternated runs); the pose rows by simd::SortedGather's windows (GroupRows)
-// instead of 18 gathers: 18.5 -> 16.4 ns (FCL 196 in the full run after it: 11.9x).
+// then either choice meets the pick rule (no contraction in this file would make them
+// identical, at a cost: docs/history.md).
+// Cost: per lane, one pass over its hull's vertices (W per step); per touching group,
+// 18 pose and plane rows read (GroupRows) and a gather_xyz per slot. Measured per pair
+// in docs/results.md ("Narrow phase"); the variants measured and dropped, with their
+// figures, in docs/history.md.
 #include <bit>
 #include <cmath>
 #include <cstdint>

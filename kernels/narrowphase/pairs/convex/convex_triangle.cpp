@@ -80,16 +80,12 @@
 // Paths: cfg.path kSimd runs the hull passes kSimdWidth faces / vertices / edges per
 // step, kScalar the same code one at a time (F = simd::Float1): the same formulas and
 // tie rules (bytes may differ where the two fuse multiply-adds differently and nearly
-// tied candidates go either way; measured: identical on the tests' random lanes); the
+// tied candidates go either way; identical on the tests' random lanes); the
 // one-lane build (IMPACT_SIMD_SCALAR) runs both one at a time. One pair per iteration.
-// Cost (impact_narrowbench BM_Kernel/convex-triangle/simd/4096: the bench's 24-point
-// hulls, ~44 faces and ~66 edges, half the pairs overlapping; AVX2 + AVX-512VL build on
-// a 2-core machine shared with other jobs): ~225-260 ns per pair (medians of 5
-// repetitions, two runs), against ~3100-3240 ns for FCL in the same runs (12-14x) and
-// ~970 ns through GJK / EPA before this kernel (FCL ~3060 ns in that run).
-// Lanes separated by the centre line or the triangle's normal (~35%) stop after the
-// vertex pass (~20 ns), by a hull face (~10%) after the face pass (~35 ns); the rest
-// run the edge pass (~200 ns a lane, ~half its blocks skipped by the bound).
+// Cost: O(V) for lanes the centre line or the triangle's normal separates (they stop
+// after the vertex pass), O(V + F) for those a hull face separates, O(V + F + E) for the
+// rest (the edge pass, about half its blocks skipped by the bound). Measured per pair,
+// with the split by pass, in docs/results.md ("Narrow phase") and docs/history.md.
 #include <cfloat>
 #include <cmath>
 #include <cstdint>

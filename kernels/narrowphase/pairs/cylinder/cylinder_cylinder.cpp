@@ -70,21 +70,10 @@
 // kArcFreeze (so its bytes do not depend on its neighbours). A bracket none of whose
 // points can meet the rims' cone rules (rim_brackets: the signs of the offset's radial
 // and axial parts from B's circle and of its part along A's axis, bounded over each step
-// from the samples) is not refined: 1.94 -> 1.17 brackets per rim pair on the bench, the
-// valid ones unchanged (counted 2026-11-29; with B's rule alone, 1.60: of ~25k brackets
-// it would drop, refined anyway, 0.1% ended valid, each at a bracket's end, not a
-// critical point, with the tangents' cross product as its normal and above its lane's
-// least o). Mutation check: an unsound version (the rules tested at the steps' ends
-// only) fails 5 of this kernel's tests; dropping the `far` guard fails none (it only
-// matters where rounding makes the offset's direction noise).
-// impact_narrowbench BM_Kernel/cylinder-cylinder/simd/4096 (2-core Intel Xeon, idle): ~199
-// ns per pair, FCL 1378 in the same run (6.9x), the one-lane path 1404, GJK / EPA ~1900
-// before. Where it goes (parts switched off in turn, ~180 ns then): the rim pairs ~84
-// (sampling and brackets ~47, refinement ~37; ~0.75 rim pairs listed per lane), the four
-// side-rim solves ~34, the rest (caps, sides, certificate, listing, manifolds) ~60.
-// 2026-11-29 (2-core AMD EPYC, Zen 4), with the packing and the bracket prune above: ~117
-// ns, FCL 1221 in the same run (10.4x); perf by region: side-rim solves ~30% (the
-// half-ellipse loop half of that), bracket sampling ~24%, refinement ~15%, manifolds ~11%.
+// from the samples) is not refined (the prune's counts and its mutation check:
+// docs/history.md). The `far` guard matters only where rounding makes the offset's
+// direction noise.
+// Cost: measured per pair in docs/results.md ("Narrow phase").
 // Contact points: one, midway between the witnesses. Where n is within kParallelSin of
 // both axes (cap on cap): each rim's 8 samples seen along n on the other's cap plane and
 // inside its disk, with their gaps, reduced to 4 (reduce4). Where n is within kParallelSin
@@ -564,7 +553,7 @@ template <uint32_t W>
 struct Chunk {
   static constexpr uint32_t kLanes = kChunkBlocks * W;
   // Rows kLanes + 16 floats apart (as box_cylinder.cpp's chunk): a lane's rows in
-  // different L1 sets: 115.0 -> 112.4 ns a pair, medians of 3 alternated runs.
+  // different L1 sets (docs/narrowphase.md, "Array layout").
   static constexpr uint32_t kRow = kLanes + 16;
   // geometry: c 0..2, ax 3..5, ay 6..8, u 9..11, ra 12, ha 13, rb 14, hb 15
   float geo[16][kRow];

@@ -68,12 +68,9 @@
 // shared solvers): both paths give the same bytes.
 // Cost: a first pass (5 support overlaps per lane) over every lane; for the lanes that
 // may touch, the shadow's nearest-point solve, 31 candidate evaluations, the selection,
-// 8 x 3 Newton steps, then 2 x (mostly 1-3) steps. impact_narrowbench
-// BM_Kernel/cylinder-ellipsoid/simd/4096 (8 lanes, idle 2-core Xeon): ~485 ns per pair,
-// FCL ~1820 in the same run (3.7x), GJK / EPA ~2390 before. The kept starts' phase ran
-// ~17% full (a group runs until its slowest lane freezes); the lanes still moving once
-// no more than a quarter of the group's do are set aside and finished packed, 16 to a
-// block (2026-11-29, AMD EPYC, 16 lanes: 302 -> 277 ns, alternated x3).
+// 8 x 3 Newton steps, then 2 x (mostly 1-3) steps; a group runs until its slowest lane
+// freezes, so the lanes still moving once no more than a quarter of the group's do are
+// set aside and finished packed, 16 to a block. Cost: measured per pair in docs/results.md ("Narrow phase").
 // Both paths run the same template (F = FloatW, or Float1 for the scalar reference).
 #include <cstdint>
 

@@ -57,10 +57,8 @@
 // kArcIterations steps (3 divisions, 2 square roots each), plus the two manifold
 // clips, run only where a lane of the block needs them; no other branch on lane data
 // (selects) except a block whose lanes are all farther apart than their bounding
-// spheres. impact_narrowbench BM_Kernel/cylinder-triangle/simd/4096: ~185 ns per pair
-// (8 lanes, AVX2, loaded 2-core machine), against ~1075 through GJK / EPA and ~2340
-// for FCL in the same runs (~12.6x); the one-lane path ~1580 (the 25 candidates and the
-// 6-slot solve one pair at a time: the reference path, not a fast one).
+// spheres. The one-lane path runs the 25 candidates and the 6-slot solve one pair at a
+// time: the reference path, not a fast one. Cost: measured per pair in docs/results.md ("Narrow phase").
 // Both paths run the same template (F = FloatW, or Float1 for the scalar reference).
 // References: Minkowski-difference support functions for penetration depth (van den
 // Bergen, Collision Detection in Interactive 3D Environments, 2003, ch. 4); the

@@ -60,10 +60,8 @@
 // may touch, 25 candidate evaluations (2 square roots each), the selection (min over
 // tagged keys, kStarts times, with the near-duplicates knocked out), 8 x 3 Newton steps,
 // then 2 x (mostly 1-2) steps (each ~6 square roots and ~6 divisions); no branch on lane
-// data in the arithmetic (selects), no libm call. impact_narrowbench
-// BM_Kernel/ellipsoid-ellipsoid/simd/4096 (8 lanes, loaded 2-core machine): ~237 ns per
-// pair, FCL ~2070 in the same run (8.7x; ~208 in a single run), GJK / EPA ~1550 before
-// (FCL ~1910 in that run); about half of it is the candidates and their selection.
+// data in the arithmetic (selects), no libm call; about half the time is the candidates
+// and their selection. Measured per pair in docs/results.md ("Narrow phase").
 // Both paths run the same template (F = FloatW, or Float1 for the scalar reference).
 #include <cstdint>
 

@@ -55,8 +55,7 @@
 // on lane data in the arithmetic (selects), no libm call. A block whose triangles all
 // lie beyond e_max along their normal or whose bounding spheres are all farther than
 // e_max from the ellipsoid's centre stops early.
-// impact_narrowbench BM_Kernel/ellipsoid-triangle/simd/4096 (8 lanes, loaded 2-core
-// machine): ~234 ns per pair, against ~1530 through GJK / EPA and ~3380 for FCL (14x).
+// Measured per pair in docs/results.md ("Narrow phase").
 // Both paths run the same template (F = FloatW, or Float1 for the scalar reference).
 #include <cstdint>
 

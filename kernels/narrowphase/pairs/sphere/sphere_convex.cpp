@@ -49,10 +49,8 @@
 // do); within a lane the face and edge passes run kSimdWidth at a time; the one-lane
 // build (IMPACT_SIMD_SCALAR) runs them with kSimdWidth = 1.
 // Cost: O(F) for separated and deep lanes, O(F + E) for the others (a second look at
-// the kept values and a few edges in double). impact_narrowbench
-// BM_Kernel/sphere-convex/4096 (24-point hulls, ~44 faces and ~66 edges, half the
-// pairs overlapping, AVX2, loaded 2-core machine): ~100 ns per pair, against ~230 ns
-// through GJK / EPA and ~1820 ns for FCL in the same run (18x).
+// the kept values and a few edges in double). Measured per pair in
+// docs/results.md ("Narrow phase").
 // Method citations: the Voronoi-region view of the closest point on a convex
 // polyhedron, Ericson, Real-Time Collision Detection (2005), ch. 5.1; the
 // minimum-translation rule for an interior point as in sphere-box (sphere_box.cpp).

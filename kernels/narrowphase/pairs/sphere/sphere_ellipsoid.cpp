@@ -61,9 +61,7 @@
 // block sits at a fixed point of its step (each lane frozen at its own; measured: the
 // same bytes as running all 10); no branch on lane data (selects), no libm call; a block whose
 // lanes are all farther than r + e_max from the ellipsoid stops early.
-// impact_narrowbench BM_Kernel/sphere-ellipsoid/simd/4096: ~25 ns per pair (8 lanes,
-// loaded 2-core machine; ~42 before the early stop), against ~400 through GJK / EPA and
-// ~2100 for FCL.
+// Measured per pair in docs/results.md ("Narrow phase").
 // Both paths run the same template (F = FloatW, or Float1 for the scalar reference).
 #include <cfloat>
 #include <cstdint>

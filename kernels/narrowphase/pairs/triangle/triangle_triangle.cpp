@@ -63,7 +63,7 @@
 // contact point then lies up to ~1e-4 L off the other triangle (measured: 1 lane in ~800
 // sliver hits). Depth and normal are not affected; below 1e-6 the longest edge is used.
 // Cost: ~450 flops SAT, ~550 flops face manifold, ~150 edge point (each run only for
-// blocks where some lane needs it); ~40 ns per pair on one AVX2 core (FCL ~450 ns).
+// blocks where some lane needs it); measured per pair in docs/results.md ("Narrow phase").
 #include <algorithm>
 #include <cmath>
 #include <cstdint>

@@ -1,4 +1,4 @@
-// build_convex_hull (host/narrowphase/convex_hull.cpp): exact face counts of the
+// build_convex_hull (host/shapes/convex_hull.cpp): exact face counts of the
 // Platonic-ish inputs (with redundant points), and on random clouds the hull's defining
 // properties checked by brute force in double: every input point inside or on it, every
 // vertex an input point and extreme, closed 2-manifold with V - E + F = 2, planar convex
@@ -15,8 +15,8 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
-#include "host/narrowphase/convex_hull.h"
-#include "host/narrowphase/shape_store.h"
+#include "host/shapes/convex_hull.h"
+#include "host/shapes/shape_store.h"
 #include "support/test_support.h"
 
 namespace impact {

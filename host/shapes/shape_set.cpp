@@ -4,10 +4,10 @@
 #include <numeric>
 #include <string>
 
-#include "host/narrowphase/convex_hull.h"
-#include "host/narrowphase/mass.h"
-#include "host/narrowphase/pose.h"
-#include "host/narrowphase/shape_store.h"
+#include "host/shapes/convex_hull.h"
+#include "host/shapes/mass.h"
+#include "host/shapes/pose.h"
+#include "host/shapes/shape_store.h"
 #include "impact/shapes.h"
 
 namespace impact {

@@ -1,6 +1,6 @@
-// HullStore (host/narrowphase/shape_store.h): every convex hull of a ShapeSet in one set
+// HullStore (host/shapes/shape_store.h): every convex hull of a ShapeSet in one set
 // of flat arrays, the layout kernels read through kernels::HullView.
-#include "host/narrowphase/shape_store.h"
+#include "host/shapes/shape_store.h"
 
 #include <cmath>
 #include <map>

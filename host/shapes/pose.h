@@ -1,4 +1,5 @@
-// Pose validation and posed bounds of shapes (host side of the narrow phase).
+// Pose validation and posed bounds of shapes: shared by the World (bodies' poses and
+// bounds), the narrow phase, the shape queries and the ray scene.
 #pragma once
 
 #include <cmath>
@@ -7,7 +8,7 @@
 
 #include <Eigen/Geometry>
 
-#include "host/narrowphase/shape_store.h"
+#include "host/shapes/shape_store.h"
 #include "impact/shapes.h"
 #include "impact/status.h"
 

@@ -15,7 +15,7 @@
 //                       canonical tetrahedron's (Blow & Binstock, "How to find the
 //                       inertia tensor (or other mass properties) of a 3D solid body
 //                       represented by a triangle mesh", 2004); I = tr(C) 1 - C.
-#include "host/narrowphase/mass.h"
+#include "host/shapes/mass.h"
 
 #include <cmath>
 #include <numbers>

@@ -5,7 +5,7 @@
 
 #include <Eigen/Core>
 
-#include "host/narrowphase/shape_store.h"
+#include "host/shapes/shape_store.h"
 #include "impact/status.h"
 
 namespace impact {

@@ -3,7 +3,7 @@
 
 #include <cstdint>
 
-#include "host/narrowphase/shape_store.h"
+#include "host/shapes/shape_store.h"
 #include "impact/shapes.h"
 #include "impact/status.h"
 

@@ -1,11 +1,11 @@
 // One ray against one posed shape: the per-object ray code of impact::raycast_shapes
-// (host/narrowphase/shape_queries.cpp), shared with RayScene's shape geometry
+// (host/shapes/shape_queries.cpp), shared with RayScene's shape geometry
 // (host/raycast/) so both give the same hits.
 #pragma once
 
 #include <Eigen/Core>
 
-#include "host/narrowphase/shape_store.h"
+#include "host/shapes/shape_store.h"
 #include "impact/shape_queries.h"
 #include "impact/shapes.h"
 

@@ -11,7 +11,7 @@
 
 namespace impact {
 
-/// A convex hull as built by host/narrowphase/convex_hull.h, in its local frame.
+/// A convex hull as built by host/shapes/convex_hull.h, in its local frame.
 struct HullData {
   std::vector<Eigen::Vector3f> vertices;
   /// Faces as polygons of vertex indices, counter-clockwise seen from outside;

@@ -1,4 +1,4 @@
-// shape_mass_properties (host/narrowphase/mass.cpp) against independent answers: Monte
+// shape_mass_properties (host/shapes/mass.cpp) against independent answers: Monte
 // Carlo integration in double (fixed seed) for every closed form and for a hull; exact
 // identities (hull of a box's corners == the box, capsule of zero length == sphere,
 // compound of two boxes == the box of their union, parallel-axis sums for offset
@@ -15,9 +15,9 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
-#include "host/narrowphase/convex_hull.h"
-#include "host/narrowphase/mass.h"
-#include "host/narrowphase/shape_store.h"
+#include "host/shapes/convex_hull.h"
+#include "host/shapes/mass.h"
+#include "host/shapes/shape_store.h"
 #include "support/test_support.h"
 
 namespace impact {

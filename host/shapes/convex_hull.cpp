@@ -11,7 +11,7 @@
 // through its neighbours in every polygon holding it (a point on a hull edge) is dropped.
 // Deterministic: faces are processed in creation order, ties go to the lowest index;
 // the hash map only answers lookups (its iteration order never shapes the result).
-#include "host/narrowphase/convex_hull.h"
+#include "host/shapes/convex_hull.h"
 
 #include <algorithm>
 #include <cmath>

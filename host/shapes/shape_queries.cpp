@@ -4,7 +4,7 @@
 // Each query is moved into the shape's local frame as R^T (x - position) in float: the
 // difference is taken first, so a pose far from the world origin costs no precision
 // relative to the shape. Leaf shapes are answered by kernels/narrowphase/leaf/leaf_queries.h.
-// Meshes walk their BVH (host/narrowphase/shape_store.h) near child first, pruning by
+// Meshes walk their BVH (host/shapes/shape_store.h) near child first, pruning by
 // the best hit / distance so far; a node is pruned only when it is strictly worse,
 // and hits are ordered by (t or distance, triangle index), so the result equals a
 // brute force over all triangles whatever the visit order. Compounds loop over their
@@ -21,10 +21,10 @@
 
 #include <Eigen/Geometry>
 
-#include "host/narrowphase/pose.h"
-#include "host/narrowphase/shape_ray.h"
-#include "host/narrowphase/shape_store.h"
 #include "host/parallel.h"
+#include "host/shapes/pose.h"
+#include "host/shapes/shape_ray.h"
+#include "host/shapes/shape_store.h"
 #include "kernels/narrowphase/leaf/leaf_queries.h"
 #include "kernels/raycast/ray_primitives.h"
 

@@ -31,7 +31,7 @@
 
 #include <Eigen/Geometry>
 
-#include "host/narrowphase/shape_store.h"
+#include "host/shapes/shape_store.h"
 #include "impact/shape_queries.h"
 #include "impact/shapes.h"
 #include "kernels/narrowphase/leaf/leaf_queries.h"
