@@ -232,8 +232,10 @@ class ImpactEngine final : public Engine {
   const char* name() const override { return "impact"; }
   std::string settings() const override {
     const impact::SolverDesc& s = world_->desc().solver;
-    return "impact soft step, " + std::to_string(s.substeps) + " substeps, contact " +
-           std::to_string(static_cast<int>(s.contact_hertz)) + " Hz, " + std::to_string(world_->threads()) +
+    const std::string hertz = s.contact_hertz > 0.0f ? std::to_string(static_cast<int>(s.contact_hertz)) + " Hz"
+                                                     : "automatic stiffness";
+    return "impact soft step, " + std::to_string(s.substeps) + " substeps, contact " + hertz + ", " +
+           std::to_string(world_->threads()) +
            " thread(s) (" + impact::to_string(world_->backend()) + ")";
   }
   bool step() override {

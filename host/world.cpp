@@ -101,8 +101,8 @@ Status check_desc(const WorldDesc& d) {
   if (s.kind != SolverKind::kSoftStep && s.kind != SolverKind::kJacobi)
     return invalid(w, "solver.kind is not a known SolverKind");
   if (s.substeps == 0 || s.substeps > 64) return invalid(w, "solver.substeps must be in [1, 64], got " + std::to_string(s.substeps));
-  if (!(std::isfinite(s.contact_hertz) && s.contact_hertz > 0.0f))
-    return invalid(w, "solver.contact_hertz must be finite and > 0, got " + fmt_float(s.contact_hertz));
+  if (!(std::isfinite(s.contact_hertz) && s.contact_hertz >= 0.0f))
+    return invalid(w, "solver.contact_hertz must be finite and >= 0, got " + fmt_float(s.contact_hertz));
   if (!(std::isfinite(s.contact_damping_ratio) && s.contact_damping_ratio >= 0.0f))
     return invalid(w, "solver.contact_damping_ratio must be finite and >= 0, got " + fmt_float(s.contact_damping_ratio));
   if (!(std::isfinite(s.max_push_speed) && s.max_push_speed > 0.0f))

@@ -56,22 +56,23 @@ void SoftStepSolver::for_each_colour(const Executor& exec, Fn&& fn) const {
       fn(kernels::Range{b + cb, b + ce});
     });
   }
-  const uint32_t ob = colour_start_[kernels::kOverflowColour], oe = colour_start_[kernels::kDeepColour];
+  const uint32_t ob = colour_start_[kernels::kOverflowColour], oe = colour_start_[kernels::kOverflowColour + 1];
   if (ob != oe) fn(kernels::Range{ob, oe});  // in order, on this thread
 }
 
-void SoftStepSolver::gather_deep(const kernels::ContactManifoldArrays& c, uint32_t manifolds) {
-  const uint8_t* colour = colour_.data();
-  const uint32_t md = colour_start_[kernels::kDeepColour + 1] - colour_start_[kernels::kDeepColour];
-  uint32_t pd = 0;
+void SoftStepSolver::gather_deep(const kernels::ContactManifoldArrays& c, uint32_t manifolds, float deep_depth) {
+  uint32_t md = 0, pd = 0;
   for (uint32_t m = 0; m < manifolds; ++m)
-    if (colour[m] == kernels::kDeepColour) pd += c.count[m];
+    if (c.depth[m] > deep_depth) {
+      ++md;
+      pd += c.count[m];
+    }
   const bool plain = c.child_a == nullptr && c.feature == nullptr;
   deep_.resize(md, pd, c.first_point == nullptr, plain);
   uint32_t* rows = scratch(deep_rows_, pd);
   uint32_t i = 0, k = 0;
   for (uint32_t m = 0; m < manifolds; ++m) {
-    if (colour[m] != kernels::kDeepColour) continue;
+    if (!(c.depth[m] > deep_depth)) continue;
     deep_.pair[i] = c.pair[m];
     deep_.a[i] = c.a[m];
     deep_.b[i] = c.b[m];
@@ -110,23 +111,22 @@ void SoftStepSolver::step(const Executor& exec, const WorldDesc& desc, const Con
   const kernels::ContactManifoldArrays c = contacts.view();
 
   // Colour, then order the constraints by colour (stable: manifold order within one).
-  // The deep manifolds (the last colour) go to the recovery solve now, before the
-  // bodies' velocities are read.
+  // The deep manifolds also go to the recovery velocity solve now, before the bodies'
+  // velocities are read.
   deep_.clear();
-  uint32_t ns = 0;  // constraints the soft step solves: colours 0 .. overflow
+  const float deep_depth = sd.max_push_speed * dt;
   if (nm > 0) {
     uint32_t* masks = scratch(body_masks_, n);
     std::memset(masks, 0, sizeof(uint32_t) * n);
     uint8_t* colour = scratch(colour_, nm);
-    uint32_t counts[kernels::kDeepColour + 1];
-    kernels::colour_manifolds(c, s.inv_mass.data(), nm, sd.max_push_speed * dt, masks, colour, counts);
-    uint32_t next[kernels::kDeepColour + 1];
+    uint32_t counts[kernels::kOverflowColour + 1];
+    kernels::colour_manifolds(c, s.inv_mass.data(), nm, masks, colour, counts);
+    uint32_t next[kernels::kOverflowColour + 1];
     colour_start_[0] = 0;
-    for (uint32_t k = 0; k <= kernels::kDeepColour; ++k) {
+    for (uint32_t k = 0; k <= kernels::kOverflowColour; ++k) {
       next[k] = colour_start_[k];
       colour_start_[k + 1] = colour_start_[k] + counts[k];
     }
-    ns = colour_start_[kernels::kDeepColour];
     uint32_t* order = scratch(order_, nm);
     for (uint32_t m = 0; m < nm; ++m) order[next[colour[m]]++] = m;
     uint32_t* first = scratch(first_, nm);
@@ -135,12 +135,11 @@ void SoftStepSolver::step(const Executor& exec, const WorldDesc& desc, const Con
       first[i] = run;
       run += c.count[order[i]];
     }
-    if (ns < nm) {
-      gather_deep(c, nm);
+    gather_deep(c, nm, deep_depth);
+    if (deep_.manifolds > 0)
       recovery_.solve_velocities(exec, sd, deep_, s, planes.restitution.data());
-    } else {
+    else
       recovery_.clear_impulses();
-    }
   }
 
   kernels::BodyForces forces{};
@@ -182,7 +181,7 @@ void SoftStepSolver::step(const Executor& exec, const WorldDesc& desc, const Con
     pts = scratch(points_, np);
     const uint32_t* order = order_.data();
     const uint32_t* first = first_.data();
-    exec.for_each_chunk(ns, kConstraintGrain, [&](uint32_t b, uint32_t e, uint32_t) {
+    exec.for_each_chunk(nm, kConstraintGrain, [&](uint32_t b, uint32_t e, uint32_t) {
       kernels::prepare_contacts(p, c, order, first, bodies, ii, com, n, mat, warm, cons, pts, {b, e});
     });
   }
@@ -191,34 +190,31 @@ void SoftStepSolver::step(const Executor& exec, const WorldDesc& desc, const Con
     exec.for_each_chunk(n, kBodyGrain, [&](uint32_t b, uint32_t e, uint32_t) {
       kernels::integrate_substep_velocities(drive, bodies, {b, e});
     });
-    if (ns > 0) {
+    if (nm > 0) {
       for_each_colour(exec, [&](kernels::Range r) { kernels::warm_start_contacts(cons, pts, bodies, r); });
       for_each_colour(exec, [&](kernels::Range r) { kernels::solve_contacts(p, true, cons, pts, bodies, r); });
     }
     exec.for_each_chunk(n, kBodyGrain, [&](uint32_t b, uint32_t e, uint32_t) {
       kernels::integrate_substep_positions(p.h, gyro, bodies, {b, e});
     });
-    if (ns > 0)
+    if (nm > 0)
       for_each_colour(exec, [&](kernels::Range r) { kernels::solve_contacts(p, false, cons, pts, bodies, r); });
   }
 
   if (nm > 0) {
     for_each_colour(exec, [&](kernels::Range r) { kernels::restitute_contacts(p, cons, pts, bodies, r); });
-    // Keep (key, values) for the next step's warm start; the public impulses. Deep
-    // points keep no warm-start value (their impulses are the recovery solver's).
+    // Keep (key, values) for the next step's warm start; the public impulses (a deep
+    // point's adds the recovery solve's).
     kernels::WarmPoint* stored = scratch(stored_, np);
     float* out = scratch(impulse_out_, np);
     const uint32_t* order = order_.data();
-    exec.for_each_chunk(ns, kConstraintGrain, [&](uint32_t b, uint32_t e, uint32_t) {
+    exec.for_each_chunk(nm, kConstraintGrain, [&](uint32_t b, uint32_t e, uint32_t) {
       kernels::store_contacts(c, order, cons, pts, stored, out, {b, e});
     });
-    if (ns < nm) {
+    if (deep_.manifolds > 0) {
       const std::span<const float> deep_impulse = recovery_.impulses();
       const uint32_t* rows = deep_rows_.data();
-      for (uint32_t k = 0; k < deep_.points; ++k) {
-        stored[rows[k]] = kernels::WarmPoint{-1.0f, 0, 0, 0, 0, 0, 0, 0};
-        out[rows[k]] = deep_impulse[k];
-      }
+      for (uint32_t k = 0; k < deep_.points; ++k) out[rows[k]] += deep_impulse[k];
     }
     uint64_t* pk = scratch(prev_keys_, np);
     uint32_t* pi = scratch(prev_index_, np);

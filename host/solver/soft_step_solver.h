@@ -12,12 +12,14 @@
 // Deep overlaps: a manifold deeper than max_push_speed * dt cannot be pushed out by
 // the soft bias within the step, and a body in hundreds of them (bodies created at
 // one point, a fast body found far inside another) would sum hundreds of capped
-// pushes into a large velocity. Those manifolds skip the soft step and go to the
-// Jacobi solver (host/solver/contact_solver.h) instead: its velocity solve stops
-// their approach (with restitution) before the substeps, and its position correction
-// moves them apart after, on displacements, so the recovery adds no kinetic energy.
-// It is linear (no angular terms, no friction): a recovery mode, not the solver.
-// A scene without deep manifolds pays one comparison per manifold for it.
+// pushes into a large velocity. Those manifolds stay in the soft step without bias
+// (a rigid stop: the bodies close no further, with friction), and the Jacobi solver
+// (host/solver/contact_solver.h) separates them: its velocity solve stops their
+// approach (with restitution) before the substeps, and its position correction moves
+// them apart after, on displacements, so the recovery adds no kinetic energy. (Taking
+// them out of the soft step instead left a pile with nothing holding its deep
+// contacts during the substeps: they sank deeper, docs/solver.md.) A scene without
+// deep manifolds pays one comparison per manifold for it.
 //
 // Cost: O(bodies) per substep for integration, O(points) per pass, 3 passes a
 // substep (warm start, solve, relax), one parallel loop per colour and pass; the
@@ -64,8 +66,8 @@ class SoftStepSolver {
  private:
   template <class Fn>
   void for_each_colour(const Executor& exec, Fn&& fn) const;
-  // Copies the manifolds of colour kDeepColour into deep_ (rows into deep_rows_).
-  void gather_deep(const kernels::ContactManifoldArrays& c, uint32_t manifolds);
+  // Copies the manifolds deeper than deep_depth into deep_ (rows into deep_rows_).
+  void gather_deep(const kernels::ContactManifoldArrays& c, uint32_t manifolds, float deep_depth);
 
   RadixSorter sorter_;
   Buffer<kernels::SolverBody> bodies_;  // entry n: the zero body of planes
@@ -90,7 +92,7 @@ class SoftStepSolver {
   Buffer<uint32_t> deep_rows_;                 // their points' rows in the step's manifolds
   ContactSolver recovery_;                     // the Jacobi solver, on deep_ only
   uint32_t prev_count_ = 0, prev_body_count_ = 0;
-  uint32_t colour_start_[kernels::kDeepColour + 2] = {};
+  uint32_t colour_start_[kernels::kOverflowColour + 2] = {};
 };
 
 }  // namespace impact::host

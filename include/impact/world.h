@@ -36,11 +36,14 @@ enum class SolverKind : uint8_t {
 /// Accuracy knobs of the contact solver (docs/solver.md has their measured cost and error).
 struct SolverDesc {
   SolverKind kind = SolverKind::kSoftStep;
-  /// kSoftStep: substeps per step, >= 1. More = stiffer stacks and smaller errors.
+  /// kSoftStep: substeps per step, >= 1: the soft step's accuracy knob. With the
+  /// automatic stiffness, more substeps = stiffer contacts (less sink, taller stacks
+  /// stand), at a cost linear in substeps (docs/solver.md, "Stiffness and substeps").
   uint32_t substeps = 4;
-  /// kSoftStep: stiffness of contacts, Hz (> 0; capped at a quarter of the substep
-  /// rate), and their damping ratio (>= 0).
-  float contact_hertz = 30.0f;
+  /// kSoftStep: stiffness of contacts, Hz (>= 0; 0 = automatic, an eighth of the
+  /// substep rate: 30 Hz at 60 Hz and 4 substeps; larger values are capped there), and
+  /// their damping ratio (>= 0).
+  float contact_hertz = 0.0f;
   float contact_damping_ratio = 10.0f;
   /// kSoftStep: the fastest a contact pushes overlapping bodies apart, m/s (> 0); an
   /// overlap deeper than max_push_speed * dt takes the recovery path instead.

@@ -4,17 +4,12 @@
 
 namespace impact::kernels {
 
-void colour_manifolds(const ContactManifoldArrays& c, const float* inv_mass, uint32_t manifolds, float deep_depth,
+void colour_manifolds(const ContactManifoldArrays& c, const float* inv_mass, uint32_t manifolds,
                       uint32_t* IMPACT_RESTRICT body_masks, uint8_t* IMPACT_RESTRICT colour,
                       uint32_t* IMPACT_RESTRICT counts) {
   constexpr uint32_t kAll = (1u << kColourCount) - 1u;
-  for (uint32_t k = 0; k <= kDeepColour; ++k) counts[k] = 0;
+  for (uint32_t k = 0; k <= kOverflowColour; ++k) counts[k] = 0;
   for (uint32_t m = 0; m < manifolds; ++m) {
-    if (c.depth[m] > deep_depth) {
-      colour[m] = static_cast<uint8_t>(kDeepColour);
-      ++counts[kDeepColour];
-      continue;
-    }
     const uint32_t a = c.a[m];
     const bool da = inv_mass[a] > 0.0f;
     const bool db = c.b_is_plane[m] == 0 && inv_mass[c.b[m]] > 0.0f;

@@ -6,8 +6,6 @@
 // thread. Greedy in manifold order (each constraint takes the lowest colour free at
 // both its bodies), as Box2D v3's constraint graph does incrementally; here it is
 // recomputed each step from the step's manifolds, which are in a deterministic order.
-// Manifolds deeper than a threshold take kDeepColour and no body colour: the soft
-// step hands them to its recovery pass (host/solver/soft_step_solver.h).
 // Cost: one serial pass, O(manifolds + bodies), a 32-bit mask per body.
 #pragma once
 
@@ -18,13 +16,11 @@ namespace impact::kernels {
 
 inline constexpr uint32_t kColourCount = 24;
 inline constexpr uint32_t kOverflowColour = kColourCount;
-inline constexpr uint32_t kDeepColour = kColourCount + 1;
 
 /// colour[m] for every manifold m < manifolds; body_masks has body_count entries,
-/// zero on entry (left holding each body's used colours). counts[kColourCount + 2]
-/// receives the constraints per colour (overflow, then deep, last). A manifold with
-/// depth[m] > deep_depth takes kDeepColour (pass +inf to colour every manifold).
-void colour_manifolds(const ContactManifoldArrays& c, const float* inv_mass, uint32_t manifolds, float deep_depth,
+/// zero on entry (left holding each body's used colours). counts[kColourCount + 1]
+/// receives the constraints per colour (overflow last).
+void colour_manifolds(const ContactManifoldArrays& c, const float* inv_mass, uint32_t manifolds,
                       uint32_t* IMPACT_RESTRICT body_masks, uint8_t* IMPACT_RESTRICT colour,
                       uint32_t* IMPACT_RESTRICT counts);
 

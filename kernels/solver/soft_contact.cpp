@@ -88,7 +88,8 @@ SoftParams soft_params(float dt, uint32_t substeps, float hertz, float zeta) {
   SoftParams p{};
   p.dt = dt;
   p.h = dt / static_cast<float>(substeps);
-  const float f = std::min(hertz, 0.25f / p.h);
+  const float cap = kMaxHertzPerSubstepRate / p.h;
+  const float f = hertz > 0.0f ? std::min(hertz, cap) : cap;
   const float omega = 2.0f * std::numbers::pi_v<float> * f;
   const float a1 = 2.0f * zeta + p.h * omega;
   const float a2 = p.h * omega * a1;
@@ -159,6 +160,7 @@ void prepare_contacts(const SoftParams& p, const ContactManifoldArrays& c, const
     k.b = plane ? body_count : c.b[m];
     k.first = first_point[i];
     k.count = c.count[m];
+    k.deep = c.depth[m] > p.max_push_speed * p.dt ? 1u : 0u;
     k.ma = bodies[k.a].inv_mass;
     k.mb = plane ? 0.0f : bodies[k.b].inv_mass;
     k.ia = inv_inertia[k.a];
@@ -301,7 +303,7 @@ void solve_contacts(const SoftParams& p, bool use_bias, ContactConstraint* cons,
       float bias = 0.0f, mass_scale = 1.0f, impulse_scale = 0.0f;
       if (s > 0.0f) {
         bias = s * inv_h;  // speculative: may close the gap, no more
-      } else if (use_bias) {
+      } else if (use_bias && k.deep == 0) {
         bias = std::max(p.bias_rate * p.mass_scale * s, -p.max_push_speed);
         mass_scale = p.mass_scale;
         impulse_scale = p.impulse_scale;

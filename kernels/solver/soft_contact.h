@@ -27,7 +27,9 @@
 // phase: s = s0 + dot(dp_b - dp_a + rot(dq_b) r_b - rot(dq_a) r_a - (r_b - r_a), n),
 // with r the anchors (point - centre of mass) at the step's start and n fixed.
 // Solve, per point: s > -slop is speculative (the impulse only stops the bodies
-// closing more than s + slop this substep); deeper points get the soft bias
+// closing more than s + slop this substep); points of a deep manifold (depth >
+// max_push_speed * dt: a push could not separate it this step) get no bias, only the
+// rigid stop (the host separates them by position correction); deeper points get the soft bias
 //   bias = max(bias_rate * mass_scale * (s + slop), -max_push_speed)
 //   dλ = -m_n (mass_scale * v_n + bias) - impulse_scale * λ,   λ = max(λ + dλ, 0)
 // with (Catto, "Solver2D: soft step", 2024; Box2D v3 b2MakeSoft)
@@ -98,7 +100,13 @@ struct SoftParams {
   float warm_start;      ///< factor on last step's impulses
 };
 
-/// Soft constraint coefficients for stiffness hertz, damping ratio zeta, substep h.
+/// The stiffest contact the soft step takes, as a fraction of the substep rate 1/h
+/// (Box3D's cap; h * omega <= pi/4): stiffer contacts at a given substep make piles
+/// jitter and slide (docs/solver.md, "Stiffness and substeps").
+inline constexpr float kMaxHertzPerSubstepRate = 0.125f;
+
+/// Soft constraint coefficients for stiffness hertz (<= 0: the cap, substep rate / 8;
+/// larger values are capped there), damping ratio zeta, substep h = dt / substeps.
 SoftParams soft_params(float dt, uint32_t substeps, float hertz, float zeta);
 
 /// One manifold point of a constraint.
@@ -117,6 +125,7 @@ struct ContactPoint {
 struct ContactConstraint {
   uint32_t a, b;            ///< SolverBody indices; b == body_count for a plane
   uint32_t first, count;    ///< its points in the point array
+  uint32_t deep;            ///< 1: deeper than max_push_speed * dt, no soft bias (held rigid)
   float ma, mb;             ///< inverse masses
   Sym3 ia, ib;              ///< world inverse inertias
   Vec3 n, t1, t2;           ///< normal (a -> b) and tangents
