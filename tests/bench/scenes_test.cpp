@@ -3,12 +3,14 @@
 // the bodies name, no two bodies start overlapping by more than the stacking overlap
 // (axis-aligned boxes by their exact boxes, the rotated piles by bounding spheres),
 // every body starts on the free side of every plane, the same arguments give the
-// same bytes, and a small version of each steps without error or NaN.
+// same bytes, a small version of each steps without error or NaN, and the mixed pile
+// comes to rest on its mesh.
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <cstring>
 #include <numeric>
 #include <string>
@@ -215,6 +217,43 @@ TEST(BenchScenes, SmallVersionsStepWithTheSoftStep) {
     for (size_t i = 0; i < a.size(); ++i)
       ASSERT_TRUE(std::isfinite(a.pos_x[i]) && std::isfinite(a.pos_y[i]) && std::isfinite(a.pos_z[i])) << i;
   }
+}
+
+// Issue 40's mixed pile: boxes, capsules, hulls, cylinders and spheres dropped on a
+// triangle mesh come to rest with no NaN. 1000 of the mixed scene's bodies, 10 s at
+// the default settings. The issue's "penetration below the slop" is not met: soft
+// contacts hold a load F at an overlap F / (m_eff omega^2), and bodies wedged in the
+// pile or pressed against its walls rest 1-3 cm deep at 4 substeps
+// (docs/solver.md, "Stiffness and substeps"); the bound here is the recovery path's
+// depth, max_push_speed * dt, below which no contact is left to the position pass.
+TEST(BenchScenes, MixedPileComesToRestOnTheMesh) {
+  const Scene s = scene_of("mixed", 1000);
+  WorldDesc desc;
+  desc.threads = 2;
+  std::unique_ptr<World> world;
+  ASSERT_TRUE(test::IsOk(load_scene(s, desc, &world)));
+  for (int k = 0; k < 600; ++k) ASSERT_TRUE(test::IsOk(world->step()));
+  const BodyArrays a = world->bodies();
+  double kinetic = 0.0;
+  bool finite = true;
+  for (size_t i = 0; i < a.size(); ++i) {
+    finite = finite && std::isfinite(a.pos_x[i]) && std::isfinite(a.pos_y[i]) && std::isfinite(a.pos_z[i]);
+    const double v2 = double(a.vel_x[i]) * a.vel_x[i] + double(a.vel_y[i]) * a.vel_y[i] + double(a.vel_z[i]) * a.vel_z[i];
+    if (a.inv_mass[i] > 0.0f) kinetic += 0.5 * v2 / a.inv_mass[i];
+  }
+  const ContactArrays c = world->contacts();
+  float deepest = 0.0f;
+  uint32_t over_1cm = 0;
+  for (size_t m = 0; m < c.size(); ++m) {
+    deepest = std::max(deepest, c.depth[m]);
+    over_1cm += c.depth[m] > 0.01f ? 1u : 0u;
+  }
+  std::printf("[ measure ] mixed pile of %zu bodies on a mesh, 10 s: kinetic energy %.3g J, deepest %.3g m, "
+              "%u of %zu manifolds deeper than 1 cm\n",
+              a.size(), kinetic, deepest, over_1cm, c.size());
+  EXPECT_TRUE(finite);
+  EXPECT_LT(kinetic, 0.5) << "at rest";
+  EXPECT_LT(deepest, desc.solver.max_push_speed * desc.fixed_dt);
 }
 
 }  // namespace
