@@ -578,6 +578,7 @@ ContactArrays World::contacts() const {
   out.point_y = {c.point[1].data(), p};
   out.point_z = {c.point[2].data(), p};
   out.point_depth = {c.point_depth.data(), p};
+  out.point_feature = {c.feature.data(), c.feature.empty() ? 0 : p};
   out.impulse = {impulse.data(), impulse.size() == p ? p : 0};
   return out;
 }

@@ -90,6 +90,39 @@ struct Box3 {
 
 using Posed = host::PosedObject;
 
+// Feature ids of manifold m's points (rows p0 ..): the quadrant of each point about the
+// points' centroid, in body a's frame (ra: its rotation), within the plane of a's two
+// axes least along the normal. A resting manifold's points then keep their ids (and
+// their warm-start impulses) whatever order the kernel reports them in, which changes
+// with rounding (a box on a box: the first corner turns with 1e-9 rad normal jitter).
+// Ids 0..3 are quadrants; a one-point manifold, or one whose points share a quadrant,
+// keeps slot ids 4 + k. Cost: a 3x3 product per point. (Box2D and Box3D key points by
+// the clipping features instead; our kernels report none.)
+void assign_features(const kernels::ContactManifoldArrays& c, uint32_t m, uint32_t p0, const Eigen::Matrix3f& ra) {
+  const uint32_t count = c.count[m];
+  uint32_t ids[kernels::kMaxManifoldPoints] = {};
+  bool quadrants = count > 1;
+  if (quadrants) {
+    const Eigen::Vector3f n = ra.transpose() * Eigen::Vector3f(c.normal[0][m], c.normal[1][m], c.normal[2][m]);
+    const int drop = std::abs(n.x()) >= std::abs(n.y()) ? (std::abs(n.x()) >= std::abs(n.z()) ? 0 : 2)
+                                                        : (std::abs(n.y()) >= std::abs(n.z()) ? 1 : 2);
+    const int u = drop == 0 ? 1 : 0, v = drop == 2 ? 1 : 2;
+    Eigen::Vector3f centroid = Eigen::Vector3f::Zero();
+    for (uint32_t k = 0; k < count; ++k)
+      centroid += Eigen::Vector3f(c.point[0][p0 + k], c.point[1][p0 + k], c.point[2][p0 + k]);
+    centroid /= static_cast<float>(count);
+    uint32_t used = 0;
+    for (uint32_t k = 0; k < count && quadrants; ++k) {
+      const Eigen::Vector3f l =
+          ra.transpose() * (Eigen::Vector3f(c.point[0][p0 + k], c.point[1][p0 + k], c.point[2][p0 + k]) - centroid);
+      ids[k] = (l[u] > 0.0f ? 1u : 0u) | (l[v] > 0.0f ? 2u : 0u);
+      quadrants = (used & (1u << ids[k])) == 0;
+      used |= 1u << ids[k];
+    }
+  }
+  for (uint32_t k = 0; k < count; ++k) c.feature[p0 + k] = quadrants ? ids[k] : 4 + k;
+}
+
 using host::LeafArrays;
 
 }  // namespace
@@ -653,11 +686,12 @@ Status host::NarrowRunner::State::run(const host::Executor& exec, const host::Na
       c.depth[m] = manifold.f[0][s];
       c.count[m] = static_cast<uint8_t>(count);
       if (c.first_point != nullptr) c.first_point[m] = p;
-      for (uint32_t k = 0; k < count; ++k, ++p) {
-        for (uint32_t d = 0; d < 3; ++d) c.point[d][p] = manifold.f[4 + 3 * k + d][s];
-        c.point_depth[p] = manifold.f[16 + k][s];
-        c.feature[p] = k;
+      for (uint32_t k = 0; k < count; ++k) {
+        for (uint32_t d = 0; d < 3; ++d) c.point[d][p + k] = manifold.f[4 + 3 * k + d][s];
+        c.point_depth[p + k] = manifold.f[16 + k][s];
       }
+      assign_features(c, m, p, posed[pr.a].R);
+      p += count;
       ++m;
     }
     if (hook != nullptr) hook->written(chunk_hits[chunk], m);

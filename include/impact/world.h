@@ -200,6 +200,9 @@ struct ContactArrays {
   std::span<const uint32_t> first_points;
   std::span<const float> point_x, point_y, point_z;  ///< per point, world, m
   std::span<const float> point_depth;                ///< per point: overlap along the normal, m
+  /// Per point: its id within its manifold, kept while the contact persists (the
+  /// solver's warm-start key); empty when every point's id is its slot (plain spheres).
+  std::span<const uint32_t> point_feature;
   std::span<const float> impulse;                    ///< per point: accumulated normal impulse, N*s
   /// Manifolds.
   size_t size() const { return a.size(); }

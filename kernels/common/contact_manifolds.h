@@ -16,8 +16,9 @@
 // Point p:
 //   point[0..2][p]       world position, midway between the two surfaces
 //   point_depth[p]       penetration along the normal at the point (the deepest equals depth)
-//   feature[p]           the point's warm-start key within its manifold: its slot 0..3
-//                        (the kernels report no feature ids yet; null: the slot)
+//   feature[p]           the point's warm-start key within its manifold, stable while
+//                        the contact persists (the general narrow phase's quadrant ids,
+//                        host/narrowphase/narrow_phase.cpp; null: the slot)
 // Order: manifolds in the pair list's order (then child_a, child_b), points in slot
 // order, so the layout is the same for any thread count.
 #pragma once

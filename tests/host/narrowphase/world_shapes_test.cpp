@@ -1,8 +1,9 @@
 // Bodies with shapes (BodyDesc::shape) in the World's step: validation, resting
 // contacts against closed-form heights, slot re-sorts that keep each body's shape and
 // orientation, determinism across backends and threads with every proxy type in one
-// scene, and sphere bodies giving the same contacts through the general path as
-// through the sphere path.
+// scene, sphere bodies giving the same contacts through the general path as through
+// the sphere path, and resting contact points that keep their ids (the solver's
+// warm-start keys) from step to step.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -432,6 +433,70 @@ TEST(WorldShapes, DestroyingTheShapedBodiesReturnsToTheSpherePath) {
   EXPECT_EQ(w->contacts().size(), 2u);
   EXPECT_EQ(w->contacts().points(), 2u);
   EXPECT_TRUE(w->contacts().first_points.empty());  // the sphere path: one point each
+}
+
+// Two boxes stacked on a floor and a box resting on a tilted static slab: once at rest
+// every corner keeps its point id from step to step (matched by position), and a
+// manifold's ids are distinct. The box-box kernel reports the corners in an order that
+// turns with rounding (1e-9 rad of normal jitter), so slot ids would not hold.
+TEST(WorldShapes, RestingCornersKeepTheirPointIds) {
+  auto w = make_world();
+  PlaneDesc floor;
+  PlaneHandle ph;
+  IMPACT_ASSERT_OK(w->create_planes(std::span(&floor, 1), std::span(&ph, 1)));
+  ShapeId cube, slab;
+  IMPACT_ASSERT_OK(w->shapes().add_box(Eigen::Vector3f(0.5f, 0.5f, 0.5f), &cube));
+  IMPACT_ASSERT_OK(w->shapes().add_box(Eigen::Vector3f(3.0f, 0.5f, 3.0f), &slab));
+  const Eigen::Quaternionf tilt(Eigen::AngleAxisf(0.35f, Eigen::Vector3f::UnitZ()));
+  const Eigen::Vector3f up = tilt * Eigen::Vector3f::UnitY(), slab_top(10.0f, 3.0f, 0.0f);
+  std::vector<BodyDesc> d(4);
+  d[0].shape = d[1].shape = d[3].shape = cube;
+  d[0].position = {0.0f, 0.499f, 0.0f};
+  d[1].position = {0.0f, 1.498f, 0.0f};
+  d[2].shape = slab;
+  d[2].inv_mass = 0.0f;
+  d[2].orientation = tilt;
+  d[2].position = slab_top - 0.5f * up;
+  d[3].orientation = tilt;
+  d[3].friction = 0.8f;
+  d[3].position = slab_top + 0.499f * up;
+  std::vector<BodyHandle> h(d.size());
+  IMPACT_ASSERT_OK(w->create_bodies(d, h));
+  struct Corner {
+    Eigen::Vector3f p;
+    uint32_t id;
+  };
+  std::vector<Corner> last;
+  uint32_t checked = 0;
+  for (int step = 0; step < 120; ++step) {
+    IMPACT_ASSERT_OK(w->step());
+    const ContactArrays c = w->contacts();
+    ASSERT_EQ(c.point_feature.size(), c.points());
+    std::vector<Corner> now;
+    for (size_t m = 0; m < c.size(); ++m) {
+      uint32_t seen = 0;
+      for (size_t k = c.first_point(m); k < c.first_point(m) + c.point_count[m]; ++k) {
+        const uint32_t id = c.point_feature[k];
+        ASSERT_LT(id, 32u);
+        EXPECT_EQ(seen & (1u << id), 0u) << "ids within a manifold are distinct";
+        seen |= 1u << id;
+        now.push_back({Eigen::Vector3f(c.point_x[k], c.point_y[k], c.point_z[k]), id});
+      }
+    }
+    if (step >= 60) {
+      ASSERT_EQ(now.size(), last.size()) << "the same contacts at rest";
+      for (const Corner& x : now) {
+        const auto near = std::min_element(last.begin(), last.end(), [&](const Corner& a, const Corner& b) {
+          return (a.p - x.p).squaredNorm() < (b.p - x.p).squaredNorm();
+        });
+        ASSERT_LT((near->p - x.p).norm(), 1e-3f);
+        EXPECT_EQ(near->id, x.id) << "step " << step << ": the corner at " << x.p.transpose() << " changed its id";
+        ++checked;
+      }
+    }
+    last = std::move(now);
+  }
+  EXPECT_EQ(checked, 60u * 12u) << "three four-point manifolds were checked every step";
 }
 
 }  // namespace
