@@ -2,7 +2,9 @@
 // pieces, and pairs built in its frame (centre 0, axis z) then posed in the world:
 //   PosedCylinder         centre, rotation (column 2 = the unit axis), radius, half length
 //   rounded               every input rounded to float, as the kernel sees it
-//   round_cylinder        the same for the cylinder fields (p, R, rc, h) of a flat pair
+//   FlatCylinder          the cylinder fields (p, R, rc, h) of a flat pair struct (a base)
+//   round_cylinder        the same rounding for those fields
+//   move_cylinder         those fields' cylinder moved (rounded to float)
 //   random_posed_cylinder  at the origin, a random rotation, radius and half length in
 //                         [0.1, 1] size
 //   CylinderPiece         cap, rim, side
@@ -35,6 +37,15 @@ inline PosedCylinder rounded(PosedCylinder c) {
   return c;
 }
 
+/// The cylinder of a pair struct that holds it flat (a base of the box-, capsule- and
+/// triangle-cylinder tests' pairs): centre p, rotation R (column 2 = the unit axis),
+/// radius rc, half length h, as random_cylinder draws them.
+struct FlatCylinder {
+  Eigen::Vector3d p;
+  Eigen::Matrix3d R;
+  double rc, h;
+};
+
 /// The cylinder fields of a pair struct that holds them flat (p, R, rc, h: as
 /// random_cylinder draws them) rounded to float.
 template <class Q>
@@ -43,6 +54,12 @@ void round_cylinder(Q* q) {
   q->R = round_to_float(q->R);
   q->rc = round_to_float(q->rc);
   q->h = round_to_float(q->h);
+}
+
+/// The flat pair q's cylinder moved by shift (its centre rounded to float).
+template <class Q>
+void move_cylinder(Q& q, const Eigen::Vector3d& shift) {
+  q.p = round_to_float(Eigen::Vector3d(q.p + shift));
 }
 
 /// A cylinder centred at the origin with a random rotation, radius and half length

@@ -18,6 +18,7 @@
 //                  test's check and its reference against the construction
 //   expect_line_contact  a two-point contact along a coordinate axis (a side line lying
 //                  on a face, an edge along a side) against its closed form
+//   expect_thin_pairs_meet  needle and pancake pairs: checked, and a fifth of them meet
 #pragma once
 
 #include <gtest/gtest.h>
@@ -210,6 +211,15 @@ template <class Draw, class Check>
 void random_pose_suite(const std::tuple<double, double>& scale, uint32_t seed, int n, Draw draw, Check check,
                        SuiteCoverage c) {
   random_pose_suite(seed, n, std::get<0>(scale), std::get<1>(scale), draw, check, c);
+}
+
+/// Needle and pancake pairs qs (one shape or both thinned to about 1e-4 of their size)
+/// run by the test's check_all(qs, what, stats): more than a fifth of them meet.
+template <class Q, class CheckAll>
+void expect_thin_pairs_meet(const std::vector<Q>& qs, CheckAll check_all) {
+  LaneStats st;
+  check_all(qs, "needle / pancake", &st);
+  EXPECT_GT(st.hits, static_cast<int>(qs.size()) / 5);
 }
 
 /// A built-feature case: check_built(&stats, &meeting) runs pairs built to meet (or just

@@ -141,8 +141,7 @@ Ref reference(const Query& q) {
   Ref f;
   f.s = r.s;
   f.n = test::ev(r.n);
-  f.conditioned = r.s > 0 && r.unique(kRel * L);
-  if (f.conditioned) f.conditioned = nref::ring_rise(a, b, r.n) >= 1e-6 * L;
+  f.conditioned = r.s > 0 && nref::well_conditioned(a, b, r, kRel * L, L);
   return f;
 }
 
@@ -391,8 +390,7 @@ TEST(BoxEllipsoidCases, CoincidentCentres) {
   // unit normal, exact depth.
   std::mt19937 g(37);
   std::uniform_real_distribution<double> u(-1, 1), s(0.2, 1.0);
-  std::vector<Query> qs;
-  for (int k = 0; k < static_cast<int>(test::scaled(120)); ++k) {
+  const std::vector<Query> qs = test::draw_cases(static_cast<int>(test::scaled(120)), [&](int k) {
     Query q;
     const Vec3d e = k % 4 == 1 ? Vec3d::Constant(s(g)) : Vec3d(s(g), s(g), s(g));
     const Vec3d h = k % 4 == 2 ? Vec3d::Constant(s(g)) : Vec3d(s(g), s(g), s(g));
@@ -402,8 +400,8 @@ TEST(BoxEllipsoidCases, CoincidentCentres) {
     if (k % 5 == 2) at = Vec3d(h[0], -h[1], 0);
     if (k % 5 == 3) at = Vec3d(-h[0], h[1], h[2]);
     q.b = Posed{q.a.p + q.a.R * at, k % 3 == 1 ? q.a.R : test::random_rotation(g), e};
-    qs.push_back(rounded(q));
-  }
+    return rounded(q);
+  });
   Stats st;
   check_all(qs, "coincident centres", &st);
   EXPECT_EQ(st.hits, static_cast<int>(qs.size()));
@@ -462,15 +460,14 @@ TEST(BoxEllipsoidCases, Analytic) {
 TEST(BoxEllipsoidCases, RoundEllipsoidIsSphereBox) {
   std::mt19937 g(11);
   std::uniform_real_distribution<double> u(-1, 1), u01(0, 1);
-  std::vector<Query> qs;
-  for (int k = 0; k < 200; ++k) {
+  const std::vector<Query> qs = test::draw_cases(200, [&](int) {
     Query q;
     q.a = Posed{Vec3d(u(g), u(g), u(g)), test::random_rotation(g),
                 Vec3d(0.2 + 0.8 * u01(g), 0.2 + 0.8 * u01(g), 0.2 + 0.8 * u01(g))};
     const double r = 0.2 + 0.6 * u01(g);
     q.b = Posed{q.a.p + Vec3d(u(g), u(g), u(g)) * 1.5, test::random_rotation(g), Vec3d::Constant(r)};
-    qs.push_back(rounded(q));
-  }
+    return rounded(q);
+  });
   const std::vector<test::PairResult> sphere =
       test::run_queries(&collide_sphere_box, qs, KernelPath::kSimd, [](const Query& q) {
         return std::pair{test::sphere_leaf(q.b.p, q.b.e[0]), test::posed_leaf(kLeafBox, q.a.p, q.a.R, q.a.e)};

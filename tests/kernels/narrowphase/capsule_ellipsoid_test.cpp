@@ -476,13 +476,12 @@ TEST(CapsuleEllipsoidCases, Analytic) {
 TEST(CapsuleEllipsoidCases, RoundEllipsoidIsSphereCapsule) {
   std::mt19937 g(11);
   std::uniform_real_distribution<double> u(-1, 1), u01(0, 1);
-  std::vector<Query> qs;
-  for (int k = 0; k < 200; ++k) {
+  const std::vector<Query> qs = test::draw_cases(200, [&](int) {
     Query q;
     q.b = Ell{Vec3d(u(g), u(g), u(g)), test::random_rotation(g), Vec3d::Constant(0.2 + 0.6 * u01(g))};
     q.a = Cap{Vec3d(u(g), u(g), u(g)), test::random_unit_vector(g), 0.05 + 0.4 * u01(g), u01(g)};
-    qs.push_back(rounded(q));
-  }
+    return rounded(q);
+  });
   // sphere (A) - capsule (B): the same pairs with the roles swapped; sphere-capsule's
   // normal points from the sphere (our B) to the capsule (our A).
   const std::vector<test::PairResult> sphere =

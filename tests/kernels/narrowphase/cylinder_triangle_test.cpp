@@ -84,11 +84,8 @@ constexpr double kRel = 1e-5;       // depth tolerance, of L
 constexpr double kAngleTol = 1e-4;  // rad, where the minimum is unique and conditioned
 constexpr double kValleyNoise = 4e-7;  // of L: twice the worst depth error measured
 
-struct Query {
-  Vec3d p;       // cylinder centre
-  Mat3d R;       // cylinder rotation (column 2 = axis)
-  double rc, h;  // radius, half length
-  Vec3d v[3];    // triangle
+struct Query : test::FlatCylinder {
+  Vec3d v[3];  // triangle
 };
 
 /// The query as the kernel sees it: every input rounded to float.
@@ -619,13 +616,12 @@ TEST(CylinderTriangle, DegenerateTriangles) {
 /// minus the capsule's radius, the normal reversed: A and B swap).
 TEST(CylinderTriangle, SliverIsCapsuleCylinder) {
   std::mt19937 g(47);
-  std::vector<Query> qs;
-  for (int i = 0; i < static_cast<int>(test::scaled(200)); ++i) {
+  const std::vector<Query> qs = test::draw_cases(static_cast<int>(test::scaled(200)), [&](int) {
     Query q = random_query(g, 1.0, 0.0, 0.6);
     const Vec3d a = q.v[0], b = q.v[1], perp = (b - a).cross(test::random_unit_vector(g)).normalized();
     q.v[2] = test::round_to_float(Vec3d(0.5 * (a + b) + 1e-7 * (b - a).norm() * perp));
-    qs.push_back(q);
-  }
+    return q;
+  });
   const auto mine = run(qs, KernelPath::kSimd);
   // capsule lanes: core v0 .. v1, radius r
   const double r = 1e-6;
@@ -665,9 +661,7 @@ TEST(CylinderTriangle, NeedlesAndPancakes) {
     }
     return q;
   });
-  Stats st;
-  check_all(qs, "needle / pancake", &st);
-  EXPECT_GT(st.hits, n / 5);
+  test::expect_thin_pairs_meet(qs, check_all);
 }
 
 /// Symmetries: the vertex order (cyclic and reversed) changes nothing; the half-turn

@@ -183,8 +183,7 @@ Ref reference(const Query& q) {
   f.s = r.s;
   f.n = test::ev(r.n);
   f.through = true;
-  f.conditioned = r.unique(kRel * L);
-  if (f.conditioned) f.conditioned = nref::ring_rise(a, b, r.n) >= 1e-6 * L;
+  f.conditioned = nref::well_conditioned(a, b, r, kRel * L, L);
   return f;
 }
 
@@ -453,8 +452,7 @@ TEST(EllipsoidTriangleCases, CentreOnTheTriangle) {
   // triangle cuts the ellipsoid through its centre; finite unit normal, exact depth.
   std::mt19937 g(37);
   std::uniform_real_distribution<double> u(-1, 1), s(0.2, 1.0), u01(0, 1);
-  std::vector<Query> qs;
-  for (int k = 0; k < static_cast<int>(test::scaled(120)); ++k) {
+  const std::vector<Query> qs = test::draw_cases(static_cast<int>(test::scaled(120)), [&](int k) {
     Query q;
     const Vec3d e = k % 4 == 1 ? Vec3d::Constant(s(g)) : Vec3d(s(g), s(g), s(g));
     q.a = Ell{Vec3d(u(g), u(g), u(g)), k % 3 == 0 ? Mat3d::Identity() : test::random_rotation(g), e};
@@ -465,8 +463,8 @@ TEST(EllipsoidTriangleCases, CentreOnTheTriangle) {
     if (k % 5 == 2) at = t.v[2];
     for (Vec3d& v : t.v) v = v - at + q.a.p;
     q.b = t;
-    qs.push_back(rounded(q));
-  }
+    return rounded(q);
+  });
   Stats st;
   check_all(qs, "centre on the triangle", &st);
   EXPECT_EQ(st.hits, static_cast<int>(qs.size()));
@@ -515,13 +513,12 @@ TEST(EllipsoidTriangleCases, Analytic) {
 TEST(EllipsoidTriangleCases, RoundEllipsoidIsSphereTriangle) {
   std::mt19937 g(11);
   std::uniform_real_distribution<double> u(-1, 1), u01(0, 1);
-  std::vector<Query> qs;
-  for (int k = 0; k < 200; ++k) {
+  const std::vector<Query> qs = test::draw_cases(200, [&](int) {
     Query q;
     q.a = Ell{Vec3d(u(g), u(g), u(g)), test::random_rotation(g), Vec3d::Constant(0.2 + 0.6 * u01(g))};
     q.b = random_triangle(g, q.a.p + Vec3d(u(g), u(g), u(g)) * 1.2, 0.3 + u01(g));
-    qs.push_back(rounded(q));
-  }
+    return rounded(q);
+  });
   const std::vector<test::PairResult> sphere =
       test::run_queries(&collide_sphere_triangle, qs, KernelPath::kSimd, [](const Query& q) {
         return std::pair{test::sphere_leaf(q.a.p, q.a.e[0]), leaves(q).second};
