@@ -120,16 +120,13 @@ double coord_ulp(const Query& q) {
 
 // --- running the kernel -----------------------------------------------------------------------
 
-/// Runs `kern` (the kernel under test unless given) on lanes [begin, end) of one bucket.
-std::vector<test::PairResult> run(const std::vector<Query>& qs, KernelPath path, PairKernel kern = nullptr,
-                                  uint32_t begin = 0, uint32_t end = ~0u) {
+/// Runs the kernel under test on one bucket of qs.
+std::vector<test::PairResult> run(const std::vector<Query>& qs, KernelPath path) {
   return test::run_queries(
-      kern != nullptr ? kern : &collide_box_cylinder, qs, path,
-      [](const Query& q) {
+      &collide_box_cylinder, qs, path, [](const Query& q) {
         return std::pair{test::posed_leaf(kLeafBox, q.c, q.Q, q.e),
                          test::posed_leaf(kLeafCylinder, q.p, q.R, Vec3d(q.rc, q.h, 0))};
-      },
-      begin, end);
+      });
 }
 
 // --- references -------------------------------------------------------------------------------
@@ -256,8 +253,7 @@ void check_all(const std::vector<Query>& qs, const char* what, Stats* out_stats 
       .sd_a = box_sd,
       .sd_b = [](const Query& q, const Vec3d& x) { return cyl_sd(q, x); },
       .apart = [](const Query& q, const Vec3d& shift) { return gap(q, shift); }};
-  test::check_lanes_on_both_paths(
-      model, qs, [](const std::vector<Query>& v, KernelPath path) { return run(v, path); }, what, out_stats);
+  test::check_lanes_on_both_paths(model, qs, run, what, out_stats);
 }
 
 // --- inputs -----------------------------------------------------------------------------------

@@ -123,15 +123,11 @@ test::Leaf leaf_of(const Cyl& c) {
   return test::posed_leaf(kLeafCylinder, c.p, c.R, Vec3d(c.r, c.h, 0.0));
 }
 
-/// Runs `kern` (the kernel under test unless given) on lanes [begin, end) of one bucket.
-std::vector<test::PairResult> run(const std::vector<Query>& qs, KernelPath path, PairKernel kern = nullptr,
-                                  uint32_t begin = 0, uint32_t end = ~0u) {
-  return test::run_queries(
-      kern != nullptr ? kern : &collide_cylinder_cylinder, qs, path,
-      [](const Query& q) {
-        return std::pair{leaf_of(q.a), leaf_of(q.b)};
-      },
-      begin, end);
+/// Runs the kernel under test on one bucket of qs.
+std::vector<test::PairResult> run(const std::vector<Query>& qs, KernelPath path) {
+  return test::run_queries(&collide_cylinder_cylinder, qs, path, [](const Query& q) {
+    return std::pair{leaf_of(q.a), leaf_of(q.b)};
+  });
 }
 
 // --- references -------------------------------------------------------------------------------
@@ -250,8 +246,7 @@ void check_all(const std::vector<Query>& qs, const char* what, Stats* out_stats 
       .sd_a = [](const Query& q, const Vec3d& x) { return cyl_sd(q.a, x); },
       .sd_b = [](const Query& q, const Vec3d& x) { return cyl_sd(q.b, x); },
       .apart = [](const Query& q, const Vec3d& shift) { return solid_minimum(q, shift); }};
-  test::check_lanes_on_both_paths(
-      model, qs, [](const std::vector<Query>& v, KernelPath path) { return run(v, path); }, what, out_stats);
+  test::check_lanes_on_both_paths(model, qs, run, what, out_stats);
 }
 
 // --- inputs -----------------------------------------------------------------------------------

@@ -115,15 +115,11 @@ test::Leaf cylinder_leaf(const Query& q) {
   return test::posed_leaf(kLeafCylinder, q.p, q.R, Vec3d(q.rc, q.h, 0));
 }
 
-/// Runs `kern` (the kernel under test unless given) on lanes [begin, end) of one bucket.
-std::vector<test::PairResult> run(const std::vector<Query>& qs, KernelPath path, PairKernel kern = nullptr,
-                                  uint32_t begin = 0, uint32_t end = ~0u) {
-  return test::run_queries(
-      kern != nullptr ? kern : pair_kernel(kLeafCylinder, kLeafTriangle), qs, path,
-      [](const Query& q) {
-        return std::pair{cylinder_leaf(q), test::triangle_leaf(q.v[0], q.v[1], q.v[2])};
-      },
-      begin, end);
+/// Runs the kernel under test on one bucket of qs.
+std::vector<test::PairResult> run(const std::vector<Query>& qs, KernelPath path) {
+  return test::run_queries(pair_kernel(kLeafCylinder, kLeafTriangle), qs, path, [](const Query& q) {
+    return std::pair{cylinder_leaf(q), test::triangle_leaf(q.v[0], q.v[1], q.v[2])};
+  });
 }
 
 // --- references -------------------------------------------------------------------------------
@@ -244,8 +240,7 @@ void check_all(const std::vector<Query>& qs, const char* what, Stats* out_stats 
       .sd_a = cyl_sd,
       .sd_b = tri_distance,  // unsigned: the triangle has no inside
       .apart = [](const Query& q, const Vec3d& shift) { return triangle_minimum(q, shift); }};
-  test::check_lanes_on_both_paths(
-      model, qs, [](const std::vector<Query>& v, KernelPath path) { return run(v, path); }, what, out_stats);
+  test::check_lanes_on_both_paths(model, qs, run, what, out_stats);
 }
 
 // --- inputs -----------------------------------------------------------------------------------
