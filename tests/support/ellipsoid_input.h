@@ -39,6 +39,12 @@ inline PosedSolid random_ellipsoid(std::mt19937& g) {
   return PosedSolid{Eigen::Vector3d(u(g), u(g), u(g)), random_rotation(g), Eigen::Vector3d(s(g), s(g), s(g))};
 }
 
+/// The same with the radii e given (centre and rotation drawn as random_ellipsoid's).
+inline PosedSolid random_ellipsoid(std::mt19937& g, const Eigen::Vector3d& e) {
+  std::uniform_real_distribution<double> u(-1, 1);
+  return PosedSolid{Eigen::Vector3d(u(g), u(g), u(g)), random_rotation(g), e};
+}
+
 /// Case k of the needle and pancake radii: ratio 1e-3 (k odd) or 1e-4; a needle (1,
 /// ratio, ratio (0.5 .. 1.5)) where (k / 2) is odd, else a pancake (1, 0.5 .. 1, ratio);
 /// the axes turned by k mod 3.

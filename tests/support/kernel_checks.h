@@ -19,6 +19,7 @@
 //   expect_line_contact  a two-point contact along a coordinate axis (a side line lying
 //                  on a face, an edge along a side) against its closed form
 //   expect_thin_pairs_meet  needle and pancake pairs: checked, and a fifth of them meet
+//   expect_all_meet  pairs that all meet: checked, every one a contact
 #pragma once
 
 #include <gtest/gtest.h>
@@ -220,6 +221,16 @@ void expect_thin_pairs_meet(const std::vector<Q>& qs, CheckAll check_all) {
   LaneStats st;
   check_all(qs, "needle / pancake", &st);
   EXPECT_GT(st.hits, static_cast<int>(qs.size()) / 5);
+}
+
+/// Pairs that all meet (coincident centres, a centre on the other shape) run by the
+/// test's check_all(qs, what, stats): every one a contact. Returns the statistics.
+template <class Q, class CheckAll>
+LaneStats expect_all_meet(const std::vector<Q>& qs, CheckAll check_all, const char* what) {
+  LaneStats st;
+  check_all(qs, what, &st);
+  EXPECT_EQ(st.hits, static_cast<int>(qs.size())) << what;
+  return st;
 }
 
 /// A built-feature case: check_built(&stats, &meeting) runs pairs built to meet (or just

@@ -320,7 +320,7 @@ std::vector<Query> thin_queries(std::mt19937& g, int n) {
   return test::draw_cases(n, [&](int k) {
     const Vec3d e = test::thin_radii(g, k);
     Query q;
-    q.b = Ell{Vec3d(u(g), u(g), u(g)), test::random_rotation(g), e};
+    q.b = test::random_ellipsoid(g, e);
     const int thin = test::thinnest_axis(e);
     const int lng = e[0] >= e[1] && e[0] >= e[2] ? 0 : (e[1] >= e[2] ? 1 : 2);
     Vec3d y, ul;
