@@ -3,6 +3,7 @@
 //   PosedSolid        centre, rotation, extents along its axes (radii; a box's half extents)
 //   rounded           every field rounded to float
 //   random_ellipsoid  centre in [-1, 1]^3, a random rotation, radii in [0.2, 1]
+//   random_round_ellipsoid  the same with one radius in [0.2, 0.8]
 //   thin_radii        needle and pancake radii (ratios 1e-3, 1e-4), axes permuted
 //   thinnest_axis     the index of the smallest radius
 //   random_surface_touch  a random ellipsoid, a point on its surface and its normal
@@ -43,6 +44,14 @@ inline PosedSolid random_ellipsoid(std::mt19937& g) {
 inline PosedSolid random_ellipsoid(std::mt19937& g, const Eigen::Vector3d& e) {
   std::uniform_real_distribution<double> u(-1, 1);
   return PosedSolid{Eigen::Vector3d(u(g), u(g), u(g)), random_rotation(g), e};
+}
+
+/// A round ellipsoid (a sphere): centre and rotation as random_ellipsoid's, radius
+/// uniform in [0.2, 0.8].
+inline PosedSolid random_round_ellipsoid(std::mt19937& g) {
+  std::uniform_real_distribution<double> u(-1, 1), u01(0, 1);
+  return PosedSolid{Eigen::Vector3d(u(g), u(g), u(g)), random_rotation(g),
+                    Eigen::Vector3d::Constant(0.2 + 0.6 * u01(g))};
 }
 
 /// Case k of the needle and pancake radii: ratio 1e-3 (k odd) or 1e-4; a needle (1,

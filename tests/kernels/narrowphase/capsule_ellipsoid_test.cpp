@@ -478,7 +478,7 @@ TEST(CapsuleEllipsoidCases, RoundEllipsoidIsSphereCapsule) {
   std::uniform_real_distribution<double> u(-1, 1), u01(0, 1);
   const std::vector<Query> qs = test::draw_cases(200, [&](int) {
     Query q;
-    q.b = Ell{Vec3d(u(g), u(g), u(g)), test::random_rotation(g), Vec3d::Constant(0.2 + 0.6 * u01(g))};
+    q.b = test::random_round_ellipsoid(g);
     q.a = Cap{Vec3d(u(g), u(g), u(g)), test::random_unit_vector(g), 0.05 + 0.4 * u01(g), u01(g)};
     return rounded(q);
   });

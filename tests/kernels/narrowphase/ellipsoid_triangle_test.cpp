@@ -513,7 +513,7 @@ TEST(EllipsoidTriangleCases, RoundEllipsoidIsSphereTriangle) {
   std::uniform_real_distribution<double> u(-1, 1), u01(0, 1);
   const std::vector<Query> qs = test::draw_cases(200, [&](int) {
     Query q;
-    q.a = Ell{Vec3d(u(g), u(g), u(g)), test::random_rotation(g), Vec3d::Constant(0.2 + 0.6 * u01(g))};
+    q.a = test::random_round_ellipsoid(g);
     q.b = random_triangle(g, q.a.p + Vec3d(u(g), u(g), u(g)) * 1.2, 0.3 + u01(g));
     return rounded(q);
   });
