@@ -12,8 +12,9 @@
 // (impact's substeps, Bullet's and ODE's solver iterations) are options.
 //
 // Exit status: 0 on success, 1 when an engine fails, 2 on bad command-line arguments.
+#include "bench/rigid_peers.h"
+
 #include <algorithm>
-#include <charconv>
 #include <chrono>
 #include <cinttypes>
 #include <cmath>
@@ -25,8 +26,9 @@
 #include <string_view>
 #include <vector>
 
-#include "bench/rigid_peers.h"
+#include "bench/cli_args.h"
 #include "bench/scenes/scenes.h"
+#include "bench/stats.h"
 #include "impact/impact.h"
 
 #ifndef IMPACT_RIGIDBENCH_HAVE_BULLET
@@ -44,7 +46,6 @@ using impact::bench::rigid::Engine;
 using impact::bench::rigid::PeerScene;
 
 constexpr int kExitError = 1;
-constexpr int kExitUsage = 2;
 constexpr std::string_view kScenes[] = {"pyramid", "wall", "pyramids", "column"};
 
 struct Options {
@@ -96,37 +97,16 @@ void print_usage(std::FILE* f) {
                join(available_engines()).c_str());
 }
 
-bool parse_unsigned(std::string_view s, uint32_t* out) {
-  if (s.empty()) return false;
-  uint32_t v = 0;
-  const auto [ptr, ec] = std::from_chars(s.data(), s.data() + s.size(), v);
-  if (ec != std::errc() || ptr != s.data() + s.size()) return false;
-  *out = v;
-  return true;
-}
+using impact::bench::parse_unsigned;
 
-// Returns 0 and fills *o, or prints the error and returns kExitUsage; -1 means --help.
+// Returns 0 and fills *o, or prints the error and returns impact::bench::kExitUsage;
+// impact::bench::kAskedForHelp for --help.
 int parse_args(int argc, char** argv, Options* o) {
-  auto fail = [](const std::string& msg) {
-    std::fprintf(stderr, "impact_rigidbench: %s\n(see impact_rigidbench --help)\n", msg.c_str());
-    return kExitUsage;
-  };
-  for (int i = 1; i < argc; ++i) {
-    std::string_view arg = argv[i];
-    std::string_view value;
-    bool has_value = false;
-    if (const size_t eq = arg.find('='); arg.starts_with("--") && eq != std::string_view::npos) {
-      value = arg.substr(eq + 1);
-      arg = arg.substr(0, eq);
-      has_value = true;
-    }
-    auto need_value = [&]() -> bool {
-      if (has_value) return true;
-      if (i + 1 >= argc) return false;
-      value = argv[++i];
-      has_value = true;
-      return true;
-    };
+  for (impact::bench::ArgCursor cur(argc, argv, "impact_rigidbench"); cur.next();) {
+    auto fail = [&](const std::string& msg) { return cur.fail(msg); };
+    const std::string_view arg = cur.name();
+    const std::string_view& value = cur.value();  // set by need_value()
+    auto need_value = [&] { return cur.need_value(); };
     auto number = [&](uint32_t* out, uint32_t min_value) -> int {
       if (!need_value()) return fail(std::string(arg) + " needs a value");
       if (!parse_unsigned(value, out) || *out < min_value)
@@ -135,7 +115,7 @@ int parse_args(int argc, char** argv, Options* o) {
       return 0;
     };
     if (arg == "--help" || arg == "-h") {
-      return -1;
+      return impact::bench::kAskedForHelp;
     } else if (arg == "--scene") {
       if (!need_value()) return fail("--scene needs a value");
       if (std::find(std::begin(kScenes), std::end(kScenes), value) == std::end(kScenes))
@@ -171,7 +151,7 @@ int parse_args(int argc, char** argv, Options* o) {
         pos = comma + 1;
       }
     } else {
-      return fail("unknown option '" + std::string(argv[i]) + "'");
+      return fail("unknown option '" + std::string(cur.raw()) + "'");
     }
   }
   if (o->engines.empty()) o->engines = available_engines();
@@ -263,14 +243,7 @@ class ImpactEngine final : public Engine {
   std::vector<impact::BodyHandle> handles_;
 };
 
-double median(std::vector<double> v) {
-  if (v.empty()) return 0.0;
-  const size_t mid = v.size() / 2;
-  std::nth_element(v.begin(), v.begin() + mid, v.end());
-  const double hi = v[mid];
-  if (v.size() % 2 == 1) return hi;
-  return 0.5 * (hi + *std::max_element(v.begin(), v.begin() + mid));
-}
+using impact::bench::median;
 
 // How the boxes stand after the run, against their start.
 struct Standing {
@@ -316,11 +289,9 @@ Standing measure(const PeerScene& scene, const std::vector<BoxState>& end) {
 int main(int argc, char** argv) {
   Options opt;
   if (int r = parse_args(argc, argv, &opt); r != 0) {
-    if (r == -1) {
-      print_usage(stdout);
-      return 0;
-    }
-    return r;
+    if (r != impact::bench::kAskedForHelp) return r;
+    print_usage(stdout);
+    return 0;
   }
 
   impact::bench::Scene scene;

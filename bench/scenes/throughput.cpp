@@ -11,7 +11,6 @@
 
 #include <algorithm>
 #include <cerrno>
-#include <charconv>
 #include <chrono>
 #include <cinttypes>
 #include <cstdint>
@@ -23,7 +22,9 @@
 #include <string_view>
 #include <vector>
 
+#include "bench/cli_args.h"
 #include "bench/scenes/scenes.h"
+#include "bench/stats.h"
 #include "impact/impact.h"
 
 namespace {
@@ -32,7 +33,6 @@ using Clock = std::chrono::steady_clock;
 using impact::bench::Scene;
 
 constexpr int kExitError = 1;
-constexpr int kExitUsage = 2;
 
 struct Options {
   std::string scene = "box";
@@ -82,40 +82,16 @@ void print_usage(std::FILE* f) {
                impact::bench::kDefaultSeed);
 }
 
-// Whole-string unsigned parse: rejects signs, blanks, trailing junk and overflow.
-template <class T>
-bool parse_unsigned(std::string_view s, T* out, int base = 10) {
-  if (base == 16 && (s.starts_with("0x") || s.starts_with("0X"))) s.remove_prefix(2);
-  if (s.empty()) return false;
-  T v{};
-  const auto [ptr, ec] = std::from_chars(s.data(), s.data() + s.size(), v, base);
-  if (ec != std::errc() || ptr != s.data() + s.size()) return false;
-  *out = v;
-  return true;
-}
+using impact::bench::parse_unsigned;
 
-// Returns 0 and fills *o, or prints the error and returns kExitUsage; -1 means --help.
+// Returns 0 and fills *o, or prints the error and returns impact::bench::kExitUsage;
+// impact::bench::kAskedForHelp for --help.
 int parse_args(int argc, char** argv, Options* o) {
-  auto fail = [](const std::string& msg) {
-    std::fprintf(stderr, "impact_bench: %s\n(see impact_bench --help)\n", msg.c_str());
-    return kExitUsage;
-  };
-  for (int i = 1; i < argc; ++i) {
-    std::string_view arg = argv[i];
-    std::string_view value;
-    bool has_value = false;
-    if (const size_t eq = arg.find('='); arg.starts_with("--") && eq != std::string_view::npos) {
-      value = arg.substr(eq + 1);
-      arg = arg.substr(0, eq);
-      has_value = true;
-    }
-    auto need_value = [&]() -> bool {
-      if (has_value) return true;
-      if (i + 1 >= argc) return false;
-      value = argv[++i];
-      has_value = true;
-      return true;
-    };
+  for (impact::bench::ArgCursor cur(argc, argv, "impact_bench"); cur.next();) {
+    auto fail = [&](const std::string& msg) { return cur.fail(msg); };
+    const std::string_view arg = cur.name();
+    const std::string_view& value = cur.value();  // set by need_value()
+    auto need_value = [&] { return cur.need_value(); };
     auto number = [&](uint32_t* out, uint32_t min_value) -> int {
       if (!need_value()) return fail(std::string(arg) + " needs a value");
       if (!parse_unsigned(value, out)) {
@@ -131,7 +107,7 @@ int parse_args(int argc, char** argv, Options* o) {
       return 0;
     };
     if (arg == "--help" || arg == "-h") {
-      return -1;
+      return impact::bench::kAskedForHelp;
     } else if (arg == "--bodies") {
       uint32_t n = 0;
       if (int r = number(&n, 1)) return r;
@@ -202,23 +178,16 @@ int parse_args(int argc, char** argv, Options* o) {
         return fail("--expect-hash needs a hex number, got '" + std::string(value) + "'");
       o->expect_hash = h;
     } else if (arg == "--no-progress") {
-      if (has_value) return fail("--no-progress takes no value");
+      if (cur.has_value()) return fail("--no-progress takes no value");
       o->progress = false;
     } else {
-      return fail("unknown option '" + std::string(argv[i]) + "'");
+      return fail("unknown option '" + std::string(cur.raw()) + "'");
     }
   }
   return 0;
 }
 
-double median(std::vector<double> v) {
-  if (v.empty()) return 0.0;
-  const size_t mid = v.size() / 2;
-  std::nth_element(v.begin(), v.begin() + mid, v.end());
-  const double hi = v[mid];
-  if (v.size() % 2 == 1) return hi;
-  return 0.5 * (hi + *std::max_element(v.begin(), v.begin() + mid));
-}
+using impact::bench::median;
 
 double mean(const std::vector<double>& v) {
   double s = 0.0;
@@ -294,11 +263,9 @@ std::string json_escape(std::string_view s) {
 int main(int argc, char** argv) {
   Options opt;
   if (int r = parse_args(argc, argv, &opt); r != 0) {
-    if (r == -1) {
-      print_usage(stdout);
-      return 0;
-    }
-    return r;
+    if (r != impact::bench::kAskedForHelp) return r;
+    print_usage(stdout);
+    return 0;
   }
 
   // --- setup -------------------------------------------------------------------------

@@ -90,6 +90,29 @@ struct RawVec<16> {
   typedef uint32_t U __attribute__((vector_size(64)));
 };
 
+/// The operators of both float lane types (FloatN<N>, FloatN<1>), spelled once and
+/// stamped into each: lane-wise arithmetic on the member v (a generic vector, or a
+/// float) and comparisons giving the type's Mask. A macro, not a base class, so that the
+/// operators stay each type's own members and hidden friends: the compiler sees the
+/// code as if written out in each.
+// clang-format off
+#define IMPACT_FLOAT_LANE_OPERATORS                                                                   \
+  friend IMPACT_INLINE FloatN operator+(FloatN a, FloatN b) { return FloatN(a.v + b.v); }          \
+  friend IMPACT_INLINE FloatN operator-(FloatN a, FloatN b) { return FloatN(a.v - b.v); }          \
+  friend IMPACT_INLINE FloatN operator*(FloatN a, FloatN b) { return FloatN(a.v * b.v); }          \
+  friend IMPACT_INLINE FloatN operator/(FloatN a, FloatN b) { return FloatN(a.v / b.v); }          \
+  friend IMPACT_INLINE FloatN operator-(FloatN a) { return FloatN(-a.v); }                         \
+  IMPACT_INLINE FloatN& operator+=(FloatN b) { v += b.v; return *this; }                           \
+  IMPACT_INLINE FloatN& operator-=(FloatN b) { v -= b.v; return *this; }                           \
+  IMPACT_INLINE FloatN& operator*=(FloatN b) { v *= b.v; return *this; }                           \
+  friend IMPACT_INLINE Mask operator<(FloatN a, FloatN b) { return Mask(a.v < b.v); }              \
+  friend IMPACT_INLINE Mask operator<=(FloatN a, FloatN b) { return Mask(a.v <= b.v); }            \
+  friend IMPACT_INLINE Mask operator>(FloatN a, FloatN b) { return Mask(a.v > b.v); }              \
+  friend IMPACT_INLINE Mask operator>=(FloatN a, FloatN b) { return Mask(a.v >= b.v); }            \
+  friend IMPACT_INLINE Mask operator==(FloatN a, FloatN b) { return Mask(a.v == b.v); }            \
+  friend IMPACT_INLINE Mask operator!=(FloatN a, FloatN b) { return Mask(a.v != b.v); }
+// clang-format on
+
 // ---------------------------------------------------------------------------------------
 // N > 1: GCC / Clang generic vectors.
 // ---------------------------------------------------------------------------------------
@@ -121,21 +144,7 @@ struct FloatN {
   IMPACT_INLINE void store(float* p) const { std::memcpy(p, &v, sizeof(Raw)); }
   IMPACT_INLINE float lane(uint32_t i) const { return v[i]; }
 
-  friend IMPACT_INLINE FloatN operator+(FloatN a, FloatN b) { return FloatN(a.v + b.v); }
-  friend IMPACT_INLINE FloatN operator-(FloatN a, FloatN b) { return FloatN(a.v - b.v); }
-  friend IMPACT_INLINE FloatN operator*(FloatN a, FloatN b) { return FloatN(a.v * b.v); }
-  friend IMPACT_INLINE FloatN operator/(FloatN a, FloatN b) { return FloatN(a.v / b.v); }
-  friend IMPACT_INLINE FloatN operator-(FloatN a) { return FloatN(-a.v); }
-  IMPACT_INLINE FloatN& operator+=(FloatN b) { v += b.v; return *this; }
-  IMPACT_INLINE FloatN& operator-=(FloatN b) { v -= b.v; return *this; }
-  IMPACT_INLINE FloatN& operator*=(FloatN b) { v *= b.v; return *this; }
-
-  friend IMPACT_INLINE Mask operator<(FloatN a, FloatN b) { return Mask(a.v < b.v); }
-  friend IMPACT_INLINE Mask operator<=(FloatN a, FloatN b) { return Mask(a.v <= b.v); }
-  friend IMPACT_INLINE Mask operator>(FloatN a, FloatN b) { return Mask(a.v > b.v); }
-  friend IMPACT_INLINE Mask operator>=(FloatN a, FloatN b) { return Mask(a.v >= b.v); }
-  friend IMPACT_INLINE Mask operator==(FloatN a, FloatN b) { return Mask(a.v == b.v); }
-  friend IMPACT_INLINE Mask operator!=(FloatN a, FloatN b) { return Mask(a.v != b.v); }
+  IMPACT_FLOAT_LANE_OPERATORS
 };
 
 /// N lane predicates: each lane all ones (true) or zero.
@@ -668,22 +677,10 @@ struct FloatN<1> {
   IMPACT_INLINE void store(float* p) const { *p = v; }
   IMPACT_INLINE float lane(uint32_t) const { return v; }
 
-  friend IMPACT_INLINE FloatN operator+(FloatN a, FloatN b) { return FloatN(a.v + b.v); }
-  friend IMPACT_INLINE FloatN operator-(FloatN a, FloatN b) { return FloatN(a.v - b.v); }
-  friend IMPACT_INLINE FloatN operator*(FloatN a, FloatN b) { return FloatN(a.v * b.v); }
-  friend IMPACT_INLINE FloatN operator/(FloatN a, FloatN b) { return FloatN(a.v / b.v); }
-  friend IMPACT_INLINE FloatN operator-(FloatN a) { return FloatN(-a.v); }
-  IMPACT_INLINE FloatN& operator+=(FloatN b) { v += b.v; return *this; }
-  IMPACT_INLINE FloatN& operator-=(FloatN b) { v -= b.v; return *this; }
-  IMPACT_INLINE FloatN& operator*=(FloatN b) { v *= b.v; return *this; }
-
-  friend IMPACT_INLINE Mask operator<(FloatN a, FloatN b) { return Mask(a.v < b.v); }
-  friend IMPACT_INLINE Mask operator<=(FloatN a, FloatN b) { return Mask(a.v <= b.v); }
-  friend IMPACT_INLINE Mask operator>(FloatN a, FloatN b) { return Mask(a.v > b.v); }
-  friend IMPACT_INLINE Mask operator>=(FloatN a, FloatN b) { return Mask(a.v >= b.v); }
-  friend IMPACT_INLINE Mask operator==(FloatN a, FloatN b) { return Mask(a.v == b.v); }
-  friend IMPACT_INLINE Mask operator!=(FloatN a, FloatN b) { return Mask(a.v != b.v); }
+  IMPACT_FLOAT_LANE_OPERATORS
 };
+
+#undef IMPACT_FLOAT_LANE_OPERATORS
 
 IMPACT_INLINE FloatN<1> select(MaskN<1> m, FloatN<1> a, FloatN<1> b) { return m.v ? a : b; }
 IMPACT_INLINE IntN<1> select(MaskN<1> m, IntN<1> a, IntN<1> b) { return m.v ? a : b; }

@@ -140,4 +140,10 @@ SurfacePoint surface_point(const Posed& b, const Vec3d& dir) {
   return {x, m};
 }
 
+/// The largest radius of curvature of the ellipsoid with radii e: e_max^2 / e_min (its
+/// support point slides by this much per radian the direction turns).
+inline double largest_curvature_radius(const Vec3d& e) {
+  return e.maxCoeff() * e.maxCoeff() / e.minCoeff();
+}
+
 }  // namespace impact::test::eref

@@ -2,7 +2,7 @@
 // (sphere_convex_test, capsule_convex_test): a small double vector, random draws, hulls
 // built by the library's quickhull into one HullStore (boxes, ellipsoid point clouds),
 // and hulls posed in double for the references. A lane is any struct with the hull's
-// position p[3] and row-major rotation R[9].
+// position p[3] and row-major rotation R[9] (and, for hull_leaf, its index hull).
 #pragma once
 
 #include <gtest/gtest.h>
@@ -10,6 +10,7 @@
 #include <Eigen/Core>
 #include <algorithm>
 #include <cmath>
+#include <cstddef>
 #include <cstdint>
 #include <random>
 #include <string>
@@ -17,7 +18,10 @@
 
 #include "host/shapes/convex_hull.h"
 #include "host/shapes/shape_store.h"
+#include "kernels/narrowphase/pair_kernels.h"
+#include "support/leaf_lanes.h"
 #include "support/random_input.h"
+#include "support/test_support.h"
 
 namespace impact::test::hull_input {
 
@@ -44,6 +48,11 @@ inline void random_rotation(Rng& g, float m[9]) {
   double r[9];
   test::random_rotation_rows(g, r);
   for (int i = 0; i < 9; ++i) m[i] = static_cast<float>(r[i]);
+}
+
+/// v rounded to float into out[3].
+inline void store_float(D3 v, float out[3]) {
+  out[0] = static_cast<float>(v.x), out[1] = static_cast<float>(v.y), out[2] = static_cast<float>(v.z);
 }
 
 /// Hulls in one store, with their HullData for the references.
@@ -192,19 +201,19 @@ inline HullData hull_from_polygons(const std::vector<Eigen::Vector3f>& v,
   return h;
 }
 
-/// The scale suites of the hull tests, pairs(g, hulls, hull_count, n, scale, offset)
-/// around random hulls checked by check(name, pairs, hulls) (statistics with hits and
-/// misses): tiny (1e-4), huge (1e4) and far (1e5 from the origin), 800 pairs around 12
-/// hulls each, more than 100 hits and 100 misses; and many_n pairs around a 400-point
-/// hull (more than 500 faces) 3 from the origin, more than many_hits hits and
-/// many_misses misses.
+/// The scale suites of the hull tests, pairs(g, hulls, 0, hull_count, scaled(n), scale,
+/// offset) (a test's random_pairs) around random hulls checked by check(name, pairs,
+/// hulls) (statistics with hits and misses): tiny (1e-4), huge (1e4) and far (1e5 from the origin), 800 pairs
+/// around 12 hulls each, more than 100 hits and 100 misses; and many_n pairs around a 400-point hull (more
+/// than 500 faces) 3 from the origin, more than many_hits hits and many_misses misses.
 template <class Pairs, class Check>
 void check_scale_suites(Pairs pairs, Check check, uint32_t many_n, uint32_t many_hits, uint32_t many_misses) {
   for (const double scale : {1e-4, 1e4}) {
     Rng g(777 + static_cast<uint32_t>(scale > 1));
     Hulls hulls;
     add_random_hulls(g, &hulls, 12, scale);
-    const auto st = check("scale " + std::to_string(scale), pairs(g, hulls, 12, 800, scale, 0.0), hulls);
+    const auto st =
+        check("scale " + std::to_string(scale), pairs(g, hulls, 0, 12, scaled(800), scale, 0.0), hulls);
     EXPECT_GT(st.hits, 100u);
     EXPECT_GT(st.misses, 100u);
   }
@@ -212,7 +221,7 @@ void check_scale_suites(Pairs pairs, Check check, uint32_t many_n, uint32_t many
     Rng g(4242);
     Hulls hulls;
     add_random_hulls(g, &hulls, 12, 1.0);
-    const auto st = check("far 1e5", pairs(g, hulls, 12, 800, 1.0, 1e5), hulls);
+    const auto st = check("far 1e5", pairs(g, hulls, 0, 12, scaled(800), 1.0, 1e5), hulls);
     EXPECT_GT(st.hits, 100u);
     EXPECT_GT(st.misses, 100u);
   }
@@ -220,7 +229,7 @@ void check_scale_suites(Pairs pairs, Check check, uint32_t many_n, uint32_t many
   Hulls hulls;
   hulls.add(ellipsoid_points(g, 400, 1.0));
   ASSERT_GT(hulls.data[0].faces.size(), 500u);
-  const auto st = check("400-point hull", pairs(g, hulls, 1, many_n, 1.0, 3.0), hulls);
+  const auto st = check("400-point hull", pairs(g, hulls, 0, 1, scaled(many_n), 1.0, 3.0), hulls);
   EXPECT_GT(st.hits, many_hits);
   EXPECT_GT(st.misses, many_misses);
 }
@@ -261,6 +270,69 @@ D3 point_near_hull(Rng& g, const HullData& h, const Lane& q, double scale, doubl
       return m + (reach * uni(g, -spread, spread)) * nw;
     }
   }
+}
+
+/// The hull of lane q as a kernel reads it: its pose and its index in the store.
+template <class Lane>
+Leaf hull_leaf(const Lane& q) {
+  Leaf b;
+  b.t = kernels::kLeafConvex;
+  std::copy(q.p, q.p + 3, b.p);
+  std::copy(q.R, q.R + 9, b.r);
+  b.ref = q.hull;
+  return b;
+}
+
+/// GJK + EPA (collide_gjk_epa, the general route) for bucket (A, hull) over bk, SIMD path.
+template <kernels::LeafType A>
+ManifoldLanes run_gjk_epa(const BucketLanes& bk, const kernels::HullView& hv) {
+  return bk.run(
+      [](const kernels::LeafSoA& a, const kernels::LeafSoA& b, const kernels::ManifoldSoA& o,
+         kernels::Range r, const kernels::NarrowConfig& cfg) {
+        kernels::collide_gjk_epa(a, b, o, r, cfg, A, kernels::kLeafConvex);
+      },
+      hv, kernels::KernelPath::kSimd);
+}
+
+/// A random lane's hull, one of [h0, h1), and its rotation.
+template <class Lane>
+void random_hull_and_rotation(Rng& g, uint32_t h0, uint32_t h1, Lane* q) {
+  q->hull = h0 + static_cast<uint32_t>(g() % (h1 - h0));
+  random_rotation(g, q->R);
+}
+
+/// The hull's position for a random lane: within scale per axis of a point offset from
+/// the origin in a random direction, rounded to float into p[3].
+inline void random_hull_position(Rng& g, double scale, double offset, float p[3]) {
+  const D3 x =
+      offset * random_unit(g) + D3{uni(g, -scale, scale), uni(g, -scale, scale), uni(g, -scale, scale)};
+  store_float(x, p);
+}
+
+/// A cube of half extent 1 whose top corner (1, 1, 1) is raised by 2^-22: the top face
+/// becomes two triangles whose planes differ by ~1e-7 rad (the float rounding of the
+/// plane distances), so a point's deepest plane in float is often the wrong one of the
+/// two. Added to hulls as its next hull.
+inline void add_nearly_coplanar_cube(Hulls* hulls) {
+  std::vector<Eigen::Vector3f> v = box_corners(1.0f, 1.0f, 1.0f);
+  v[7].z() = 1.0f + 0x1p-22f;
+  hulls->data.push_back(hull_from_polygons(
+      v, {{0, 1, 3, 2}, {0, 2, 6, 4}, {1, 3, 7, 5}, {0, 1, 5, 4}, {2, 3, 7, 6}, {4, 5, 7}, {4, 7, 6}}));
+  hulls->store.add(hulls->data.back());
+}
+
+/// The hull tests' main random suite: 24 random hulls of size 1 (seed 12345) and
+/// scaled(3000) pairs(g, hulls, 0, 24, n, 1, 10) around them (a test's random_pairs), 10
+/// from the origin, checked by check("random", pairs, hulls); returns the statistics,
+/// *n_pairs the pair count.
+template <class Pairs, class Check>
+auto check_random_suite(Pairs pairs, Check check, size_t* n_pairs) {
+  Rng g(12345);
+  Hulls hulls;
+  add_random_hulls(g, &hulls, 24, 1.0);
+  const auto ps = pairs(g, hulls, 0, 24, scaled(3000), 1.0, 10.0);
+  *n_pairs = ps.size();
+  return check("random", ps, hulls);
 }
 
 }  // namespace impact::test::hull_input

@@ -13,6 +13,13 @@
 //                  lanes, a contact on exactly those
 //   check_lanes    every lane of a bucket on both paths against the test's reference
 //                  (PairModel: its reference, surfaces, support overlap and distance)
+//   check_lanes_on_both_paths  check_lanes of a test's run(queries, path)
+//   check_built_features  pairs built to meet (or just miss) at a feature pair: the
+//                  test's check and its reference against the construction
+//   expect_line_contact  a two-point contact along a coordinate axis (a side line lying
+//                  on a face, an edge along a side) against its closed form
+//   expect_thin_pairs_meet  needle and pancake pairs: checked, and a fifth of them meet
+//   expect_all_meet  pairs that all meet: checked, every one a contact
 #pragma once
 
 #include <gtest/gtest.h>
@@ -20,6 +27,7 @@
 #include <Eigen/Core>
 #include <algorithm>
 #include <cmath>
+#include <cstddef>
 #include <cstdint>
 #include <cstdio>
 #include <functional>
@@ -27,6 +35,7 @@
 #include <random>
 #include <string>
 #include <tuple>
+#include <type_traits>
 #include <vector>
 
 #include "kernels/narrowphase/pair_kernels.h"
@@ -131,6 +140,11 @@ inline uint32_t scale_seed(uint32_t base, double size, double offset) {
   return static_cast<uint32_t>(base + std::lround(std::log10(size)) + (offset > 0 ? 10 : 0));
 }
 
+/// An angle tolerance for expect_built that is the same for every pair: angle rad.
+inline auto every_pair_angle_tol(double angle) {
+  return [angle](size_t, double) { return angle; };
+}
+
 /// Built pairs ts on both kernel paths: run(queries, path) against them by expect_built;
 /// each path must check more than a quarter of them as contacts.
 template <class Q, class Run, class Size, class AngleTol>
@@ -193,6 +207,32 @@ void random_pose_suite(uint32_t seed, int n, double size, double offset, Draw dr
   }
 }
 
+/// The same at scale = (size, offset), one of kernel_scales() (a TEST_P's GetParam()).
+template <class Draw, class Check>
+void random_pose_suite(const std::tuple<double, double>& scale, uint32_t seed, int n, Draw draw, Check check,
+                       SuiteCoverage c) {
+  random_pose_suite(seed, n, std::get<0>(scale), std::get<1>(scale), draw, check, c);
+}
+
+/// Needle and pancake pairs qs (one shape or both thinned to about 1e-4 of their size)
+/// run by the test's check_all(qs, what, stats): more than a fifth of them meet.
+template <class Q, class CheckAll>
+void expect_thin_pairs_meet(const std::vector<Q>& qs, CheckAll check_all) {
+  LaneStats st;
+  check_all(qs, "needle / pancake", &st);
+  EXPECT_GT(st.hits, static_cast<int>(qs.size()) / 5);
+}
+
+/// Pairs that all meet (coincident centres, a centre on the other shape) run by the
+/// test's check_all(qs, what, stats): every one a contact. Returns the statistics.
+template <class Q, class CheckAll>
+LaneStats expect_all_meet(const std::vector<Q>& qs, CheckAll check_all, const char* what) {
+  LaneStats st;
+  check_all(qs, what, &st);
+  EXPECT_EQ(st.hits, static_cast<int>(qs.size())) << what;
+  return st;
+}
+
 /// A built-feature case: check_built(&stats, &meeting) runs pairs built to meet (or just
 /// miss) at one feature pair and returns how many meeting lanes got that pair's normal;
 /// at least 3/4 of them must, and exactly the meeting lanes must report a contact.
@@ -205,6 +245,15 @@ LaneStats expect_feature_pairs(CheckBuilt check_built) {
   EXPECT_GE(on, meeting * 3 / 4);
   EXPECT_EQ(st.hits, meeting);
   return st;
+}
+
+/// The two surface points of a single-point contact h: pt[0] + n depth/2 (on A's
+/// surface) and pt[0] - n depth/2 (on B's).
+struct ContactSides {
+  Eigen::Vector3d on_a, on_b;
+};
+inline ContactSides contact_sides(const PairResult& h) {
+  return {h.pt[0] + h.n * (0.5 * h.depth), h.pt[0] - h.n * (0.5 * h.depth)};
 }
 
 /// How a contact's points must carry the depth: a single point exactly, the deepest
@@ -228,6 +277,11 @@ struct PairModel {
   std::function<double(const Q&, const Eigen::Vector3d&)> sd_a = {}, sd_b = {};
   /// > 0: the distance between A and B moved by shift; <= 0: they meet (the translation check).
   std::function<double(const Q&, const Eigen::Vector3d&)> apart = {};
+  /// Optional: the default point check's allowance beyond ptol for the point on A's
+  /// (b_side false) or B's surface, e.g. the slide of a curved side's support point
+  /// under the normal's error; < 0 leaves that side unchecked (where only the other side
+  /// is known exactly).
+  std::function<double(const Q&, const LaneRef&, const PairResult&, bool b_side)> side_slack = {};
   /// Optional: a check of a contact's points replacing the default (points_on_surfaces).
   std::function<void(const Q&, const LaneRef&, const PairResult&, double tol, double ptol,
                      const std::string& where)>
@@ -247,12 +301,15 @@ struct PairModel {
 };
 
 /// The default point check: each point finite, 0 < pdepth <= depth (+ tol for
-/// kDeepestWithinTol), point +- n pdepth/2 on A's / B's surface within ptol; the depth
-/// carried as `carries` says.
+/// kDeepestWithinTol), point +- n pdepth/2 on A's / B's surface within ptol (+ the
+/// model's side_slack; a side with a negative one unchecked); the depth carried as
+/// `carries` says.
 template <class Q>
-void points_on_surfaces(const PairModel<Q>& m, const Q& q, const PairResult& h, double tol, double ptol,
-                        const std::string& where) {
+void points_on_surfaces(const PairModel<Q>& m, const Q& q, const LaneRef& f, const PairResult& h, double tol,
+                        double ptol, const std::string& where) {
   const double slack = m.carries == Carries::kDeepestWithinTol ? tol : 0.0;
+  const double slack_a = m.side_slack ? m.side_slack(q, f, h, false) : 0.0,
+               slack_b = m.side_slack ? m.side_slack(q, f, h, true) : 0.0;
   double deepest = -std::numeric_limits<double>::infinity();
   for (uint32_t i = 0; i < h.count; ++i) {
     ASSERT_TRUE(h.pt[i].allFinite()) << where;
@@ -260,8 +317,12 @@ void points_on_surfaces(const PairModel<Q>& m, const Q& q, const PairResult& h, 
     EXPECT_LE(h.pd[i], h.depth + slack) << where << " point " << i;
     deepest = std::max(deepest, h.pd[i]);
     const Eigen::Vector3d on_a = h.pt[i] + 0.5 * h.pd[i] * h.n, on_b = h.pt[i] - 0.5 * h.pd[i] * h.n;
-    EXPECT_LE(std::fabs(m.sd_a(q, on_a)), ptol) << where << " point " << i << " off A";
-    EXPECT_LE(std::fabs(m.sd_b(q, on_b)), ptol) << where << " point " << i << " off B";
+    if (slack_a >= 0) {
+      EXPECT_LE(std::fabs(m.sd_a(q, on_a)), ptol + slack_a) << where << " point " << i << " off A";
+    }
+    if (slack_b >= 0) {
+      EXPECT_LE(std::fabs(m.sd_b(q, on_b)), ptol + slack_b) << where << " point " << i << " off B";
+    }
   }
   if (m.carries == Carries::kDeepestWithinTol) {
     EXPECT_GE(deepest, h.depth - tol) << where << ": no point carries the depth";
@@ -328,7 +389,7 @@ LaneStats check_lanes(const PairModel<Q>& m, const std::vector<Q>& qs, const std
       if (m.points)
         m.points(q, f, h, tol, ptol, where);
       else
-        points_on_surfaces(m, q, h, tol, ptol, where);
+        points_on_surfaces(m, q, f, h, tol, ptol, where);
     };
     check_path(simd[k], true);
     check_path(scal[k], false);
@@ -361,6 +422,97 @@ LaneStats check_lanes(const PairModel<Q>& m, const std::vector<Q>& qs, const std
   std::printf(" | worst |depth-ref| %.2g L (lane %zu), angle %.2g rad (lane %zu)\n", st.worst_depth,
               st.worst_depth_lane, st.worst_angle, st.worst_angle_lane);
   return st;
+}
+
+/// check_lanes of run(qs, KernelPath::kSimd) and run(qs, KernelPath::kScalar) (a test's
+/// kernel call); the stats go to *out_stats when given.
+template <class Q, class Run>
+void check_lanes_on_both_paths(const PairModel<Q>& m, const std::vector<Q>& qs, Run run, const char* what,
+                               LaneStats* out_stats) {
+  const LaneStats st =
+      check_lanes(m, qs, run(qs, kernels::KernelPath::kSimd), run(qs, kernels::KernelPath::kScalar), what);
+  if (out_stats != nullptr) *out_stats = st;
+}
+
+/// Feature pairs built in closed form: n lanes b = build(i) (each with b.q, the pair;
+/// b.delta, > 0 the overlap along b.n, < 0 minus the distance; b.n from A to B) run by
+/// check_all(queries, what, st), then reference(b.q) (a struct with apart, depth, n)
+/// against the construction: apart lanes (delta < 0) apart, at depth delta within 1e-6
+/// and n within apart_angle rad (the built points are each other's closest points);
+/// meeting ones no deeper than delta + 1e-6 (the overlap along n); more than a quarter
+/// apart. literal(b.q), if given, names a lane in failures. Sets *meeting_lanes and
+/// returns how many meeting lanes have their minimum at the built pair (depth delta
+/// within 1e-6, n within 1e-4 rad).
+template <class Build, class CheckAll, class Reference, class Literal = std::nullptr_t>
+int check_built_features(int n, Build build, CheckAll check_all, Reference reference, const char* what,
+                         LaneStats* st, int* meeting_lanes, double apart_angle = 1e-4,
+                         Literal literal = nullptr) {
+  using B = decltype(build(0));
+  std::vector<B> bs;
+  std::vector<decltype(B::q)> qs;
+  for (int i = 0; i < n; ++i) {
+    bs.push_back(build(i));
+    qs.push_back(bs.back().q);
+  }
+  check_all(qs, what, st);
+  int on_feature = 0, apart = 0;
+  *meeting_lanes = 0;
+  for (size_t k = 0; k < bs.size(); ++k) {
+    std::string trace;
+    if constexpr (!std::is_same_v<Literal, std::nullptr_t>) {
+      trace = "lane " + std::to_string(k) + " as C++: " + literal(bs[k].q);
+    }
+    SCOPED_TRACE(trace);
+    const auto r = reference(bs[k].q);
+    if (bs[k].delta < 0) {
+      ++apart;
+      EXPECT_TRUE(r.apart) << what << " lane " << k;
+      EXPECT_NEAR(r.depth, bs[k].delta, 1e-6) << what << " lane " << k;
+      EXPECT_LT(angle(r.n, bs[k].n), apart_angle) << what << " lane " << k;
+    } else {
+      ++*meeting_lanes;
+      EXPECT_LE(r.depth, bs[k].delta + 1e-6) << what << " lane " << k;
+      on_feature += std::fabs(r.depth - bs[k].delta) <= 1e-6 && angle(r.n, bs[k].n) <= 1e-4;
+    }
+  }
+  EXPECT_GT(apart, static_cast<int>(bs.size()) / 4);
+  std::printf("  %-28s meeting %d, of which at the built pair %d\n", what, *meeting_lanes, on_feature);
+  return on_feature;
+}
+
+/// The closed form of a two-point line contact, coordinates relative to `origin`: the
+/// normal n, the depth d; the points' coordinate `axis` spanning [lo, hi]; each point's
+/// other coordinates at `at`'s (those that are not NaN) and, with `points_carry_depth`,
+/// its depth d.
+struct LineContact {
+  Eigen::Vector3d n;
+  double d = 0;
+  Eigen::Vector3d origin = Eigen::Vector3d::Zero();
+  int axis = 0;
+  double lo = 0, hi = 0;
+  Eigen::Vector3d at = Eigen::Vector3d::Constant(std::numeric_limits<double>::quiet_NaN());
+  bool points_carry_depth = true;
+};
+
+/// r against the line contact c: two points, the normal within 1e-6 rad, the depth, the
+/// span and the points' coordinates and depths within 1e-6.
+inline void expect_line_contact(const PairResult& r, const LineContact& c) {
+  ASSERT_EQ(r.count, 2u);
+  EXPECT_LT(angle(r.n, c.n), 1e-6) << r.n.transpose();
+  EXPECT_NEAR(r.depth, c.d, 1e-6);
+  const double x0 = std::min(r.pt[0][c.axis], r.pt[1][c.axis]) - c.origin[c.axis],
+               x1 = std::max(r.pt[0][c.axis], r.pt[1][c.axis]) - c.origin[c.axis];
+  EXPECT_NEAR(x0, c.lo, 1e-6);
+  EXPECT_NEAR(x1, c.hi, 1e-6);
+  for (int i = 0; i < 2; ++i) {
+    for (int j = 0; j < 3; ++j)
+      if (j != c.axis && !std::isnan(c.at[j])) {
+        EXPECT_NEAR(r.pt[i][j] - c.origin[j], c.at[j], 1e-6) << "point " << i << " coordinate " << j;
+      }
+    if (c.points_carry_depth) {
+      EXPECT_NEAR(r.pd[i], c.d, 1e-6) << "point " << i;
+    }
+  }
 }
 
 }  // namespace impact::test

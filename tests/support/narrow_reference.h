@@ -534,6 +534,13 @@ inline double ring_rise(const Shape& a, const Shape& b, V3 n, double cone = 3e-3
   return best;
 }
 
+/// Whether r (solve_pair's answer for a and b) is well conditioned at tol for a pair of
+/// size L: its minimum unique at tol and the overlap rising by at least 1e-6 L 3e-3 rad
+/// from it in every direction (the per-kernel tests' rule).
+inline bool well_conditioned(const Shape& a, const Shape& b, const PairResult& r, double tol, double L) {
+  return r.unique(tol) && ring_rise(a, b, r.n) >= 1e-6 * L;
+}
+
 /// The reference collision data of A and B (B translated by b_shift).
 inline PairResult solve_pair(const Shape& a, const Shape& b, V3 b_shift = {}, const Options& opt = {}) {
   PairResult r;

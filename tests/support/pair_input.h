@@ -455,7 +455,7 @@ inline double lane_size(const Lane& l) {
 /// rising by at least 1e-6 L 3e-3 rad from it in every direction (the per-kernel tests'
 /// rule, e.g. box_ellipsoid_test.cpp).
 inline bool well_conditioned(const Lane& l, double tol) {
-  return l.ref.unique(tol) && nref::ring_rise(l.sa, l.sb, l.ref.n) >= 1e-6 * lane_size(l);
+  return nref::well_conditioned(l.sa, l.sb, l.ref, tol, lane_size(l));
 }
 
 /// The largest coordinate of a shape (its centre, its vertices).

@@ -1,10 +1,11 @@
 // Random input shared by the shape, raycast and narrow-phase tests: a seeded generator of
 // uniform floats, indices, vectors, unit vectors and rotations, the double draws of the
 // narrow-phase kernel tests (a unit vector, a rotation, a frame about a given axis, a
-// cylinder's random pose), and a bumpy grid mesh.
+// cylinder's random pose), a generator's case loop (draw_cases), and a bumpy grid mesh.
 #pragma once
 
 #include <cmath>
+#include <cstddef>
 #include <cstdint>
 #include <random>
 #include <vector>
@@ -87,6 +88,16 @@ inline Eigen::Matrix3d random_rotation(std::mt19937& rng) {
   Eigen::Quaterniond q(g(rng), g(rng), g(rng), g(rng));
   q.normalize();
   return q.toRotationMatrix();
+}
+
+/// make(0), make(1) .. make(n - 1), in that order: a generator's cases, each drawn from
+/// the generator's random stream in turn.
+template <class Make>
+auto draw_cases(int n, Make make) {
+  std::vector<decltype(make(0))> v;
+  v.reserve(n > 0 ? static_cast<size_t>(n) : 0);
+  for (int k = 0; k < n; ++k) v.push_back(make(k));
+  return v;
 }
 
 /// A cylinder's random pose and size for the cylinder kernels' random-pose suites (Q has

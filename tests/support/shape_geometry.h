@@ -1,14 +1,15 @@
 // Small double-precision geometry shared by the narrow-phase kernel tests (Eigen, the
 // inputs already rounded to float as the kernel sees them): angles, rotations and
 // frames, the closed-form signed distances of a point to a box and to a cylinder, the
-// cylinder's closest point, and conversions to the sampled reference's vectors
-// (tests/support/narrow_reference.h).
+// cylinder's closest point, the float rounding of a pair's coordinates, and conversions
+// to the sampled reference's vectors (tests/support/narrow_reference.h).
 #pragma once
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
+#include <initializer_list>
 
 #include "support/narrow_reference.h"
 
@@ -81,6 +82,14 @@ inline Eigen::Vector3d cylinder_closest(const Eigen::Vector3d& p, const Eigen::M
   const double rho = std::hypot(l.x(), l.y());
   const double s = rho > rc ? rc / rho : 1.0;
   return p + R * Eigen::Vector3d(l.x() * s, l.y() * s, std::clamp(l.z(), -h, h));
+}
+
+/// One float ulp (2^-23 relative) of the largest coordinate a pair's inputs reach: the
+/// largest |coefficient| of the given points (centres, vertices) plus the pair's size.
+inline double coordinate_ulp(double size, std::initializer_list<Eigen::Vector3d> points) {
+  double m = 0;
+  for (const Eigen::Vector3d& p : points) m = std::max(m, p.cwiseAbs().maxCoeff());
+  return (m + size) * std::ldexp(1.0, -23);
 }
 
 /// Eigen and reference vectors.

@@ -63,6 +63,13 @@ inline uint32_t scaled(uint32_t base, uint32_t at_least = 1) {
   return std::max(at_least, static_cast<uint32_t>(std::min(v, 4.0e9)));
 }
 
+/// Lanes per scenario of a test whose double references dominate its run time: base
+/// scaled by IMPACT_TEST_INTENSITY; under the sanitizers a quarter (at least 2), the
+/// kernel running the same code on fewer lanes.
+inline int scenario_lanes(uint32_t base) {
+  return static_cast<int>(kSanitized ? std::max((base + 3) / 4, 2u) : scaled(base));
+}
+
 /// One way of running the passes.
 struct ExecCase {
   Backend backend;

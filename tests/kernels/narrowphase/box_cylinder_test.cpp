@@ -70,12 +70,15 @@
 #include <vector>
 
 #include "kernels/narrowphase/pair_kernels.h"
+#include "support/cylinder_frame.h"
 #include "support/kernel_checks.h"
 #include "support/leaf_lanes.h"
 #include "support/narrow_reference.h"
 #include "support/random_input.h"
+#include "support/same_answers.h"
 #include "support/shape_geometry.h"
 #include "support/test_support.h"
+#include "support/unique_minimum.h"
 
 namespace impact::kernels {
 namespace {
@@ -92,13 +95,10 @@ constexpr double kValleyNoise = 4e-7;  // of L: twice the worst depth error meas
 /// Golden-section steps per coordinate of the gap: brackets of 0.618^48 ~ 1e-10 of a face.
 constexpr int kGoldenIters = 48;
 
-struct Query {
-  Vec3d c;       // box centre
-  Mat3d Q;       // box rotation (columns: its axes)
-  Vec3d e;       // box half extents
-  Vec3d p;       // cylinder centre
-  Mat3d R;       // cylinder rotation (column 2 = axis)
-  double rc, h;  // cylinder radius, half length
+struct Query : test::FlatCylinder {
+  Vec3d c;  // box centre
+  Mat3d Q;  // box rotation (columns: its axes)
+  Vec3d e;  // box half extents
 };
 
 /// The query as the kernel sees it: every input rounded to float.
@@ -106,10 +106,7 @@ Query rounded(Query q) {
   q.c = test::round_to_float(q.c);
   q.Q = test::round_to_float(q.Q);
   q.e = test::round_to_float(q.e);
-  q.p = test::round_to_float(q.p);
-  q.R = test::round_to_float(q.R);
-  q.rc = test::round_to_float(q.rc);
-  q.h = test::round_to_float(q.h);
+  test::round_cylinder(&q);
   return q;
 }
 
@@ -118,22 +115,18 @@ double size_of(const Query& q) {
 }
 
 double coord_ulp(const Query& q) {
-  const double m = std::max(q.c.cwiseAbs().maxCoeff(), q.p.cwiseAbs().maxCoeff()) + size_of(q);
-  return m * std::ldexp(1.0, -23);
+  return test::coordinate_ulp(size_of(q), {q.c, q.p});
 }
 
 // --- running the kernel -----------------------------------------------------------------------
 
-/// Runs `kern` (the kernel under test unless given) on lanes [begin, end) of one bucket.
-std::vector<test::PairResult> run(const std::vector<Query>& qs, KernelPath path, PairKernel kern = nullptr,
-                                  uint32_t begin = 0, uint32_t end = ~0u) {
+/// Runs the kernel under test on one bucket of qs.
+std::vector<test::PairResult> run(const std::vector<Query>& qs, KernelPath path) {
   return test::run_queries(
-      kern != nullptr ? kern : &collide_box_cylinder, qs, path,
-      [](const Query& q) {
+      &collide_box_cylinder, qs, path, [](const Query& q) {
         return std::pair{test::posed_leaf(kLeafBox, q.c, q.Q, q.e),
                          test::posed_leaf(kLeafCylinder, q.p, q.R, Vec3d(q.rc, q.h, 0))};
-      },
-      begin, end);
+      });
 }
 
 // --- references -------------------------------------------------------------------------------
@@ -213,28 +206,9 @@ bool unique_minimum(const Query& q, const Vec3d& n_ref, double depth, double sec
                     double* rise) {
   const nref::Shape sa = box_shape(q), sb = cylinder_shape(q);
   auto o = [&](const Vec3d& n) { return nref::overlap(sa, sb, v3(n.normalized())); };
-  const Vec3d t1 = n_ref.unitOrthogonal(), t2 = n_ref.cross(t1);
-  auto ring = [&](double cone, int count) {
-    double r = std::numeric_limits<double>::infinity();
-    for (int i = 0; i < count; ++i) {
-      const double a = 2 * M_PI * i / count;
-      r = std::min(r, o(n_ref + std::tan(cone) * (std::cos(a) * t1 + std::sin(a) * t2)));
-    }
-    return r;
-  };
-  double best = std::min(second, ring(0.02, 720));
-  const Vec3d axes[4] = {q.R.col(2), q.Q.col(0), q.Q.col(1), q.Q.col(2)};
-  for (const Vec3d& ax : axes) {
-    const Vec3d e1 = ax.normalized().unitOrthogonal(), e2 = ax.normalized().cross(e1);
-    for (int i = 0; i < 6284; ++i) {
-      const double a = 1e-3 * i;
-      const Vec3d n = std::cos(a) * e1 + std::sin(a) * e2;
-      if (angle(n, n_ref) > 0.02) best = std::min(best, o(n));
-    }
-  }
-  if (!(best > depth + 2 * tol)) return false;
-  *rise = ring(3e-3, 96) - depth;
-  return *rise >= 1e-6 * size_of(q);
+  const test::GreatCircles circles{
+      {q.R.col(2).normalized(), q.Q.col(0).normalized(), q.Q.col(1).normalized(), q.Q.col(2).normalized()}};
+  return test::unique_minimum(o, n_ref, depth, second, tol, circles, 1e-6 * size_of(q), rise);
 }
 
 /// The reference (test::LaneRef): depth (> 0 penetration, else minus the distance), the
@@ -279,9 +253,7 @@ void check_all(const std::vector<Query>& qs, const char* what, Stats* out_stats 
       .sd_a = box_sd,
       .sd_b = [](const Query& q, const Vec3d& x) { return cyl_sd(q, x); },
       .apart = [](const Query& q, const Vec3d& shift) { return gap(q, shift); }};
-  const Stats st =
-      test::check_lanes(model, qs, run(qs, KernelPath::kSimd), run(qs, KernelPath::kScalar), what);
-  if (out_stats != nullptr) *out_stats = st;
+  test::check_lanes_on_both_paths(model, qs, run, what, out_stats);
 }
 
 // --- inputs -----------------------------------------------------------------------------------
@@ -300,9 +272,7 @@ Query random_query(std::mt19937& g, double size, double offset, double spread) {
 }
 
 std::vector<Query> random_queries(std::mt19937& g, int n, double size, double offset) {
-  std::vector<Query> qs;
-  for (int i = 0; i < n; ++i) qs.push_back(random_query(g, size, offset, 1.3));
-  return qs;
+  return test::draw_cases(n, [&](int) { return random_query(g, size, offset, 1.3); });
 }
 
 /// A query in the cylinder's frame (centre 0, axis z): the box's centre c and axes Qb are
@@ -374,7 +344,8 @@ double spread(const test::PairResult& r) {
 
 // ---------------------------------------------------------------------------------------------
 
-/// The references against closed forms: point distances; a box beside the side, on the
+/// The references against closed forms (the point distances they use: reference_self_test):
+/// a box beside the side, on the
 /// cap, an edge and a vertex off a rim (apart), an edge across a rim, a level box through
 /// the middle, a small box inside, the cylinder inside a big box; and nref against the
 /// gap (distance and normal) on random separated lanes.
@@ -386,22 +357,6 @@ TEST(BoxCylinder, ReferenceMatchesClosedForms) {
   q.c = Vec3d(-1, 0.5, 2);
   q.Q = Mat3d::Identity();
   q.e = Vec3d(0.5, 1, 2);
-  EXPECT_NEAR(cyl_sd(q, q.p + Vec3d(3, 0, 0)), 2.0, 1e-15);
-  EXPECT_NEAR(cyl_sd(q, q.p + Vec3d(0, 0, 2.5)), 0.5, 1e-15);
-  EXPECT_NEAR(cyl_sd(q, q.p + Vec3d(0, 4, 6)), 5.0, 1e-15);  // rim (0, 1, 2): (3, 4)
-  EXPECT_NEAR(cyl_sd(q, q.p + Vec3d(0.5, 0, 0)), -0.5, 1e-15);
-  EXPECT_NEAR(cyl_sd(q, q.p + Vec3d(0, 0, 1.9)), -0.1, 1e-15);
-  EXPECT_NEAR(box_sd(q, q.c + Vec3d(1.5, 0, 0)), 1.0, 1e-15);
-  EXPECT_NEAR(box_sd(q, q.c + Vec3d(1.5, 2, 0)), std::sqrt(2.0), 1e-15);
-  EXPECT_NEAR(box_sd(q, q.c + Vec3d(-1.5, -4, 6)), std::sqrt(1 + 9 + 16.0), 1e-14);
-  EXPECT_NEAR(box_sd(q, q.c + Vec3d(0.25, 0, 0)), -0.25, 1e-15);
-  EXPECT_NEAR(box_sd(q, q.c + Vec3d(0.5, 1, 2)), 0.0, 1e-15);
-  {
-    const Mat3d turn = rot(0.7, Vec3d(1, 2, 3));
-    Query t = q;
-    t.Q = turn;
-    EXPECT_NEAR(box_sd(t, t.c + turn * Vec3d(0.5, -1.25, 2.5)), std::hypot(0.25, 0.5), 1e-14);
-  }
   struct Case {
     Vec3d c, e;
     Mat3d Q;
@@ -529,8 +484,9 @@ Built build(Feature f, std::mt19937& g, int i, double gap_scale = 1.0) {
   const Vec3d m = std::cos(phi) * radial(a) + std::sin(phi) * s * Vec3d::UnitZ();  // the rim's outward normal
   const Vec3d side = rc * radial(a) + 0.5 * h * uni(g) * Vec3d::UnitZ();
   const double psi = 0.3 + 0.97 * std::fabs(uni(g));
-  Vec3d c, n, x0;
-  Mat3d Qb;
+  // (every feature sets them; zero for the compiler, which cannot see the switch is total)
+  Vec3d c = Vec3d::Zero(), n = Vec3d::Zero(), x0 = Vec3d::Zero();
+  Mat3d Qb = Mat3d::Identity();
   Vec3d half(0.5 + 0.7 * std::fabs(uni(g)), 0.1 + 0.4 * std::fabs(uni(g)), 0.1 + 0.4 * std::fabs(uni(g)));
   switch (f) {
     case Feature::kEdgeRim: {
@@ -582,32 +538,10 @@ Built build(Feature f, std::mt19937& g, int i, double gap_scale = 1.0) {
 int check_built(Feature f, uint32_t seed, const char* what, Stats* st, int* meeting_lanes,
                 double gap_scale = 1.0) {
   std::mt19937 g(seed);
-  std::vector<Built> bs;
-  std::vector<Query> qs;
-  for (int i = 0; i < static_cast<int>(test::scaled(48)); ++i) {
-    bs.push_back(build(f, g, i, gap_scale));
-    qs.push_back(bs.back().q);
-  }
-  check_all(qs, what, st);
-  int on_feature = 0, apart = 0;
-  *meeting_lanes = 0;
-  for (size_t k = 0; k < bs.size(); ++k) {
-    const Ref r = reference(bs[k].q);
-    if (bs[k].delta < 0) {
-      ++apart;
-      EXPECT_TRUE(r.apart) << what << " lane " << k;
-      EXPECT_NEAR(r.depth, bs[k].delta, 1e-6) << what << " lane " << k;
-      // (the reference's direction from a gap of 1e-4 L is good to ~1e-3 rad)
-      EXPECT_LT(angle(r.n, bs[k].n), 1e-4 / gap_scale) << what << " lane " << k;
-    } else {
-      ++*meeting_lanes;
-      EXPECT_LE(r.depth, bs[k].delta + 1e-6) << what << " lane " << k;
-      on_feature += std::fabs(r.depth - bs[k].delta) <= 1e-6 && angle(r.n, bs[k].n) <= 1e-4;
-    }
-  }
-  EXPECT_GT(apart, static_cast<int>(bs.size()) / 4);
-  std::printf("  %-28s meeting %d, of which at the built pair %d\n", what, *meeting_lanes, on_feature);
-  return on_feature;
+  // (the reference's direction from a gap of 1e-4 L is good to ~1e-3 rad)
+  return test::check_built_features(
+      static_cast<int>(test::scaled(48)), [&](int i) { return build(f, g, i, gap_scale); }, check_all,
+      reference, what, st, meeting_lanes, 1e-4 / gap_scale);
 }
 
 /// A box edge across a rim: the minimum on the edge-rim piece of the Minkowski
@@ -858,19 +792,13 @@ TEST(BoxCylinder, CylinderLyingOnABoxFace) {
       SCOPED_TRACE(cs.box_x);
       Query q = aligned(p, Vec3d(cs.box_x, 0.25, -(rc - d) - 0.5), Mat3d::Identity(), Vec3d(cs.ex, 3, 0.5), rc, h);
       q.R = along_x;
-      const auto r = run({q}, path)[0];
-      ASSERT_EQ(r.count, 2u);
-      EXPECT_LT(angle(r.n, Vec3d(0, 0, 1)), 1e-6);
-      EXPECT_NEAR(r.depth, d, 1e-6);
-      const double x0 = std::min(r.pt[0].x(), r.pt[1].x()) - p.x(),
-                   x1 = std::max(r.pt[0].x(), r.pt[1].x()) - p.x();
-      EXPECT_NEAR(x0, cs.x0, 1e-6);
-      EXPECT_NEAR(x1, cs.x1, 1e-6);
-      for (int i = 0; i < 2; ++i) {
-        EXPECT_NEAR(r.pt[i].y() - p.y(), 0.0, 1e-6);
-        EXPECT_NEAR(r.pt[i].z() - p.z(), -rc + d / 2, 1e-6);
-        EXPECT_NEAR(r.pd[i], d, 1e-6);
-      }
+      test::expect_line_contact(run({q}, path)[0], {.n = Vec3d(0, 0, 1),
+                                                    .d = d,
+                                                    .origin = p,
+                                                    .axis = 0,
+                                                    .lo = cs.x0,
+                                                    .hi = cs.x1,
+                                                    .at = Vec3d(0, 0.0, -rc + d / 2)});
     }
   }
 }
@@ -945,8 +873,7 @@ TEST(BoxCylinder, Touching) {
   std::mt19937 g(43);
   test::expect_touching_after_push(
       g, static_cast<int>(test::scaled(40)), 400,
-      [](std::mt19937& gg) { return random_query(gg, 1.0, 0.0, 0.5); }, reference,
-      [](Query& q, const Vec3d& s) { q.p = test::round_to_float(Vec3d(q.p + s)); },
+      [](std::mt19937& gg) { return random_query(gg, 1.0, 0.0, 0.5); }, reference, test::move_cylinder<Query>,
       [](const std::vector<Query>& qs) { return run(qs, KernelPath::kSimd); }, size_of, kRel);
 }
 
@@ -954,9 +881,8 @@ TEST(BoxCylinder, Touching) {
 /// 1 x 1 x 1e-4, cylinders of radius 1e-4 h and of half length 1e-4 rc.
 TEST(BoxCylinder, NeedlesAndPancakes) {
   std::mt19937 g(53);
-  std::vector<Query> qs;
   const int n = static_cast<int>(test::scaled(48));
-  for (int i = 0; i < n; ++i) {
+  const std::vector<Query> qs = test::draw_cases(n, [&](int i) {
     Query q = random_query(g, 1.0, 0.0, 0.0);
     switch (i % 4) {
       case 0:
@@ -974,11 +900,9 @@ TEST(BoxCylinder, NeedlesAndPancakes) {
     }
     const double reach = q.e.norm() + std::hypot(q.rc, q.h);
     q.c = q.p + 0.3 * reach * test::random_unit_vector(g);
-    qs.push_back(rounded(q));
-  }
-  Stats st;
-  check_all(qs, "needle / pancake", &st);
-  EXPECT_GT(st.hits, n / 5);
+    return rounded(q);
+  });
+  test::expect_thin_pairs_meet(qs, check_all);
 }
 
 /// Symmetries: turning and moving the whole pair turns the normal and keeps the depth;
@@ -1009,26 +933,14 @@ TEST(BoxCylinder, Symmetries) {
     r.e = Vec3d(q.e.y(), q.e.z(), q.e.x());
     relabelled.push_back(r);
   }
-  const auto a = run(base, KernelPath::kSimd), b = run(turned, KernelPath::kSimd),
-             c = run(flipped, KernelPath::kSimd), d = run(relabelled, KernelPath::kSimd);
-  int compared = 0;
-  for (size_t k = 0; k < base.size(); ++k) {
-    const Ref f = reference(base[k]);
-    const double tol = kRel * size_of(base[k]);
-    if (std::fabs(f.depth) <= 4 * tol) continue;
-    for (const auto* other : {&b, &c, &d}) ASSERT_EQ(a[k].count > 0, (*other)[k].count > 0) << k;
-    if (a[k].count == 0) continue;
-    ++compared;
-    EXPECT_NEAR(a[k].depth, b[k].depth, 2 * tol) << k;
-    EXPECT_NEAR(a[k].depth, c[k].depth, tol) << k;
-    EXPECT_NEAR(a[k].depth, d[k].depth, tol) << k;
-    if (f.unique) {
-      EXPECT_LT(angle(turns[k] * a[k].n, b[k].n), kAngleTol) << k;
-      EXPECT_LT(angle(a[k].n, c[k].n), kAngleTol) << k;
-      EXPECT_LT(angle(a[k].n, d[k].n), kAngleTol) << k;
-    }
-  }
-  EXPECT_GT(compared, static_cast<int>(base.size()) / 4);
+  test::expect_symmetric(run(base, KernelPath::kSimd),
+                         {{run(turned, KernelPath::kSimd), 2, [&](size_t k) { return turns[k]; }},
+                          {run(flipped, KernelPath::kSimd)},
+                          {run(relabelled, KernelPath::kSimd)}},
+                         kAngleTol, [&](size_t k) {
+                           const Ref f = reference(base[k]);
+                           return test::SymmetryLane{kRel * size_of(base[k]), f.depth, f.unique};
+                         });
 }
 
 }  // namespace

@@ -46,12 +46,14 @@
 #include <vector>
 
 #include "kernels/narrowphase/pair_kernels.h"
+#include "support/ellipsoid_input.h"
 #include "support/ellipsoid_reference.h"
 #include "support/kernel_checks.h"
 #include "support/lane_checks.h"
 #include "support/leaf_lanes.h"
 #include "support/narrow_reference.h"
 #include "support/random_input.h"
+#include "support/same_answers.h"
 #include "support/shape_geometry.h"
 #include "support/test_support.h"
 
@@ -68,23 +70,14 @@ constexpr double kAngleTol = 1e-4;  // rad, where the minimum is well conditione
 /// A few float ulps of the overlap at size L (4 x 2^-24): its evaluation's rounding.
 constexpr double kRoundingSlack = 2.4e-7;
 
-struct Posed {
-  Vec3d p;
-  Mat3d R;  // columns: the axes of e
-  Vec3d e;  // box: half extents; ellipsoid: radii
-};
+using Posed = test::PosedSolid;  // box: half extents; ellipsoid: radii
+using test::rounded;
 
 struct Query {
   Posed a;  // box
   Posed b;  // ellipsoid
 };
 
-Posed rounded(Posed s) {
-  s.p = test::round_to_float(s.p);
-  s.R = test::round_to_float(s.R);
-  s.e = test::round_to_float(s.e);
-  return s;
-}
 Query rounded(Query q) {
   return Query{rounded(q.a), rounded(q.b)};
 }
@@ -148,8 +141,7 @@ Ref reference(const Query& q) {
   Ref f;
   f.s = r.s;
   f.n = test::ev(r.n);
-  f.conditioned = r.s > 0 && r.unique(kRel * L);
-  if (f.conditioned) f.conditioned = nref::ring_rise(a, b, r.n) >= 1e-6 * L;
+  f.conditioned = r.s > 0 && nref::well_conditioned(a, b, r, kRel * L, L);
   return f;
 }
 
@@ -158,8 +150,7 @@ Ref reference(const Query& q) {
 // ---------------------------------------------------------------------------------------
 
 double coord_ulp(const Query& q) {
-  const double m = std::max(q.a.p.cwiseAbs().maxCoeff(), q.b.p.cwiseAbs().maxCoeff());
-  return (m + size_of(q)) * std::ldexp(1.0, -23);
+  return test::coordinate_ulp(size_of(q), {q.a.p, q.b.p});
 }
 
 using Stats = test::LaneStats;
@@ -186,16 +177,12 @@ void check_all(const std::vector<Query>& qs, const char* what, Stats* out_stats 
       .size = size_of,
       .coord_ulp = coord_ulp,
       .overlap = overlap,
-      .points =
-          [](const Query& q, const test::LaneRef& f, const test::PairResult& h, double, double ptol,
-             const std::string& where) {
-            EXPECT_EQ(h.pd[0], h.depth) << where;
-            const Vec3d on_a = h.pt[0] + h.n * (0.5 * h.depth), on_b = h.pt[0] - h.n * (0.5 * h.depth);
-            EXPECT_NEAR(test::eref::signed_distance_posed(q.b, on_b), 0.0, ptol) << where;
-            if (f.unique) {
-              const double rho = q.b.e.maxCoeff() * q.b.e.maxCoeff() / q.b.e.minCoeff();
-              EXPECT_NEAR(sd_box(q.a, on_a), 0.0, ptol + (angle(h.n, f.n) + 1e-6) * rho) << where;
-            }
+      .sd_a = [](const Query& q, const Vec3d& x) { return sd_box(q.a, x); },
+      .sd_b = [](const Query& q, const Vec3d& x) { return test::eref::signed_distance_posed(q.b, x); },
+      .side_slack =
+          [](const Query& q, const test::LaneRef& f, const test::PairResult& h, bool b_side) {
+            if (b_side) return 0.0;
+            return f.unique ? (angle(h.n, f.n) + 1e-6) * test::eref::largest_curvature_radius(q.b.e) : -1.0;
           },
       .normal_ok =
           [](const Query& q, const test::LaneRef& f, const test::PairResult& h, double ang) {
@@ -204,9 +191,7 @@ void check_all(const std::vector<Query>& qs, const char* what, Stats* out_stats 
           },
       .same_bytes_paths = false,
       .point_ulps = 1};
-  const Stats st =
-      test::check_lanes(model, qs, run(qs, KernelPath::kSimd), run(qs, KernelPath::kScalar), what);
-  if (out_stats != nullptr) *out_stats = st;
+  test::check_lanes_on_both_paths(model, qs, run, what, out_stats);
 }
 
 // ---------------------------------------------------------------------------------------
@@ -217,8 +202,7 @@ void check_all(const std::vector<Query>& qs, const char* what, Stats* out_stats 
 /// origin: ellipsoids from deep through it to well outside, about half touching.
 std::vector<Query> random_queries(std::mt19937& g, int n, double size, double offset) {
   std::uniform_real_distribution<double> u(-1, 1), s(0.2, 1.0);
-  std::vector<Query> qs;
-  for (int k = 0; k < n; ++k) {
+  return test::draw_cases(n, [&](int k) {
     Query q;
     const Vec3d p = Vec3d(offset, -offset, 0.5 * offset) + Vec3d(u(g), u(g), u(g)) * size;
     q.a = Posed{p, test::random_rotation(g), Vec3d(s(g), s(g), s(g)) * size};
@@ -231,9 +215,8 @@ std::vector<Query> random_queries(std::mt19937& g, int n, double size, double of
             ? Vec3d(p + q.a.R * v.cwiseProduct(q.a.e) * 1.1 + test::random_unit_vector(g) * (0.8 * e.mean()))
             : Vec3d(p + v * (1.6 * size));
     q.b = Posed{c, test::random_rotation(g), e};
-    qs.push_back(rounded(q));
-  }
-  return qs;
+    return rounded(q);
+  });
 }
 
 /// Boxes touching the ellipsoid at a random surface point x (outward normal m) at
@@ -242,14 +225,11 @@ std::vector<Query> random_queries(std::mt19937& g, int n, double size, double of
 /// it): depth = -f, n = -m (box to ellipsoid).
 using Touch = test::Built<Query>;
 std::vector<Touch> touching_queries(std::mt19937& g, int n) {
-  std::uniform_real_distribution<double> u(-1, 1), s(0.2, 1.0), f(-1e-3, 1e-3), w(0.15, 1.0);
-  std::vector<Touch> out;
-  for (int k = 0; k < n; ++k) {
+  std::uniform_real_distribution<double> s(0.2, 1.0), w(0.15, 1.0);
+  return test::draw_cases(n, [&](int k) {
     Query q;
-    q.b = Posed{Vec3d(u(g), u(g), u(g)), test::random_rotation(g), Vec3d(s(g), s(g), s(g))};
-    const auto [x, m] = test::eref::surface_point(q.b, test::random_unit_vector(g));
-    const double ff = (k % 5 == 0) ? 0.0 : f(g);
-    const Vec3d c = x + ff * m;  // the touching feature's point
+    const auto [ell, x, m, c, ff] = test::random_surface_touch(g, k);  // c: the touching feature's point
+    q.b = ell;
     const Vec3d h(s(g), s(g), s(g));
     // Box frame D (columns d_i) with the box in the corner c + sum t_i d_i, t_i in
     // [0, 2 h_i] (vertex), the edge along d_0 through c, or the face's centre at c.
@@ -272,9 +252,8 @@ std::vector<Touch> touching_queries(std::mt19937& g, int n) {
     if (k % 3 == 0) centre_local = Vec3d(0, 0, h[2]);
     if (k % 3 == 1) centre_local = Vec3d(0, h[1], h[2]);
     q.a = Posed{c + D * centre_local, D, h};
-    out.push_back(Touch{rounded(q), -ff, -m});
-  }
-  return out;
+    return Touch{rounded(q), -ff, -m};
+  });
 }
 
 /// Needle and pancake ellipsoids (ratio 1e-3 or 1e-4, axes permuted, rotated) against
@@ -282,16 +261,12 @@ std::vector<Touch> touching_queries(std::mt19937& g, int n) {
 /// pancake's face, and nearby.
 std::vector<Query> thin_queries(std::mt19937& g, int n) {
   std::uniform_real_distribution<double> u(-1, 1), u01(0, 1), s(0.2, 1.0);
-  std::vector<Query> qs;
-  for (int k = 0; k < n; ++k) {
+  return test::draw_cases(n, [&](int k) {
     const double ratio = (k % 2) ? 1e-3 : 1e-4;
-    const bool needle = (k / 2) % 2;
-    Vec3d e = needle ? Vec3d(1, ratio, ratio * (0.5 + u01(g))) : Vec3d(1, 0.5 + 0.5 * u01(g), ratio);
-    const int sh = k % 3;
-    e = Vec3d(e[sh], e[(sh + 1) % 3], e[(sh + 2) % 3]);
+    const Vec3d e = test::thin_radii(g, k);
     Query q;
-    q.b = Posed{Vec3d(u(g), u(g), u(g)), test::random_rotation(g), e};
-    const int thin = e[0] <= e[1] && e[0] <= e[2] ? 0 : (e[1] <= e[2] ? 1 : 2);
+    q.b = test::random_ellipsoid(g, e);
+    const int thin = test::thinnest_axis(e);
     Posed box{Vec3d::Zero(), test::random_rotation(g), Vec3d(s(g), s(g), s(g)) * 0.5};
     switch ((k / 4) % 5) {
       case 0:  // through, near the centre
@@ -327,19 +302,17 @@ std::vector<Query> thin_queries(std::mt19937& g, int n) {
     box.p = q.b.p + q.b.R * box.p;
     box.R = q.b.R * box.R;
     q.a = box;
-    qs.push_back(rounded(q));
-  }
-  return qs;
+    return rounded(q);
+  });
 }
 
 /// Degenerate and extreme boxes: flat (one extent 1e-4 .. 0), needles (two), points
 /// (three), and large boxes (10 .. 1e4 times the ellipsoid) through, under and near it.
 std::vector<Query> odd_box_queries(std::mt19937& g, int n) {
   std::uniform_real_distribution<double> u(-1, 1), s(0.2, 1.0), ex(1, 4), u01(0, 1);
-  std::vector<Query> qs;
-  for (int k = 0; k < n; ++k) {
+  return test::draw_cases(n, [&](int k) {
     Query q;
-    q.b = Posed{Vec3d(u(g), u(g), u(g)), test::random_rotation(g), Vec3d(s(g), s(g), s(g))};
+    q.b = test::random_ellipsoid(g);
     Vec3d h(s(g), s(g), s(g));
     const double tiny = (k / 5) % 2 ? 0.0 : 1e-4 * u01(g);
     Vec3d c = q.b.p + Vec3d(u(g), u(g), u(g)) * 0.9;
@@ -360,14 +333,12 @@ std::vector<Query> odd_box_queries(std::mt19937& g, int n) {
         // its top face 1.2 * u from the ellipsoid's centre along R's z
         c = q.b.p - R.col(2) * (h[2] - 1.2 * u(g)) + (k % 2 ? Vec3d(R.col(0) * (0.9 * big)) : Vec3d::Zero());
         q.a = Posed{c, R, h};
-        qs.push_back(rounded(q));
-        continue;
+        return rounded(q);
       }
     }
     q.a = Posed{c, test::random_rotation(g), h};
-    qs.push_back(rounded(q));
-  }
-  return qs;
+    return rounded(q);
+  });
 }
 
 // ---------------------------------------------------------------------------------------
@@ -392,9 +363,8 @@ TEST(BoxEllipsoidReference, ReferencesAgree) {
 class BoxEllipsoid : public ::testing::TestWithParam<std::tuple<double, double>> {};
 
 TEST_P(BoxEllipsoid, RandomPosesAgainstDoubleReference) {
-  const auto [size, offset] = GetParam();
-  const int n = static_cast<int>(test::scaled(160));
-  test::random_pose_suite(17, n, size, offset, random_queries, check_all, {.normals_div = 3});
+  test::random_pose_suite(GetParam(), 17, static_cast<int>(test::scaled(160)), random_queries, check_all,
+                          {.normals_div = 3});
 }
 
 INSTANTIATE_TEST_SUITE_P(Scales, BoxEllipsoid, ::testing::ValuesIn(test::kernel_scales()));
@@ -402,9 +372,7 @@ INSTANTIATE_TEST_SUITE_P(Scales, BoxEllipsoid, ::testing::ValuesIn(test::kernel_
 TEST(BoxEllipsoidCases, ConstructedTouching) {
   std::mt19937 g(29);
   const std::vector<Touch> ts = touching_queries(g, static_cast<int>(test::scaled(300)));
-  test::expect_built_on_both_paths(
-      ts, [](const std::vector<Query>& qs, KernelPath path) { return run(qs, path); }, kRel, size_of,
-      [](size_t, double) { return kAngleTol; }, "touching");
+  test::expect_built_on_both_paths(ts, run, kRel, size_of, test::every_pair_angle_tol(kAngleTol), "touching");
 }
 
 TEST(BoxEllipsoidCases, NeedlesPancakesOddBoxes) {
@@ -422,8 +390,7 @@ TEST(BoxEllipsoidCases, CoincidentCentres) {
   // unit normal, exact depth.
   std::mt19937 g(37);
   std::uniform_real_distribution<double> u(-1, 1), s(0.2, 1.0);
-  std::vector<Query> qs;
-  for (int k = 0; k < static_cast<int>(test::scaled(120)); ++k) {
+  const std::vector<Query> qs = test::draw_cases(static_cast<int>(test::scaled(120)), [&](int k) {
     Query q;
     const Vec3d e = k % 4 == 1 ? Vec3d::Constant(s(g)) : Vec3d(s(g), s(g), s(g));
     const Vec3d h = k % 4 == 2 ? Vec3d::Constant(s(g)) : Vec3d(s(g), s(g), s(g));
@@ -433,11 +400,9 @@ TEST(BoxEllipsoidCases, CoincidentCentres) {
     if (k % 5 == 2) at = Vec3d(h[0], -h[1], 0);
     if (k % 5 == 3) at = Vec3d(-h[0], h[1], h[2]);
     q.b = Posed{q.a.p + q.a.R * at, k % 3 == 1 ? q.a.R : test::random_rotation(g), e};
-    qs.push_back(rounded(q));
-  }
-  Stats st;
-  check_all(qs, "coincident centres", &st);
-  EXPECT_EQ(st.hits, static_cast<int>(qs.size()));
+    return rounded(q);
+  });
+  test::expect_all_meet(qs, check_all, "coincident centres");
 }
 
 TEST(BoxEllipsoidCases, Analytic) {
@@ -493,41 +458,24 @@ TEST(BoxEllipsoidCases, Analytic) {
 TEST(BoxEllipsoidCases, RoundEllipsoidIsSphereBox) {
   std::mt19937 g(11);
   std::uniform_real_distribution<double> u(-1, 1), u01(0, 1);
-  std::vector<Query> qs;
-  for (int k = 0; k < 200; ++k) {
+  const std::vector<Query> qs = test::draw_cases(200, [&](int) {
     Query q;
     q.a = Posed{Vec3d(u(g), u(g), u(g)), test::random_rotation(g),
                 Vec3d(0.2 + 0.8 * u01(g), 0.2 + 0.8 * u01(g), 0.2 + 0.8 * u01(g))};
     const double r = 0.2 + 0.6 * u01(g);
     q.b = Posed{q.a.p + Vec3d(u(g), u(g), u(g)) * 1.5, test::random_rotation(g), Vec3d::Constant(r)};
-    qs.push_back(rounded(q));
-  }
-  const std::vector<test::PairResult> mine = run(qs, KernelPath::kSimd);
-  const size_t n = qs.size();
-  test::ManifoldLanes o;
-  test::run_queries(
-      &collide_sphere_box, qs, KernelPath::kSimd,
-      [](const Query& q) {
+    return rounded(q);
+  });
+  const std::vector<test::PairResult> sphere =
+      test::run_queries(&collide_sphere_box, qs, KernelPath::kSimd, [](const Query& q) {
         return std::pair{test::sphere_leaf(q.b.p, q.b.e[0]), test::posed_leaf(kLeafBox, q.a.p, q.a.R, q.a.e)};
-      },
-      0, ~0u, &o);
-  int hits = 0;
-  for (uint32_t k = 0; k < n; ++k) {
-    const test::PairResult r = o.result(k);
-    if ((r.count == 0) != (mine[k].count == 0)) {
-      EXPECT_LT(std::max(r.count ? r.depth : 0.0, mine[k].count ? mine[k].depth : 0.0), 1e-5) << k;
-      continue;
-    }
-    if (!r.count) continue;
-    ++hits;
-    EXPECT_NEAR(mine[k].depth, r.depth, 2e-6) << k;
-    // sphere-box's normal (sphere to box) is minus ours; unique unless the centre is
-    // inside the box on a medial plane.
-    if (sd_box(qs[k].a, qs[k].b.p) > 1e-3) {
-      EXPECT_LT(angle(mine[k].n, -r.n), 1e-5) << k;
-      EXPECT_LT((mine[k].pt[0] - r.pt[0]).norm(), 1e-5) << k;
-    }
-  }
+      });
+  // sphere-box's normal (sphere to box) is minus ours; unique unless the centre is
+  // inside the box on a medial plane.
+  const int hits = test::expect_same_answers(run(qs, KernelPath::kSimd), sphere, {}, [&](size_t k) {
+    const bool outside = sd_box(qs[k].a, qs[k].b.p) > 1e-3;
+    return test::LaneRule{.normal = outside, .point = outside, .map = -Mat3d::Identity()};
+  });
   EXPECT_GT(hits, 30);
 }
 
@@ -544,19 +492,9 @@ TEST(BoxEllipsoidCases, RelabelledBoxAxes) {
     q.a.R = R;
     q.a.e = Vec3d(q.a.e[1], q.a.e[2], q.a.e[0]);
   }
-  const std::vector<test::PairResult> h1 = run(other, KernelPath::kSimd);
-  for (size_t k = 0; k < qs.size(); ++k) {
-    const double L = size_of(qs[k]);
-    if (h0[k].count != h1[k].count) {
-      EXPECT_LT(std::max(h0[k].depth * h0[k].count, h1[k].depth * h1[k].count), 1e-5 * L) << k;
-      continue;
-    }
-    if (!h0[k].count) continue;
-    EXPECT_NEAR(h0[k].depth, h1[k].depth, 2e-6 * L) << k;
-    if (reference(qs[k]).conditioned) {
-      EXPECT_LT(angle(h0[k].n, h1[k].n), kAngleTol) << k;
-    }
-  }
+  test::expect_same_answers(h0, run(other, KernelPath::kSimd), {.angle = kAngleTol}, [&](size_t k) {
+    return test::LaneRule{.scale = size_of(qs[k]), .normal = reference(qs[k]).conditioned};
+  });
 }
 
 }  // namespace

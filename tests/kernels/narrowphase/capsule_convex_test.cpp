@@ -74,15 +74,12 @@ struct Pair {
 
 /// The capsule and the hull of a lane.
 std::pair<test::Leaf, test::Leaf> leaves(const Pair& q) {
-  test::Leaf a, b;
-  a.t = k::kLeafCapsule, b.t = k::kLeafConvex;
+  test::Leaf a;
+  a.t = k::kLeafCapsule;
   std::copy(q.c, q.c + 3, a.p);
   std::copy(q.Ra, q.Ra + 9, a.r);
   a.e[0] = q.r, a.e[1] = q.h;
-  std::copy(q.p, q.p + 3, b.p);
-  std::copy(q.R, q.R + 9, b.r);
-  b.ref = q.hull;
-  return {a, b};
+  return {a, hull_leaf(q)};
 }
 
 struct Bucket : test::BucketLanes {
@@ -91,15 +88,6 @@ struct Bucket : test::BucketLanes {
 
 ManifoldLanes run(k::PairKernel kern, const Bucket& bk, const k::HullView& hv, k::KernelPath path) {
   return bk.run(kern, hv, path);
-}
-
-ManifoldLanes run_gjk(const Bucket& bk, const k::HullView& hv) {
-  return bk.run(
-      [](const k::LeafSoA& a, const k::LeafSoA& b, const k::ManifoldSoA& o, k::Range r,
-         const k::NarrowConfig& cfg) {
-        k::collide_gjk_epa(a, b, o, r, cfg, k::kLeafCapsule, k::kLeafConvex);
-      },
-      hv, k::KernelPath::kSimd);
 }
 
 // --- the reference ---------------------------------------------------------------------------
@@ -231,7 +219,7 @@ Stats check_pairs(const std::string& name, const std::vector<Pair>& pairs, const
   EXPECT_EQ(kern, &k::collide_capsule_convex);
   const ManifoldLanes simd = run(kern, bk, hv, k::KernelPath::kSimd);
   const ManifoldLanes scalar = run(kern, bk, hv, k::KernelPath::kScalar);
-  const ManifoldLanes gjk = run_gjk(bk, hv);
+  const ManifoldLanes gjk = run_gjk_epa<k::kLeafCapsule>(bk, hv);
   int failures = 0;
   for (uint32_t i = 0; i < bk.n && failures < 10; ++i) {
     const Pair& q = pairs[i];
@@ -293,9 +281,9 @@ Stats check_pairs(const std::string& name, const std::vector<Pair>& pairs, const
   return st;
 }
 
-/// World position of local point l under pair q's hull pose.
+/// The capsule's centre c rounded to float.
 void set_c(Pair* q, D3 c) {
-  q->c[0] = static_cast<float>(c.x), q->c[1] = static_cast<float>(c.y), q->c[2] = static_cast<float>(c.z);
+  store_float(c, q->c);
 }
 
 /// A row-major rotation whose column 2 is the unit axis a (float rounded).
@@ -315,15 +303,11 @@ void axis_rotation(D3 a, float m[9]) {
 /// capsule centre anywhere near the hull, near a vertex, an edge or a face; random axes.
 std::vector<Pair> random_pairs(Rng& g, const Hulls& hulls, uint32_t h0, uint32_t h1, uint32_t n, double scale,
                                double offset) {
-  std::vector<Pair> out;
-  for (uint32_t i = 0; i < n; ++i) {
+  return draw_cases(static_cast<int>(n), [&](int) {
     Pair q;
-    q.hull = h0 + static_cast<uint32_t>(g() % (h1 - h0));
-    random_rotation(g, q.R);
+    random_hull_and_rotation(g, h0, h1, &q);
     random_rotation(g, q.Ra);
-    const D3 p =
-        offset * random_unit(g) + D3{uni(g, -scale, scale), uni(g, -scale, scale), uni(g, -scale, scale)};
-    q.p[0] = static_cast<float>(p.x), q.p[1] = static_cast<float>(p.y), q.p[2] = static_cast<float>(p.z);
+    random_hull_position(g, scale, offset, q.p);
     q.r = static_cast<float>(scale * uni(g, 0.05, 0.8));
     q.h = static_cast<float>(scale * (g() % 8 == 0 ? 0.0 : uni(g, 0.0, 1.0)));
     const HullData& h = hulls.data[q.hull];
@@ -335,35 +319,26 @@ std::vector<Pair> random_pairs(Rng& g, const Hulls& hulls, uint32_t h0, uint32_t
     if (where == Near::kFace && (g() & 1))
       axis_rotation(cross(nw, random_unit(g)) + uni(g, -0.03, 0.03) * nw, q.Ra);
     set_c(&q, c);
-    out.push_back(q);
-  }
-  return out;
+    return q;
+  });
 }
 
 // --- tests ------------------------------------------------------------------------------------
 
 TEST(CapsuleConvex, RandomPosesAgreeWithReference) {
-  Rng g(12345);
-  Hulls hulls;
-  add_random_hulls(g, &hulls, 24, 1.0);
-  const auto pairs = random_pairs(g, hulls, 0, 24, scaled(3000), 1.0, 10.0);
-  const Stats st = check_pairs("random", pairs, hulls);
+  size_t n = 0;
+  const Stats st = check_random_suite(random_pairs, check_pairs, &n);
   // Every branch exercised: misses, hits with the core outside and meeting the hull,
   // two-point contacts.
-  EXPECT_GT(st.misses, pairs.size() / 10);
-  EXPECT_GT(st.hits - st.meets, pairs.size() / 10);
-  EXPECT_GT(st.meets, pairs.size() / 20);
-  EXPECT_GT(st.two, pairs.size() / 50);
+  EXPECT_GT(st.misses, n / 10);
+  EXPECT_GT(st.hits - st.meets, n / 10);
+  EXPECT_GT(st.meets, n / 20);
+  EXPECT_GT(st.two, n / 50);
   RecordProperty("worst_depth_rel", std::to_string(st.worst_depth));
 }
 
 TEST(CapsuleConvex, TinyHugeFarAndManyFaceHulls) {
-  check_scale_suites([](Rng& g, const Hulls& h, uint32_t hulls, uint32_t n, double scale,
-                        double offset) { return random_pairs(g, h, 0, hulls, scaled(n), scale, offset); },
-                     [](const std::string& what, const std::vector<Pair>& pairs, const Hulls& h) {
-                       return check_pairs(what, pairs, h);
-                     },
-                     300u, 50u, 30u);
+  check_scale_suites(random_pairs, check_pairs, 300u, 50u, 30u);
 }
 
 /// A capsule lane in a box hull's frame (identity rotation, hull at p).
@@ -372,7 +347,7 @@ Pair box_lane(D3 p, D3 c, D3 axis, double r, double h) {
   const float I[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};
   std::copy(I, I + 9, q.R);
   axis_rotation(axis, q.Ra);
-  q.p[0] = static_cast<float>(p.x), q.p[1] = static_cast<float>(p.y), q.p[2] = static_cast<float>(p.z);
+  store_float(p, q.p);
   set_c(&q, p + c);
   q.r = static_cast<float>(r);
   q.h = static_cast<float>(h);
@@ -467,12 +442,8 @@ TEST(CapsuleConvex, NearlyCoplanarFaces) {
   // point's deepest plane in float is then often the wrong triangle, while it projects
   // into the other: the near-tie faces must be tried (else the nearest point falls to
   // the ridge edge, farther away).
-  std::vector<Eigen::Vector3f> v = box_corners(1.0f, 1.0f, 1.0f);
-  v[7].z() = 1.0f + 0x1p-22f;
   Hulls hulls;
-  hulls.data.push_back(hull_from_polygons(
-      v, {{0, 1, 3, 2}, {0, 2, 6, 4}, {1, 3, 7, 5}, {0, 1, 5, 4}, {2, 3, 7, 6}, {4, 5, 7}, {4, 7, 6}}));
-  hulls.store.add(hulls.data.back());
+  add_nearly_coplanar_cube(&hulls);
   Rng g(8);
   std::vector<Pair> pairs;
   for (int i = 0; i < 400; ++i) {
@@ -499,7 +470,7 @@ TEST(CapsuleConvex, TwoPointsAsCapsuleBox) {
     Pair q;
     random_rotation(g, q.R);
     const D3 p{uni(g, -5, 5), uni(g, -5, 5), uni(g, -5, 5)};
-    q.p[0] = static_cast<float>(p.x), q.p[1] = static_cast<float>(p.y), q.p[2] = static_cast<float>(p.z);
+    store_float(p, q.p);
     q.hull = 0;
     q.r = static_cast<float>(uni(g, 0.1, 0.4));
     q.h = static_cast<float>(uni(g, 0.1, 0.6));
@@ -577,7 +548,7 @@ TEST(CapsuleConvex, WithoutEdgeAdjacencyTakesTheGeneralPath) {
   k::HullView no_adj = hulls.store.view();
   no_adj.adj_begin = nullptr;
   const ManifoldLanes o = run(&k::collide_capsule_convex, bk, no_adj, k::KernelPath::kSimd);
-  const ManifoldLanes gjk = run_gjk(bk, no_adj);
+  const ManifoldLanes gjk = run_gjk_epa<k::kLeafCapsule>(bk, no_adj);
   uint32_t hits = 0;
   for (uint32_t i = 0; i < bk.n; ++i) {
     EXPECT_EQ(o.lane_bits(i), gjk.lane_bits(i)) << i;

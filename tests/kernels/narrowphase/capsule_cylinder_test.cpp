@@ -49,10 +49,12 @@
 #include <vector>
 
 #include "kernels/narrowphase/pair_kernels.h"
+#include "support/cylinder_frame.h"
 #include "support/kernel_checks.h"
 #include "support/leaf_lanes.h"
 #include "support/narrow_reference.h"
 #include "support/random_input.h"
+#include "support/same_answers.h"
 #include "support/shape_geometry.h"
 #include "support/test_support.h"
 
@@ -67,12 +69,9 @@ using test::angle, test::v3, test::ev;
 constexpr double kRel = 1e-5;       // depth tolerance, of L
 constexpr double kAngleTol = 1e-4;  // rad, where the normal is unique
 
-struct Query {
+struct Query : test::FlatCylinder {
   Vec3d c, u;    // capsule centre and axis
   double r, hs;  // radius, half length of the core
-  Vec3d p;       // cylinder centre
-  Mat3d R;       // cylinder rotation (column 2 = axis)
-  double rc, h;  // radius, half length
 };
 
 /// The query as the kernel sees it: every input rounded to float.
@@ -81,10 +80,7 @@ Query rounded(Query q) {
   q.u = test::round_to_float(q.u);
   q.r = test::round_to_float(q.r);
   q.hs = test::round_to_float(q.hs);
-  q.p = test::round_to_float(q.p);
-  q.R = test::round_to_float(q.R);
-  q.rc = test::round_to_float(q.rc);
-  q.h = test::round_to_float(q.h);
+  test::round_cylinder(&q);
   return q;
 }
 
@@ -93,8 +89,7 @@ double size_of(const Query& q) {
 }
 
 double coord_ulp(const Query& q) {
-  const double m = std::max(q.c.cwiseAbs().maxCoeff(), q.p.cwiseAbs().maxCoeff()) + size_of(q);
-  return m * std::ldexp(1.0, -23);
+  return test::coordinate_ulp(size_of(q), {q.c, q.p});
 }
 
 // --- running the kernel -----------------------------------------------------------------------
@@ -243,9 +238,8 @@ void check_all(const std::vector<Query>& qs, const char* what, Stats* out_stats 
       .sd_a = cap_sd,
       .sd_b = [](const Query& q, const Vec3d& x) { return cyl_sd(q, x); },
       .apart = [](const Query& q, const Vec3d& shift) { return core_min(q, shift) - q.r; }};
-  const Stats st =
-      test::check_lanes(model, qs, run(qs, KernelPath::kSimd), run(qs, KernelPath::kScalar), what);
-  if (out_stats != nullptr) *out_stats = st;
+  test::check_lanes_on_both_paths(
+      model, qs, [](const std::vector<Query>& v, KernelPath path) { return run(v, path); }, what, out_stats);
 }
 
 // --- inputs -----------------------------------------------------------------------------------
@@ -265,9 +259,7 @@ Query random_query(std::mt19937& g, double size, double offset, double spread) {
 }
 
 std::vector<Query> random_queries(std::mt19937& g, int n, double size, double offset) {
-  std::vector<Query> qs;
-  for (int i = 0; i < n; ++i) qs.push_back(random_query(g, size, offset, 0.9));
-  return qs;
+  return test::draw_cases(n, [&](int) { return random_query(g, size, offset, 0.9); });
 }
 
 /// A query in the cylinder's frame (centre 0, axis z, size 1 parts) posed by a random
@@ -285,7 +277,8 @@ Query posed(std::mt19937& g, const Vec3d& c, const Vec3d& u, double r, double hs
 
 // ---------------------------------------------------------------------------------------------
 
-/// The references against closed forms: point distances, a core beside the side / above
+/// The references against closed forms (the point distances they use: reference_self_test):
+/// a core beside the side / above
 /// the cap / at a rim (apart: r - distance), a core through the middle, along the axis
 /// and a parallel core inside near the side (penetration), and nref against the
 /// golden-section distance on random separated lanes.
@@ -294,11 +287,6 @@ TEST(CapsuleCylinder, ReferenceMatchesClosedForms) {
   q.p = Vec3d(1, 2, 3);
   q.R = Mat3d::Identity();
   q.rc = 1.0, q.h = 2.0;
-  EXPECT_NEAR(cyl_sd(q, q.p + Vec3d(3, 0, 0)), 2.0, 1e-15);
-  EXPECT_NEAR(cyl_sd(q, q.p + Vec3d(0, 0, 2.5)), 0.5, 1e-15);
-  EXPECT_NEAR(cyl_sd(q, q.p + Vec3d(0, 4, 6)), 5.0, 1e-15);  // rim (0, 1, 2): (3, 4)
-  EXPECT_NEAR(cyl_sd(q, q.p + Vec3d(0.5, 0, 0)), -0.5, 1e-15);
-  EXPECT_NEAR(cyl_sd(q, q.p + Vec3d(0, 0, 1.9)), -0.1, 1e-15);
   q.r = 0.5, q.hs = 1.0;
   struct Case {
     Vec3d c, u;
@@ -576,8 +564,7 @@ TEST(CapsuleCylinder, Touching) {
   std::mt19937 g(43);
   test::expect_touching_after_push(
       g, static_cast<int>(test::scaled(40)), 400,
-      [](std::mt19937& gg) { return random_query(gg, 1.0, 0.0, 0.6); }, reference,
-      [](Query& q, const Vec3d& s) { q.p = test::round_to_float(Vec3d(q.p + s)); },
+      [](std::mt19937& gg) { return random_query(gg, 1.0, 0.0, 0.6); }, reference, test::move_cylinder<Query>,
       [](const std::vector<Query>& qs) { return run(qs, KernelPath::kSimd); }, size_of, kRel);
 }
 
@@ -604,9 +591,8 @@ TEST(CapsuleCylinder, ZeroLengthCoreIsSphereCylinder) {
 /// Needles and pancakes (1e-4 proportions) of both shapes.
 TEST(CapsuleCylinder, NeedlesAndPancakes) {
   std::mt19937 g(53);
-  std::vector<Query> qs;
   const int n = static_cast<int>(test::scaled(40));
-  for (int i = 0; i < n; ++i) {
+  const std::vector<Query> qs = test::draw_cases(n, [&](int i) {
     Query q = random_query(g, 1.0, 0.0, 0.6);
     switch (i % 4) {
       case 0:
@@ -624,11 +610,9 @@ TEST(CapsuleCylinder, NeedlesAndPancakes) {
     }
     const double reach = q.r + q.hs + std::hypot(q.rc, q.h);
     q.c = q.p + 0.3 * reach * test::random_unit_vector(g);
-    qs.push_back(rounded(q));
-  }
-  Stats st;
-  check_all(qs, "needle / pancake", &st);
-  EXPECT_GT(st.hits, n / 5);
+    return rounded(q);
+  });
+  test::expect_thin_pairs_meet(qs, check_all);
 }
 
 /// Symmetries: the half-turn about the cylinder's x axis maps it onto itself (same
@@ -656,31 +640,19 @@ TEST(CapsuleCylinder, Symmetries) {
     t.R = test::round_to_float(Mat3d(turn * q.R));
     turned.push_back(t);
   }
-  const auto a = run(base, KernelPath::kSimd), b = run(flipped, KernelPath::kSimd),
-             c = run(reversed, KernelPath::kSimd), d = run(turned, KernelPath::kSimd);
-  int compared = 0;
-  for (size_t k = 0; k < base.size(); ++k) {
-    const Ref f = reference(base[k]);
-    const double tol = kRel * size_of(base[k]);
-    if (std::fabs(f.depth) <= 4 * tol) continue;
-    ASSERT_EQ(a[k].count > 0, b[k].count > 0) << k;
-    ASSERT_EQ(a[k].count > 0, c[k].count > 0) << k;
-    ASSERT_EQ(a[k].count > 0, d[k].count > 0) << k;
-    if (a[k].count == 0) continue;
-    ++compared;
-    const Mat3d flip =
-        base[k].R * Eigen::AngleAxisd(M_PI, Vec3d::UnitX()).toRotationMatrix() * base[k].R.transpose();
-    const Mat3d turn = turned[k].R * base[k].R.transpose();
-    EXPECT_NEAR(a[k].depth, b[k].depth, 2 * tol) << k;
-    EXPECT_NEAR(a[k].depth, c[k].depth, tol) << k;
-    EXPECT_NEAR(a[k].depth, d[k].depth, 2 * tol) << k;
-    if (f.unique) {
-      EXPECT_LT(angle(flip * a[k].n, b[k].n), kAngleTol) << k;
-      EXPECT_LT(angle(a[k].n, c[k].n), kAngleTol) << k;
-      EXPECT_LT(angle(turn * a[k].n, d[k].n), kAngleTol) << k;
-    }
-  }
-  EXPECT_GT(compared, static_cast<int>(base.size()) / 4);
+  const auto flip = [&](size_t k) {
+    return Mat3d(base[k].R * Eigen::AngleAxisd(M_PI, Vec3d::UnitX()).toRotationMatrix() *
+                 base[k].R.transpose());
+  };
+  test::expect_symmetric(run(base, KernelPath::kSimd),
+                         {{run(flipped, KernelPath::kSimd), 2, flip},
+                          {run(reversed, KernelPath::kSimd)},
+                          {run(turned, KernelPath::kSimd), 2,
+                           [&](size_t k) { return Mat3d(turned[k].R * base[k].R.transpose()); }}},
+                         kAngleTol, [&](size_t k) {
+                           const Ref f = reference(base[k]);
+                           return test::SymmetryLane{kRel * size_of(base[k]), f.depth, f.unique};
+                         });
 }
 
 }  // namespace

@@ -55,12 +55,14 @@
 #include <vector>
 
 #include "kernels/narrowphase/pair_kernels.h"
+#include "support/ellipsoid_input.h"
 #include "support/ellipsoid_reference.h"
 #include "support/kernel_checks.h"
 #include "support/lane_checks.h"
 #include "support/leaf_lanes.h"
 #include "support/narrow_reference.h"
 #include "support/random_input.h"
+#include "support/same_answers.h"
 #include "support/shape_geometry.h"
 #include "support/test_support.h"
 
@@ -82,11 +84,7 @@ struct Cap {
   double r, h;
 };
 
-struct Ell {
-  Vec3d p;
-  Mat3d R;  // columns: the axes of e
-  Vec3d e;
-};
+using Ell = test::PosedSolid;
 
 struct Query {
   Cap a;
@@ -98,9 +96,7 @@ Query rounded(Query q) {
   q.a.u = test::round_to_float(q.a.u);
   q.a.r = test::round_to_float(q.a.r);
   q.a.h = test::round_to_float(q.a.h);
-  q.b.p = test::round_to_float(q.b.p);
-  q.b.R = test::round_to_float(q.b.R);
-  q.b.e = test::round_to_float(q.b.e);
+  q.b = test::rounded(q.b);
   return q;
 }
 
@@ -228,8 +224,7 @@ Ref reference(const Query& q, bool check_conditioning = true) {
 // ---------------------------------------------------------------------------------------
 
 double coord_ulp(const Query& q) {
-  const double m = std::max(q.a.p.cwiseAbs().maxCoeff(), q.b.p.cwiseAbs().maxCoeff());
-  return (m + size_of(q)) * std::ldexp(1.0, -23);
+  return test::coordinate_ulp(size_of(q), {q.a.p, q.b.p});
 }
 
 double sd_capsule(const Query& q, const Vec3d& x) {
@@ -257,20 +252,15 @@ void check_all(const std::vector<Query>& qs, const char* what, Stats* out_stats 
       .size = size_of,
       .coord_ulp = coord_ulp,
       .overlap = overlap,
-      .points =
-          [](const Query& q, const test::LaneRef&, const test::PairResult& h, double, double ptol,
-             const std::string& where) {
-            EXPECT_EQ(h.pd[0], h.depth) << where;
-            const Vec3d on_a = h.pt[0] + h.n * (0.5 * h.depth), on_b = h.pt[0] - h.n * (0.5 * h.depth);
-            const double rho = q.b.e.maxCoeff() * q.b.e.maxCoeff() / q.b.e.minCoeff();
-            EXPECT_NEAR(sd_capsule(q, on_a), 0.0, ptol + 1e-6 * rho) << where;
-            EXPECT_NEAR(test::eref::signed_distance_posed(q.b, on_b), 0.0, ptol) << where;
+      .sd_a = sd_capsule,
+      .sd_b = [](const Query& q, const Vec3d& x) { return test::eref::signed_distance_posed(q.b, x); },
+      .side_slack =
+          [](const Query& q, const test::LaneRef&, const test::PairResult&, bool b_side) {
+            return b_side ? 0.0 : 1e-6 * test::eref::largest_curvature_radius(q.b.e);
           },
       .same_bytes_paths = false,
       .point_ulps = 1};
-  const Stats st =
-      test::check_lanes(model, qs, run(qs, KernelPath::kSimd), run(qs, KernelPath::kScalar), what);
-  if (out_stats != nullptr) *out_stats = st;
+  test::check_lanes_on_both_paths(model, qs, run, what, out_stats);
 }
 
 // ---------------------------------------------------------------------------------------
@@ -281,8 +271,7 @@ void check_all(const std::vector<Query>& qs, const char* what, Stats* out_stats 
 /// origin: capsules from deep through it to well outside, about half touching.
 std::vector<Query> random_queries(std::mt19937& g, int n, double size, double offset) {
   std::uniform_real_distribution<double> u(-1, 1), s(0.2, 1.0), rr(0.05, 0.8), hh(0.0, 1.0);
-  std::vector<Query> qs;
-  for (int k = 0; k < n; ++k) {
+  return test::draw_cases(n, [&](int k) {
     Query q;
     const Vec3d p = Vec3d(offset, -offset, 0.5 * offset) + Vec3d(u(g), u(g), u(g)) * size;
     q.b = Ell{p, test::random_rotation(g), Vec3d(s(g), s(g), s(g)) * size};
@@ -291,9 +280,8 @@ std::vector<Query> random_queries(std::mt19937& g, int n, double size, double of
     q.a.u = test::random_unit_vector(g);
     const Vec3d v(u(g), u(g), u(g));
     q.a.p = p + (k % 2 ? Vec3d(q.b.R * v.cwiseProduct(q.b.e) * 1.2) : Vec3d(v * (1.6 * size)));
-    qs.push_back(rounded(q));
-  }
-  return qs;
+    return rounded(q);
+  });
 }
 
 /// Capsules touching the ellipsoid at a random surface point x (outward normal m):
@@ -302,10 +290,9 @@ std::vector<Query> random_queries(std::mt19937& g, int n, double size, double of
 using Touch = test::Built<Query>;
 std::vector<Touch> touching_queries(std::mt19937& g, int n) {
   std::uniform_real_distribution<double> u(-1, 1), s(0.2, 1.0), f(-1e-3, 1e-3), u01(0, 1);
-  std::vector<Touch> out;
-  for (int k = 0; k < n; ++k) {
+  return test::draw_cases(n, [&](int k) {
     Query q;
-    q.b = Ell{Vec3d(u(g), u(g), u(g)), test::random_rotation(g), Vec3d(s(g), s(g), s(g))};
+    q.b = test::random_ellipsoid(g);
     const auto [x, m] = test::eref::surface_point(q.b, test::random_unit_vector(g));
     q.a.r = 0.05 + 0.5 * u01(g);
     q.a.h = 0.6 * u01(g);
@@ -322,25 +309,19 @@ std::vector<Touch> touching_queries(std::mt19937& g, int n) {
       q.a.p = c + q.a.h * w;
     }
     Touch t{rounded(q), -ff, -m};
-    out.push_back(t);
-  }
-  return out;
+    return t;
+  });
 }
 
 /// Needle and pancake ellipsoids (ratio 1e-3 or 1e-4, axes permuted, rotated) with cores
 /// through them (along, across, tilted), lying across a flat side, near a rim or tip.
 std::vector<Query> thin_queries(std::mt19937& g, int n) {
   std::uniform_real_distribution<double> u(-1, 1), u01(0, 1);
-  std::vector<Query> qs;
-  for (int k = 0; k < n; ++k) {
-    const double ratio = (k % 2) ? 1e-3 : 1e-4;
-    const bool needle = (k / 2) % 2;
-    Vec3d e = needle ? Vec3d(1, ratio, ratio * (0.5 + u01(g))) : Vec3d(1, 0.5 + 0.5 * u01(g), ratio);
-    const int sh = k % 3;
-    e = Vec3d(e[sh], e[(sh + 1) % 3], e[(sh + 2) % 3]);
+  return test::draw_cases(n, [&](int k) {
+    const Vec3d e = test::thin_radii(g, k);
     Query q;
-    q.b = Ell{Vec3d(u(g), u(g), u(g)), test::random_rotation(g), e};
-    const int thin = e[0] <= e[1] && e[0] <= e[2] ? 0 : (e[1] <= e[2] ? 1 : 2);
+    q.b = test::random_ellipsoid(g, e);
+    const int thin = test::thinnest_axis(e);
     const int lng = e[0] >= e[1] && e[0] >= e[2] ? 0 : (e[1] >= e[2] ? 1 : 2);
     Vec3d y, ul;
     q.a.r = (k % 3 == 0 ? 0.01 : 0.3) * u01(g) + 1e-3;
@@ -372,17 +353,15 @@ std::vector<Query> thin_queries(std::mt19937& g, int n) {
     }
     q.a.u = (q.b.R * ul).normalized();
     q.a.p = q.b.p + q.b.R * y;
-    qs.push_back(rounded(q));
-  }
-  return qs;
+    return rounded(q);
+  });
 }
 
 /// Cores through (or ending at) the ellipsoid's centre, and capsule centre = ellipsoid
 /// centre, at several proportions.
 std::vector<Query> centre_queries(std::mt19937& g, int n) {
   std::uniform_real_distribution<double> u(-1, 1), s(0.2, 1.0), u01(0, 1);
-  std::vector<Query> qs;
-  for (int k = 0; k < n; ++k) {
+  return test::draw_cases(n, [&](int k) {
     Query q;
     Vec3d e(s(g), s(g), s(g));
     if (k % 4 == 1) e = Vec3d(1, 1, 1) * s(g);  // round
@@ -392,9 +371,8 @@ std::vector<Query> centre_queries(std::mt19937& g, int n) {
     q.a.h = (k % 5 == 0) ? 0.0 : 1.5 * u01(g);
     q.a.u = (k % 3 == 0) ? Vec3d::Unit(k % 3) : test::random_unit_vector(g);
     q.a.p = q.b.p + ((k / 2) % 2 ? Vec3d::Zero() : Vec3d(q.a.u * q.a.h * u(g)));
-    qs.push_back(rounded(q));
-  }
-  return qs;
+    return rounded(q);
+  });
 }
 
 // ---------------------------------------------------------------------------------------
@@ -424,9 +402,7 @@ TEST(CapsuleEllipsoidReference, ReferencesAgree) {
 class CapsuleEllipsoid : public ::testing::TestWithParam<std::tuple<double, double>> {};
 
 TEST_P(CapsuleEllipsoid, RandomPosesAgainstDoubleReference) {
-  const auto [size, offset] = GetParam();
-  const int n = static_cast<int>(test::scaled(400));
-  test::random_pose_suite(17, n, size, offset, random_queries, check_all,
+  test::random_pose_suite(GetParam(), 17, static_cast<int>(test::scaled(400)), random_queries, check_all,
                           {.flagged_div = 20, .normals_div = 2});
 }
 
@@ -442,9 +418,7 @@ TEST(CapsuleEllipsoidCases, ConstructedTouching) {
         nref::ring_rise(capsule_shape(ts[k].q), ellipsoid_shape(ts[k].q.b), test::v3(ts[k].n));
     return nref::valley_angle(kAngleTol, std::max(rise, 1e-6 * L), 3e-3, kValleyNoise * L);
   };
-  test::expect_built_on_both_paths(
-      ts, [](const std::vector<Query>& qs, KernelPath path) { return run(qs, path); }, kRel, size_of,
-      angle_tol, "touching");
+  test::expect_built_on_both_paths(ts, run, kRel, size_of, angle_tol, "touching");
 }
 
 TEST(CapsuleEllipsoidCases, NeedlesPancakesAndCentres) {
@@ -502,38 +476,24 @@ TEST(CapsuleEllipsoidCases, Analytic) {
 TEST(CapsuleEllipsoidCases, RoundEllipsoidIsSphereCapsule) {
   std::mt19937 g(11);
   std::uniform_real_distribution<double> u(-1, 1), u01(0, 1);
-  std::vector<Query> qs;
-  for (int k = 0; k < 200; ++k) {
+  const std::vector<Query> qs = test::draw_cases(200, [&](int) {
     Query q;
-    q.b = Ell{Vec3d(u(g), u(g), u(g)), test::random_rotation(g), Vec3d::Constant(0.2 + 0.6 * u01(g))};
+    q.b = test::random_round_ellipsoid(g);
     q.a = Cap{Vec3d(u(g), u(g), u(g)), test::random_unit_vector(g), 0.05 + 0.4 * u01(g), u01(g)};
-    qs.push_back(rounded(q));
-  }
-  const std::vector<test::PairResult> mine = run(qs, KernelPath::kSimd);
-  // sphere (A) - capsule (B): the same pairs with the roles swapped.
-  const size_t n = qs.size();
-  test::ManifoldLanes o;
-  test::run_queries(
-      &collide_sphere_capsule, qs, KernelPath::kSimd,
-      [](const Query& q) {
+    return rounded(q);
+  });
+  // sphere (A) - capsule (B): the same pairs with the roles swapped; sphere-capsule's
+  // normal points from the sphere (our B) to the capsule (our A).
+  const std::vector<test::PairResult> sphere =
+      test::run_queries(&collide_sphere_capsule, qs, KernelPath::kSimd, [](const Query& q) {
         return std::pair{test::sphere_leaf(q.b.p, q.b.e[0]), leaves(q).first};
-      },
-      0, ~0u, &o);
-  int hits = 0;
-  for (uint32_t k = 0; k < n; ++k) {
-    const test::PairResult r = o.result(k);
-    if (std::fabs(r.count ? r.depth : 0.0) < 1e-5 && mine[k].count == 0) continue;
-    if (r.count == 0 && mine[k].count && mine[k].depth < 1e-5) continue;
-    ASSERT_EQ(mine[k].count, r.count) << k;
-    if (!r.count) continue;
-    ++hits;
-    EXPECT_NEAR(mine[k].depth, r.depth, 2e-6) << k;
-    // sphere-capsule's normal points from the sphere (our B) to the capsule (our A)
-    if (r.depth < 0.9 * (qs[k].a.r + qs[k].b.e[0])) {
-      EXPECT_LT(angle(mine[k].n, -r.n), 1e-5) << k;
-    }
-    EXPECT_LT((mine[k].pt[0] - r.pt[0]).norm(), 1e-5) << k;
-  }
+      });
+  const int hits =
+      test::expect_same_answers(run(qs, KernelPath::kSimd), sphere, {.same_count = true}, [&](size_t k) {
+        return test::LaneRule{.normal = sphere[k].depth < 0.9 * (qs[k].a.r + qs[k].b.e[0]),
+                              .point = true,
+                              .map = -Mat3d::Identity()};
+      });
   EXPECT_GT(hits, 40);
 }
 
@@ -541,28 +501,13 @@ TEST(CapsuleEllipsoidCases, ZeroLengthCoreIsSphereEllipsoid) {
   std::mt19937 g(13);
   std::vector<Query> qs = random_queries(g, 200, 1.0, 0.0);
   for (Query& q : qs) q.a.h = 0;
-  const std::vector<test::PairResult> mine = run(qs, KernelPath::kSimd);
-  const size_t n = qs.size();
-  test::ManifoldLanes o;
-  test::run_queries(
-      &collide_sphere_ellipsoid, qs, KernelPath::kSimd,
-      [](const Query& q) {
+  const std::vector<test::PairResult> sphere =
+      test::run_queries(&collide_sphere_ellipsoid, qs, KernelPath::kSimd, [](const Query& q) {
         return std::pair{test::sphere_leaf(q.a.p, q.a.r), leaves(q).second};
-      },
-      0, ~0u, &o);
-  int hits = 0;
-  for (uint32_t k = 0; k < n; ++k) {
-    const test::PairResult r = o.result(k);
-    const double L = size_of(qs[k]);
-    if ((r.count == 0) != (mine[k].count == 0)) {
-      EXPECT_LT(std::max(r.count ? r.depth : 0.0, mine[k].count ? mine[k].depth : 0.0), 1e-5 * L) << k;
-      continue;
-    }
-    if (!r.count) continue;
-    ++hits;
-    EXPECT_NEAR(mine[k].depth, r.depth, 2e-6 * L) << k;
-    EXPECT_LT(angle(mine[k].n, r.n), 1e-4) << k;
-  }
+      });
+  const int hits = test::expect_same_answers(
+      run(qs, KernelPath::kSimd), sphere, {.angle = 1e-4},
+      [&](size_t k) { return test::LaneRule{.scale = size_of(qs[k]), .normal = true}; });
   EXPECT_GT(hits, 40);
 }
 
@@ -571,20 +516,11 @@ TEST(CapsuleEllipsoidCases, AxisDirectionDoesNotMatter) {
   std::vector<Query> qs = random_queries(g, 160, 1.0, 0.0);
   std::vector<Query> flipped = qs;
   for (Query& q : flipped) q.a.u = -q.a.u;
-  const std::vector<test::PairResult> h0 = run(qs, KernelPath::kSimd), h1 = run(flipped, KernelPath::kSimd);
-  for (size_t k = 0; k < qs.size(); ++k) {
-    const double L = size_of(qs[k]);
-    if (h0[k].count != h1[k].count) {
-      EXPECT_LT(std::max(h0[k].depth * h0[k].count, h1[k].depth * h1[k].count), 1e-5 * L) << k;
-      continue;
-    }
-    if (!h0[k].count) continue;
-    EXPECT_NEAR(h0[k].depth, h1[k].depth, 1e-6 * L) << k;
-    const Ref f = reference(qs[k]);
-    if (f.conditioned) {
-      EXPECT_LT(angle(h0[k].n, h1[k].n), kAngleTol) << k;
-    }
-  }
+  test::expect_same_answers(run(qs, KernelPath::kSimd), run(flipped, KernelPath::kSimd),
+                            {.depth = 1e-6, .angle = kAngleTol}, [&](size_t k) {
+                              return test::LaneRule{.scale = size_of(qs[k]),
+                                                    .normal = reference(qs[k]).conditioned};
+                            });
 }
 
 }  // namespace

@@ -66,12 +66,15 @@
 #include <vector>
 
 #include "kernels/narrowphase/pair_kernels.h"
+#include "support/cylinder_frame.h"
 #include "support/kernel_checks.h"
 #include "support/leaf_lanes.h"
 #include "support/narrow_reference.h"
 #include "support/random_input.h"
+#include "support/same_answers.h"
 #include "support/shape_geometry.h"
 #include "support/test_support.h"
+#include "support/unique_minimum.h"
 
 namespace impact::kernels {
 namespace {
@@ -88,31 +91,13 @@ constexpr double kAngleTol = 1e-4;  // rad, where the minimum is unique and cond
 /// a cylinder's length or diameter.
 constexpr int kGoldenIters = 40;
 
-/// Lanes per scenario: base scaled by IMPACT_TEST_INTENSITY; under the sanitizers a
-/// quarter (at least 2): the double references dominate the run time there, and the
-/// kernel runs the same code on fewer lanes.
-int lanes(uint32_t base) {
-  return static_cast<int>(test::kSanitized ? std::max((base + 3) / 4, 2u) : test::scaled(base));
-}
-
-/// One solid cylinder: centre, rotation (column 2 = the unit axis), radius, half length.
-struct Cyl {
-  Vec3d p = Vec3d::Zero();
-  Mat3d R = Mat3d::Identity();
-  double r = 1, h = 1;
-};
+using Cyl = test::PosedCylinder;
+using Piece = test::CylinderPiece;
+using test::rounded;
 
 struct Query {
   Cyl a, b;
 };
-
-Cyl rounded(Cyl c) {
-  c.p = test::round_to_float(c.p);
-  c.R = test::round_to_float(c.R);
-  c.r = test::round_to_float(c.r);
-  c.h = test::round_to_float(c.h);
-  return c;
-}
 
 /// The query as the kernel sees it: every input rounded to float.
 Query rounded(const Query& q) {
@@ -128,8 +113,7 @@ double size_of(const Query& q) {
 }
 
 double coord_ulp(const Query& q) {
-  const double m = std::max(q.a.p.cwiseAbs().maxCoeff(), q.b.p.cwiseAbs().maxCoeff()) + size_of(q);
-  return m * std::ldexp(1.0, -23);
+  return test::coordinate_ulp(size_of(q), {q.a.p, q.b.p});
 }
 
 // --- running the kernel -----------------------------------------------------------------------
@@ -139,15 +123,11 @@ test::Leaf leaf_of(const Cyl& c) {
   return test::posed_leaf(kLeafCylinder, c.p, c.R, Vec3d(c.r, c.h, 0.0));
 }
 
-/// Runs `kern` (the kernel under test unless given) on lanes [begin, end) of one bucket.
-std::vector<test::PairResult> run(const std::vector<Query>& qs, KernelPath path, PairKernel kern = nullptr,
-                                  uint32_t begin = 0, uint32_t end = ~0u) {
-  return test::run_queries(
-      kern != nullptr ? kern : &collide_cylinder_cylinder, qs, path,
-      [](const Query& q) {
-        return std::pair{leaf_of(q.a), leaf_of(q.b)};
-      },
-      begin, end);
+/// Runs the kernel under test on one bucket of qs.
+std::vector<test::PairResult> run(const std::vector<Query>& qs, KernelPath path) {
+  return test::run_queries(&collide_cylinder_cylinder, qs, path, [](const Query& q) {
+    return std::pair{leaf_of(q.a), leaf_of(q.b)};
+  });
 }
 
 // --- references -------------------------------------------------------------------------------
@@ -218,29 +198,10 @@ double overlap_along(const Query& q, const Vec3d& n) {
 bool unique_minimum(const Query& q, const Vec3d& n_ref, double depth, double second, double tol) {
   const nref::Shape sa = shape_of(q.a), sb = shape_of(q.b);
   auto o = [&](const Vec3d& n) { return nref::overlap(sa, sb, v3(n.normalized())); };
-  const Vec3d t1 = n_ref.unitOrthogonal(), t2 = n_ref.cross(t1);
-  auto ring = [&](double cone, int count) {
-    double r = std::numeric_limits<double>::infinity();
-    for (int i = 0; i < count; ++i) {
-      const double a = 2 * M_PI * i / count;
-      r = std::min(r, o(n_ref + std::tan(cone) * (std::cos(a) * t1 + std::sin(a) * t2)));
-    }
-    return r;
-  };
-  double best = std::min(second, ring(0.02, 720));
-  std::vector<Vec3d> poles = {q.a.R.col(2), q.b.R.col(2)};
+  test::GreatCircles circles{{q.a.R.col(2), q.b.R.col(2)}};
   const Vec3d both = q.a.R.col(2).cross(q.b.R.col(2));
-  if (both.norm() > 1e-6) poles.push_back(both.normalized());
-  for (const Vec3d& ax : poles) {
-    const Vec3d e1 = ax.unitOrthogonal(), e2 = ax.cross(e1);
-    for (int i = 0; i < 6284; ++i) {
-      const double a = 1e-3 * i;
-      const Vec3d n = std::cos(a) * e1 + std::sin(a) * e2;
-      if (angle(n, n_ref) > 0.02) best = std::min(best, o(n));
-    }
-  }
-  if (!(best > depth + 2 * tol)) return false;
-  return ring(3e-3, 96) - depth >= 1e-6 * size_of(q);
+  if (both.norm() > 1e-6) circles.poles.push_back(both.normalized());
+  return test::unique_minimum(o, n_ref, depth, second, tol, circles, 1e-6 * size_of(q));
 }
 
 /// The reference (test::LaneRef): depth (> 0 penetration, else minus the distance), the
@@ -285,52 +246,32 @@ void check_all(const std::vector<Query>& qs, const char* what, Stats* out_stats 
       .sd_a = [](const Query& q, const Vec3d& x) { return cyl_sd(q.a, x); },
       .sd_b = [](const Query& q, const Vec3d& x) { return cyl_sd(q.b, x); },
       .apart = [](const Query& q, const Vec3d& shift) { return solid_minimum(q, shift); }};
-  const Stats st =
-      test::check_lanes(model, qs, run(qs, KernelPath::kSimd), run(qs, KernelPath::kScalar), what);
-  if (out_stats != nullptr) *out_stats = st;
+  test::check_lanes_on_both_paths(model, qs, run, what, out_stats);
 }
 
 // --- inputs -----------------------------------------------------------------------------------
-
-Cyl random_cyl(std::mt19937& g, double size) {
-  std::uniform_real_distribution<double> uni(0, 1);
-  Cyl c;
-  c.R = test::random_rotation(g);
-  c.r = size * (0.1 + 0.9 * uni(g));
-  c.h = size * (0.1 + 0.9 * uni(g));
-  return c;
-}
 
 /// A random pair at size `size`, `offset` from the origin, A's centre within `spread`
 /// (of the pair's reach) of B's.
 Query random_query(std::mt19937& g, double size, double offset, double spread) {
   std::uniform_real_distribution<double> uni(0, 1);
   Query q;
-  q.b = random_cyl(g, size);
+  q.b = test::random_posed_cylinder(g, size);
   q.b.p = Vec3d(offset, -offset, 0.5 * offset) + size * Vec3d(uni(g) - 0.5, uni(g) - 0.5, uni(g) - 0.5);
-  q.a = random_cyl(g, size);
+  q.a = test::random_posed_cylinder(g, size);
   const double reach = std::hypot(q.a.r, q.a.h) + std::hypot(q.b.r, q.b.h);
   q.a.p = q.b.p + spread * reach * uni(g) * test::random_unit_vector(g);
   return rounded(q);
 }
 
 std::vector<Query> random_queries(std::mt19937& g, int n, double size, double offset) {
-  std::vector<Query> qs;
-  for (int i = 0; i < n; ++i) qs.push_back(random_query(g, size, offset, 1.4));
-  return qs;
+  return test::draw_cases(n, [&](int) { return random_query(g, size, offset, 1.4); });
 }
 
 /// A query in A's frame (centre 0, axis z): B's centre and rotation are local; the pair
 /// posed by a random rotation and offset.
 Query posed(std::mt19937& g, double ra, double ha, const Cyl& b_local, double offset = 0.0) {
-  Query q;
-  q.a.R = test::random_rotation(g);
-  q.a.p = Vec3d(offset, 0.3 * offset, -0.7 * offset) + Vec3d(0.25, -0.5, 0.75);
-  q.a.r = ra, q.a.h = ha;
-  q.b = b_local;
-  q.b.p = q.a.p + q.a.R * b_local.p;
-  q.b.R = q.a.R * b_local.R;
-  return rounded(q);
+  return test::posed_in_cylinder_frame<Query>(g, ra, ha, b_local, offset);
 }
 
 /// An axis-aligned A (R = I) at p, B at p + c with rotation Rb: exact in float for the
@@ -362,9 +303,6 @@ Cyl rim_at(const Vec3d& x, const Vec3d& m, double psi, const Vec3d& w, double r,
   return c;
 }
 
-/// The boundary pieces of a cylinder.
-enum class Piece { kCap, kRim, kSide };
-
 struct Built {
   Query q;
   double delta;  // > 0: overlap along n; < 0: minus the distance
@@ -385,23 +323,7 @@ Built build(Piece pa, Piece pb, bool parallel, std::mt19937& g, int i) {
   const double a = M_PI * uni(g), s = uni(g) > 0 ? 1.0 : -1.0;
   const double delta = (i % 3 == 0 ? -1.0 : 1.0) * mag(0.01, 0.1);
   const Vec3d z = Vec3d::UnitZ();
-  Vec3d xa = Vec3d::Zero(), n = Vec3d::UnitZ();
-  switch (pa) {
-    case Piece::kCap:
-      xa = 0.7 * ra * std::fabs(uni(g)) * radial(a) + s * ha * z;
-      n = s * z;
-      break;
-    case Piece::kRim: {
-      const double phi = mag(0.3, 1.27);
-      xa = ra * radial(a) + s * ha * z;
-      n = std::cos(phi) * radial(a) + std::sin(phi) * s * z;
-      break;
-    }
-    case Piece::kSide:
-      xa = ra * radial(a) + 0.7 * ha * uni(g) * z;
-      n = radial(a);
-      break;
-  }
+  const auto [xa, n] = test::cylinder_piece_point(pa, ra, ha, a, s, g);
   const Vec3d xb = xa - delta * n;
   const Vec3d w = rot(M_PI * uni(g), n) * n.unitOrthogonal();  // a random unit normal to n
   Cyl b;
@@ -441,31 +363,9 @@ Built build(Piece pa, Piece pb, bool parallel, std::mt19937& g, int i) {
 int check_built(Piece pa, Piece pb, bool parallel, uint32_t seed, const char* what, Stats* st,
                 int* meeting_lanes) {
   std::mt19937 g(seed);
-  std::vector<Built> bs;
-  std::vector<Query> qs;
-  for (int i = 0; i < lanes(48); ++i) {
-    bs.push_back(build(pa, pb, parallel, g, i));
-    qs.push_back(bs.back().q);
-  }
-  check_all(qs, what, st);
-  int on_feature = 0, apart = 0;
-  *meeting_lanes = 0;
-  for (size_t k = 0; k < bs.size(); ++k) {
-    const Ref r = reference(bs[k].q);
-    if (bs[k].delta < 0) {
-      ++apart;
-      EXPECT_TRUE(r.apart) << what << " lane " << k;
-      EXPECT_NEAR(r.depth, bs[k].delta, 1e-6) << what << " lane " << k;
-      EXPECT_LT(angle(r.n, bs[k].n), 1e-4) << what << " lane " << k;
-    } else {
-      ++*meeting_lanes;
-      EXPECT_LE(r.depth, bs[k].delta + 1e-6) << what << " lane " << k;
-      on_feature += std::fabs(r.depth - bs[k].delta) <= 1e-6 && angle(r.n, bs[k].n) <= 1e-4;
-    }
-  }
-  EXPECT_GT(apart, static_cast<int>(bs.size()) / 4);
-  std::printf("  %-28s meeting %d, of which at the built pair %d\n", what, *meeting_lanes, on_feature);
-  return on_feature;
+  return test::check_built_features(
+      test::scenario_lanes(48), [&](int i) { return build(pa, pb, parallel, g, i); }, check_all, reference,
+      what, st, meeting_lanes);
 }
 
 double spread(const test::PairResult& r) {
@@ -511,7 +411,8 @@ void disk_overlap(double r1, double r2, double D, double* area, double* diameter
 
 // ---------------------------------------------------------------------------------------------
 
-/// The references against closed forms: point distances; the solid minimum of pairs
+/// The references against closed forms (the point distances they use: reference_self_test):
+/// the solid minimum of pairs
 /// apart (caps, sides, crossed sides, coplanar rims, rims in perpendicular planes) and of
 /// one inside the other; the full reference on those and on meeting pairs (cap on cap,
 /// side by side, crossed sides, a small one inside, a long thin one through the
@@ -521,18 +422,6 @@ TEST(CylinderCylinder, ReferenceMatchesClosedForms) {
   Cyl c;
   c.p = Vec3d(1, 2, 3);
   c.r = 1.0, c.h = 2.0;
-  EXPECT_NEAR(cyl_sd(c, c.p + Vec3d(3, 0, 0)), 2.0, 1e-15);
-  EXPECT_NEAR(cyl_sd(c, c.p + Vec3d(0, 0, 2.5)), 0.5, 1e-15);
-  EXPECT_NEAR(cyl_sd(c, c.p + Vec3d(0, 4, 6)), 5.0, 1e-15);  // rim (0, 1, 2): (3, 4)
-  EXPECT_NEAR(cyl_sd(c, c.p + Vec3d(0.5, 0, 0)), -0.5, 1e-15);
-  EXPECT_NEAR(cyl_sd(c, c.p + Vec3d(0, 0, 1.9)), -0.1, 1e-15);
-  EXPECT_NEAR(cyl_sd(c, c.p + Vec3d(0.6, 0.8, -2)), 0.0, 1e-15);
-  {
-    Cyl t = c;
-    t.R = rot(0.7, Vec3d(1, 2, 3));
-    EXPECT_NEAR(cyl_sd(t, t.p + t.R * Vec3d(0, 1.25, 2.5)), std::hypot(0.25, 0.5), 1e-14);
-    EXPECT_LT((cyl_closest(t, t.p + t.R * Vec3d(0, 1.25, 2.5)) - (t.p + t.R * Vec3d(0, 1, 2))).norm(), 1e-14);
-  }
   struct Case {
     const char* what;
     Vec3d c;  // B's centre from A's
@@ -615,7 +504,7 @@ class CylinderCylinderScales : public ::testing::TestWithParam<std::tuple<double
 
 TEST_P(CylinderCylinderScales, RandomPosesAgainstReference) {
   const auto [size, offset] = GetParam();
-  const int n = lanes(offset == 0 && size == 1.0 ? 240 : 160);
+  const int n = test::scenario_lanes(offset == 0 && size == 1.0 ? 240 : 160);
   test::random_pose_suite(test::scale_seed(21, size, offset), n, size, offset, random_queries, check_all,
                           {.max_hit_tenths = 9, .normals_div = 2});
 }
@@ -629,7 +518,7 @@ TEST(CylinderCylinder, DeepPairs) {
   std::uniform_real_distribution<double> uni(-1, 1);
   auto mag = [&](double lo, double hi) { return lo + (hi - lo) * std::fabs(uni(g)); };
   std::vector<Query> qs;
-  const int n = lanes(12);
+  const int n = test::scenario_lanes(12);
   for (int i = 0; i < n; ++i) {
     const double ra = mag(0.3, 1.0), ha = mag(0.3, 1.0);
     // coincident centres
@@ -793,19 +682,14 @@ TEST(CylinderCylinder, LyingOnTheCap) {
       const Query q = aligned(p, ra, ha, Vec3d(cs.x, cs.y, ha - d + rb), along_x(), rb, cs.hb);
       for (bool b_on_a : {true, false}) {
         SCOPED_TRACE(b_on_a ? "B on A" : "A on B");
-        const auto r = run({b_on_a ? q : swapped(q)}, path)[0];
-        ASSERT_EQ(r.count, 2u);
-        EXPECT_LT(angle(r.n, Vec3d(0, 0, b_on_a ? 1 : -1)), 1e-6);
-        EXPECT_NEAR(r.depth, d, 1e-6);
-        const double x0 = std::min(r.pt[0].x(), r.pt[1].x()) - p.x(),
-                     x1 = std::max(r.pt[0].x(), r.pt[1].x()) - p.x();
-        EXPECT_NEAR(x0, cs.x0, 1e-6);
-        EXPECT_NEAR(x1, cs.x1, 1e-6);
-        for (int i = 0; i < 2; ++i) {
-          EXPECT_NEAR(r.pt[i].y() - p.y(), cs.y, 1e-6);
-          EXPECT_NEAR(r.pt[i].z() - p.z(), ha - d / 2, 1e-6);
-          EXPECT_NEAR(r.pd[i], d, 1e-6);
-        }
+        test::expect_line_contact(run({b_on_a ? q : swapped(q)}, path)[0],
+                                  {.n = Vec3d(0, 0, b_on_a ? 1 : -1),
+                                   .d = d,
+                                   .origin = p,
+                                   .axis = 0,
+                                   .lo = cs.x0,
+                                   .hi = cs.x1,
+                                   .at = Vec3d(0, cs.y, ha - d / 2)});
       }
     }
   }
@@ -835,20 +719,14 @@ TEST(CylinderCylinder, SideBySide) {
           aligned(p, ra, ha, (ra + rb - d) * cs.dir + Vec3d(0, 0, cs.z), Mat3d::Identity(), rb, cs.hb);
       for (bool b_by_a : {true, false}) {
         SCOPED_TRACE(b_by_a ? "A, B" : "B, A");
-        const auto r = run({b_by_a ? q : swapped(q)}, path)[0];
-        ASSERT_EQ(r.count, 2u);
-        EXPECT_LT(angle(r.n, b_by_a ? cs.dir : Vec3d(-cs.dir)), 1e-6);
-        EXPECT_NEAR(r.depth, d, 1e-6);
-        const double z0 = std::min(r.pt[0].z(), r.pt[1].z()) - p.z(),
-                     z1 = std::max(r.pt[0].z(), r.pt[1].z()) - p.z();
-        EXPECT_NEAR(z0, cs.z0, 1e-6);
-        EXPECT_NEAR(z1, cs.z1, 1e-6);
-        for (int i = 0; i < 2; ++i) {
-          const Vec3d l = r.pt[i] - p;
-          EXPECT_NEAR(l.x(), (ra - d / 2) * cs.dir.x(), 1e-6);
-          EXPECT_NEAR(l.y(), (ra - d / 2) * cs.dir.y(), 1e-6);
-          EXPECT_NEAR(r.pd[i], d, 1e-6);
-        }
+        test::expect_line_contact(run({b_by_a ? q : swapped(q)}, path)[0],
+                                  {.n = b_by_a ? cs.dir : Vec3d(-cs.dir),
+                                   .d = d,
+                                   .origin = p,
+                                   .axis = 2,
+                                   .lo = cs.z0,
+                                   .hi = cs.z1,
+                                   .at = Vec3d((ra - d / 2) * cs.dir.x(), (ra - d / 2) * cs.dir.y(), 0)});
       }
     }
   }
@@ -862,7 +740,7 @@ TEST(CylinderCylinder, NearParallelManifolds) {
   const double tilts[] = {0.0, 1e-7, 1e-5, 1e-3, 1e-2};
   std::vector<Query> standing, lying, beside;
   const double ra = 0.5, ha = 1.0, d = 0.05;
-  for (int i = 0; i < lanes(5); ++i)
+  for (int i = 0; i < test::scenario_lanes(5); ++i)
     for (double tilt : tilts) {
       const Mat3d tilted = rot(tilt, radial(M_PI * uni(g))) * rot(M_PI * uni(g), Vec3d::UnitZ());
       const Vec3d u = tilted.col(2);
@@ -925,8 +803,9 @@ TEST(CylinderCylinder, Touching) {
     }
   std::mt19937 g(43);
   test::expect_touching_after_push(
-      g, lanes(40), 10 * lanes(40), [](std::mt19937& gg) { return random_query(gg, 1.0, 0.0, 0.5); },
-      reference, [](Query& q, const Vec3d& s) { q.b.p = test::round_to_float(Vec3d(q.b.p + s)); },
+      g, test::scenario_lanes(40), 10 * test::scenario_lanes(40),
+      [](std::mt19937& gg) { return random_query(gg, 1.0, 0.0, 0.5); }, reference,
+      [](Query& q, const Vec3d& s) { q.b.p = test::round_to_float(Vec3d(q.b.p + s)); },
       [](const std::vector<Query>& qs) { return run(qs, KernelPath::kSimd); }, size_of, kRel);
 }
 
@@ -934,9 +813,8 @@ TEST(CylinderCylinder, Touching) {
 /// the half length, half length 1e-4 of the radius.
 TEST(CylinderCylinder, NeedlesAndPancakes) {
   std::mt19937 g(53);
-  std::vector<Query> qs;
-  const int n = lanes(48);
-  for (int i = 0; i < n; ++i) {
+  const int n = test::scenario_lanes(48);
+  const std::vector<Query> qs = test::draw_cases(n, [&](int i) {
     Query q = random_query(g, 1.0, 0.0, 0.0);
     switch (i % 6) {
       case 0:
@@ -960,11 +838,9 @@ TEST(CylinderCylinder, NeedlesAndPancakes) {
     }
     const double reach = std::hypot(q.a.r, q.a.h) + std::hypot(q.b.r, q.b.h);
     q.a.p = q.b.p + 0.3 * reach * test::random_unit_vector(g);
-    qs.push_back(rounded(q));
-  }
-  Stats st;
-  check_all(qs, "needle / pancake", &st);
-  EXPECT_GT(st.hits, n / 5);
+    return rounded(q);
+  });
+  test::expect_thin_pairs_meet(qs, check_all);
 }
 
 /// Two coins (half length 1e-4 of the radius) whose four rim pairs each give the most
@@ -1003,7 +879,7 @@ TEST(CylinderCylinder, Symmetries) {
   std::mt19937 g(59);
   std::vector<Query> base, turned, swaps, flip_a, flip_b;
   std::vector<Mat3d> turns;
-  for (int i = 0; i < lanes(80); ++i) {
+  for (int i = 0; i < test::scenario_lanes(80); ++i) {
     const Query q = random_query(g, 1.0, 0.0, 0.7);
     base.push_back(q);
     const Mat3d turn = test::random_rotation(g);
@@ -1025,29 +901,16 @@ TEST(CylinderCylinder, Symmetries) {
     f.b.R.col(2) = -q.b.R.col(2);
     flip_b.push_back(f);
   }
-  const auto a = run(base, KernelPath::kSimd), b = run(turned, KernelPath::kSimd),
-             c = run(swaps, KernelPath::kSimd), d = run(flip_a, KernelPath::kSimd),
-             e = run(flip_b, KernelPath::kSimd);
-  int compared = 0;
-  for (size_t k = 0; k < base.size(); ++k) {
-    const Ref f = reference(base[k]);
-    const double tol = kRel * size_of(base[k]);
-    if (std::fabs(f.depth) <= 4 * tol) continue;
-    for (const auto* other : {&b, &c, &d, &e}) ASSERT_EQ(a[k].count > 0, (*other)[k].count > 0) << k;
-    if (a[k].count == 0) continue;
-    ++compared;
-    EXPECT_NEAR(a[k].depth, b[k].depth, 2 * tol) << k;
-    EXPECT_NEAR(a[k].depth, c[k].depth, tol) << k;
-    EXPECT_NEAR(a[k].depth, d[k].depth, tol) << k;
-    EXPECT_NEAR(a[k].depth, e[k].depth, tol) << k;
-    if (f.unique) {
-      EXPECT_LT(angle(turns[k] * a[k].n, b[k].n), kAngleTol) << k;
-      EXPECT_LT(angle(a[k].n, -c[k].n), kAngleTol) << k;
-      EXPECT_LT(angle(a[k].n, d[k].n), kAngleTol) << k;
-      EXPECT_LT(angle(a[k].n, e[k].n), kAngleTol) << k;
-    }
-  }
-  EXPECT_GT(compared, static_cast<int>(base.size()) / 4);
+  test::expect_symmetric(
+      run(base, KernelPath::kSimd),
+      {{run(turned, KernelPath::kSimd), 2, [&](size_t k) { return turns[k]; }},
+       {run(swaps, KernelPath::kSimd), 1, [](size_t) { return Mat3d(-Mat3d::Identity()); }},
+       {run(flip_a, KernelPath::kSimd)},
+       {run(flip_b, KernelPath::kSimd)}},
+      kAngleTol, [&](size_t k) {
+        const Ref f = reference(base[k]);
+        return test::SymmetryLane{kRel * size_of(base[k]), f.depth, f.unique};
+      });
 }
 
 }  // namespace

@@ -56,17 +56,21 @@
 #include <cstdint>
 #include <cstdio>
 #include <cstring>
+#include <limits>
 #include <numeric>
 #include <random>
 #include <vector>
 
 #include "kernels/narrowphase/pair_kernels.h"
+#include "support/cylinder_frame.h"
 #include "support/kernel_checks.h"
 #include "support/leaf_lanes.h"
 #include "support/narrow_reference.h"
 #include "support/random_input.h"
+#include "support/same_answers.h"
 #include "support/shape_geometry.h"
 #include "support/test_support.h"
+#include "support/unique_minimum.h"
 
 namespace impact::kernels {
 namespace {
@@ -80,19 +84,13 @@ constexpr double kRel = 1e-5;       // depth tolerance, of L
 constexpr double kAngleTol = 1e-4;  // rad, where the minimum is unique and conditioned
 constexpr double kValleyNoise = 4e-7;  // of L: twice the worst depth error measured
 
-struct Query {
-  Vec3d p;       // cylinder centre
-  Mat3d R;       // cylinder rotation (column 2 = axis)
-  double rc, h;  // radius, half length
-  Vec3d v[3];    // triangle
+struct Query : test::FlatCylinder {
+  Vec3d v[3];  // triangle
 };
 
 /// The query as the kernel sees it: every input rounded to float.
 Query rounded(Query q) {
-  q.p = test::round_to_float(q.p);
-  q.R = test::round_to_float(q.R);
-  q.rc = test::round_to_float(q.rc);
-  q.h = test::round_to_float(q.h);
+  test::round_cylinder(&q);
   for (Vec3d& v : q.v) v = test::round_to_float(v);
   return q;
 }
@@ -107,9 +105,7 @@ double size_of(const Query& q) {
 }
 
 double coord_ulp(const Query& q) {
-  double m = q.p.cwiseAbs().maxCoeff();
-  for (const Vec3d& v : q.v) m = std::max(m, v.cwiseAbs().maxCoeff());
-  return (m + size_of(q)) * std::ldexp(1.0, -23);
+  return test::coordinate_ulp(size_of(q), {q.p, q.v[0], q.v[1], q.v[2]});
 }
 
 // --- running the kernel -----------------------------------------------------------------------
@@ -119,15 +115,11 @@ test::Leaf cylinder_leaf(const Query& q) {
   return test::posed_leaf(kLeafCylinder, q.p, q.R, Vec3d(q.rc, q.h, 0));
 }
 
-/// Runs `kern` (the kernel under test unless given) on lanes [begin, end) of one bucket.
-std::vector<test::PairResult> run(const std::vector<Query>& qs, KernelPath path, PairKernel kern = nullptr,
-                                  uint32_t begin = 0, uint32_t end = ~0u) {
-  return test::run_queries(
-      kern != nullptr ? kern : pair_kernel(kLeafCylinder, kLeafTriangle), qs, path,
-      [](const Query& q) {
-        return std::pair{cylinder_leaf(q), test::triangle_leaf(q.v[0], q.v[1], q.v[2])};
-      },
-      begin, end);
+/// Runs the kernel under test on one bucket of qs.
+std::vector<test::PairResult> run(const std::vector<Query>& qs, KernelPath path) {
+  return test::run_queries(pair_kernel(kLeafCylinder, kLeafTriangle), qs, path, [](const Query& q) {
+    return std::pair{cylinder_leaf(q), test::triangle_leaf(q.v[0], q.v[1], q.v[2])};
+  });
 }
 
 // --- references -------------------------------------------------------------------------------
@@ -184,33 +176,13 @@ double overlap_along(const Query& q, const Vec3d& n) {
 /// *rise: that least rise.
 bool unique_minimum(const Query& q, const Vec3d& n_ref, double depth, double second, double tol,
                     double* rise) {
-  double best = second;
-  const Vec3d t1 = n_ref.unitOrthogonal(), t2 = n_ref.cross(t1);
-  auto ring = [&](double cone, int count) {
-    double r = 1e300;
-    for (int i = 0; i < count; ++i) {
-      const double a = 2 * M_PI * i / count;
-      r = std::min(r, overlap_along(q, (n_ref + std::tan(cone) * (std::cos(a) * t1 + std::sin(a) * t2))));
-    }
-    return r;
-  };
-  best = std::min(best, ring(0.02, 720));
-  std::vector<Vec3d> axes = {q.R.col(2)};
+  test::GreatCircles circles{{q.R.col(2)}, 3142, 2e-3};
   for (int j = 0; j < 3; ++j) {
     const Vec3d e = q.v[(j + 1) % 3] - q.v[j];
-    if (e.norm() > 0) axes.push_back(e.normalized());
+    if (e.norm() > 0) circles.poles.push_back(e.normalized());
   }
-  for (const Vec3d& ax : axes) {
-    const Vec3d e1 = ax.unitOrthogonal(), e2 = ax.cross(e1);
-    for (int i = 0; i < 3142; ++i) {
-      const double a = 2e-3 * i;
-      const Vec3d n = std::cos(a) * e1 + std::sin(a) * e2;
-      if (angle(n, n_ref) > 0.02) best = std::min(best, overlap_along(q, n));
-    }
-  }
-  if (!(best > depth + 2 * tol)) return false;
-  *rise = ring(3e-3, 96) - depth;
-  return *rise >= 1e-6 * size_of(q);
+  return test::unique_minimum([&](const Vec3d& n) { return overlap_along(q, n); }, n_ref, depth, second, tol,
+                              circles, 1e-6 * size_of(q), rise);
 }
 
 struct Ref {
@@ -268,9 +240,7 @@ void check_all(const std::vector<Query>& qs, const char* what, Stats* out_stats 
       .sd_a = cyl_sd,
       .sd_b = tri_distance,  // unsigned: the triangle has no inside
       .apart = [](const Query& q, const Vec3d& shift) { return triangle_minimum(q, shift); }};
-  const Stats st =
-      test::check_lanes(model, qs, run(qs, KernelPath::kSimd), run(qs, KernelPath::kScalar), what);
-  if (out_stats != nullptr) *out_stats = st;
+  test::check_lanes_on_both_paths(model, qs, run, what, out_stats);
 }
 
 // --- inputs -----------------------------------------------------------------------------------
@@ -300,9 +270,7 @@ Query random_query(std::mt19937& g, double size, double offset, double spread) {
 }
 
 std::vector<Query> random_queries(std::mt19937& g, int n, double size, double offset) {
-  std::vector<Query> qs;
-  for (int i = 0; i < n; ++i) qs.push_back(random_query(g, size, offset, 0.8));
-  return qs;
+  return test::draw_cases(n, [&](int) { return random_query(g, size, offset, 0.8); });
 }
 
 /// A query in the cylinder's frame (centre 0, axis z) posed by a random rotation and
@@ -329,7 +297,8 @@ Query aligned(const Vec3d& p, const Vec3d& v0, const Vec3d& v1, const Vec3d& v2,
 
 // ---------------------------------------------------------------------------------------------
 
-/// The references against closed forms (the point distance; a triangle on a cap, beside
+/// The references against closed forms (the point distance: reference_self_test; a
+/// triangle on a cap, beside
 /// the side, off a rim, through the middle) and against each other (nref's sampled
 /// minimum against the golden-section distance on separated lanes).
 TEST(CylinderTriangle, ReferenceMatchesClosedForms) {
@@ -337,9 +306,6 @@ TEST(CylinderTriangle, ReferenceMatchesClosedForms) {
   q.p = Vec3d(1, 2, 3);
   q.R = Mat3d::Identity();
   q.rc = 1.0, q.h = 2.0;
-  EXPECT_NEAR(cyl_sd(q, q.p + Vec3d(3, 0, 0)), 2.0, 1e-15);
-  EXPECT_NEAR(cyl_sd(q, q.p + Vec3d(0, 4, 6)), 5.0, 1e-15);  // rim (0, 1, 2): (3, 4)
-  EXPECT_NEAR(cyl_sd(q, q.p + Vec3d(0, 0, 1.9)), -0.1, 1e-15);
   struct Case {
     Vec3d v0, v1, v2;
     double depth;
@@ -485,35 +451,25 @@ TEST(CylinderTriangle, AnalyticCases) {
     {
       Query q = aligned(p, Vec3d(-10, -10, -rc + d), Vec3d(10, -10, -rc + d), Vec3d(0, 10, -rc + d), rc, h);
       q.R << 0, 0, 1, 0, 1, 0, -1, 0, 0;  // column 2 = +x
-      const auto r = run({q}, path)[0];
-      ASSERT_EQ(r.count, 2u);
-      EXPECT_LT(angle(r.n, Vec3d(0, 0, -1)), 1e-6);
-      EXPECT_NEAR(r.depth, d, 1e-6);
-      const double x0 = std::min(r.pt[0].x(), r.pt[1].x()) - p.x(),
-                   x1 = std::max(r.pt[0].x(), r.pt[1].x()) - p.x();
-      EXPECT_NEAR(x0, -h, 1e-6);
-      EXPECT_NEAR(x1, h, 1e-6);
-      for (int i = 0; i < 2; ++i) {
-        EXPECT_NEAR(r.pt[i].z() - p.z(), -rc + d / 2, 1e-6);
-        EXPECT_NEAR(r.pt[i].y() - p.y(), 0.0, 1e-6);
-        EXPECT_NEAR(r.pd[i], d, 1e-6);
-      }
+      test::expect_line_contact(run({q}, path)[0], {.n = Vec3d(0, 0, -1),
+                                                    .d = d,
+                                                    .origin = p,
+                                                    .axis = 0,
+                                                    .lo = -h,
+                                                    .hi = h,
+                                                    .at = Vec3d(0, 0.0, -rc + d / 2)});
     }
     // an edge along the side, d inside, z in [-0.5, 2.5] -> clipped to [-0.5, h]
     {
       const Query q = aligned(p, Vec3d(rc - d, 0, -0.5), Vec3d(rc - d, 0, 2.5), Vec3d(rc + 3, 0, 1.0), rc, h);
-      const auto r = run({q}, path)[0];
-      ASSERT_EQ(r.count, 2u);
-      EXPECT_LT(angle(r.n, Vec3d(1, 0, 0)), 1e-6);
-      EXPECT_NEAR(r.depth, d, 1e-6);
-      const double z0 = std::min(r.pt[0].z(), r.pt[1].z()) - p.z(),
-                   z1 = std::max(r.pt[0].z(), r.pt[1].z()) - p.z();
-      EXPECT_NEAR(z0, -0.5, 1e-6);
-      EXPECT_NEAR(z1, h, 1e-6);
-      for (int i = 0; i < 2; ++i) {
-        EXPECT_NEAR(r.pt[i].x() - p.x(), rc - d / 2, 1e-6);
-        EXPECT_NEAR(r.pd[i], d, 1e-6);
-      }
+      const double unchecked = std::numeric_limits<double>::quiet_NaN();
+      test::expect_line_contact(run({q}, path)[0], {.n = Vec3d(1, 0, 0),
+                                                    .d = d,
+                                                    .origin = p,
+                                                    .axis = 2,
+                                                    .lo = -0.5,
+                                                    .hi = h,
+                                                    .at = Vec3d(rc - d / 2, unchecked, unchecked)});
     }
     // a vertex into the top cap, the triangle leaning out: 1 point
     {
@@ -528,15 +484,14 @@ TEST(CylinderTriangle, AnalyticCases) {
     // crossings x = +-sqrt(rc^2 - 0.25^2)
     {
       const Query q = aligned(p, Vec3d(-2, 0.25, h - d), Vec3d(2, 0.25, h - d), Vec3d(0, 3, h + 5), rc, h);
-      const auto r = run({q}, path)[0];
-      ASSERT_EQ(r.count, 2u);
-      EXPECT_LT(angle(r.n, Vec3d(0, 0, 1)), 1e-6);
-      EXPECT_NEAR(r.depth, d, 1e-6);
       const double xc = std::sqrt(rc * rc - 0.25 * 0.25);
-      const double x0 = std::min(r.pt[0].x(), r.pt[1].x()) - p.x(),
-                   x1 = std::max(r.pt[0].x(), r.pt[1].x()) - p.x();
-      EXPECT_NEAR(x0, -xc, 1e-6);
-      EXPECT_NEAR(x1, xc, 1e-6);
+      test::expect_line_contact(run({q}, path)[0], {.n = Vec3d(0, 0, 1),
+                                                    .d = d,
+                                                    .origin = p,
+                                                    .axis = 0,
+                                                    .lo = -xc,
+                                                    .hi = xc,
+                                                    .points_carry_depth = false});
     }
     // an edge across the side (horizontal, along y, d inside), the triangle in the plane
     // z = 0 reaching out: n = +x, one point
@@ -656,13 +611,12 @@ TEST(CylinderTriangle, DegenerateTriangles) {
 /// minus the capsule's radius, the normal reversed: A and B swap).
 TEST(CylinderTriangle, SliverIsCapsuleCylinder) {
   std::mt19937 g(47);
-  std::vector<Query> qs;
-  for (int i = 0; i < static_cast<int>(test::scaled(200)); ++i) {
+  const std::vector<Query> qs = test::draw_cases(static_cast<int>(test::scaled(200)), [&](int) {
     Query q = random_query(g, 1.0, 0.0, 0.6);
     const Vec3d a = q.v[0], b = q.v[1], perp = (b - a).cross(test::random_unit_vector(g)).normalized();
     q.v[2] = test::round_to_float(Vec3d(0.5 * (a + b) + 1e-7 * (b - a).norm() * perp));
-    qs.push_back(q);
-  }
+    return q;
+  });
   const auto mine = run(qs, KernelPath::kSimd);
   // capsule lanes: core v0 .. v1, radius r
   const double r = 1e-6;
@@ -692,20 +646,17 @@ TEST(CylinderTriangle, SliverIsCapsuleCylinder) {
 /// larger size.
 TEST(CylinderTriangle, NeedlesAndPancakes) {
   std::mt19937 g(53);
-  std::vector<Query> qs;
   const int n = static_cast<int>(test::scaled(40));
-  for (int i = 0; i < n; ++i) {
+  const std::vector<Query> qs = test::draw_cases(n, [&](int i) {
     Query q = random_query(g, 1.0, 0.0, 0.5);
     if (i % 2 == 0) {
       q.rc = test::round_to_float(1e-4 * q.h);  // needle
     } else {
       q.h = test::round_to_float(1e-4 * q.rc);  // pancake (a disk)
     }
-    qs.push_back(q);
-  }
-  Stats st;
-  check_all(qs, "needle / pancake", &st);
-  EXPECT_GT(st.hits, n / 5);
+    return q;
+  });
+  test::expect_thin_pairs_meet(qs, check_all);
 }
 
 /// Symmetries: the vertex order (cyclic and reversed) changes nothing; the half-turn
@@ -734,32 +685,20 @@ TEST(CylinderTriangle, Symmetries) {
     for (int j = 0; j < 3; ++j) t.v[j] = test::round_to_float(Vec3d(turn * q.v[j]));
     turned.push_back(t);
   }
-  const auto a = run(base, KernelPath::kSimd), b = run(cyc, KernelPath::kSimd),
-             c = run(rev, KernelPath::kSimd), d = run(flipped, KernelPath::kSimd),
-             e = run(turned, KernelPath::kSimd);
-  int compared = 0;
-  for (size_t k = 0; k < base.size(); ++k) {
-    const Ref f = reference(base[k]);
-    const double tol = kRel * size_of(base[k]);
-    if (std::fabs(f.depth) <= 4 * tol) continue;
-    for (const auto* other : {&b, &c, &d, &e}) ASSERT_EQ(a[k].count > 0, (*other)[k].count > 0) << k;
-    if (a[k].count == 0) continue;
-    ++compared;
-    const Mat3d flip =
-        base[k].R * Eigen::AngleAxisd(M_PI, Vec3d::UnitX()).toRotationMatrix() * base[k].R.transpose();
-    const Mat3d turn = turned[k].R * base[k].R.transpose();
-    EXPECT_NEAR(a[k].depth, b[k].depth, tol) << k;
-    EXPECT_NEAR(a[k].depth, c[k].depth, tol) << k;
-    EXPECT_NEAR(a[k].depth, d[k].depth, 2 * tol) << k;
-    EXPECT_NEAR(a[k].depth, e[k].depth, 2 * tol) << k;
-    if (f.unique) {
-      EXPECT_LT(angle(a[k].n, b[k].n), kAngleTol) << k;
-      EXPECT_LT(angle(a[k].n, c[k].n), kAngleTol) << k;
-      EXPECT_LT(angle(flip * a[k].n, d[k].n), kAngleTol) << k;
-      EXPECT_LT(angle(turn * a[k].n, e[k].n), kAngleTol) << k;
-    }
-  }
-  EXPECT_GT(compared, static_cast<int>(base.size()) / 4);
+  const auto flip = [&](size_t k) {
+    return Mat3d(base[k].R * Eigen::AngleAxisd(M_PI, Vec3d::UnitX()).toRotationMatrix() *
+                 base[k].R.transpose());
+  };
+  test::expect_symmetric(run(base, KernelPath::kSimd),
+                         {{run(cyc, KernelPath::kSimd)},
+                          {run(rev, KernelPath::kSimd)},
+                          {run(flipped, KernelPath::kSimd), 2, flip},
+                          {run(turned, KernelPath::kSimd), 2,
+                           [&](size_t k) { return Mat3d(turned[k].R * base[k].R.transpose()); }}},
+                         kAngleTol, [&](size_t k) {
+                           const Ref f = reference(base[k]);
+                           return test::SymmetryLane{kRel * size_of(base[k]), f.depth, f.unique};
+                         });
 }
 
 }  // namespace

@@ -10,9 +10,12 @@
 //     ternary search, a third method), where the core segments do not intersect;
 //   - signed distance of points to cylinders, hulls (a cube) and ellipsoids (spheres,
 //     minor-axis points) by the general support-based route vs closed forms;
+//   - the closed-form point distances the per-kernel tests use (tests/support/
+//     shape_geometry.h: cylinder_sd, cylinder_closest, box_sd) at known points;
 //   - the translation identity: B moved by s*n touches (s' ~ 0).
 #include <gtest/gtest.h>
 
+#include <Eigen/Core>
 #include <cmath>
 #include <cstdio>
 #include <random>
@@ -20,6 +23,7 @@
 
 #include "support/narrow_reference.h"
 #include "support/random_input.h"
+#include "support/shape_geometry.h"
 #include "support/test_support.h"
 
 namespace impact::test {
@@ -317,6 +321,39 @@ TEST(NarrowReference, PointDistancesThroughSupport) {
   wc.print("point-cylinder distance");
   wh.print("point-hull distance (no hints)");
   we.print("point-ellipsoid distance");
+}
+
+// shape_geometry.h's cylinder and box distances (the per-kernel tests' own references
+// are built on them) at points whose distance is known: outside a face, a side, a rim,
+// a corner; inside; on the surface; turned.
+TEST(ShapeGeometry, CylinderAndBoxDistancesAtKnownPoints) {
+  using Eigen::Matrix3d, Eigen::Vector3d;
+  const Vector3d p(1, 2, 3);
+  const Matrix3d I = Matrix3d::Identity();
+  const auto cyl_sd = [&](const Matrix3d& R, const Vector3d& x) { return cylinder_sd(p, R, 1.0, 2.0, x); };
+  EXPECT_NEAR(cyl_sd(I, p + Vector3d(3, 0, 0)), 2.0, 1e-15);
+  EXPECT_NEAR(cyl_sd(I, p + Vector3d(0, 0, 2.5)), 0.5, 1e-15);
+  EXPECT_NEAR(cyl_sd(I, p + Vector3d(0, 4, 6)), 5.0, 1e-15);  // rim (0, 1, 2): (3, 4)
+  EXPECT_NEAR(cyl_sd(I, p + Vector3d(0.5, 0, 0)), -0.5, 1e-15);
+  EXPECT_NEAR(cyl_sd(I, p + Vector3d(0, 0, 1.9)), -0.1, 1e-15);
+  EXPECT_NEAR(cyl_sd(I, p + Vector3d(0.6, 0.8, -2)), 0.0, 1e-15);
+  {
+    const Matrix3d R = rot(0.7, Vector3d(1, 2, 3));
+    EXPECT_NEAR(cyl_sd(R, p + R * Vector3d(0, 1.25, 2.5)), std::hypot(0.25, 0.5), 1e-14);
+    EXPECT_LT((cylinder_closest(p, R, 1.0, 2.0, p + R * Vector3d(0, 1.25, 2.5)) - (p + R * Vector3d(0, 1, 2)))
+                  .norm(),
+              1e-14);
+  }
+  const Vector3d c(-1, 0.5, 2), e(0.5, 1, 2);
+  EXPECT_NEAR(box_sd(c, I, e, c + Vector3d(1.5, 0, 0)), 1.0, 1e-15);
+  EXPECT_NEAR(box_sd(c, I, e, c + Vector3d(1.5, 2, 0)), std::sqrt(2.0), 1e-15);
+  EXPECT_NEAR(box_sd(c, I, e, c + Vector3d(-1.5, -4, 6)), std::sqrt(1 + 9 + 16.0), 1e-14);
+  EXPECT_NEAR(box_sd(c, I, e, c + Vector3d(0.25, 0, 0)), -0.25, 1e-15);
+  EXPECT_NEAR(box_sd(c, I, e, c + Vector3d(0.5, 1, 2)), 0.0, 1e-15);
+  {
+    const Matrix3d turn = rot(0.7, Vector3d(1, 2, 3));
+    EXPECT_NEAR(box_sd(c, turn, e, c + turn * Vector3d(0.5, -1.25, 2.5)), std::hypot(0.25, 0.5), 1e-14);
+  }
 }
 
 // Needle and pancake boxes (aspect 1e4) and deep penetration: sphere-box through the

@@ -71,14 +71,11 @@ struct Pair {
 
 /// The sphere and the hull of a lane.
 std::pair<test::Leaf, test::Leaf> leaves(const Pair& q) {
-  test::Leaf a, b;
-  a.t = k::kLeafSphere, b.t = k::kLeafConvex;
+  test::Leaf a;
+  a.t = k::kLeafSphere;
   std::copy(q.c, q.c + 3, a.p);
   a.e[0] = q.r;
-  std::copy(q.p, q.p + 3, b.p);
-  std::copy(q.R, q.R + 9, b.r);
-  b.ref = q.hull;
-  return {a, b};
+  return {a, hull_leaf(q)};
 }
 
 struct Bucket : test::BucketLanes {
@@ -87,13 +84,6 @@ struct Bucket : test::BucketLanes {
 
 ManifoldLanes run_kernel(k::PairKernel kern, const Bucket& bk, const k::HullView& hv, k::KernelPath path) {
   return bk.run(kern, hv, path);
-}
-
-ManifoldLanes run_gjk(const Bucket& bk, const k::HullView& hv) {
-  return bk.run(
-      [](const k::LeafSoA& a, const k::LeafSoA& b, const k::ManifoldSoA& o, k::Range r,
-         const k::NarrowConfig& cfg) { k::collide_gjk_epa(a, b, o, r, cfg, k::kLeafSphere, k::kLeafConvex); },
-      hv, k::KernelPath::kSimd);
 }
 
 // --- the reference ---------------------------------------------------------------------------
@@ -199,7 +189,7 @@ Stats check_pairs(const std::string& name, const std::vector<Pair>& pairs, const
   EXPECT_EQ(kern, &k::collide_sphere_convex);
   const ManifoldLanes simd = run_kernel(kern, bk, hv, k::KernelPath::kSimd);
   const ManifoldLanes scalar = run_kernel(kern, bk, hv, k::KernelPath::kScalar);
-  const ManifoldLanes gjk = run_gjk(bk, hulls.store.view());
+  const ManifoldLanes gjk = run_gjk_epa<k::kLeafSphere>(bk, hulls.store.view());
   int failures = 0;
   for (uint32_t i = 0; i < bk.n && failures < 10; ++i) {
     const Pair& q = pairs[i];
@@ -270,58 +260,49 @@ Stats check_pairs(const std::string& name, const std::vector<Pair>& pairs, const
 
 Pair make_pair(D3 c, double r, D3 p, const float R[9], uint32_t hull) {
   Pair q;
-  q.c[0] = static_cast<float>(c.x), q.c[1] = static_cast<float>(c.y), q.c[2] = static_cast<float>(c.z);
+  store_float(c, q.c);
   q.r = static_cast<float>(r);
-  q.p[0] = static_cast<float>(p.x), q.p[1] = static_cast<float>(p.y), q.p[2] = static_cast<float>(p.z);
+  store_float(p, q.p);
   std::copy(R, R + 9, q.R);
   q.hull = hull;
   return q;
 }
 
-/// World position of local point l under pair q's hull pose.
 /// Random lanes around the hulls [h0, h1) of size ~scale at distance ~offset from the
 /// origin: centres uniform in a box, near vertices, near edges and near faces.
 std::vector<Pair> random_pairs(Rng& g, const Hulls& hulls, uint32_t h0, uint32_t h1, uint32_t n, double scale,
                                double offset) {
-  std::vector<Pair> out;
-  for (uint32_t i = 0; i < n; ++i) {
+  return draw_cases(static_cast<int>(n), [&](int) {
     Pair q;
-    q.hull = h0 + static_cast<uint32_t>(g() % (h1 - h0));
-    random_rotation(g, q.R);
-    const D3 p =
-        offset * random_unit(g) + D3{uni(g, -scale, scale), uni(g, -scale, scale), uni(g, -scale, scale)};
-    q.p[0] = static_cast<float>(p.x), q.p[1] = static_cast<float>(p.y), q.p[2] = static_cast<float>(p.z);
+    random_hull_and_rotation(g, h0, h1, &q);
+    random_hull_position(g, scale, offset, q.p);
     q.r = static_cast<float>(scale * uni(g, 0.05, 1.0));
     const HullData& h = hulls.data[q.hull];
     const D3 c = point_near_hull(g, h, q, scale, q.r, 1.5);
-    q.c[0] = static_cast<float>(c.x), q.c[1] = static_cast<float>(c.y), q.c[2] = static_cast<float>(c.z);
-    out.push_back(q);
-  }
-  return out;
+    store_float(c, q.c);
+    return q;
+  });
+}
+
+/// check_pairs on the store's own hull view.
+Stats check_all_pairs(const std::string& name, const std::vector<Pair>& pairs, const Hulls& hulls) {
+  return check_pairs(name, pairs, hulls);
 }
 
 // --- tests ------------------------------------------------------------------------------------
 
 TEST(SphereConvex, RandomPosesAgreeWithReference) {
-  Rng g(12345);
-  Hulls hulls;
-  add_random_hulls(g, &hulls, 24, 1.0);
-  const auto pairs = random_pairs(g, hulls, 0, 24, scaled(3000), 1.0, 10.0);
-  const Stats st = check_pairs("random", pairs, hulls);
+  size_t n = 0;
+  const Stats st = check_random_suite(random_pairs, check_all_pairs, &n);
   // The scenario must exercise every branch: misses, hits outside and inside.
-  EXPECT_GT(st.misses, pairs.size() / 10);
-  EXPECT_GT(st.hits - st.inside, pairs.size() / 10);
-  EXPECT_GT(st.inside, pairs.size() / 20);
+  EXPECT_GT(st.misses, n / 10);
+  EXPECT_GT(st.hits - st.inside, n / 10);
+  EXPECT_GT(st.inside, n / 20);
   RecordProperty("worst_depth_rel", std::to_string(st.worst_depth));
 }
 
 TEST(SphereConvex, TinyHugeFarAndManyFaceHulls) {
-  check_scale_suites([](Rng& g, const Hulls& h, uint32_t hulls, uint32_t n, double scale,
-                        double offset) { return random_pairs(g, h, 0, hulls, scaled(n), scale, offset); },
-                     [](const std::string& what, const std::vector<Pair>& pairs, const Hulls& h) {
-                       return check_pairs(what, pairs, h);
-                     },
-                     600u, 100u, 50u);
+  check_scale_suites(random_pairs, check_all_pairs, 600u, 100u, 50u);
 }
 
 TEST(SphereConvex, WithoutEdgeAdjacency) {
@@ -402,7 +383,7 @@ TEST(SphereConvex, RandomHullFeatures) {
       q.hull = hi;
       random_rotation(g, q.R);
       const D3 p = D3{uni(g, -5, 5), uni(g, -5, 5), uni(g, -5, 5)};
-      q.p[0] = static_cast<float>(p.x), q.p[1] = static_cast<float>(p.y), q.p[2] = static_cast<float>(p.z);
+      store_float(p, q.p);
       q.r = static_cast<float>(uni(g, 0.05, 1.0));
       const auto& f = h.faces[g() % h.faces.size()];
       D3 c;
@@ -424,7 +405,7 @@ TEST(SphereConvex, RandomHullFeatures) {
           break;
         }
       }
-      q.c[0] = static_cast<float>(c.x), q.c[1] = static_cast<float>(c.y), q.c[2] = static_cast<float>(c.z);
+      store_float(c, q.c);
       pairs.push_back(q);
     }
   }
@@ -438,12 +419,8 @@ TEST(SphereConvex, NearlyCoplanarFaces) {
   // by ~1e-7 rad, the size of the float rounding of the plane distances. The deepest
   // plane in float is then often the wrong triangle of the pair, while the closest
   // point lies inside the other (not on the ridge): the near-tie faces must be tried.
-  std::vector<Eigen::Vector3f> v = box_corners(1.0f, 1.0f, 1.0f);
-  v[7].z() = 1.0f + 0x1p-22f;
   Hulls hulls;
-  hulls.data.push_back(hull_from_polygons(
-      v, {{0, 1, 3, 2}, {0, 2, 6, 4}, {1, 3, 7, 5}, {0, 1, 5, 4}, {2, 3, 7, 6}, {4, 5, 7}, {4, 7, 6}}));
-  hulls.store.add(hulls.data.back());
+  add_nearly_coplanar_cube(&hulls);
   Rng g(8);
   std::vector<Pair> pairs;
   const float I[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1};

@@ -220,7 +220,7 @@ void check_all(const std::vector<Query>& qs, const char* what, Stats* st_out = n
       EXPECT_NEAR(h.n.norm(), 1.0, 1e-6);
       // (d) the point, half the depth from each surface
       const double slack = tol + coord_ulp(q);
-      const Vec3d on_a = h.pt[0] + h.n * (0.5 * h.depth), on_b = h.pt[0] - h.n * (0.5 * h.depth);
+      const auto [on_a, on_b] = test::contact_sides(h);
       EXPECT_NEAR((on_a - q.c).norm(), q.r, slack) << what << " lane " << k;
       EXPECT_NEAR(signed_distance(q.b, on_b), 0.0, slack) << what << " lane " << k;
     }
