@@ -15,7 +15,9 @@ namespace impact::host {
 namespace {
 
 constexpr uint32_t kBodyGrain = 1u << 13;       // bodies per chunk
-constexpr uint32_t kConstraintGrain = 1u << 9;  // constraints per chunk of a colour
+constexpr uint32_t kConstraintGrain = 1u << 9;  // constraint slots per chunk (whole blocks)
+constexpr uint32_t kBlockGrain = kConstraintGrain / kernels::kContactLanes;  // blocks per chunk of a colour
+static_assert(kConstraintGrain % kernels::kContactLanes == 0);
 constexpr uint32_t kPointGrain = 1u << 13;      // points or keys per chunk
 
 kernels::SoftBodyInput body_input(BodyStore& s, const WorldDesc& desc, kernels::BodyForces* forces,
@@ -47,17 +49,20 @@ kernels::SoftBodyInput body_input(BodyStore& s, const WorldDesc& desc, kernels::
 
 }  // namespace
 
-template <class Fn>
-void SoftStepSolver::for_each_colour(const Executor& exec, Fn&& fn) const {
+template <class Wide, class Serial>
+void SoftStepSolver::for_each_colour(const Executor& exec, Wide&& wide, Serial&& serial) const {
+  constexpr uint32_t W = kernels::kContactLanes;
   for (uint32_t k = 0; k < kernels::kColourCount; ++k) {
-    const uint32_t b = colour_start_[k], e = colour_start_[k + 1];
+    // Whole blocks: the colour's slots start at a multiple of W and are padded to one.
+    const uint32_t b = colour_start_[k] / W, e = b + kernels::contact_blocks(colour_count_[k]);
     if (b == e) continue;
-    exec.for_each_chunk(e - b, kConstraintGrain, [&](uint32_t cb, uint32_t ce, uint32_t) {
-      fn(kernels::Range{b + cb, b + ce});
+    exec.for_each_chunk(e - b, kBlockGrain, [&](uint32_t cb, uint32_t ce, uint32_t) {
+      wide(kernels::Range{b + cb, b + ce});
     });
   }
-  const uint32_t ob = colour_start_[kernels::kOverflowColour], oe = colour_start_[kernels::kOverflowColour + 1];
-  if (ob != oe) fn(kernels::Range{ob, oe});  // in order, on this thread
+  const uint32_t ob = colour_start_[kernels::kOverflowColour];
+  const uint32_t oe = ob + colour_count_[kernels::kOverflowColour];
+  if (ob != oe) serial(kernels::Range{ob, oe});  // slot by slot in order, on this thread
 }
 
 void SoftStepSolver::gather_deep(const kernels::ContactManifoldArrays& c, uint32_t manifolds, float deep_depth) {
@@ -114,6 +119,7 @@ void SoftStepSolver::step(const Executor& exec, const WorldDesc& desc, const Con
   // The deep manifolds also go to the recovery velocity solve now, before the bodies'
   // velocities are read.
   deep_.clear();
+  uint32_t slots = 0;
   const float deep_depth = sd.max_push_speed * dt;
   if (nm > 0) {
     uint32_t* masks = scratch(body_masks_, n);
@@ -121,20 +127,18 @@ void SoftStepSolver::step(const Executor& exec, const WorldDesc& desc, const Con
     uint8_t* colour = scratch(colour_, nm);
     uint32_t counts[kernels::kOverflowColour + 1];
     kernels::colour_manifolds(c, s.inv_mass.data(), nm, masks, colour, counts);
+    // Slots: each colour padded to whole blocks (padding slots: kNoConstraint).
     uint32_t next[kernels::kOverflowColour + 1];
     colour_start_[0] = 0;
     for (uint32_t k = 0; k <= kernels::kOverflowColour; ++k) {
       next[k] = colour_start_[k];
-      colour_start_[k + 1] = colour_start_[k] + counts[k];
+      colour_count_[k] = counts[k];
+      colour_start_[k + 1] = colour_start_[k] + kernels::contact_blocks(counts[k]) * kernels::kContactLanes;
     }
-    uint32_t* order = scratch(order_, nm);
+    slots = colour_start_[kernels::kOverflowColour + 1];
+    uint32_t* order = scratch(order_, slots);
+    for (uint32_t i = 0; i < slots; ++i) order[i] = kernels::kNoConstraint;
     for (uint32_t m = 0; m < nm; ++m) order[next[colour[m]]++] = m;
-    uint32_t* first = scratch(first_, nm);
-    uint32_t run = 0;
-    for (uint32_t i = 0; i < nm; ++i) {
-      first[i] = run;
-      run += c.count[order[i]];
-    }
     gather_deep(c, nm, deep_depth);
     if (deep_.manifolds > 0)
       recovery_.solve_velocities(exec, sd, deep_, s, planes.restitution.data());
@@ -157,8 +161,7 @@ void SoftStepSolver::step(const Executor& exec, const WorldDesc& desc, const Con
   bodies[n] = kernels::SolverBody{};
   bodies[n].dq = {0.0f, 0.0f, 0.0f, 1.0f};
 
-  kernels::ContactConstraint* cons = nullptr;
-  kernels::ContactPoint* pts = nullptr;
+  kernels::ContactBlock* blocks = nullptr;
   if (nm > 0) {
     // Last step's impulses of the same contacts (a, b, plane, feature).
     uint64_t* keys = scratch(keys_, np);
@@ -177,12 +180,10 @@ void SoftStepSolver::step(const Executor& exec, const WorldDesc& desc, const Con
     }
     const kernels::ContactMaterials mat{s.friction.data(), s.restitution.data(), s.rolling.data(),
                                         planes.friction.data(), planes.restitution.data()};
-    cons = scratch(cons_, nm);
-    pts = scratch(points_, np);
+    blocks = scratch(blocks_, slots / kernels::kContactLanes);
     const uint32_t* order = order_.data();
-    const uint32_t* first = first_.data();
-    exec.for_each_chunk(nm, kConstraintGrain, [&](uint32_t b, uint32_t e, uint32_t) {
-      kernels::prepare_contacts(p, c, order, first, bodies, ii, com, n, mat, warm, cons, pts, {b, e});
+    exec.for_each_chunk(slots, kConstraintGrain, [&](uint32_t b, uint32_t e, uint32_t) {
+      kernels::prepare_contacts(p, c, order, bodies, ii, com, n, mat, warm, blocks, {b, e});
     });
   }
 
@@ -191,25 +192,33 @@ void SoftStepSolver::step(const Executor& exec, const WorldDesc& desc, const Con
       kernels::integrate_substep_velocities(drive, bodies, {b, e});
     });
     if (nm > 0) {
-      for_each_colour(exec, [&](kernels::Range r) { kernels::warm_start_contacts(cons, pts, bodies, r); });
-      for_each_colour(exec, [&](kernels::Range r) { kernels::solve_contacts(p, true, cons, pts, bodies, r); });
+      for_each_colour(
+          exec, [&](kernels::Range r) { kernels::warm_start_contacts(blocks, bodies, r); },
+          [&](kernels::Range r) { kernels::warm_start_contacts_serial(blocks, bodies, r); });
+      for_each_colour(
+          exec, [&](kernels::Range r) { kernels::solve_contacts(p, true, blocks, bodies, r); },
+          [&](kernels::Range r) { kernels::solve_contacts_serial(p, true, blocks, bodies, r); });
     }
     exec.for_each_chunk(n, kBodyGrain, [&](uint32_t b, uint32_t e, uint32_t) {
       kernels::integrate_substep_positions(p.h, gyro, bodies, {b, e});
     });
     if (nm > 0)
-      for_each_colour(exec, [&](kernels::Range r) { kernels::solve_contacts(p, false, cons, pts, bodies, r); });
+      for_each_colour(
+          exec, [&](kernels::Range r) { kernels::solve_contacts(p, false, blocks, bodies, r); },
+          [&](kernels::Range r) { kernels::solve_contacts_serial(p, false, blocks, bodies, r); });
   }
 
   if (nm > 0) {
-    for_each_colour(exec, [&](kernels::Range r) { kernels::restitute_contacts(p, cons, pts, bodies, r); });
+    for_each_colour(
+        exec, [&](kernels::Range r) { kernels::restitute_contacts(p, blocks, bodies, r); },
+        [&](kernels::Range r) { kernels::restitute_contacts_serial(p, blocks, bodies, r); });
     // Keep (key, values) for the next step's warm start; the public impulses (a deep
     // point's adds the recovery solve's).
     kernels::WarmPoint* stored = scratch(stored_, np);
     float* out = scratch(impulse_out_, np);
     const uint32_t* order = order_.data();
-    exec.for_each_chunk(nm, kConstraintGrain, [&](uint32_t b, uint32_t e, uint32_t) {
-      kernels::store_contacts(c, order, cons, pts, stored, out, {b, e});
+    exec.for_each_chunk(slots, kConstraintGrain, [&](uint32_t b, uint32_t e, uint32_t) {
+      kernels::store_contacts(c, order, blocks, stored, out, {b, e});
     });
     if (deep_.manifolds > 0) {
       const std::span<const float> deep_impulse = recovery_.impulses();

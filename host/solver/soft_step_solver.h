@@ -21,6 +21,12 @@
 // contacts during the substeps: they sank deeper, docs/solver.md.) A scene without
 // deep manifolds pays one comparison per manifold for it.
 //
+// Constraints sit in slots in colour order, each colour padded to whole blocks of
+// kernels::kContactLanes (kernels/solver/soft_contact.h): a colour's passes run its
+// blocks in parallel chunks of whole blocks (one constraint a SIMD lane), so block and
+// chunk boundaries depend only on the colour counts; the overflow colour runs slot by
+// slot, in order, on the calling thread.
+//
 // Cost: O(bodies) per substep for integration, O(points) per pass, 3 passes a
 // substep (warm start, solve, relax), one parallel loop per colour and pass; the
 // colouring, the overflow colour and the copy of the deep manifolds are serial.
@@ -64,8 +70,10 @@ class SoftStepSolver {
   std::span<const float> impulses() const { return {impulse_out_.data(), impulse_out_.size()}; }
 
  private:
-  template <class Fn>
-  void for_each_colour(const Executor& exec, Fn&& fn) const;
+  // wide(blocks) over each colour's blocks in chunks (whole blocks, in parallel), colour
+  // after colour, then serial(slots) over the overflow colour on this thread.
+  template <class Wide, class Serial>
+  void for_each_colour(const Executor& exec, Wide&& wide, Serial&& serial) const;
   // Copies the manifolds deeper than deep_depth into deep_ (rows into deep_rows_).
   void gather_deep(const kernels::ContactManifoldArrays& c, uint32_t manifolds, float deep_depth);
 
@@ -77,9 +85,8 @@ class SoftStepSolver {
   Buffer<kernels::GyroBody> gyro_;             // when rotating bodies take the gyroscopic term
   Buffer<uint32_t> body_masks_;
   Buffer<uint8_t> colour_;
-  Buffer<uint32_t> order_, first_;             // constraint -> manifold, first point
-  Buffer<kernels::ContactConstraint> cons_;
-  Buffer<kernels::ContactPoint> points_;
+  Buffer<uint32_t> order_;                     // constraint slot -> manifold (kNoConstraint: padding)
+  Buffer<kernels::ContactBlock> blocks_;       // the constraints, kContactLanes a block
   Buffer<uint64_t> keys_;                      // this step's point keys
   Buffer<kernels::WarmPoint> warm_;            // matched last-step values per point row
   Buffer<kernels::WarmPoint> stored_;          // this step's values per point row
@@ -92,7 +99,8 @@ class SoftStepSolver {
   Buffer<uint32_t> deep_rows_;                 // their points' rows in the step's manifolds
   ContactSolver recovery_;                     // the Jacobi solver, on deep_ only
   uint32_t prev_count_ = 0, prev_body_count_ = 0;
-  uint32_t colour_start_[kernels::kOverflowColour + 2] = {};
+  uint32_t colour_start_[kernels::kOverflowColour + 2] = {};  // first slot per colour (block aligned)
+  uint32_t colour_count_[kernels::kOverflowColour + 1] = {};  // constraints per colour
 };
 
 }  // namespace impact::host

@@ -17,6 +17,7 @@
 //              (the inverse of compacting a block's live lanes; float, or int32 to uint8);
 //              compact_store<N>(dst, int lanes, bits): the set lanes to dst[0, 1, ..];
 //              load_transposed(N row pointers): N rows of N floats, one per lane;
+//              store_transposed(N row pointers, bits): its inverse, for the set lanes only;
 //              gather4(records, stride, index array): 4 floats of each lane's record
 //              (16-byte loads and a transpose, no gather); gather_xyz: the first three
 //              of 4-float records;
@@ -614,6 +615,46 @@ IMPACT_INLINE void load_transposed(const float* const* rows, FloatN<N>* out) {
     for (uint32_t i = 0; i < N; ++i) out[j].v[i] = rows[i][j];
 }
 
+/// The inverse of load_transposed for the rows whose bit is set in `bits`: rows[i][j] =
+/// lane i of in[j] for i, j < N where bit i is set; rows with a clear bit are not
+/// touched (not even rewritten with their own values, so a row shared by several lanes
+/// or threads, read-only to them, is never written). The per-lane scatter of short
+/// records (a constraint's bodies) after a wide update.
+template <uint32_t N>
+IMPACT_INLINE void store_transposed(float* const* rows, const FloatN<N>* in, uint32_t bits) {
+#if defined(__AVX__)
+  if constexpr (N == 8) {
+    __m256 r[8];
+    for (int j = 0; j < 8; ++j) r[j] = reinterpret_cast<__m256>(in[j].v);
+    // The 8 x 8 transpose is its own inverse: the network of load_transposed.
+    const __m256 t0 = _mm256_unpacklo_ps(r[0], r[1]), t1 = _mm256_unpackhi_ps(r[0], r[1]);
+    const __m256 t2 = _mm256_unpacklo_ps(r[2], r[3]), t3 = _mm256_unpackhi_ps(r[2], r[3]);
+    const __m256 t4 = _mm256_unpacklo_ps(r[4], r[5]), t5 = _mm256_unpackhi_ps(r[4], r[5]);
+    const __m256 t6 = _mm256_unpacklo_ps(r[6], r[7]), t7 = _mm256_unpackhi_ps(r[6], r[7]);
+    const __m256 s0 = _mm256_shuffle_ps(t0, t2, 0x44), s1 = _mm256_shuffle_ps(t0, t2, 0xee);
+    const __m256 s2 = _mm256_shuffle_ps(t1, t3, 0x44), s3 = _mm256_shuffle_ps(t1, t3, 0xee);
+    const __m256 s4 = _mm256_shuffle_ps(t4, t6, 0x44), s5 = _mm256_shuffle_ps(t4, t6, 0xee);
+    const __m256 s6 = _mm256_shuffle_ps(t5, t7, 0x44), s7 = _mm256_shuffle_ps(t5, t7, 0xee);
+    const __m256 o[8] = {_mm256_permute2f128_ps(s0, s4, 0x20), _mm256_permute2f128_ps(s1, s5, 0x20),
+                         _mm256_permute2f128_ps(s2, s6, 0x20), _mm256_permute2f128_ps(s3, s7, 0x20),
+                         _mm256_permute2f128_ps(s0, s4, 0x31), _mm256_permute2f128_ps(s1, s5, 0x31),
+                         _mm256_permute2f128_ps(s2, s6, 0x31), _mm256_permute2f128_ps(s3, s7, 0x31)};
+    for (int i = 0; i < 8; ++i) {
+#if defined(__AVX512F__) && defined(__AVX512VL__)
+      // A masked store with an empty mask writes nothing (and does not fault).
+      _mm256_mask_storeu_ps(rows[i], static_cast<__mmask8>(-((bits >> i) & 1u)), o[i]);
+#else
+      if ((bits >> i) & 1u) _mm256_storeu_ps(rows[i], o[i]);
+#endif
+    }
+    return;
+  }
+#endif
+  for (uint32_t i = 0; i < N; ++i)
+    if ((bits >> i) & 1u)
+      for (uint32_t j = 0; j < N; ++j) rows[i][j] = in[j].v[i];
+}
+
 /// key with its 5 low mantissa bits replaced by index i in [0, 32) (a relative change
 /// below 4e-6; among exactly equal positive keys the lower index compares larger).
 template <uint32_t N>
@@ -709,6 +750,9 @@ IMPACT_INLINE FloatN<1> abs(FloatN<1> a) { return FloatN<1>(std::fabs(a.v)); }
 IMPACT_INLINE FloatN<1> gather(const float* base, IntN<1> idx) { return FloatN<1>(base[idx.v]); }
 IMPACT_INLINE FloatN<1> gather_lanes(const FloatN<1>* arr, IntN<1> idx) { return arr[idx.v]; }
 IMPACT_INLINE void load_transposed(const float* const* rows, FloatN<1>* out) { out[0] = FloatN<1>(rows[0][0]); }
+IMPACT_INLINE void store_transposed(float* const* rows, const FloatN<1>* in, uint32_t bits) {
+  if (bits & 1u) rows[0][0] = in[0].v;
+}
 template <>
 class SortedGather<1> {
  public:

@@ -4,6 +4,11 @@
 #include <cmath>
 #include <numbers>
 
+#include "kernels/simd/vec3.h"
+// No FMA contraction in this file: GCC contracts the block (FloatW) and slot (Float1)
+// instantiations of one template differently, and they must give the same bytes.
+#include "kernels/narrowphase/lanes/no_contract.h"  // last: its pragma covers what follows
+
 namespace impact::kernels {
 namespace {
 
@@ -62,24 +67,306 @@ IMPACT_INLINE DVec rotate_inv_d(DQuat q, DVec v) { return rotate_d({-q.x, -q.y, 
 IMPACT_INLINE DVec rotate_inv_d(DQuat q, Vec3 v) { return rotate_inv_d(q, DVec{v.x, v.y, v.z}); }
 IMPACT_INLINE DVec mul_d(Vec3 a, DVec b) { return {a.x * b.x, a.y * b.y, a.z * b.z}; }
 
-// Applies linear impulse P at anchors ra, rb: a gets -P, b gets +P.
-IMPACT_INLINE void push(const ContactConstraint& k, Vec3 P, Vec3 ra, Vec3 rb, Vec3& va, Vec3& wa, Vec3& vb,
-                        Vec3& wb) {
-  va = va - k.ma * P;
-  wa = wa - k.ia * cross(ra, P);
-  vb = vb + k.mb * P;
-  wb = wb + k.ib * cross(rb, P);
+// ---------------------------------------------------------------------------------------
+// Lane kernels: one template over the lane type F (FloatW: a block, lane 0; Float1: one
+// slot, its lane). Lane fields are read at &field[lane], so both paths read the same
+// storage; the expressions are those of the per-constraint math, in its order.
+// ---------------------------------------------------------------------------------------
+
+using simd::V3;
+constexpr uint32_t W = kContactLanes;
+
+template <class F>
+IMPACT_INLINE F ld(const float* f, uint32_t lane) {
+  return F::load(f + lane);
+}
+template <class F>
+IMPACT_INLINE V3<F> ld3(const float (*f)[W], uint32_t lane) {
+  return {F::load(f[0] + lane), F::load(f[1] + lane), F::load(f[2] + lane)};
+}
+template <class F>
+IMPACT_INLINE void st3(float (*f)[W], uint32_t lane, const V3<F>& v) {
+  v.x.store(f[0] + lane);
+  v.y.store(f[1] + lane);
+  v.z.store(f[2] + lane);
 }
 
-IMPACT_INLINE void write_back(const ContactConstraint& k, SolverBody* bodies, Vec3 va, Vec3 wa, Vec3 vb, Vec3 wb) {
-  if (k.ma > 0.0f) {
-    bodies[k.a].v = va;
-    bodies[k.a].w = wa;
+template <class F>
+struct S3 {
+  F xx, yy, zz, xy, xz, yz;
+};
+template <class F>
+IMPACT_INLINE S3<F> ld_sym(const float (*f)[W], uint32_t lane) {
+  return {F::load(f[0] + lane), F::load(f[1] + lane), F::load(f[2] + lane),
+          F::load(f[3] + lane), F::load(f[4] + lane), F::load(f[5] + lane)};
+}
+// As Sym3 * Vec3.
+template <class F>
+IMPACT_INLINE V3<F> operator*(const S3<F>& s, const V3<F>& v) {
+  return {s.xx * v.x + s.xy * v.y + s.xz * v.z, s.xy * v.x + s.yy * v.y + s.yz * v.z,
+          s.xz * v.x + s.yz * v.y + s.zz * v.z};
+}
+// As rotate(Quat, Vec3): v + w t + u x t, t = 2 (u x v).
+template <class F>
+IMPACT_INLINE V3<F> rotate_lanes(const F* q, const V3<F>& v) {
+  const V3<F> u{q[0], q[1], q[2]};
+  const V3<F> c = simd::cross(u, v);
+  const V3<F> t{F(2.0f) * c.x, F(2.0f) * c.y, F(2.0f) * c.z};
+  const V3<F> e = simd::cross(u, t);
+  return {v.x + q[3] * t.x + e.x, v.y + q[3] * t.y + e.y, v.z + q[3] * t.z + e.z};
+}
+// s * v as the scalar code's float * Vec3 (s first).
+template <class F>
+IMPACT_INLINE V3<F> scale(F s, const V3<F>& v) {
+  return {s * v.x, s * v.y, s * v.z};
+}
+template <class F>
+IMPACT_INLINE V3<F> keep(typename F::Mask m, const V3<F>& changed, const V3<F>& old) {
+  return simd::select(m, changed, old);
+}
+
+// Each lane's body: 8 floats of its SolverBody row from float `offset` (0: v, inv_mass,
+// w, pad; 8: dp, pad, dq), transposed into lanes.
+template <class F>
+IMPACT_INLINE void gather_body(const SolverBody* bodies, const int32_t* idx, uint32_t offset, F* out) {
+  constexpr uint32_t N = F::kWidth;
+  static_assert(N <= 8 && 8 % N == 0, "gather_body: widths 1, 2, 4, 8");
+  for (uint32_t o = 0; o < 8; o += N) {
+    const float* rows[N];
+    for (uint32_t l = 0; l < N; ++l) rows[l] = reinterpret_cast<const float*>(bodies + idx[l]) + offset + o;
+    simd::load_transposed(rows, out + o);
   }
-  if (k.mb > 0.0f) {
-    bodies[k.b].v = vb;
-    bodies[k.b].w = wb;
+}
+// The inverse for the lanes of `bits`: v, inv_mass (as gathered), w, pad.
+template <class F>
+IMPACT_INLINE void scatter_body(SolverBody* bodies, const int32_t* idx, uint32_t bits, const F* in) {
+  constexpr uint32_t N = F::kWidth;
+  for (uint32_t o = 0; o < 8; o += N) {
+    float* rows[N];
+    for (uint32_t l = 0; l < N; ++l) rows[l] = reinterpret_cast<float*>(bodies + idx[l]) + o;
+    simd::store_transposed(rows, in + o, bits);
   }
+}
+
+// The velocities of a lane's two bodies while a pass runs on them.
+template <class F>
+struct LaneBodies {
+  F ra[8], rb[8];  // gathered rows: v, inv_mass, w, pad
+  V3<F> va, wa, vb, wb;
+};
+template <class F>
+IMPACT_INLINE void load_velocities(const ContactBlock& k, uint32_t lane, const SolverBody* bodies, LaneBodies<F>& s) {
+  gather_body(bodies, k.a + lane, 0, s.ra);
+  gather_body(bodies, k.b + lane, 0, s.rb);
+  s.va = {s.ra[0], s.ra[1], s.ra[2]};
+  s.wa = {s.ra[4], s.ra[5], s.ra[6]};
+  s.vb = {s.rb[0], s.rb[1], s.rb[2]};
+  s.wb = {s.rb[4], s.rb[5], s.rb[6]};
+}
+// Back to the lanes whose body is dynamic (ma, mb > 0): never the zero body or a static.
+template <class F>
+IMPACT_INLINE void store_velocities(const ContactBlock& k, uint32_t lane, F ma, F mb, LaneBodies<F>& s,
+                                    SolverBody* bodies) {
+  s.ra[0] = s.va.x, s.ra[1] = s.va.y, s.ra[2] = s.va.z;
+  s.ra[4] = s.wa.x, s.ra[5] = s.wa.y, s.ra[6] = s.wa.z;
+  s.rb[0] = s.vb.x, s.rb[1] = s.vb.y, s.rb[2] = s.vb.z;
+  s.rb[4] = s.wb.x, s.rb[5] = s.wb.y, s.rb[6] = s.wb.z;
+  scatter_body(bodies, k.a + lane, simd::bits(ma > F(0.0f)), s.ra);
+  scatter_body(bodies, k.b + lane, simd::bits(mb > F(0.0f)), s.rb);
+}
+
+// The constraint's masses.
+template <class F>
+struct LaneMass {
+  F ma, mb;
+  S3<F> ia, ib;
+};
+template <class F>
+IMPACT_INLINE LaneMass<F> load_mass(const ContactBlock& k, uint32_t lane) {
+  return {ld<F>(k.ma, lane), ld<F>(k.mb, lane), ld_sym<F>(k.ia, lane), ld_sym<F>(k.ib, lane)};
+}
+
+// Linear impulse P at anchors ra, rb: a gets -P, b gets +P (where m, else unchanged).
+template <class F>
+IMPACT_INLINE void push(const LaneMass<F>& m, const V3<F>& P, const V3<F>& ra, const V3<F>& rb, LaneBodies<F>& s) {
+  s.va = s.va - scale(m.ma, P);
+  s.wa = s.wa - m.ia * simd::cross(ra, P);
+  s.vb = s.vb + scale(m.mb, P);
+  s.wb = s.wb + m.ib * simd::cross(rb, P);
+}
+template <class F>
+IMPACT_INLINE void push_masked(typename F::Mask live, const LaneMass<F>& m, const V3<F>& P, const V3<F>& ra,
+                               const V3<F>& rb, LaneBodies<F>& s) {
+  s.va = keep<F>(live, s.va - scale(m.ma, P), s.va);
+  s.wa = keep<F>(live, s.wa - m.ia * simd::cross(ra, P), s.wa);
+  s.vb = keep<F>(live, s.vb + scale(m.mb, P), s.vb);
+  s.wb = keep<F>(live, s.wb + m.ib * simd::cross(rb, P), s.wb);
+}
+// Angular impulse: a gets -ang, b gets +ang.
+template <class F>
+IMPACT_INLINE void turn(const LaneMass<F>& m, const V3<F>& ang, LaneBodies<F>& s) {
+  s.wa = s.wa - m.ia * ang;
+  s.wb = s.wb + m.ib * ang;
+}
+
+template <class F>
+IMPACT_INLINE typename F::Mask lanes_with_point(const ContactBlock& k, uint32_t lane, uint32_t j) {
+  using I = typename F::Int;
+  return I::load(k.count + lane) > I(static_cast<int32_t>(j));
+}
+
+template <class F>
+IMPACT_INLINE void warm_start_lanes(const ContactBlock& k, uint32_t lane, SolverBody* bodies) {
+  LaneBodies<F> s;
+  load_velocities(k, lane, bodies, s);
+  const LaneMass<F> m = load_mass<F>(k, lane);
+  const V3<F> n = ld3<F>(k.n, lane);
+  for (uint32_t j = 0; j < kMaxContactPoints; ++j) {
+    const auto live = lanes_with_point<F>(k, lane, j);
+    if (simd::none(live)) break;
+    const ContactBlockPoint& cp = k.p[j];
+    push_masked(live, m, scale(ld<F>(cp.impulse, lane), n), ld3<F>(cp.ra, lane), ld3<F>(cp.rb, lane), s);
+  }
+  const V3<F> t1 = ld3<F>(k.t1, lane), t2 = ld3<F>(k.t2, lane);
+  push(m, scale(ld<F>(k.f1, lane), t1) + scale(ld<F>(k.f2, lane), t2), ld3<F>(k.ca, lane), ld3<F>(k.cb, lane), s);
+  turn(m, scale(ld<F>(k.twist, lane), n) + ld3<F>(k.roll, lane), s);
+  store_velocities(k, lane, m.ma, m.mb, s, bodies);
+}
+
+template <class F>
+IMPACT_INLINE void solve_lanes(const SoftParams& p, bool use_bias, ContactBlock& k, uint32_t lane,
+                               SolverBody* bodies) {
+  using M = typename F::Mask;
+  const F inv_h(1.0f / p.h);
+  LaneBodies<F> s;
+  load_velocities(k, lane, bodies, s);
+  F da[8], db[8];  // dp, pad, dq
+  gather_body(bodies, k.a + lane, 8, da);
+  gather_body(bodies, k.b + lane, 8, db);
+  const V3<F> dp = V3<F>{db[0], db[1], db[2]} - V3<F>{da[0], da[1], da[2]};
+  const LaneMass<F> m = load_mass<F>(k, lane);
+  const V3<F> n = ld3<F>(k.n, lane);
+  using I = typename F::Int;
+  const M soft_ok = use_bias ? I::load(k.deep + lane) == I(0) : M(false);
+  const F bias_coef(p.bias_rate * p.mass_scale);
+  F total(0.0f), twist_limit(0.0f);
+  for (uint32_t j = 0; j < kMaxContactPoints; ++j) {
+    const M live = lanes_with_point<F>(k, lane, j);
+    if (simd::none(live)) break;
+    ContactBlockPoint& cp = k.p[j];
+    const V3<F> ra = ld3<F>(cp.ra, lane), rb = ld3<F>(cp.rb, lane);
+    const V3<F> ds = dp + rotate_lanes(db + 4, rb) - rotate_lanes(da + 4, ra);
+    const F sep = simd::dot(ds, n) + ld<F>(cp.base, lane) + F(p.slop);
+    // s > 0 is speculative (the gap may close, no more); else the soft bias where
+    // biased and not deep; else rigid.
+    const M spec = sep > F(0.0f);
+    const M soft = simd::andnot(soft_ok, spec);
+    const F bias = simd::select(spec, sep * inv_h,
+                                simd::select(soft, simd::max(F(-p.max_push_speed), bias_coef * sep), F(0.0f)));
+    const F mass_scale = simd::select(soft, F(p.mass_scale), F(1.0f));
+    const F impulse_scale = simd::select(soft, F(p.impulse_scale), F(0.0f));
+    const F vn = simd::dot((s.vb + simd::cross(s.wb, rb)) - (s.va + simd::cross(s.wa, ra)), n);
+    const F impulse = ld<F>(cp.impulse, lane);
+    const F d = -ld<F>(cp.normal_mass, lane) * (mass_scale * vn + bias) - impulse_scale * impulse;
+    const F next = simd::max(F(0.0f), impulse + d);  // std::max(impulse + d, 0)
+    const F applied = next - impulse;
+    simd::select(live, next, impulse).store(cp.impulse + lane);
+    const F max_impulse = ld<F>(cp.max_impulse, lane);
+    simd::select(live, simd::max(next, max_impulse), max_impulse).store(cp.max_impulse + lane);
+    if (!use_bias) {  // the relax pass ends a substep: its impulse is final
+      const F tot = ld<F>(cp.total, lane);
+      simd::select(live, tot + next, tot).store(cp.total + lane);
+    }
+    total = simd::select(live, total + next, total);
+    twist_limit = simd::select(live, twist_limit + ld<F>(cp.lever, lane) * next, twist_limit);
+    push_masked(live, m, scale(applied, n), ra, rb, s);
+  }
+  if (!use_bias) {
+    const F friction = ld<F>(k.friction, lane);
+    // Twist about the normal.
+    {
+      const F speed = simd::dot(n, s.wb - s.wa);
+      const F lim = friction * twist_limit;
+      const F old = ld<F>(k.twist, lane);
+      // std::clamp(x, -lim, lim) for lim >= 0.
+      const F twist = simd::min(lim, simd::max(-lim, old - ld<F>(k.twist_mass, lane) * speed));
+      twist.store(k.twist + lane);
+      turn(m, scale(twist - old, n), s);
+    }
+    // Rolling resistance: a 3D angular impulse opposing relative spin.
+    const F rolling = ld<F>(k.rolling, lane);
+    const M rolls = rolling > F(0.0f);
+    if (simd::any(rolls)) {
+      const V3<F> old = ld3<F>(k.roll, lane);
+      V3<F> next = old - ld_sym<F>(k.rolling_mass, lane) * (s.wb - s.wa);
+      const F lim = rolling * total;
+      const F mag2 = simd::dot(next, next);
+      next = keep<F>(mag2 > lim * lim, scale(lim / simd::sqrt(mag2), next), next);
+      next = keep<F>(rolls, next, old);
+      st3(k.roll, lane, next);
+      const V3<F> ang = next - old;
+      const V3<F> wa = s.wa, wb = s.wb;
+      turn(m, ang, s);
+      s.wa = keep<F>(rolls, s.wa, wa);
+      s.wb = keep<F>(rolls, s.wb, wb);
+    }
+    // Coulomb friction at the anchor, clamped to the disc of radius mu * sum(lambda).
+    {
+      const V3<F> ca = ld3<F>(k.ca, lane), cb = ld3<F>(k.cb, lane);
+      const V3<F> t1 = ld3<F>(k.t1, lane), t2 = ld3<F>(k.t2, lane);
+      const V3<F> vr = (s.vb + simd::cross(s.wb, cb)) - (s.va + simd::cross(s.wa, ca));
+      const F v1 = simd::dot(vr, t1), v2 = simd::dot(vr, t2);
+      const F k11 = ld<F>(k.k11, lane), k12 = ld<F>(k.k12, lane), k22 = ld<F>(k.k22, lane);
+      const F f1_old = ld<F>(k.f1, lane), f2_old = ld<F>(k.f2, lane);
+      F f1 = f1_old - (k11 * v1 + k12 * v2);
+      F f2 = f2_old - (k12 * v1 + k22 * v2);
+      const F lim = friction * total;
+      const F mag2 = f1 * f1 + f2 * f2;
+      const M over = mag2 > lim * lim;
+      const F sc = lim / simd::sqrt(mag2);
+      f1 = simd::select(over, f1 * sc, f1);
+      f2 = simd::select(over, f2 * sc, f2);
+      const V3<F> P = scale(f1 - f1_old, t1) + scale(f2 - f2_old, t2);
+      f1.store(k.f1 + lane);
+      f2.store(k.f2 + lane);
+      push(m, P, ca, cb, s);
+    }
+  }
+  store_velocities(k, lane, m.ma, m.mb, s, bodies);
+}
+
+template <class F>
+IMPACT_INLINE void restitute_lanes(const SoftParams& p, ContactBlock& k, uint32_t lane, SolverBody* bodies) {
+  using M = typename F::Mask;
+  const F restitution = ld<F>(k.restitution, lane);
+  const M bounces = restitution != F(0.0f);
+  if (simd::none(bounces)) return;
+  LaneBodies<F> s;
+  load_velocities(k, lane, bodies, s);
+  const LaneMass<F> m = load_mass<F>(k, lane);
+  const V3<F> n = ld3<F>(k.n, lane);
+  for (uint32_t j = 0; j < kMaxContactPoints; ++j) {
+    const M live = lanes_with_point<F>(k, lane, j);
+    if (simd::none(live)) break;
+    ContactBlockPoint& cp = k.p[j];
+    // Only points that approached fast enough and took an impulse bounce.
+    const F approach = ld<F>(cp.approach, lane);
+    const M quiet = (approach > F(-p.restitution_threshold)) | (ld<F>(cp.max_impulse, lane) == F(0.0f));
+    const M act = simd::andnot(live & bounces, quiet);
+    if (simd::none(act)) continue;
+    const V3<F> ra = ld3<F>(cp.ra, lane), rb = ld3<F>(cp.rb, lane);
+    const F vn = simd::dot((s.vb + simd::cross(s.wb, rb)) - (s.va + simd::cross(s.wa, ra)), n);
+    const F impulse = ld<F>(cp.impulse, lane);
+    const F d = -ld<F>(cp.normal_mass, lane) * (vn + restitution * approach);
+    const F next = simd::max(F(0.0f), impulse + d);
+    const F applied = next - impulse;
+    simd::select(act, next, impulse).store(cp.impulse + lane);
+    const F tot = ld<F>(cp.total, lane);
+    simd::select(act, tot + applied, tot).store(cp.total + lane);
+    push_masked(act, m, scale(applied, n), ra, rb, s);
+  }
+  // Lanes without restitution keep their velocities: storing them writes the same bytes.
+  store_velocities(k, lane, m.ma, m.mb, s, bodies);
 }
 
 }  // namespace
@@ -148,89 +435,141 @@ void prepare_bodies(const SoftParams& p, Vec3 g, const SoftBodyInput& in, Solver
 }
 
 void prepare_contacts(const SoftParams& p, const ContactManifoldArrays& c, const uint32_t* order,
-                      const uint32_t* first_point, const SolverBody* bodies, const Sym3* inv_inertia,
-                      const Vec3* com, uint32_t body_count, const ContactMaterials& mat, const WarmPoint* warm,
-                      ContactConstraint* IMPACT_RESTRICT out, ContactPoint* IMPACT_RESTRICT points, Range r) {
+                      const SolverBody* bodies, const Sym3* inv_inertia, const Vec3* com, uint32_t body_count,
+                      const ContactMaterials& mat, const WarmPoint* warm, ContactBlock* IMPACT_RESTRICT out, Range r) {
   const Sym3 zero{0, 0, 0, 0, 0, 0};
+  auto put3 = [](float (*f)[W], uint32_t l, Vec3 v) { f[0][l] = v.x, f[1][l] = v.y, f[2][l] = v.z; };
+  auto put_sym = [](float (*f)[W], uint32_t l, const Sym3& m) {
+    f[0][l] = m.xx, f[1][l] = m.yy, f[2][l] = m.zz, f[3][l] = m.xy, f[4][l] = m.xz, f[5][l] = m.yz;
+  };
   for (uint32_t i = r.begin; i < r.end; ++i) {
+    ContactBlock& k = out[i / W];
+    const uint32_t l = i % W;
+    for (ContactBlockPoint& cp : k.p) {
+      for (int d = 0; d < 3; ++d) cp.ra[d][l] = cp.rb[d][l] = 0.0f;
+      cp.base[l] = cp.normal_mass[l] = cp.impulse[l] = cp.total[l] = 0.0f;
+      cp.max_impulse[l] = cp.approach[l] = cp.lever[l] = 0.0f;
+    }
     const uint32_t m = order[i];
-    ContactConstraint k{};
+    if (m == kNoConstraint) {  // padding: both bodies the zero body, no points, zero masses
+      k.a[l] = k.b[l] = static_cast<int32_t>(body_count);
+      k.count[l] = 0;
+      k.deep[l] = 0;
+      k.ma[l] = k.mb[l] = 0.0f;
+      put_sym(k.ia, l, zero);
+      put_sym(k.ib, l, zero);
+      put3(k.n, l, {0, 0, 0});
+      put3(k.t1, l, {0, 0, 0});
+      put3(k.t2, l, {0, 0, 0});
+      put3(k.ca, l, {0, 0, 0});
+      put3(k.cb, l, {0, 0, 0});
+      k.friction[l] = k.restitution[l] = k.rolling[l] = 0.0f;
+      k.k11[l] = k.k12[l] = k.k22[l] = k.twist_mass[l] = 0.0f;
+      put_sym(k.rolling_mass, l, zero);
+      k.f1[l] = k.f2[l] = k.twist[l] = 0.0f;
+      put3(k.roll, l, {0, 0, 0});
+      continue;
+    }
     const bool plane = c.b_is_plane[m] != 0;
-    k.a = c.a[m];
-    k.b = plane ? body_count : c.b[m];
-    k.first = first_point[i];
-    k.count = c.count[m];
-    k.deep = c.depth[m] > p.max_push_speed * p.dt ? 1u : 0u;
-    k.ma = bodies[k.a].inv_mass;
-    k.mb = plane ? 0.0f : bodies[k.b].inv_mass;
-    k.ia = inv_inertia[k.a];
-    k.ib = plane ? zero : inv_inertia[k.b];
-    k.n = {c.normal[0][m], c.normal[1][m], c.normal[2][m]};
-    k.t1 = perpendicular(k.n);
-    k.t2 = cross(k.n, k.t1);
-    const float fb = plane ? mat.plane_friction[c.b[m]] : mat.friction[k.b];
-    k.friction = std::sqrt(mat.friction[k.a] * fb);
-    k.restitution = std::max(mat.restitution[k.a], plane ? mat.plane_restitution[c.b[m]] : mat.restitution[k.b]);
-    k.rolling = plane ? mat.rolling[k.a] : std::max(mat.rolling[k.a], mat.rolling[k.b]);
-    const Vec3 com_a = com[k.a];
-    const Vec3 com_b = plane ? com_a : com[k.b];
-    const SolverBody& A = bodies[k.a];
-    const SolverBody& B = bodies[k.b];  // the zero body for a plane
+    const uint32_t a = c.a[m];
+    const uint32_t b = plane ? body_count : c.b[m];
+    const uint32_t count = c.count[m];
+    k.a[l] = static_cast<int32_t>(a);
+    k.b[l] = static_cast<int32_t>(b);
+    k.count[l] = static_cast<int32_t>(count);
+    k.deep[l] = c.depth[m] > p.max_push_speed * p.dt ? 1 : 0;
+    const float ma = bodies[a].inv_mass;
+    const float mb = plane ? 0.0f : bodies[b].inv_mass;
+    const Sym3 ia = inv_inertia[a];
+    const Sym3 ib = plane ? zero : inv_inertia[b];
+    const Vec3 n{c.normal[0][m], c.normal[1][m], c.normal[2][m]};
+    const Vec3 t1 = perpendicular(n);
+    const Vec3 t2 = cross(n, t1);
+    const float fb = plane ? mat.plane_friction[c.b[m]] : mat.friction[b];
+    const float friction = std::sqrt(mat.friction[a] * fb);
+    const float rolling = plane ? mat.rolling[a] : std::max(mat.rolling[a], mat.rolling[b]);
+    k.ma[l] = ma;
+    k.mb[l] = mb;
+    put_sym(k.ia, l, ia);
+    put_sym(k.ib, l, ib);
+    put3(k.n, l, n);
+    put3(k.t1, l, t1);
+    put3(k.t2, l, t2);
+    k.friction[l] = friction;
+    k.restitution[l] = std::max(mat.restitution[a], plane ? mat.plane_restitution[c.b[m]] : mat.restitution[b]);
+    k.rolling[l] = rolling;
+    float f1 = 0.0f, f2 = 0.0f, twist = 0.0f;
+    Vec3 roll{0, 0, 0};
+    const Vec3 com_a = com[a];
+    const Vec3 com_b = plane ? com_a : com[b];
+    const SolverBody& A = bodies[a];
+    const SolverBody& B = bodies[b];  // the zero body for a plane
     const uint32_t row0 = first_point_of(c, m);
     Vec3 centre_a{0, 0, 0}, centre_b{0, 0, 0};
     bool warmed = false;
-    for (uint32_t j = 0; j < k.count; ++j) {
+    for (uint32_t j = 0; j < count; ++j) {
       const uint32_t row = row0 + j;
-      ContactPoint& cp = points[k.first + j];
+      ContactBlockPoint& cp = k.p[j];
       const Vec3 x{c.point[0][row], c.point[1][row], c.point[2][row]};
-      cp.ra = x - com_a;
+      const Vec3 ra = x - com_a;
       // A plane never moves (dp_b = 0, dq_b = 1): any anchor gives the same
       // separation change, and r_b = r_a keeps it free of world-coordinate rounding.
-      cp.rb = plane ? cp.ra : x - com_b;
+      const Vec3 rb = plane ? ra : x - com_b;
+      put3(cp.ra, l, ra);
+      put3(cp.rb, l, rb);
       const float s0 = -c.point_depth[row];
-      cp.base = s0 - dot(cp.rb - cp.ra, k.n);
-      const Vec3 rna = cross(cp.ra, k.n), rnb = cross(cp.rb, k.n);
-      const float kn = k.ma + k.mb + dot(rna, k.ia * rna) + dot(rnb, k.ib * rnb);
-      cp.normal_mass = kn > 0.0f ? 1.0f / kn : 0.0f;
-      const Vec3 vra = A.v + cross(A.w, cp.ra), vrb = B.v + cross(B.w, cp.rb);
-      cp.approach = dot(vrb - vra, k.n);
-      cp.impulse = 0.0f;
-      cp.total = 0.0f;
-      cp.max_impulse = 0.0f;
+      cp.base[l] = s0 - dot(rb - ra, n);
+      const Vec3 rna = cross(ra, n), rnb = cross(rb, n);
+      const float kn = ma + mb + dot(rna, ia * rna) + dot(rnb, ib * rnb);
+      cp.normal_mass[l] = kn > 0.0f ? 1.0f / kn : 0.0f;
+      const Vec3 vra = A.v + cross(A.w, ra), vrb = B.v + cross(B.w, rb);
+      cp.approach[l] = dot(vrb - vra, n);
       if (warm != nullptr && warm[row].normal >= 0.0f) {
-        cp.impulse = p.warm_start * warm[row].normal;
+        cp.impulse[l] = p.warm_start * warm[row].normal;
         if (!warmed) {
           const WarmPoint& w = warm[row];
           const Vec3 f{w.fx, w.fy, w.fz};
-          k.f1 = p.warm_start * dot(f, k.t1);
-          k.f2 = p.warm_start * dot(f, k.t2);
-          k.twist = p.warm_start * w.twist;
-          k.roll = p.warm_start * Vec3{w.rx, w.ry, w.rz};
+          f1 = p.warm_start * dot(f, t1);
+          f2 = p.warm_start * dot(f, t2);
+          twist = p.warm_start * w.twist;
+          roll = p.warm_start * Vec3{w.rx, w.ry, w.rz};
           warmed = true;
         }
       }
-      centre_a = centre_a + cp.ra;
-      centre_b = centre_b + cp.rb;
+      centre_a = centre_a + ra;
+      centre_b = centre_b + rb;
     }
-    const float inv_count = 1.0f / static_cast<float>(k.count);
-    k.ca = inv_count * centre_a;
-    k.cb = inv_count * centre_b;
-    for (uint32_t j = 0; j < k.count; ++j) points[k.first + j].lever = length(points[k.first + j].ra - k.ca);
-    const Vec3 ra1 = cross(k.ca, k.t1), ra2 = cross(k.ca, k.t2), rb1 = cross(k.cb, k.t1), rb2 = cross(k.cb, k.t2);
-    const float m11 = k.ma + k.mb + dot(ra1, k.ia * ra1) + dot(rb1, k.ib * rb1);
-    const float m22 = k.ma + k.mb + dot(ra2, k.ia * ra2) + dot(rb2, k.ib * rb2);
-    const float m12 = dot(ra1, k.ia * ra2) + dot(rb1, k.ib * rb2);
+    k.f1[l] = f1;
+    k.f2[l] = f2;
+    k.twist[l] = twist;
+    put3(k.roll, l, roll);
+    const float inv_count = 1.0f / static_cast<float>(count);
+    const Vec3 ca = inv_count * centre_a;
+    const Vec3 cb = inv_count * centre_b;
+    put3(k.ca, l, ca);
+    put3(k.cb, l, cb);
+    for (uint32_t j = 0; j < count; ++j) {
+      ContactBlockPoint& cp = k.p[j];
+      k.p[j].lever[l] = length(Vec3{cp.ra[0][l], cp.ra[1][l], cp.ra[2][l]} - ca);
+    }
+    const Vec3 ra1 = cross(ca, t1), ra2 = cross(ca, t2), rb1 = cross(cb, t1), rb2 = cross(cb, t2);
+    const float m11 = ma + mb + dot(ra1, ia * ra1) + dot(rb1, ib * rb1);
+    const float m22 = ma + mb + dot(ra2, ia * ra2) + dot(rb2, ib * rb2);
+    const float m12 = dot(ra1, ia * ra2) + dot(rb1, ib * rb2);
     const float det = m11 * m22 - m12 * m12;
+    float k11 = 0.0f, k12 = 0.0f, k22 = 0.0f;
     if (det > 0.0f) {
       const float inv = 1.0f / det;
-      k.k11 = m22 * inv;
-      k.k22 = m11 * inv;
-      k.k12 = -m12 * inv;
+      k11 = m22 * inv;
+      k22 = m11 * inv;
+      k12 = -m12 * inv;
     }
-    const float kt = dot(k.n, add(k.ia, k.ib) * k.n);
-    k.twist_mass = kt > 0.0f ? 1.0f / kt : 0.0f;
-    k.rolling_mass = k.rolling > 0.0f ? inverse(add(k.ia, k.ib)) : zero;
-    out[i] = k;
+    k.k11[l] = k11;
+    k.k12[l] = k12;
+    k.k22[l] = k22;
+    const float kt = dot(n, add(ia, ib) * n);
+    k.twist_mass[l] = kt > 0.0f ? 1.0f / kt : 0.0f;
+    put_sym(k.rolling_mass, l, rolling > 0.0f ? inverse(add(ia, ib)) : zero);
   }
 }
 
@@ -269,135 +608,39 @@ void integrate_substep_positions(float h, const GyroBody* IMPACT_RESTRICT gyro, 
   }
 }
 
-void warm_start_contacts(const ContactConstraint* cons, const ContactPoint* points, SolverBody* bodies, Range r) {
-  for (uint32_t i = r.begin; i < r.end; ++i) {
-    const ContactConstraint& k = cons[i];
-    Vec3 va = bodies[k.a].v, wa = bodies[k.a].w, vb = bodies[k.b].v, wb = bodies[k.b].w;
-    for (uint32_t j = 0; j < k.count; ++j) {
-      const ContactPoint& cp = points[k.first + j];
-      push(k, cp.impulse * k.n, cp.ra, cp.rb, va, wa, vb, wb);
-    }
-    push(k, k.f1 * k.t1 + k.f2 * k.t2, k.ca, k.cb, va, wa, vb, wb);
-    const Vec3 ang = k.twist * k.n + k.roll;
-    wa = wa - k.ia * ang;
-    wb = wb + k.ib * ang;
-    write_back(k, bodies, va, wa, vb, wb);
-  }
+void warm_start_contacts(const ContactBlock* blocks, SolverBody* bodies, Range r) {
+  for (uint32_t i = r.begin; i < r.end; ++i) warm_start_lanes<simd::FloatW>(blocks[i], 0, bodies);
+}
+void solve_contacts(const SoftParams& p, bool use_bias, ContactBlock* blocks, SolverBody* bodies, Range r) {
+  for (uint32_t i = r.begin; i < r.end; ++i) solve_lanes<simd::FloatW>(p, use_bias, blocks[i], 0, bodies);
+}
+void restitute_contacts(const SoftParams& p, ContactBlock* blocks, SolverBody* bodies, Range r) {
+  for (uint32_t i = r.begin; i < r.end; ++i) restitute_lanes<simd::FloatW>(p, blocks[i], 0, bodies);
 }
 
-void solve_contacts(const SoftParams& p, bool use_bias, ContactConstraint* cons, ContactPoint* points,
-                    SolverBody* bodies, Range r) {
-  const float inv_h = 1.0f / p.h;
-  for (uint32_t i = r.begin; i < r.end; ++i) {
-    ContactConstraint& k = cons[i];
-    const SolverBody& A = bodies[k.a];
-    const SolverBody& B = bodies[k.b];
-    Vec3 va = A.v, wa = A.w, vb = B.v, wb = B.w;
-    const Vec3 dp = B.dp - A.dp;
-    const Quat dqa = A.dq, dqb = B.dq;
-    float total = 0.0f, twist_limit = 0.0f;
-    for (uint32_t j = 0; j < k.count; ++j) {
-      ContactPoint& cp = points[k.first + j];
-      const Vec3 ds = dp + rotate(dqb, cp.rb) - rotate(dqa, cp.ra);
-      const float s = dot(ds, k.n) + cp.base + p.slop;
-      float bias = 0.0f, mass_scale = 1.0f, impulse_scale = 0.0f;
-      if (s > 0.0f) {
-        bias = s * inv_h;  // speculative: may close the gap, no more
-      } else if (use_bias && k.deep == 0) {
-        bias = std::max(p.bias_rate * p.mass_scale * s, -p.max_push_speed);
-        mass_scale = p.mass_scale;
-        impulse_scale = p.impulse_scale;
-      }
-      const float vn = dot((vb + cross(wb, cp.rb)) - (va + cross(wa, cp.ra)), k.n);
-      const float d = -cp.normal_mass * (mass_scale * vn + bias) - impulse_scale * cp.impulse;
-      const float next = std::max(cp.impulse + d, 0.0f);
-      const float applied = next - cp.impulse;
-      cp.impulse = next;
-      cp.max_impulse = std::max(cp.max_impulse, next);
-      if (!use_bias) cp.total += next;  // the relax pass ends a substep: its impulse is final
-      total += next;
-      twist_limit += cp.lever * next;
-      push(k, applied * k.n, cp.ra, cp.rb, va, wa, vb, wb);
-    }
-    if (!use_bias) {
-      // Twist about the normal.
-      {
-        const float speed = dot(k.n, wb - wa);
-        const float lim = k.friction * twist_limit;
-        const float old = k.twist;
-        k.twist = std::clamp(old - k.twist_mass * speed, -lim, lim);
-        const Vec3 ang = (k.twist - old) * k.n;
-        wa = wa - k.ia * ang;
-        wb = wb + k.ib * ang;
-      }
-      // Rolling resistance: a 3D angular impulse opposing relative spin.
-      if (k.rolling > 0.0f) {
-        const Vec3 old = k.roll;
-        Vec3 next = old - k.rolling_mass * (wb - wa);
-        const float lim = k.rolling * total;
-        const float mag2 = dot(next, next);
-        if (mag2 > lim * lim) next = (lim / std::sqrt(mag2)) * next;
-        k.roll = next;
-        const Vec3 ang = next - old;
-        wa = wa - k.ia * ang;
-        wb = wb + k.ib * ang;
-      }
-      // Coulomb friction at the anchor, clamped to the disc of radius mu * sum(lambda).
-      {
-        const Vec3 vr = (vb + cross(wb, k.cb)) - (va + cross(wa, k.ca));
-        const float v1 = dot(vr, k.t1), v2 = dot(vr, k.t2);
-        float f1 = k.f1 - (k.k11 * v1 + k.k12 * v2);
-        float f2 = k.f2 - (k.k12 * v1 + k.k22 * v2);
-        const float lim = k.friction * total;
-        const float mag2 = f1 * f1 + f2 * f2;
-        if (mag2 > lim * lim) {
-          const float sc = lim / std::sqrt(mag2);
-          f1 *= sc;
-          f2 *= sc;
-        }
-        const Vec3 P = (f1 - k.f1) * k.t1 + (f2 - k.f2) * k.t2;
-        k.f1 = f1;
-        k.f2 = f2;
-        push(k, P, k.ca, k.cb, va, wa, vb, wb);
-      }
-    }
-    write_back(k, bodies, va, wa, vb, wb);
-  }
+void warm_start_contacts_serial(const ContactBlock* blocks, SolverBody* bodies, Range r) {
+  for (uint32_t i = r.begin; i < r.end; ++i) warm_start_lanes<simd::Float1>(blocks[i / W], i % W, bodies);
+}
+void solve_contacts_serial(const SoftParams& p, bool use_bias, ContactBlock* blocks, SolverBody* bodies, Range r) {
+  for (uint32_t i = r.begin; i < r.end; ++i) solve_lanes<simd::Float1>(p, use_bias, blocks[i / W], i % W, bodies);
+}
+void restitute_contacts_serial(const SoftParams& p, ContactBlock* blocks, SolverBody* bodies, Range r) {
+  for (uint32_t i = r.begin; i < r.end; ++i) restitute_lanes<simd::Float1>(p, blocks[i / W], i % W, bodies);
 }
 
-void restitute_contacts(const SoftParams& p, const ContactConstraint* cons, ContactPoint* points,
-                        SolverBody* bodies, Range r) {
+void store_contacts(const ContactManifoldArrays& c, const uint32_t* order, const ContactBlock* blocks,
+                    WarmPoint* IMPACT_RESTRICT out, float* IMPACT_RESTRICT impulse_out, Range r) {
   for (uint32_t i = r.begin; i < r.end; ++i) {
-    const ContactConstraint& k = cons[i];
-    if (k.restitution == 0.0f) continue;
-    Vec3 va = bodies[k.a].v, wa = bodies[k.a].w, vb = bodies[k.b].v, wb = bodies[k.b].w;
-    for (uint32_t j = 0; j < k.count; ++j) {
-      ContactPoint& cp = points[k.first + j];
-      // Only points that approached fast enough and took an impulse bounce.
-      if (cp.approach > -p.restitution_threshold || cp.max_impulse == 0.0f) continue;
-      const float vn = dot((vb + cross(wb, cp.rb)) - (va + cross(wa, cp.ra)), k.n);
-      const float d = -cp.normal_mass * (vn + k.restitution * cp.approach);
-      const float next = std::max(cp.impulse + d, 0.0f);
-      const float applied = next - cp.impulse;
-      cp.impulse = next;
-      cp.total += applied;
-      push(k, applied * k.n, cp.ra, cp.rb, va, wa, vb, wb);
-    }
-    write_back(k, bodies, va, wa, vb, wb);
-  }
-}
-
-void store_contacts(const ContactManifoldArrays& c, const uint32_t* order, const ContactConstraint* cons,
-                    const ContactPoint* points, WarmPoint* IMPACT_RESTRICT out, float* IMPACT_RESTRICT impulse_out,
-                    Range r) {
-  for (uint32_t i = r.begin; i < r.end; ++i) {
-    const ContactConstraint& k = cons[i];
+    if (order[i] == kNoConstraint) continue;
+    const ContactBlock& k = blocks[i / W];
+    const uint32_t l = i % W;
     const uint32_t row0 = first_point_of(c, order[i]);
-    const Vec3 f = k.f1 * k.t1 + k.f2 * k.t2;
-    for (uint32_t j = 0; j < k.count; ++j) {
-      const ContactPoint& cp = points[k.first + j];
-      out[row0 + j] = WarmPoint{cp.impulse, f.x, f.y, f.z, k.twist, k.roll.x, k.roll.y, k.roll.z};
-      impulse_out[row0 + j] = cp.total;
+    const Vec3 t1{k.t1[0][l], k.t1[1][l], k.t1[2][l]}, t2{k.t2[0][l], k.t2[1][l], k.t2[2][l]};
+    const Vec3 f = k.f1[l] * t1 + k.f2[l] * t2;
+    for (uint32_t j = 0; j < static_cast<uint32_t>(k.count[l]); ++j) {
+      const ContactBlockPoint& cp = k.p[j];
+      out[row0 + j] = WarmPoint{cp.impulse[l], f.x, f.y, f.z, k.twist[l], k.roll[0][l], k.roll[1][l], k.roll[2][l]};
+      impulse_out[row0 + j] = cp.total[l];
     }
   }
 }

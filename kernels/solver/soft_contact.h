@@ -43,13 +43,24 @@
 // constraints in parallel (no two share a dynamic body) and colours in order, so the
 // result is the same bytes for any thread count. Bodies with inv_mass 0 (static,
 // kinematic, planes: index body_count, a zero body) are read, never written.
-// Cost per constraint and pass: ~40 flops per point plus ~120 for the friction anchor.
+// SIMD across the constraints of a colour (Box2D v3 / Box3D contact_solver.c,
+// b3SolveContact_Convex): constraints are stored in blocks of kContactLanes (SoA, one
+// constraint a lane, each colour padded to whole blocks); a pass gathers each lane's
+// two bodies (SolverBody rows, transposed), runs the points to the block's largest
+// count with the shorter lanes masked, and scatters the lanes whose body is dynamic.
+// The kernels are one template over the lane type: FloatW for blocks, Float1 for the
+// overflow colour slot by slot; every verb is lane-wise and IEEE and the operation
+// order is the same, so both give the same bytes.
+// Cost per constraint and pass: ~40 flops per point plus ~120 for the friction anchor,
+// and the gather / scatter of two 64-byte bodies (two 8 x 8 transposes each way); a
+// block does kContactLanes constraints in about the instructions of one.
 #pragma once
 
 #include "kernels/common/contact_manifolds.h"
 #include "kernels/common/kernel.h"
 #include "kernels/common/math3.h"
 #include "kernels/integrate/rigid_euler.h"
+#include "kernels/simd/lanes.h"
 
 namespace impact::kernels {
 
@@ -109,34 +120,53 @@ inline constexpr float kMaxHertzPerSubstepRate = 0.125f;
 /// larger values are capped there), damping ratio zeta, substep h = dt / substeps.
 SoftParams soft_params(float dt, uint32_t substeps, float hertz, float zeta);
 
-/// One manifold point of a constraint.
-struct ContactPoint {
-  Vec3 ra, rb;       ///< anchors: point - centre of mass, world, at the step's start
-  float base;        ///< s0 - dot(rb - ra, n)
-  float normal_mass;
-  float impulse;     ///< accumulated normal impulse of a substep, N s (warm starts the next)
-  float total;       ///< impulse the step applied: the sum over substeps, plus restitution's
-  float max_impulse; ///< largest accumulated impulse of the step (restitution's "touched")
-  float approach;    ///< relative normal velocity at the step's start (restitution)
-  float lever;       ///< |ra - centre_a| (twist friction's arm)
+/// Lanes of a constraint block: kSimdWidth (kernels/simd/lanes.h).
+inline constexpr uint32_t kContactLanes = simd::kSimdWidth;
+
+/// Constraint slots: colour k's constraints take slots colour_start .. + count, with
+/// colour_start a multiple of kContactLanes (each colour padded to whole blocks).
+/// Slot i is lane i % kContactLanes of block i / kContactLanes.
+IMPACT_INLINE uint32_t contact_blocks(uint32_t constraints) {
+  return (constraints + kContactLanes - 1) / kContactLanes;
+}
+
+/// Point j of every lane of a block (SoA over the lanes).
+struct ContactBlockPoint {
+  static constexpr uint32_t W = kContactLanes;
+  float ra[3][W], rb[3][W];  ///< anchors: point - centre of mass, world, at the step's start
+  float base[W];             ///< s0 - dot(rb - ra, n)
+  float normal_mass[W];
+  float impulse[W];          ///< accumulated normal impulse of a substep, N s (warm starts the next)
+  float total[W];            ///< impulse the step applied: the sum over substeps, plus restitution's
+  float max_impulse[W];      ///< largest accumulated impulse of the step (restitution's "touched")
+  float approach[W];         ///< relative normal velocity at the step's start (restitution)
+  float lever[W];            ///< |ra - centre_a| (twist friction's arm)
 };
 
-/// One manifold's constraint.
-struct ContactConstraint {
-  uint32_t a, b;            ///< SolverBody indices; b == body_count for a plane
-  uint32_t first, count;    ///< its points in the point array
-  uint32_t deep;            ///< 1: deeper than max_push_speed * dt, no soft bias (held rigid)
-  float ma, mb;             ///< inverse masses
-  Sym3 ia, ib;              ///< world inverse inertias
-  Vec3 n, t1, t2;           ///< normal (a -> b) and tangents
-  Vec3 ca, cb;              ///< friction anchor relative to each centre of mass
-  float friction, restitution, rolling;
-  float k11, k12, k22;      ///< inverse 2x2 tangent mass
-  float twist_mass;
-  Sym3 rolling_mass;        ///< (I_a^-1 + I_b^-1)^-1
-  float f1, f2, twist;      ///< accumulated friction impulses
-  Vec3 roll;                ///< accumulated rolling impulse
+/// kContactLanes constraints, one a lane, SoA (Box2D v3 / Box3D b3ContactConstraintWide).
+/// A padding lane (past its colour's end) has count 0, both bodies the zero body and
+/// zero masses: the kernels act on nothing there and write no body. Points j >= count
+/// of a lane are zero.
+struct alignas(64) ContactBlock {
+  static constexpr uint32_t W = kContactLanes;
+  int32_t a[W], b[W];         ///< SolverBody indices; b == body_count for a plane
+  int32_t count[W];           ///< points, 0 (padding) .. 4
+  int32_t deep[W];            ///< 1: deeper than max_push_speed * dt, no soft bias (held rigid)
+  float ma[W], mb[W];         ///< inverse masses
+  float ia[6][W], ib[6][W];   ///< world inverse inertias (Sym3 order: xx yy zz xy xz yz)
+  float n[3][W], t1[3][W], t2[3][W];  ///< normal (a -> b) and tangents
+  float ca[3][W], cb[3][W];   ///< friction anchor relative to each centre of mass
+  float friction[W], restitution[W], rolling[W];
+  float k11[W], k12[W], k22[W];  ///< inverse 2x2 tangent mass
+  float twist_mass[W];
+  float rolling_mass[6][W];   ///< (I_a^-1 + I_b^-1)^-1
+  float f1[W], f2[W], twist[W];  ///< accumulated friction impulses
+  float roll[3][W];           ///< accumulated rolling impulse
+  ContactBlockPoint p[kMaxContactPoints];
 };
+
+/// order[i] of a padding slot.
+inline constexpr uint32_t kNoConstraint = 0xffffffffu;
 
 /// Warm-start values of one point of last step: its normal impulse, and its
 /// manifold's friction impulse (world), twist and rolling impulses.
@@ -162,13 +192,13 @@ void prepare_bodies(const SoftParams& p, Vec3 gravity, const SoftBodyInput& in, 
                     BodyDrive* IMPACT_RESTRICT drive, Sym3* IMPACT_RESTRICT inv_inertia, Vec3* IMPACT_RESTRICT com,
                     GyroBody* IMPACT_RESTRICT gyro, Range r);
 
-/// Constraints order[i] for i in r: manifold order[i] of c becomes constraint i with
-/// points first_point[i] ...; warm[k] (null: cold) is point k's value from last step
-/// (normal < 0: no match).
+/// Constraint slots i in r: manifold order[i] of c becomes the constraint in slot i
+/// (order[i] == kNoConstraint: a padding lane); warm[k] (null: cold) is point row k's
+/// value from last step (normal < 0: no match). Per slot, scalar; any partition of the
+/// slots gives the same bytes.
 void prepare_contacts(const SoftParams& p, const ContactManifoldArrays& c, const uint32_t* order,
-                      const uint32_t* first_point, const SolverBody* bodies, const Sym3* inv_inertia,
-                      const Vec3* com, uint32_t body_count, const ContactMaterials& mat, const WarmPoint* warm,
-                      ContactConstraint* IMPACT_RESTRICT out, ContactPoint* IMPACT_RESTRICT points, Range r);
+                      const SolverBody* bodies, const Sym3* inv_inertia, const Vec3* com, uint32_t body_count,
+                      const ContactMaterials& mat, const WarmPoint* warm, ContactBlock* IMPACT_RESTRICT out, Range r);
 
 void integrate_substep_velocities(const BodyDrive* IMPACT_RESTRICT drive, SolverBody* IMPACT_RESTRICT b, Range r);
 /// gyro: null, or prepare_bodies' per-body gyroscopic data.
@@ -183,18 +213,25 @@ void integrate_substep_velocities(const BodyDrive* IMPACT_RESTRICT drive, Solver
 void integrate_substep_positions(float h, const GyroBody* IMPACT_RESTRICT gyro, SolverBody* IMPACT_RESTRICT b,
                                  Range r);
 
-void warm_start_contacts(const ContactConstraint* cons, const ContactPoint* points, SolverBody* bodies, Range r);
-void solve_contacts(const SoftParams& p, bool use_bias, ContactConstraint* cons, ContactPoint* points,
-                    SolverBody* bodies, Range r);
-void restitute_contacts(const SoftParams& p, const ContactConstraint* cons, ContactPoint* points,
-                        SolverBody* bodies, Range r);
+/// The constraint passes over blocks r of one colour (no two lanes of a range share
+/// a dynamic body): kContactLanes constraints at a time, one a lane (FloatW), bodies
+/// gathered per lane and scattered back to the lanes whose body is dynamic.
+void warm_start_contacts(const ContactBlock* blocks, SolverBody* bodies, Range r);
+void solve_contacts(const SoftParams& p, bool use_bias, ContactBlock* blocks, SolverBody* bodies, Range r);
+void restitute_contacts(const SoftParams& p, ContactBlock* blocks, SolverBody* bodies, Range r);
 
-/// Warm-start values of constraints r, written at their manifolds' point rows
-/// (order / first_point as in prepare_contacts; c's first_point for the rows), and
-/// each point's total impulse of the step (ContactArrays::impulse).
-void store_contacts(const ContactManifoldArrays& c, const uint32_t* order, const ContactConstraint* cons,
-                    const ContactPoint* points, WarmPoint* IMPACT_RESTRICT out, float* IMPACT_RESTRICT impulse_out,
-                    Range r);
+/// The same passes over slots r one after another (Float1, the same template), for
+/// constraints that may share bodies: the overflow colour. For a range of one colour
+/// they give the bytes of the block passes.
+void warm_start_contacts_serial(const ContactBlock* blocks, SolverBody* bodies, Range r);
+void solve_contacts_serial(const SoftParams& p, bool use_bias, ContactBlock* blocks, SolverBody* bodies, Range r);
+void restitute_contacts_serial(const SoftParams& p, ContactBlock* blocks, SolverBody* bodies, Range r);
+
+/// Warm-start values of constraint slots r (padding slots skipped), written at their
+/// manifolds' point rows (c's first_point for the rows), and each point's total
+/// impulse of the step (ContactArrays::impulse).
+void store_contacts(const ContactManifoldArrays& c, const uint32_t* order, const ContactBlock* blocks,
+                    WarmPoint* IMPACT_RESTRICT out, float* IMPACT_RESTRICT impulse_out, Range r);
 
 /// Last step's stored values, keys sorted ascending with the rows of their values
 /// and start[a] over body a = key >> 32 (a < body_count).

@@ -12,6 +12,10 @@
 // contraction every copy rounds alike, and the one-lane and SIMD paths give the same
 // bytes (tests/kernels/narrowphase/contract_test.cpp relies on it).
 //
+// The soft step's contact kernels (kernels/solver/soft_contact.cpp) include it for the
+// same reason: GCC contracts a template's block (FloatW) and one-lane (Float1)
+// instantiations differently, and both must give the same bytes.
+//
 // Where to include it (GCC 12, checked on its assembly): the pragma covers every
 // function and template defined after it, and whatever is inlined into them, including
 // IMPACT_INLINE helpers and templates from headers included before it. A function

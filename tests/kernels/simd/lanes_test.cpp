@@ -11,6 +11,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <random>
 #include <vector>
 
@@ -230,6 +231,57 @@ TEST(Lanes, SortedGatherMatchesALoop) {
   check_sorted_gather<4>(32);
   check_sorted_gather<8>(33);
   check_sorted_gather<16>(34);
+}
+
+/// load_transposed and store_transposed against a loop: rows of 16-float records (as
+/// the soft step's SolverBody) at offsets 0 and N, one per lane, at random records with
+/// repeats; store_transposed writes exactly the rows whose bit is set (the others keep
+/// their canary bytes, repeated rows included when no set lane names them).
+template <uint32_t N>
+void check_transposed(uint32_t seed) {
+  std::mt19937 g(seed);
+  constexpr uint32_t kRecords = 20, kStride = 16;
+  for (int round = 0; round < 200; ++round) {
+    std::vector<float> rec(kRecords * kStride + 1);
+    for (uint32_t k = 0; k < rec.size(); ++k) rec[k] = static_cast<float>(g() % 1000) - 500.5f;
+    // Distinct records for the lanes that store (set bits), any record for the others.
+    uint32_t bits = g() & ((N == 32 ? 0u : (1u << N)) - 1u);
+    int32_t idx[N];
+    std::vector<int32_t> pool(kRecords);
+    for (uint32_t k = 0; k < kRecords; ++k) pool[k] = static_cast<int32_t>(k);
+    std::shuffle(pool.begin(), pool.end(), g);
+    for (uint32_t l = 0; l < N; ++l) idx[l] = (bits >> l) & 1u ? pool[l] : static_cast<int32_t>(g() % kRecords);
+    for (uint32_t l = 0; l < N; ++l)
+      if (!((bits >> l) & 1u))
+        for (uint32_t m = 0; m < N; ++m)
+          if ((bits >> m) & 1u && idx[m] == idx[l]) bits &= ~(1u << m);  // a read-only row stays unwritten
+    for (uint32_t at = 0; at + N <= kStride; at += N) {
+      float* base = rec.data() + 1;  // unaligned
+      const float* crows[N];
+      float* rows[N];
+      for (uint32_t l = 0; l < N; ++l) rows[l] = base + kStride * idx[l] + at, crows[l] = rows[l];
+      FloatN<N> out[N];
+      load_transposed(crows, out);
+      for (uint32_t j = 0; j < N; ++j)
+        for (uint32_t l = 0; l < N; ++l) ASSERT_EQ(out[j].lane(l), rows[l][j]) << "width " << N;
+      FloatN<N> in[N];
+      for (uint32_t j = 0; j < N; ++j) in[j] = out[j] + FloatN<N>(static_cast<float>(j + 1));
+      const std::vector<float> before = rec;
+      store_transposed(rows, in, bits);
+      std::vector<float> want = before;
+      for (uint32_t l = 0; l < N; ++l)
+        if ((bits >> l) & 1u)
+          for (uint32_t j = 0; j < N; ++j) want[1 + kStride * idx[l] + at + j] = in[j].lane(l);
+      ASSERT_EQ(0, std::memcmp(want.data(), rec.data(), sizeof(float) * rec.size())) << "width " << N;
+    }
+  }
+}
+
+TEST(Lanes, TransposedLoadAndStoreMatchALoop) {
+  check_transposed<1>(41);
+  check_transposed<4>(42);
+  check_transposed<8>(43);
+  check_transposed<16>(44);
 }
 
 TEST(Lanes, MaxLowestIndexReportsNoneForNaNOnly) {
