@@ -14,12 +14,22 @@
 namespace impact::host {
 namespace {
 
-constexpr uint32_t kBodyGrain = 1u << 13;       // bodies per chunk
-constexpr uint32_t kConstraintGrain = 1u << 9;  // constraint slots per chunk (whole blocks)
-constexpr uint32_t kBlockGrain = kConstraintGrain / kernels::kContactLanes;  // blocks per chunk of a colour
-static_assert(kConstraintGrain % kernels::kContactLanes == 0);
+// Grains. The per-substep passes of a small scene are short (a 1240-box pyramid has
+// ~150 constraints a colour and ~1.2k bodies), so they split into chunks down to the
+// minimum grains, about four per thread; large scenes take bigger chunks and pay
+// less scheduling. Chunks never change the bytes: bodies, and one colour's
+// constraints, are independent of each other.
+constexpr uint32_t kMinBodyGrain = 1u << 8;     // bodies per chunk, at least
+constexpr uint32_t kConstraintGrain = 1u << 9;  // constraint slots per chunk of prepare and store
+constexpr uint32_t kMinColourGrain = 1u << 5;   // constraint slots per chunk of a colour's pass, at least
+static_assert(kMinColourGrain % kernels::kContactLanes == 0);
 constexpr uint32_t kPointGrain = 1u << 13;      // points or keys per chunk
 
+// About four chunks per thread of `count` items, at least `min_grain` items each.
+uint32_t grain_for(const Executor& exec, uint32_t count, uint32_t min_grain) {
+  const uint32_t parts = 4 * std::max(exec.threads(), 1u);
+  return std::max(min_grain, (count + parts - 1) / parts);
+}
 kernels::SoftBodyInput body_input(BodyStore& s, const WorldDesc& desc, kernels::BodyForces* forces,
                                   kernels::BodyDamping* damping) {
   kernels::SoftBodyInput in{};
@@ -56,7 +66,8 @@ void SoftStepSolver::for_each_colour(const Executor& exec, Wide&& wide, Serial&&
     // Whole blocks: the colour's slots start at a multiple of W and are padded to one.
     const uint32_t b = colour_start_[k] / W, e = b + kernels::contact_blocks(colour_count_[k]);
     if (b == e) continue;
-    exec.for_each_chunk(e - b, kBlockGrain, [&](uint32_t cb, uint32_t ce, uint32_t) {
+    const uint32_t grain = grain_for(exec, e - b, kMinColourGrain / W);  // in blocks
+    exec.for_each_chunk(e - b, grain, [&](uint32_t cb, uint32_t ce, uint32_t) {
       wide(kernels::Range{b + cb, b + ce});
     });
   }
@@ -104,6 +115,7 @@ void SoftStepSolver::gather_deep(const kernels::ContactManifoldArrays& c, uint32
 
 void SoftStepSolver::step(const Executor& exec, const WorldDesc& desc, const ContactManifolds& contacts, BodyStore& s,
                           const PlaneStore& planes, float dt) {
+  const uint32_t body_grain = grain_for(exec, static_cast<uint32_t>(s.size()), kMinBodyGrain);
   const SolverDesc& sd = desc.solver;
   const auto n = static_cast<uint32_t>(s.size());
   const auto nm = static_cast<uint32_t>(contacts.manifolds);
@@ -155,7 +167,7 @@ void SoftStepSolver::step(const Executor& exec, const WorldDesc& desc, const Con
   kernels::Vec3* com = scratch(com_, n);
   kernels::GyroBody* gyro = in.rotating && in.gyroscopic ? scratch(gyro_, n) : nullptr;
   const kernels::Vec3 g{desc.gravity.x(), desc.gravity.y(), desc.gravity.z()};
-  exec.for_each_chunk(n, kBodyGrain, [&](uint32_t b, uint32_t e, uint32_t) {
+  exec.for_each_chunk(n, body_grain, [&](uint32_t b, uint32_t e, uint32_t) {
     kernels::prepare_bodies(p, g, in, bodies, drive, ii, com, gyro, {b, e});
   });
   bodies[n] = kernels::SolverBody{};
@@ -188,7 +200,7 @@ void SoftStepSolver::step(const Executor& exec, const WorldDesc& desc, const Con
   }
 
   for (uint32_t sub = 0; sub < sd.substeps; ++sub) {
-    exec.for_each_chunk(n, kBodyGrain, [&](uint32_t b, uint32_t e, uint32_t) {
+    exec.for_each_chunk(n, body_grain, [&](uint32_t b, uint32_t e, uint32_t) {
       kernels::integrate_substep_velocities(drive, bodies, {b, e});
     });
     if (nm > 0) {
@@ -199,7 +211,7 @@ void SoftStepSolver::step(const Executor& exec, const WorldDesc& desc, const Con
           exec, [&](kernels::Range r) { kernels::solve_contacts(p, true, blocks, bodies, r); },
           [&](kernels::Range r) { kernels::solve_contacts_serial(p, true, blocks, bodies, r); });
     }
-    exec.for_each_chunk(n, kBodyGrain, [&](uint32_t b, uint32_t e, uint32_t) {
+    exec.for_each_chunk(n, body_grain, [&](uint32_t b, uint32_t e, uint32_t) {
       kernels::integrate_substep_positions(p.h, gyro, bodies, {b, e});
     });
     if (nm > 0)
@@ -243,7 +255,7 @@ void SoftStepSolver::step(const Executor& exec, const WorldDesc& desc, const Con
     recovery_.clear_impulses();
   }
 
-  exec.for_each_chunk(n, kBodyGrain, [&](uint32_t b, uint32_t e, uint32_t) {
+  exec.for_each_chunk(n, body_grain, [&](uint32_t b, uint32_t e, uint32_t) {
     kernels::finish_bodies(in, bodies, com, {b, e});
   });
   if (deep_.manifolds > 0) recovery_.correct_positions(exec, sd, deep_, s, dt);
