@@ -89,4 +89,29 @@ IMPACT_INLINE Sym3 operator+(const Sym3& a, const Sym3& b) {
   return {a.xx + b.xx, a.yy + b.yy, a.zz + b.zz, a.xy + b.xy, a.xz + b.xz, a.yz + b.yz};
 }
 
+/// A unit vector perpendicular to unit n, chosen continuously away from the poles
+/// (Frisvad's branch on the smallest component, as Box3D's b3Perp).
+IMPACT_INLINE Vec3 perpendicular(Vec3 n) {
+  if (std::fabs(n.x) < 0.57735f) {
+    const float inv = 1.0f / std::sqrt(n.y * n.y + n.z * n.z);
+    return {0.0f, n.z * inv, -n.y * inv};
+  }
+  const float inv = 1.0f / std::sqrt(n.x * n.x + n.y * n.y);
+  return {n.y * inv, -n.x * inv, 0.0f};
+}
+
+/// Inverse of a symmetric 3x3 (zero when singular).
+IMPACT_INLINE Sym3 inverse(const Sym3& m) {
+  const float c00 = m.yy * m.zz - m.yz * m.yz, c01 = m.xz * m.yz - m.xy * m.zz, c02 = m.xy * m.yz - m.xz * m.yy;
+  const float det = m.xx * c00 + m.xy * c01 + m.xz * c02;
+  if (!(std::fabs(det) > 1e-30f)) return {0, 0, 0, 0, 0, 0};
+  const float inv = 1.0f / det;
+  return {c00 * inv,
+          (m.xx * m.zz - m.xz * m.xz) * inv,
+          (m.xx * m.yy - m.xy * m.xy) * inv,
+          c01 * inv,
+          c02 * inv,
+          (m.xz * m.xy - m.xx * m.yz) * inv};
+}
+
 }  // namespace impact::kernels

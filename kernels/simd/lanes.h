@@ -589,12 +589,10 @@ IMPACT_INLINE void gather_xyz(const float* xyzw, const int32_t* idx, FloatN<N>* 
 /// lane, no alignment needed), transposed; the per-lane walk over a short array without
 /// gathers (N loads and a shuffle network: 24 shuffles for N = 8, where 8 gathers cost
 /// several times that).
-template <uint32_t N>
-IMPACT_INLINE void load_transposed(const float* const* rows, FloatN<N>* out) {
 #if defined(__AVX__)
-  if constexpr (N == 8) {
-    __m256 r[8];
-    for (int i = 0; i < 8; ++i) r[i] = _mm256_loadu_ps(rows[i]);
+/// o = the 8 x 8 transpose of r (row i of r is register r[i]): unpacks, shuffles and
+/// 128-bit permutes, no memory. load_transposed and store_transposed share it.
+IMPACT_INLINE void transpose8(const __m256 r[8], __m256 o[8]) {
     const __m256 t0 = _mm256_unpacklo_ps(r[0], r[1]), t1 = _mm256_unpackhi_ps(r[0], r[1]);
     const __m256 t2 = _mm256_unpacklo_ps(r[2], r[3]), t3 = _mm256_unpackhi_ps(r[2], r[3]);
     const __m256 t4 = _mm256_unpacklo_ps(r[4], r[5]), t5 = _mm256_unpackhi_ps(r[4], r[5]);
@@ -603,10 +601,22 @@ IMPACT_INLINE void load_transposed(const float* const* rows, FloatN<N>* out) {
     const __m256 s2 = _mm256_shuffle_ps(t1, t3, 0x44), s3 = _mm256_shuffle_ps(t1, t3, 0xee);
     const __m256 s4 = _mm256_shuffle_ps(t4, t6, 0x44), s5 = _mm256_shuffle_ps(t4, t6, 0xee);
     const __m256 s6 = _mm256_shuffle_ps(t5, t7, 0x44), s7 = _mm256_shuffle_ps(t5, t7, 0xee);
-    const __m256 o[8] = {_mm256_permute2f128_ps(s0, s4, 0x20), _mm256_permute2f128_ps(s1, s5, 0x20),
+    const __m256 x[8] = {_mm256_permute2f128_ps(s0, s4, 0x20), _mm256_permute2f128_ps(s1, s5, 0x20),
                          _mm256_permute2f128_ps(s2, s6, 0x20), _mm256_permute2f128_ps(s3, s7, 0x20),
                          _mm256_permute2f128_ps(s0, s4, 0x31), _mm256_permute2f128_ps(s1, s5, 0x31),
                          _mm256_permute2f128_ps(s2, s6, 0x31), _mm256_permute2f128_ps(s3, s7, 0x31)};
+    for (int j = 0; j < 8; ++j) o[j] = x[j];
+}
+#endif
+
+template <uint32_t N>
+IMPACT_INLINE void load_transposed(const float* const* rows, FloatN<N>* out) {
+#if defined(__AVX__)
+  if constexpr (N == 8) {
+    __m256 r[8];
+    for (int i = 0; i < 8; ++i) r[i] = _mm256_loadu_ps(rows[i]);
+    __m256 o[8];
+    transpose8(r, o);
     for (int j = 0; j < 8; ++j) out[j] = FloatN<N>(reinterpret_cast<typename FloatN<N>::Raw>(o[j]));
     return;
   }
@@ -626,19 +636,9 @@ IMPACT_INLINE void store_transposed(float* const* rows, const FloatN<N>* in, uin
   if constexpr (N == 8) {
     __m256 r[8];
     for (int j = 0; j < 8; ++j) r[j] = reinterpret_cast<__m256>(in[j].v);
-    // The 8 x 8 transpose is its own inverse: the network of load_transposed.
-    const __m256 t0 = _mm256_unpacklo_ps(r[0], r[1]), t1 = _mm256_unpackhi_ps(r[0], r[1]);
-    const __m256 t2 = _mm256_unpacklo_ps(r[2], r[3]), t3 = _mm256_unpackhi_ps(r[2], r[3]);
-    const __m256 t4 = _mm256_unpacklo_ps(r[4], r[5]), t5 = _mm256_unpackhi_ps(r[4], r[5]);
-    const __m256 t6 = _mm256_unpacklo_ps(r[6], r[7]), t7 = _mm256_unpackhi_ps(r[6], r[7]);
-    const __m256 s0 = _mm256_shuffle_ps(t0, t2, 0x44), s1 = _mm256_shuffle_ps(t0, t2, 0xee);
-    const __m256 s2 = _mm256_shuffle_ps(t1, t3, 0x44), s3 = _mm256_shuffle_ps(t1, t3, 0xee);
-    const __m256 s4 = _mm256_shuffle_ps(t4, t6, 0x44), s5 = _mm256_shuffle_ps(t4, t6, 0xee);
-    const __m256 s6 = _mm256_shuffle_ps(t5, t7, 0x44), s7 = _mm256_shuffle_ps(t5, t7, 0xee);
-    const __m256 o[8] = {_mm256_permute2f128_ps(s0, s4, 0x20), _mm256_permute2f128_ps(s1, s5, 0x20),
-                         _mm256_permute2f128_ps(s2, s6, 0x20), _mm256_permute2f128_ps(s3, s7, 0x20),
-                         _mm256_permute2f128_ps(s0, s4, 0x31), _mm256_permute2f128_ps(s1, s5, 0x31),
-                         _mm256_permute2f128_ps(s2, s6, 0x31), _mm256_permute2f128_ps(s3, s7, 0x31)};
+    // The 8 x 8 transpose is its own inverse.
+    __m256 o[8];
+    transpose8(r, o);
     for (int i = 0; i < 8; ++i) {
 #if defined(__AVX512F__) && defined(__AVX512VL__)
       // A masked store with an empty mask writes nothing (and does not fault).

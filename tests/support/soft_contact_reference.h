@@ -46,32 +46,6 @@ struct ContactConstraint {
 
 namespace detail {
 
-// A unit vector perpendicular to unit n, chosen continuously away from the poles
-// (Frisvad's branch on the smallest component, as Box3D's b3Perp).
-IMPACT_INLINE Vec3 perpendicular(Vec3 n) {
-  if (std::fabs(n.x) < 0.57735f) {
-    const float inv = 1.0f / std::sqrt(n.y * n.y + n.z * n.z);
-    return {0.0f, n.z * inv, -n.y * inv};
-  }
-  const float inv = 1.0f / std::sqrt(n.x * n.x + n.y * n.y);
-  return {n.y * inv, -n.x * inv, 0.0f};
-}
-
-// Inverse of a symmetric 3x3 (zero when singular).
-IMPACT_INLINE Sym3 inverse(const Sym3& m) {
-  const float c00 = m.yy * m.zz - m.yz * m.yz, c01 = m.xz * m.yz - m.xy * m.zz, c02 = m.xy * m.yz - m.xz * m.yy;
-  const float det = m.xx * c00 + m.xy * c01 + m.xz * c02;
-  if (!(std::fabs(det) > 1e-30f)) return {0, 0, 0, 0, 0, 0};
-  const float inv = 1.0f / det;
-  return {c00 * inv,
-          (m.xx * m.zz - m.xz * m.xz) * inv,
-          (m.xx * m.yy - m.xy * m.xy) * inv,
-          c01 * inv,
-          c02 * inv,
-          (m.xz * m.xy - m.xx * m.yz) * inv};
-}
-
-IMPACT_INLINE Sym3 add(const Sym3& a, const Sym3& b) { return a + b; }
 
 // Applies linear impulse P at anchors ra, rb: a gets -P, b gets +P.
 IMPACT_INLINE void push(const ContactConstraint& k, Vec3 P, Vec3 ra, Vec3 rb, Vec3& va, Vec3& wa, Vec3& vb,
@@ -177,9 +151,9 @@ inline void prepare_contacts(const SoftParams& p, const ContactManifoldArrays& c
       k.k22 = m11 * inv;
       k.k12 = -m12 * inv;
     }
-    const float kt = dot(k.n, add(k.ia, k.ib) * k.n);
+    const float kt = dot(k.n, (k.ia + k.ib) * k.n);
     k.twist_mass = kt > 0.0f ? 1.0f / kt : 0.0f;
-    k.rolling_mass = k.rolling > 0.0f ? inverse(add(k.ia, k.ib)) : zero;
+    k.rolling_mass = k.rolling > 0.0f ? inverse((k.ia + k.ib)) : zero;
     out[i] = k;
   }
 }
