@@ -55,6 +55,7 @@ struct Options {
   uint32_t block = 10;
   uint32_t threads = 1;
   uint32_t substeps = 4;
+  bool sleep = false;
   uint32_t bullet_iterations = 10;
   uint32_t ode_iterations = 20;
   std::vector<std::string> engines;  // empty: every engine built in
@@ -88,6 +89,7 @@ void print_usage(std::FILE* f) {
                "  --threads N          impact's worker threads, 0 = all hardware threads (default 1);\n"
                "                       the peers run on one thread\n"
                "  --substeps N         impact's soft-step substeps (default 4)\n"
+               "  --sleep              impact's islands and sleeping on (default off, as the peers')\n"
                "  --bullet-iterations N  Bullet's solver iterations (default 10)\n"
                "  --ode-iterations N   ODE's quickstep iterations (default 20)\n"
                "  --help               this text\n\n"
@@ -133,6 +135,8 @@ int parse_args(int argc, char** argv, Options* o) {
       if (int r = number(&o->threads, 0)) return r;
     } else if (arg == "--substeps") {
       if (int r = number(&o->substeps, 1)) return r;
+    } else if (arg == "--sleep") {
+      o->sleep = true;
     } else if (arg == "--bullet-iterations") {
       if (int r = number(&o->bullet_iterations, 1)) return r;
     } else if (arg == "--ode-iterations") {
@@ -187,7 +191,7 @@ bool to_peer_scene(const impact::bench::Scene& s, PeerScene* out) {
   return true;
 }
 
-// impact through its public API: a World with the soft step and no sleeping (it has none).
+// impact through its public API: a World with the soft step; sleeping off unless --sleep.
 class ImpactEngine final : public Engine {
  public:
   static std::unique_ptr<ImpactEngine> create(const impact::bench::Scene& scene, const Options& o) {
@@ -196,6 +200,7 @@ class ImpactEngine final : public Engine {
     desc.threads = o.threads;
     desc.solver.kind = impact::SolverKind::kSoftStep;
     desc.solver.substeps = o.substeps;
+    desc.solver.sleep = o.sleep;
     auto e = std::unique_ptr<ImpactEngine>(new ImpactEngine());
     impact::Status s = impact::World::create(desc, &e->world_);
     if (s.ok()) s = impact::bench::add_scene_shapes(scene, &e->world_->shapes());
@@ -214,8 +219,8 @@ class ImpactEngine final : public Engine {
     const impact::SolverDesc& s = world_->desc().solver;
     const std::string hertz = s.contact_hertz > 0.0f ? std::to_string(static_cast<int>(s.contact_hertz)) + " Hz"
                                                      : "automatic stiffness";
-    return "impact soft step, " + std::to_string(s.substeps) + " substeps, contact " + hertz + ", " +
-           std::to_string(world_->threads()) +
+    return "impact soft step, " + std::to_string(s.substeps) + " substeps, contact " + hertz +
+           (s.sleep ? ", sleeping" : "") + ", " + std::to_string(world_->threads()) +
            " thread(s) (" + impact::to_string(world_->backend()) + ")";
   }
   bool step() override {

@@ -48,6 +48,8 @@ struct BodyRow {
   float cx = 0, cy = 0, cz = 0;
   float linear_damping = 0, angular_damping = 0, gravity_scale = 1;
   float fx = 0, fy = 0, fz = 0, tx = 0, ty = 0, tz = 0;
+  float sleep_time = 0;
+  uint8_t asleep = 0;
   BodyHandle handle;
 };
 
@@ -69,6 +71,8 @@ struct BodyStore {
   Buffer<float> cx, cy, cz;              ///< centre of mass in the shape frame, m (kRigid)
   Buffer<float> linear_damping, angular_damping, gravity_scale;  ///< (kDamping)
   Buffer<float> fx, fy, fz, tx, ty, tz;  ///< force (N) and torque (N m) for the next step (kForces)
+  Buffer<float> sleep_time;              ///< s the body has been slower than SolverDesc::sleep_speed
+  Buffer<uint8_t> asleep;                ///< 1: asleep (host/pipeline/sleep_stage.cpp)
   Buffer<BodyHandle> handle;             ///< slot -> handle
 
   size_t size() const { return handle.size(); }
@@ -149,6 +153,8 @@ inline constexpr auto kBodyFields = std::tuple{
     BodyField<float>{"tx", &BodyStore::tx, &BodyRow::tx, nullptr, FieldSet::kForces},
     BodyField<float>{"ty", &BodyStore::ty, &BodyRow::ty, nullptr, FieldSet::kForces},
     BodyField<float>{"tz", &BodyStore::tz, &BodyRow::tz, nullptr, FieldSet::kForces},
+    BodyField<float>{"sleep_time", &BodyStore::sleep_time, &BodyRow::sleep_time, nullptr, FieldSet::kCore},
+    BodyField<uint8_t>{"asleep", &BodyStore::asleep, &BodyRow::asleep, &BodyArrays::asleep, FieldSet::kCore},
     BodyField<BodyHandle>{"handle", &BodyStore::handle, &BodyRow::handle, &BodyArrays::handles, FieldSet::kCore},
 };
 

@@ -116,6 +116,10 @@ Status check_desc(const WorldDesc& d) {
                           fmt_float(s.restitution_threshold));
   if (!(s.warm_start >= 0.0f && s.warm_start <= 1.0f))
     return invalid(w, "solver.warm_start must be in [0, 1], got " + fmt_float(s.warm_start));
+  if (!(std::isfinite(s.sleep_speed) && s.sleep_speed > 0.0f))
+    return invalid(w, "solver.sleep_speed must be finite and > 0, got " + fmt_float(s.sleep_speed));
+  if (!(std::isfinite(s.sleep_time) && s.sleep_time > 0.0f))
+    return invalid(w, "solver.sleep_time must be finite and > 0, got " + fmt_float(s.sleep_time));
   if (d.broad_phase != BroadPhaseKind::kGrid && d.broad_phase != BroadPhaseKind::kBruteForce &&
       d.broad_phase != BroadPhaseKind::kLbvh && d.broad_phase != BroadPhaseKind::kSweepAndPrune &&
       d.broad_phase != BroadPhaseKind::kAuto)
@@ -180,6 +184,37 @@ void WorldImpl::enable_rigid() {
     host::body_inertia(shapes, shaped ? ShapeId{s.shape[i]} : ShapeId{}, s.radius[i], s.inv_mass[i], &row);
     host::set_rigid_fields(s, i, row);
   }
+}
+
+void WorldImpl::wake(std::span<const uint32_t> slots) {
+  host::BodyStore& s = bodies;
+  frozen = false;
+  bool any_asleep = false;
+  for (uint32_t i = 0; i < s.size() && !any_asleep; ++i) any_asleep = s.asleep[i] != 0;
+  if (any_asleep && contacts.manifolds > 0) {
+    std::vector<uint8_t> moved(s.size(), 0);
+    for (const uint32_t k : slots) moved[k] = 1;
+    const kernels::ContactManifoldArrays c = contacts.view();
+    for (size_t m = 0; m < contacts.manifolds; ++m) {
+      if (c.b_is_plane[m] || c.a[m] >= s.size() || c.b[m] >= s.size()) continue;
+      if (moved[c.a[m]] || moved[c.b[m]]) {
+        for (const uint32_t k : {c.a[m], c.b[m]}) {
+          s.asleep[k] = 0;
+          s.sleep_time[k] = 0.0f;
+        }
+      }
+    }
+  }
+  for (const uint32_t k : slots) {
+    s.asleep[k] = 0;
+    s.sleep_time[k] = 0.0f;
+  }
+}
+
+void WorldImpl::wake_all() {
+  frozen = false;
+  std::fill(bodies.asleep.begin(), bodies.asleep.end(), uint8_t{0});
+  std::fill(bodies.sleep_time.begin(), bodies.sleep_time.end(), 0.0f);
 }
 
 void WorldImpl::swap_remove_body(uint32_t slot) {
@@ -260,6 +295,7 @@ BodyHandle append_body(WorldImpl& w, const BodyDesc& d, float radius) {
   if (shaped) ++w.shaped_count;
   w.broad_phase.invalidate();
   w.positions_changed();
+  w.frozen = false;  // a new body is awake
   return row.handle;
 }
 
@@ -346,6 +382,7 @@ Status World::destroy_bodies(std::span<const BodyHandle> handles) {
   std::sort(sorted.begin(), sorted.end());  // validation only; does not shape results
   if (std::adjacent_find(sorted.begin(), sorted.end()) != sorted.end())
     return invalid("destroy_bodies", "the same body is listed twice");
+  impl_->wake(slots);           // what rested on them falls
   impl_->slots_changed(true);  // slots move: last step's results and contact keys no longer apply
   for (const BodyHandle& h : handles) {
     // Look up again: earlier removals may have moved this body to another slot.
@@ -363,6 +400,7 @@ Status World::set_positions(std::span<const BodyHandle> handles, std::span<const
     if (Status s = check_position("set_positions: body " + std::to_string(i), values[i]); !s.ok()) return s;
   host::BodyStore& b = impl_->bodies;
   impl_->positions_changed();
+  impl_->wake(slots);
   for (size_t i = 0; i < values.size(); ++i) {
     const uint32_t k = slots[i];
     b.pos_x[k] = values[i].x();
@@ -385,6 +423,7 @@ Status World::set_velocities(std::span<const BodyHandle> handles, std::span<cons
   for (size_t i = 0; i < values.size(); ++i)
     if (Status s = check_velocity("set_velocities: body " + std::to_string(i), values[i]); !s.ok()) return s;
   host::BodyStore& b = impl_->bodies;
+  impl_->wake(slots);
   for (size_t i = 0; i < values.size(); ++i) {
     b.vel_x[slots[i]] = values[i].x();
     b.vel_y[slots[i]] = values[i].y();
@@ -463,6 +502,7 @@ Status World::create_planes(std::span<const PlaneDesc> descs, std::span<PlaneHan
     p.handle.push_back(h);
     out[i] = h;
   }
+  if (!descs.empty()) impl_->wake_all();  // a new plane may cut through a sleeping pile
   return Status();
 }
 
@@ -483,6 +523,7 @@ Status World::destroy_planes(std::span<const PlaneHandle> handles) {
   if (std::adjacent_find(sorted.begin(), sorted.end()) != sorted.end())
     return invalid("destroy_planes", "the same plane is listed twice");
   impl_->slots_changed(false);  // plane slots move: last step's results and contact keys no longer apply
+  if (!handles.empty()) impl_->wake_all();  // what rested on them falls
   for (const PlaneHandle& h : handles) {
     const uint32_t slot = impl_->plane_handles.lookup(h.index, h.generation);
     const uint32_t last = static_cast<uint32_t>(p.size() - 1);
@@ -667,12 +708,14 @@ Status World::set_solver(const SolverDesc& solver) {
   d.solver = solver;
   if (Status s = check_desc(d); !s.ok()) return s;
   impl_->desc = d;
+  impl_->wake_all();
   return Status();
 }
 
 Status World::set_gravity(const Eigen::Vector3f& gravity) {
   if (!finite3(gravity)) return invalid("set_gravity", "gravity must be finite, got " + vec_str(gravity));
   impl_->desc.gravity = gravity;
+  impl_->wake_all();
   return Status();
 }
 

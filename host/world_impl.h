@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cstdint>
+#include <span>
 
 #include "host/body_store.h"
 #include "host/broadphase/stage.h"
@@ -41,6 +42,13 @@ class WorldImpl {
   /// Switches the rigid field set on (angular velocity, inertia, centre of mass),
   /// giving the dynamic bodies that exist their inertia.
   void enable_rigid();
+  /// Wakes the bodies in `slots` (their sleep timers restart) and every asleep body that
+  /// shares a last-step manifold with one of them (a body resting on a moved or removed
+  /// one); their islands wake in the next step's sleep stage. Cost: O(slots), plus one
+  /// pass over the last step's manifolds while any body sleeps.
+  void wake(std::span<const uint32_t> slots);
+  /// Wakes every body.
+  void wake_all();
 
   WorldDesc desc;
   host::Executor exec;
@@ -56,6 +64,7 @@ class WorldImpl {
   StepStats last;
   bool queries_fresh = false;
   uint64_t steps_since_reorder = 0;
+  bool frozen = false;  // every dynamic body asleep: step() skips its stages
 
   // Kept from step to step.
   host::BroadPhaseStage broad_phase;

@@ -75,6 +75,7 @@ Status World::set_angular_velocities(std::span<const BodyHandle> handles, std::s
     if (b.fixed_rotation[slots[i]] && values[i] != Eigen::Vector3f::Zero())
       return host::invalid(body_who(call, i), "has fixed_rotation; its angular velocity must stay zero, got " +
                                                   host::vec_str(values[i]));
+  impl_->wake(slots);
   bool any = false;
   for (const Eigen::Vector3f& w : values) any = any || w != Eigen::Vector3f::Zero();
   if (!any && !b.on(FieldSet::kRigid)) return Status();  // zero is what every body has
@@ -112,6 +113,7 @@ Status World::set_orientations(std::span<const BodyHandle> handles, std::span<co
   BodyStore& b = impl_->bodies;
   b.enable(FieldSet::kOriented);
   impl_->positions_changed();
+  impl_->wake(slots);
   for (size_t i = 0; i < values.size(); ++i) {
     const Eigen::Quaternionf q = values[i].normalized();
     b.qx[slots[i]] = q.x();
@@ -139,6 +141,7 @@ Status World::apply_forces(std::span<const BodyHandle> handles, std::span<const 
   if (Status s = check_finite(call, "force", forces); !s.ok()) return s;
   impl_->enable_rigid();
   impl_->bodies.enable(FieldSet::kForces);
+  impl_->wake(slots);
   for (size_t i = 0; i < forces.size(); ++i)
     accumulate(impl_->bodies, slots[i], forces[i], nullptr, Eigen::Vector3f::Zero());
   return Status();
@@ -156,6 +159,7 @@ Status World::apply_forces_at(std::span<const BodyHandle> handles, std::span<con
     if (Status s = host::check_position(body_who(call, i) + " point", points[i]); !s.ok()) return s;
   impl_->enable_rigid();
   impl_->bodies.enable(FieldSet::kForces);
+  impl_->wake(slots);
   for (size_t i = 0; i < forces.size(); ++i)
     accumulate(impl_->bodies, slots[i], forces[i], &points[i], Eigen::Vector3f::Zero());
   return Status();
@@ -169,6 +173,7 @@ Status World::apply_torques(std::span<const BodyHandle> handles, std::span<const
   if (Status s = check_finite(call, "torque", torques); !s.ok()) return s;
   impl_->enable_rigid();
   impl_->bodies.enable(FieldSet::kForces);
+  impl_->wake(slots);
   for (size_t i = 0; i < torques.size(); ++i)
     accumulate(impl_->bodies, slots[i], Eigen::Vector3f::Zero(), nullptr, torques[i]);
   return Status();
@@ -185,6 +190,7 @@ Status World::apply_impulses(std::span<const BodyHandle> handles, std::span<cons
   for (size_t i = 0; i < points.size(); ++i)
     if (Status s = host::check_position(body_who(call, i) + " point", points[i]); !s.ok()) return s;
   impl_->enable_rigid();
+  impl_->wake(slots);
   BodyStore& b = impl_->bodies;
   for (size_t i = 0; i < impulses.size(); ++i) {
     const uint32_t k = slots[i];
@@ -199,6 +205,13 @@ Status World::apply_impulses(std::span<const BodyHandle> handles, std::span<cons
     b.wy[k] += dw.y();
     b.wz[k] += dw.z();
   }
+  return Status();
+}
+
+Status World::wake_bodies(std::span<const BodyHandle> handles) {
+  std::vector<uint32_t> slots;
+  if (Status s = host::resolve_bodies(*impl_, handles, "wake_bodies", &slots); !s.ok()) return s;
+  impl_->wake(slots);
   return Status();
 }
 

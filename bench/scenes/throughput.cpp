@@ -43,6 +43,7 @@ struct Options {
   impact::BroadPhaseKind broad_phase = impact::BroadPhaseKind::kGrid;
   std::optional<uint32_t> iterations;  // unset: the library default
   std::optional<impact::SolverKind> solver;  // unset: the library default
+  bool sleep = true;
   uint64_t seed = impact::bench::kDefaultSeed;
   std::string json_path;
   std::optional<uint64_t> expect_hash;
@@ -71,6 +72,7 @@ void print_usage(std::FILE* f) {
                "  --solver NAME        jacobi | soft (default: soft for the rigid scenes pyramid,\n"
                "                       wall, pyramids, column, hulls and mixed, which need rotation\n"
                "                       and friction; otherwise the library default)\n"
+               "  --no-sleep           soft step: islands and sleeping off (default on)\n"
                "  --seed N             scene seed (default %" PRIu64
                ")\n"
                "  --json FILE          also write every figure as JSON to FILE\n"
@@ -120,6 +122,8 @@ int parse_args(int argc, char** argv, Options* o) {
       uint32_t it = 0;
       if (int r = number(&it, 0)) return r;
       o->iterations = it;
+    } else if (arg == "--no-sleep") {
+      o->sleep = false;
     } else if (arg == "--solver") {
       if (!need_value()) return fail("--solver needs a value");
       if (value == "jacobi") {
@@ -280,6 +284,7 @@ int main(int argc, char** argv) {
   desc.threads = opt.threads;
   desc.broad_phase = opt.broad_phase;
   if (opt.iterations) desc.solver.velocity_iterations = *opt.iterations;
+  desc.solver.sleep = opt.sleep;
   if (opt.solver)
     desc.solver.kind = *opt.solver;
   else if (scene.rigid)
@@ -293,7 +298,7 @@ int main(int argc, char** argv) {
   // --- run ---------------------------------------------------------------------------
   std::vector<double> step_ms, integrate, bounds, broad, narrow, solve, total;
   for (auto* v : {&step_ms, &integrate, &bounds, &broad, &narrow, &solve, &total}) v->reserve(opt.steps);
-  double pairs = 0.0, contacts = 0.0, plane_contacts = 0.0;
+  double pairs = 0.0, contacts = 0.0, plane_contacts = 0.0, asleep = 0.0;
   Progress progress(opt.progress, opt.steps);
   for (uint32_t i = 0; i < opt.steps; ++i) {
     const Clock::time_point t0 = Clock::now();
@@ -315,6 +320,7 @@ int main(int argc, char** argv) {
     pairs += static_cast<double>(st.pairs);
     contacts += static_cast<double>(st.contacts);
     plane_contacts += static_cast<double>(st.plane_contacts);
+    asleep += static_cast<double>(st.asleep_bodies);
     progress.update(i + 1);
   }
   progress.finish();
@@ -342,8 +348,8 @@ int main(int argc, char** argv) {
       "  ms per pass      integrate %.3f  bounds %.3f  broad_phase %.3f  narrow_phase %.3f  solve %.3f"
       "  (library total %.3f), medians\n",
       median(integrate), median(bounds), median(broad), median(narrow), median(solve), median(total));
-  std::printf("  per step (mean)  %.0f pairs, %.0f contacts (%.0f body-plane)\n", pairs / n_steps,
-              contacts / n_steps, plane_contacts / n_steps);
+  std::printf("  per step (mean)  %.0f pairs, %.0f contacts (%.0f body-plane), %.0f bodies asleep\n",
+              pairs / n_steps, contacts / n_steps, plane_contacts / n_steps, asleep / n_steps);
   std::printf("  throughput       %.4g body-steps/s (bodies / median step time)\n", body_steps_per_s);
   std::printf("  state_hash       %016" PRIx64 "\n", hash);
   std::printf("csv: %u,%u,%u,%.4f,%016" PRIx64 "\n", threads, bodies, opt.steps, med, hash);

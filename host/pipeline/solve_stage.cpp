@@ -8,7 +8,8 @@ namespace impact::host {
 
 Status solve_velocities_stage(StepContext& ctx) {
   if (ctx.desc.solver.kind == SolverKind::kSoftStep) {
-    ctx.soft_solver.step(ctx.exec, ctx.desc, ctx.contacts, ctx.bodies, ctx.planes, ctx.dt);
+    const float* inv_mass = ctx.solver_inv_mass != nullptr ? ctx.solver_inv_mass : ctx.bodies.inv_mass.data();
+    ctx.soft_solver.step(ctx.exec, ctx.desc, ctx.contacts, ctx.bodies, ctx.planes, ctx.dt, inv_mass);
     if (ctx.bodies.on(FieldSet::kForces)) clear_forces(ctx);
     return Status();
   }

@@ -8,6 +8,7 @@
 //   narrow phase          body-plane pairs by the plane filter, then the contact
 //                         manifolds of every pair, on the poses the step starts from
 //                                                                     (narrow_phase_stage.cpp)
+//   sleep                 islands; which sleep, which wake           (sleep_stage.cpp)
 //   (continuous collision will run here, between the narrow phase and the solve)
 //   solve velocities      warm start + iterations on the manifolds' points (solve_stage.cpp)
 //   integrate positions   x += v dt with the solved velocities        (integrate_stage.cpp)
@@ -17,7 +18,9 @@
 // g dt^2 every step. Every pass inside a stage is for_each_chunk over a kernel, and
 // variable-size outputs use count -> scan -> write or chunk-local buffers, so results
 // are identical for any thread count. A stage that fails ends the step: the bodies
-// keep what the earlier stages did, and the step has no contacts.
+// keep what the earlier stages did, and the step has no contacts. When the last step
+// left every dynamic body asleep and nothing has woken one since (WorldImpl::frozen),
+// the step runs no stage: nothing would move, and last step's contacts still hold.
 #include <chrono>
 
 #include "host/pipeline/step_context.h"
@@ -40,6 +43,7 @@ constexpr Stage kStages[] = {
     {"bounds", &host::bounds_stage, &PassTimes::bounds},
     {"broad phase", &host::broad_phase_stage, &PassTimes::broad_phase},
     {"narrow phase", &host::narrow_phase_stage, &PassTimes::narrow_phase},
+    {"sleep", &host::sleep_stage, &PassTimes::solve},
     {"solve velocities", &host::solve_velocities_stage, &PassTimes::solve},
     {"integrate positions", &host::integrate_positions_stage, &PassTimes::integrate},
     {"correct positions", &host::correct_positions_stage, &PassTimes::solve},
@@ -50,10 +54,17 @@ constexpr Stage kStages[] = {
 host::StepContext WorldImpl::context() {
   return host::StepContext{desc,    exec,        desc.fixed_dt, bodies, body_handles, planes,  shapes,
                            shaped_count, broad_phase, pairs,  narrow, contacts,     solver,  soft_solver, scratch,
-                           last,    steps_since_reorder};
+                           last,    steps_since_reorder, frozen};
 }
 
 Status WorldImpl::step() {
+  if (frozen && desc.solver.sleep && desc.solver.kind == SolverKind::kSoftStep) {
+    const auto t0 = Clock::now();
+    last.ms = PassTimes{};
+    last.skipped = true;
+    last.ms.total = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+    return Status();
+  }
   last = StepStats{};
   positions_changed();  // the step moves bodies (and its structure sees start poses)
   host::StepContext ctx = context();

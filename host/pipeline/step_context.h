@@ -36,6 +36,10 @@ struct StepScratch {
   Buffer<uint8_t> tmp_u8;
   Buffer<float> tmp_f32;
   Buffer<BodyHandle> tmp_handle;
+  Buffer<float> solver_inv_mass;                 // sleep: inv_mass with the asleep bodies' zeroed
+  Buffer<float> island_min;                      // sleep: per island root, its smallest timer
+  Buffer<uint32_t> island_parent;
+  Buffer<uint8_t> kept_awake;
 };
 
 /// The narrow-phase stage's state: the runner and the arrays it is given.
@@ -68,10 +72,13 @@ struct StepContext {
   StepScratch& scratch;
   StepStats& stats;
   uint64_t& steps_since_reorder;
+  bool& frozen;                   // every dynamic body asleep, no kinematic one moving (sleep stage)
 
   // Handed from the bounds stage to the broad phase.
   kernels::AabbSoA boxes{};
   kernels::BoundsSummary summary{};
+  // Handed from the sleep stage to the solver: the inverse masses it sees.
+  const float* solver_inv_mass = nullptr;
 };
 
 /// The stages, in step order (host/pipeline/step.cpp).
@@ -80,6 +87,7 @@ Status integrate_velocities_stage(StepContext& ctx);
 Status bounds_stage(StepContext& ctx);
 Status broad_phase_stage(StepContext& ctx);
 Status narrow_phase_stage(StepContext& ctx);
+Status sleep_stage(StepContext& ctx);
 Status solve_velocities_stage(StepContext& ctx);
 Status integrate_positions_stage(StepContext& ctx);
 Status correct_positions_stage(StepContext& ctx);

@@ -24,6 +24,8 @@ constexpr uint32_t kConstraintGrain = 1u << 9;  // constraint slots per chunk of
 constexpr uint32_t kMinColourGrain = 1u << 5;   // constraint slots per chunk of a colour's pass, at least
 static_assert(kMinColourGrain % kernels::kContactLanes == 0);
 constexpr uint32_t kPointGrain = 1u << 13;      // points or keys per chunk
+constexpr uint8_t kLeftOut = 0xff;              // colour of a manifold between asleep or static bodies
+static_assert(kernels::kOverflowColour < kLeftOut);
 
 // About four chunks per thread of `count` items, at least `min_grain` items each.
 uint32_t grain_for(const Executor& exec, uint32_t count, uint32_t min_grain) {
@@ -76,10 +78,12 @@ void SoftStepSolver::for_each_colour(const Executor& exec, Wide&& wide, Serial&&
   if (ob != oe) serial(kernels::Range{ob, oe});  // slot by slot in order, on this thread
 }
 
-void SoftStepSolver::gather_deep(const kernels::ContactManifoldArrays& c, uint32_t manifolds, float deep_depth) {
+void SoftStepSolver::gather_deep(const kernels::ContactManifoldArrays& c, uint32_t manifolds, float deep_depth,
+                                 const uint8_t* colour) {
+  auto deep = [&](uint32_t m) { return c.depth[m] > deep_depth && colour[m] != kLeftOut; };
   uint32_t md = 0, pd = 0;
   for (uint32_t m = 0; m < manifolds; ++m)
-    if (c.depth[m] > deep_depth) {
+    if (deep(m)) {
       ++md;
       pd += c.count[m];
     }
@@ -88,7 +92,7 @@ void SoftStepSolver::gather_deep(const kernels::ContactManifoldArrays& c, uint32
   uint32_t* rows = scratch(deep_rows_, pd);
   uint32_t i = 0, k = 0;
   for (uint32_t m = 0; m < manifolds; ++m) {
-    if (!(c.depth[m] > deep_depth)) continue;
+    if (!deep(m)) continue;
     deep_.pair[i] = c.pair[m];
     deep_.a[i] = c.a[m];
     deep_.b[i] = c.b[m];
@@ -114,7 +118,7 @@ void SoftStepSolver::gather_deep(const kernels::ContactManifoldArrays& c, uint32
 }
 
 void SoftStepSolver::step(const Executor& exec, const WorldDesc& desc, const ContactManifolds& contacts, BodyStore& s,
-                          const PlaneStore& planes, float dt) {
+                          const PlaneStore& planes, float dt, const float* inv_mass) {
   const uint32_t body_grain = grain_for(exec, static_cast<uint32_t>(s.size()), kMinBodyGrain);
   const SolverDesc& sd = desc.solver;
   const auto n = static_cast<uint32_t>(s.size());
@@ -126,6 +130,12 @@ void SoftStepSolver::step(const Executor& exec, const WorldDesc& desc, const Con
   p.restitution_threshold = sd.restitution_threshold;
   p.warm_start = sd.warm_start;
   const kernels::ContactManifoldArrays c = contacts.view();
+  // Asleep bodies (inv_mass 0 here, kernels/solver/islands.h) are static to the solver;
+  // a manifold with no body it moves is left out and keeps last step's values.
+  const bool sleeping = inv_mass != s.inv_mass.data();
+  auto moves_a_body = [&](uint32_t m) {
+    return inv_mass[c.a[m]] > 0.0f || (c.b_is_plane[m] == 0 && inv_mass[c.b[m]] > 0.0f);
+  };
 
   // Colour, then order the constraints by colour (stable: manifold order within one).
   // The deep manifolds also go to the recovery velocity solve now, before the bodies'
@@ -138,7 +148,13 @@ void SoftStepSolver::step(const Executor& exec, const WorldDesc& desc, const Con
     std::memset(masks, 0, sizeof(uint32_t) * n);
     uint8_t* colour = scratch(colour_, nm);
     uint32_t counts[kernels::kOverflowColour + 1];
-    kernels::colour_manifolds(c, s.inv_mass.data(), nm, masks, colour, counts);
+    kernels::colour_manifolds(c, inv_mass, nm, masks, colour, counts);
+    if (sleeping)
+      for (uint32_t m = 0; m < nm; ++m)
+        if (!moves_a_body(m)) {
+          --counts[colour[m]];
+          colour[m] = kLeftOut;
+        }
     // Slots: each colour padded to whole blocks (padding slots: kNoConstraint).
     uint32_t next[kernels::kOverflowColour + 1];
     colour_start_[0] = 0;
@@ -150,8 +166,9 @@ void SoftStepSolver::step(const Executor& exec, const WorldDesc& desc, const Con
     slots = colour_start_[kernels::kOverflowColour + 1];
     uint32_t* order = scratch(order_, slots);
     for (uint32_t i = 0; i < slots; ++i) order[i] = kernels::kNoConstraint;
-    for (uint32_t m = 0; m < nm; ++m) order[next[colour[m]]++] = m;
-    gather_deep(c, nm, deep_depth);
+    for (uint32_t m = 0; m < nm; ++m)
+      if (colour[m] != kLeftOut) order[next[colour[m]]++] = m;
+    gather_deep(c, nm, deep_depth, colour);
     if (deep_.manifolds > 0)
       recovery_.solve_velocities(exec, sd, deep_, s, planes.restitution.data());
     else
@@ -160,7 +177,8 @@ void SoftStepSolver::step(const Executor& exec, const WorldDesc& desc, const Con
 
   kernels::BodyForces forces{};
   kernels::BodyDamping damping{};
-  const kernels::SoftBodyInput in = body_input(s, desc, &forces, &damping);
+  kernels::SoftBodyInput in = body_input(s, desc, &forces, &damping);
+  in.rigid.inv_mass = inv_mass;
   kernels::SolverBody* bodies = scratch(bodies_, static_cast<size_t>(n) + 1);
   kernels::BodyDrive* drive = scratch(drive_, n);
   kernels::Sym3* ii = scratch(inv_inertia_, n);
@@ -232,6 +250,20 @@ void SoftStepSolver::step(const Executor& exec, const WorldDesc& desc, const Con
     exec.for_each_chunk(slots, kConstraintGrain, [&](uint32_t b, uint32_t e, uint32_t) {
       kernels::store_contacts(c, order, blocks, stored, out, {b, e});
     });
+    if (sleeping) {  // the left-out manifolds keep last step's values (a step's worth of impulse)
+      const kernels::WarmPoint* warm = sd.warm_start > 0.0f && prev_count_ > 0 ? warm_.data() : nullptr;
+      const uint8_t* colour = colour_.data();
+      for (uint32_t m = 0; m < nm; ++m) {
+        if (colour[m] != kLeftOut) continue;
+        const uint32_t row0 = kernels::first_point_of(c, m);
+        for (uint32_t j = 0; j < c.count[m]; ++j) {
+          kernels::WarmPoint w{};
+          if (warm != nullptr && warm[row0 + j].normal >= 0.0f) w = warm[row0 + j];
+          stored[row0 + j] = w;
+          out[row0 + j] = w.normal * static_cast<float>(sd.substeps);
+        }
+      }
+    }
     if (deep_.manifolds > 0) {
       const std::span<const float> deep_impulse = recovery_.impulses();
       const uint32_t* rows = deep_rows_.data();

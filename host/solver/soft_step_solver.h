@@ -51,9 +51,12 @@ namespace impact::host {
 class SoftStepSolver {
  public:
   /// Solves and integrates one step of dt: velocities, positions and orientations of
-  /// `bodies` move; the force accumulators are left for the caller to clear.
+  /// `bodies` move; the force accumulators are left for the caller to clear. inv_mass:
+  /// the inverse masses the solver sees, bodies.inv_mass or a copy with the asleep
+  /// bodies' zeroed (host/pipeline/sleep_stage.cpp): those stay where they are, and a
+  /// manifold that moves no body is not solved (it keeps last step's impulses).
   void step(const Executor& exec, const WorldDesc& desc, const ContactManifolds& c, BodyStore& bodies,
-            const PlaneStore& planes, float dt);
+            const PlaneStore& planes, float dt, const float* inv_mass);
   /// Body slots were permuted (inv_perm[old slot] = new slot, n bodies).
   void remap_bodies(const Executor& exec, const uint32_t* inv_perm, uint32_t n);
   /// Slots were removed or reused: last step's impulses no longer apply.
@@ -74,8 +77,10 @@ class SoftStepSolver {
   // after colour, then serial(slots) over the overflow colour on this thread.
   template <class Wide, class Serial>
   void for_each_colour(const Executor& exec, Wide&& wide, Serial&& serial) const;
-  // Copies the manifolds deeper than deep_depth into deep_ (rows into deep_rows_).
-  void gather_deep(const kernels::ContactManifoldArrays& c, uint32_t manifolds, float deep_depth);
+  // Copies the solved manifolds (colour not left out) deeper than deep_depth into deep_
+  // (rows into deep_rows_).
+  void gather_deep(const kernels::ContactManifoldArrays& c, uint32_t manifolds, float deep_depth,
+                   const uint8_t* colour);
 
   RadixSorter sorter_;
   Buffer<kernels::SolverBody> bodies_;  // entry n: the zero body of planes

@@ -66,6 +66,17 @@ struct SolverDesc {
   /// Fraction of last step's impulse a persisting contact starts from, in [0, 1]
   /// (0 = cold start every step).
   float warm_start = 1.0f;
+  /// kSoftStep: islands and sleeping (docs/solver.md, "Islands and sleeping"). Dynamic
+  /// bodies joined by contacts form an island; an island whose every body has moved
+  /// slower than sleep_speed (m/s, > 0; a body's speed is |v| + radius |w|) for
+  /// sleep_time (s, > 0) falls asleep: its velocities are zeroed and the solver takes
+  /// its bodies as static until a contact with an awake body (a dynamic one, or a
+  /// moving kinematic one), wake_bodies() or a call that moves, pushes or removes a
+  /// body wakes the island. A world whose every dynamic body sleeps skips its step.
+  /// kJacobi keeps every body awake.
+  bool sleep = true;
+  float sleep_speed = 0.05f;
+  float sleep_time = 0.5f;
 };
 
 /// Settings fixed at creation (some can be changed later through setters).
@@ -127,6 +138,8 @@ struct StepStats {
   uint64_t manifolds = 0;      ///< contact manifolds (body-body plus body-plane)
   uint64_t contacts = 0;       ///< contact points of those manifolds (the solver's contacts)
   uint64_t plane_contacts = 0; ///< of which body-plane
+  uint64_t asleep_bodies = 0;  ///< bodies asleep after the step (SolverDesc::sleep)
+  bool skipped = false;        ///< every dynamic body slept: the step ran no stage
   PassTimes ms;                ///< wall time per pass
 };
 
@@ -148,6 +161,8 @@ struct BodyArrays {
   std::span<const float> restitution;                 ///< in [0, 1]
   std::span<const uint32_t> layer, mask;              ///< collision filter
   std::span<const BodyHandle> handles;                ///< slot -> handle
+  /// Per body: 1 while it sleeps (SolverDesc::sleep); static bodies never do.
+  std::span<const uint8_t> asleep;
   /// Per body: the index of its shape in World::shapes() (ShapeId::index), or
   /// kSphereBody for a plain sphere of `radius`; empty while no body has a shape.
   std::span<const uint32_t> shape;
@@ -275,6 +290,9 @@ class World {
   /// w += I_world^-1 ((point - centre of mass) x J). All-or-nothing.
   Status apply_impulses(std::span<const BodyHandle> handles, std::span<const Eigen::Vector3f> impulses,
                         std::span<const Eigen::Vector3f> points);
+  /// Wakes the bodies' islands (SolverDesc::sleep): they move again from the next step.
+  /// An awake body's sleep timer restarts. All-or-nothing.
+  Status wake_bodies(std::span<const BodyHandle> handles);
   /// Dense slot of a live handle, or an error.
   Status slot_of(BodyHandle handle, uint32_t* out_slot) const;
   /// Live bodies.

@@ -122,6 +122,7 @@ Scene make_reference_scene(double s, const Vec3d& offset) {
   d.solver.penetration_slop = static_cast<float>(0.001 * s);
   d.solver.restitution_threshold = static_cast<float>(0.5 * s);
   d.solver.max_push_speed = static_cast<float>(3.0 * s);
+  d.solver.sleep_speed = static_cast<float>(0.05 * s);  // a speed too: the stack sleeps at every scale
   std::vector<BodyDesc> b(kSceneBodies);
   for (int i = 0; i < kStack; ++i) {
     b[i].position = (offset + s * Vec3d(0.0, 0.5 + i, 0.0)).cast<float>();
