@@ -8,6 +8,8 @@
 #include <cstddef>
 #include <cstdint>
 
+#include <Eigen/Core>
+
 #include "host/buffer.h"
 #include "kernels/narrowphase/leaf/leaf.h"
 
@@ -39,6 +41,32 @@ struct LeafArrays {
     return s;
   }
 };
+
+// Writers of one lane k of a LeafArrays side. Only the fields the leaf type uses
+// (leaf.h's table): a sphere lane writes 4 of the 22 arrays. Unused fields keep stale
+// values that no kernel reads.
+inline void put_p(LeafArrays& s, size_t k, const Eigen::Vector3f& p) {
+  for (int i = 0; i < 3; ++i) s.f[i][k] = p[i];
+}
+inline void put_r(LeafArrays& s, size_t k, const Eigen::Matrix3f& R) {
+  for (int i = 0; i < 3; ++i) {
+    for (int j = 0; j < 3; ++j) s.f[3 + 3 * i + j][k] = R(i, j);
+  }
+}
+inline void put_e(LeafArrays& s, size_t k, const float* e) {
+  for (int i = 0; i < 3; ++i) s.f[12 + i][k] = e[i];
+}
+/// A half-space (local unit normal e, plane offset) posed by R, p: a point of the plane
+/// and the world normal, renormalised.
+inline void put_plane(LeafArrays& s, size_t k, const Eigen::Matrix3f& R, const Eigen::Vector3f& p,
+                      const float* e, float offset) {
+  const Eigen::Vector3f el(e[0], e[1], e[2]);
+  const Eigen::Vector3f n = R * el;
+  const Eigen::Vector3f nn = n / n.norm();
+  put_p(s, k, p + R * (el * offset));
+  const float ne[3] = {nn[0], nn[1], nn[2]};
+  put_e(s, k, ne);
+}
 
 /// The kernels' results: count, then f = depth, n[3], point[4][3], pdepth[4].
 struct ManifoldArrays {

@@ -24,6 +24,7 @@
 #include <string>
 
 #include "host/narrowphase/lane_arrays.h"
+#include "host/narrowphase/narrow_arrays.h"
 #include "host/narrowphase/narrow_phase.h"
 #include "host/parallel.h"
 #include "host/radix_sort.h"
@@ -64,22 +65,6 @@ struct LeafPair {
   uint8_t swapped;
   uint8_t pad = 0;
 };
-
-LeafType leaf_of(ShapeType t) {
-  switch (t) {
-    case ShapeType::kSphere: return kernels::kLeafSphere;
-    case ShapeType::kCapsule: return kernels::kLeafCapsule;
-    case ShapeType::kBox:
-    case ShapeType::kAabb: return kernels::kLeafBox;
-    case ShapeType::kConvex: return kernels::kLeafConvex;
-    case ShapeType::kCylinder: return kernels::kLeafCylinder;
-    case ShapeType::kEllipsoid: return kernels::kLeafEllipsoid;
-    case ShapeType::kHalfSpace: return kernels::kLeafHalfSpace;
-    case ShapeType::kMesh: return kernels::kLeafTriangle;
-    case ShapeType::kCompound: break;
-  }
-  return kernels::kLeafTypeCount;
-}
 
 struct Box3 {
   Eigen::Vector3f lo, hi;
@@ -174,8 +159,8 @@ struct host::NarrowRunner::State {
     lp.pair = pair_index;
     lp.child_a = kNoChild;
     lp.child_b = kNoChild;
-    lp.type_a = leaf_of(ta);
-    lp.type_b = leaf_of(tb);
+    lp.type_a = host::leaf_type_of(ta);
+    lp.type_b = host::leaf_type_of(tb);
     lp.swapped = lp.type_a > lp.type_b ? 1 : 0;
     return lp;
   }
@@ -310,9 +295,9 @@ void host::NarrowRunner::State::expand(uint32_t pair_index, std::vector<LeafPair
   auto leaf_type = [&](const ShapeRecord& r, uint32_t child) -> uint8_t {
     if (r.type == ShapeType::kCompound) {
       const CompoundChild& c = store->children[store->child_begin[r.ref] + child];
-      return leaf_of(store->shapes[c.shape.index].type);
+      return host::leaf_type_of(store->shapes[c.shape.index].type);
     }
-    return leaf_of(r.type);
+    return host::leaf_type_of(r.type);
   };
   auto emit = [&](uint32_t child_a, uint32_t child_b) {
     LeafPair lp;
@@ -367,32 +352,6 @@ void host::NarrowRunner::State::expand(uint32_t pair_index, std::vector<LeafPair
   }
 }
 
-// Only the fields the leaf type uses (leaf.h's table): a sphere lane writes 4 of the 22
-// arrays. Unused fields keep stale values that no kernel reads.
-namespace {
-inline void put_p(LeafArrays& s, size_t k, const Eigen::Vector3f& p) {
-  for (int i = 0; i < 3; ++i) s.f[i][k] = p[i];
-}
-inline void put_r(LeafArrays& s, size_t k, const Eigen::Matrix3f& R) {
-  for (int i = 0; i < 3; ++i) {
-    for (int j = 0; j < 3; ++j) s.f[3 + 3 * i + j][k] = R(i, j);
-  }
-}
-inline void put_e(LeafArrays& s, size_t k, const float* e) {
-  for (int i = 0; i < 3; ++i) s.f[12 + i][k] = e[i];
-}
-/// A half-space (local unit normal e, plane offset) posed by R, p: a point of the plane
-/// and the world normal, renormalised.
-inline void put_plane(LeafArrays& s, size_t k, const Eigen::Matrix3f& R, const Eigen::Vector3f& p,
-                      const float* e, float offset) {
-  const Eigen::Vector3f el(e[0], e[1], e[2]);
-  const Eigen::Vector3f n = R * el;
-  const Eigen::Vector3f nn = n / n.norm();
-  put_p(s, k, p + R * (el * offset));
-  const float ne[3] = {nn[0], nn[1], nn[2]};
-  put_e(s, k, ne);
-}
-}  // namespace
 
 IMPACT_INLINE void host::NarrowRunner::State::fill(LeafArrays& s, size_t k, uint32_t obj, uint32_t child) const {
   // Plain shapes (every leaf of a pair list without meshes or compounds): the pose as it
@@ -780,6 +739,7 @@ struct NarrowPhase::Impl {
   std::vector<ShapeType> types;
   std::vector<uint32_t> first_bad;  // per chunk of objects: its first bad object
   host::ContactManifolds contacts;
+  host::ArrayRunner arrays;  // collide_arrays
 
   Status collide(const ShapeSet& shapes, std::span<const ShapeId> shape_of_in,
                  std::span<const Pose> poses, std::span<const ShapePair> pairs_in,
@@ -935,6 +895,12 @@ Status NarrowPhase::collide(const ShapeSet& shapes, std::span<const ShapeId> sha
                             std::vector<Manifold>* out) {
   if (!impl_->options_status.ok()) return impl_->options_status;
   return impl_->collide(shapes, shape_of, poses, pairs, out);
+}
+
+Status NarrowPhase::collide_arrays(const ShapeSet& shapes, std::span<const ShapeId> shape_of, const PoseArrays& poses,
+                                   std::span<const ShapePair> pairs, const PairContactArrays& out) {
+  if (!impl_->options_status.ok()) return impl_->options_status;
+  return impl_->arrays.run(impl_->exec, shapes.store(), shape_of, poses, pairs, host::config_of(impl_->options), out);
 }
 
 }  // namespace impact

@@ -25,6 +25,23 @@ Status validate_options(const NarrowPhaseOptions& options);
 /// The kernels' configuration for the options' knobs (the hull view is set by the run).
 kernels::NarrowConfig config_of(const NarrowPhaseOptions& options);
 
+/// The kernels' leaf type of a shape type (kLeafTypeCount: a compound, which has none).
+inline kernels::LeafType leaf_type_of(ShapeType t) {
+  switch (t) {
+    case ShapeType::kSphere: return kernels::kLeafSphere;
+    case ShapeType::kCapsule: return kernels::kLeafCapsule;
+    case ShapeType::kBox:
+    case ShapeType::kAabb: return kernels::kLeafBox;
+    case ShapeType::kConvex: return kernels::kLeafConvex;
+    case ShapeType::kCylinder: return kernels::kLeafCylinder;
+    case ShapeType::kEllipsoid: return kernels::kLeafEllipsoid;
+    case ShapeType::kHalfSpace: return kernels::kLeafHalfSpace;
+    case ShapeType::kMesh: return kernels::kLeafTriangle;
+    case ShapeType::kCompound: break;
+  }
+  return kernels::kLeafTypeCount;
+}
+
 /// An object's placement (world = R * local + p, R a rotation) and, on the same 64-byte
 /// line, what the gather copies from a plain shape's record: its e (sphere, capsule, box,
 /// cylinder, ellipsoid, half-space) or hull index (convex), and a half-space's offset. So

@@ -70,6 +70,27 @@ struct Manifold {
   float point_depth[4] = {0, 0, 0, 0};  ///< penetration along normal at each point
 };
 
+/// Object poses as caller-owned arrays, one entry per object (the batch form of
+/// NarrowPhase::collide_arrays): position, m, and unit orientation (x, y, z, w).
+struct PoseArrays {
+  std::span<const float> px, py, pz;
+  std::span<const float> qx, qy, qz, qw;
+};
+
+/// Collision data per pair in caller-owned arrays of pairs.size() entries each: the
+/// kernels' own layout, written in place. Pair i touches when count[i] > 0 (1..4): a
+/// unit normal (a to b), depth > 0 (the safe displacement, as Manifold::depth) and
+/// points k < count[i] at (point_x[k][i], point_y[k][i], point_z[k][i]) with overlap
+/// point_depth[k][i]. The other entries of a pair (all of them when count[i] == 0) are
+/// unspecified.
+struct PairContactArrays {
+  std::span<uint8_t> count;
+  std::span<float> normal_x, normal_y, normal_z;
+  std::span<float> depth;
+  std::span<float> point_x[4], point_y[4], point_z[4];
+  std::span<float> point_depth[4];
+};
+
 /// Runs the narrow phase; keeps its scratch between calls. Internally it fills the
 /// library's one contact layout (SoA manifolds and points) and converts it to
 /// Manifold structs at the end of collide().
@@ -100,6 +121,20 @@ class NarrowPhase {
   Status collide(const ShapeSet& shapes, std::span<const ShapeId> shape_of,
                  std::span<const Pose> poses, std::span<const ShapePair> pairs,
                  std::vector<Manifold>* out);
+
+  /// The batch form of collide() for convex objects (sphere, capsule, box, AABB,
+  /// cylinder, ellipsoid, convex hull, half-space): poses read from arrays, one result
+  /// slot per pair written into the caller's arrays, nothing allocated per call once
+  /// the scratch has grown. The same numbers as collide() for the same pairs (without
+  /// its per-point feature ids). Cost beyond the pair kernels: one pass over the
+  /// objects (validation), one over the pairs (bucket keys), the gather of each pair's
+  /// two poses into the kernels' lanes; pairs listed by type skip the bucket sort and
+  /// their results are written by the kernels in place (docs/narrowphase.md, "The
+  /// batch call"). Errors as collide(), and: a mesh or compound object (kInvalidArgument
+  /// naming it: collide() takes those), an array shorter or longer than its count
+  /// (kSizeMismatch naming it).
+  Status collide_arrays(const ShapeSet& shapes, std::span<const ShapeId> shape_of, const PoseArrays& poses,
+                        std::span<const ShapePair> pairs, const PairContactArrays& out);
 
  private:
   struct Impl;
