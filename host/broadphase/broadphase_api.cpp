@@ -31,10 +31,15 @@ class BroadPhaseImpl {
   Backend exec_backend = Backend::kDefault;
   uint32_t exec_threads = 0;
   bool exec_ready = false;
+  // Set when a build or update failed after its boxes were validated (the structure is
+  // then gone): pairs() and the queries report it until a build or update succeeds.
+  // Bad input never sets it: boxes are validated before anything is changed.
+  Status broken;
 
   Status check_options() const;
   Status ready(const ExecConfig& e);
-  // Validates boxes and runs build (from_scratch) or update.
+  // Validates boxes, then runs build (from_scratch) or update. A validation error
+  // leaves the structure as it was.
   Status ingest(const AabbInput& boxes, const ExecConfig& e, bool from_scratch);
   // Validates a query batch and answers it from the stage (host/broadphase/query.h).
   template <class Queries>
@@ -198,10 +203,12 @@ Status BroadPhaseImpl::ingest(const AabbInput& boxes, const ExecConfig& e, bool 
   if (Status s = ready(e); !s.ok()) return s;
   kernels::BoundsSummary sum{};
   bool has_sum = false;
-  if (Status s = check_boxes(exec, boxes, chunk_ok, chunk_bounds, &sum, &has_sum); !s.ok()) {
-    stage.invalidate();
-    return s;
-  }
+  // Everything that can reject the boxes runs before the structure is touched.
+  if (Status s = check_boxes(exec, boxes, chunk_ok, chunk_bounds, &sum, &has_sum); !s.ok()) return s;
+  if (options.kind == BroadPhaseKind::kLbvh && boxes.size() > kernels::kLbvhMaxLeaves)
+    return Status(StatusCode::kCapacityExceeded, "broad phase: the LBVH holds at most " +
+                                                     std::to_string(kernels::kLbvhMaxLeaves) + " boxes, got " +
+                                                     std::to_string(boxes.size()));
   kernels::AabbSoA soa{boxes.min_x.data(), boxes.min_y.data(), boxes.min_z.data(),
                        boxes.max_x.data(), boxes.max_y.data(), boxes.max_z.data()};
   const uint32_t n = static_cast<uint32_t>(boxes.size());
@@ -219,8 +226,19 @@ Status BroadPhaseImpl::ingest(const AabbInput& boxes, const ExecConfig& e, bool 
                                    boxes.is_static.empty() ? nullptr : boxes.is_static.data()};
   const kernels::BoundsSummary* summary = has_sum ? &sum : nullptr;
   const Status s = from_scratch ? stage.build(exec, soa, filter, n, summary) : stage.update(exec, soa, filter, n, summary);
-  if (!s.ok()) stage.invalidate();
+  if (s.ok()) {
+    broken = Status();
+  } else {
+    stage.invalidate();
+    broken = s;
+  }
   return s;
+}
+
+// The error pairs() and the queries give while `broken` is set.
+static Status broken_error(const Status& broken, const char* what) {
+  return Status(broken.code(), std::string(what) + ": the last build/update failed (" + broken.message() +
+                                   "); build or update with valid boxes first");
 }
 
 Status BroadPhase::build(const AabbInput& boxes, const ExecConfig& exec) {
@@ -239,6 +257,10 @@ Status BroadPhase::pairs(std::vector<BodyPair>* out, const ExecConfig& exec) {
   if (Status s = b.ready(exec); !s.ok()) {
     out->clear();
     return s;
+  }
+  if (!b.broken.ok()) {
+    out->clear();
+    return broken_error(b.broken, "pairs");
   }
   if (Status s = b.stage.pairs(b.exec, &b.pairs); !s.ok()) {
     out->clear();
@@ -270,6 +292,7 @@ template <class Queries>
 Status BroadPhaseImpl::query(const Queries& q, const char* what, QueryHits* out, const ExecConfig& e) {
   if (out == nullptr) return Status(StatusCode::kInvalidArgument, std::string(what) + ": out must not be null");
   if (Status s = ready(e); !s.ok()) return s;
+  if (!broken.ok()) return broken_error(broken, what);
   host::QueryBatch batch{};
   if (Status s = host::make_batch(q, what, &batch); !s.ok()) return s;
   if (Status s = stage.query(exec, batch, &out->offsets, &out->hits); !s.ok())

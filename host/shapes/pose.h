@@ -11,6 +11,7 @@
 #include "host/shapes/shape_store.h"
 #include "impact/shapes.h"
 #include "impact/status.h"
+#include "impact/types.h"
 
 namespace impact::host {
 
@@ -18,10 +19,11 @@ namespace impact::host {
 inline bool pose_ok(const Pose& p) {
   if (!p.position.allFinite() || !p.orientation.coeffs().allFinite()) return false;
   const double n2 = p.orientation.coeffs().cast<double>().squaredNorm();
-  return std::fabs(n2 - 1.0) <= 2e-3;
+  return std::fabs(n2 - 1.0) <= kUnitQuaternionTolerance;
 }
 
-/// Finite position, finite quaternion of unit length within 1e-3.
+/// Finite position, finite quaternion of unit length within kUnitQuaternionTolerance
+/// (include/impact/types.h).
 inline Status check_pose(const Pose& p, const char* who) {
   if (!p.position.allFinite()) {
     return Status(StatusCode::kInvalidArgument, std::string(who) + ": position is not finite");
@@ -30,7 +32,7 @@ inline Status check_pose(const Pose& p, const char* who) {
     return Status(StatusCode::kInvalidArgument, std::string(who) + ": orientation is not finite");
   }
   const double n2 = p.orientation.coeffs().cast<double>().squaredNorm();
-  if (!(std::fabs(n2 - 1.0) <= 2e-3)) {
+  if (!(std::fabs(n2 - 1.0) <= kUnitQuaternionTolerance)) {
     char buf[64];
     std::snprintf(buf, sizeof buf, "%g", std::sqrt(n2));
     return Status(StatusCode::kInvalidArgument,

@@ -136,6 +136,15 @@ class BroadPhaseImpl;
 ///   find_pairs(b,out) update + pairs
 ///
 /// The boxes are copied into the structure: the spans need not outlive a call.
+///
+/// Failure: build, update and find_pairs validate every box (and option) before they
+/// change anything, so one rejected for bad input (a NaN or Inf anywhere, min > max,
+/// mismatched spans: kInvalidArgument / kSizeMismatch naming the box and field) leaves
+/// the structure exactly as the last successful call left it: pairs(), size() and the
+/// queries answer as before, and the next valid update proceeds from there. A call
+/// that fails after validation (kCapacityExceeded: more boxes than the structure
+/// holds) discards the structure, and pairs() and the queries then fail with that
+/// error until a build or update succeeds.
 class BroadPhase {
  public:
   /// A broad phase of the given structure with default options.
@@ -157,11 +166,12 @@ class BroadPhase {
   Status find_pairs(const AabbInput& boxes, std::vector<BodyPair>* out, const ExecConfig& exec = {});
 
   /// Builds the structure from scratch over boxes (validated as find_pairs does;
-  /// on error the previous structure is discarded).
+  /// on bad input the previous structure is kept unchanged, see "Failure" above).
   Status build(const AabbInput& boxes, const ExecConfig& exec = {});
   /// The coherent path for the next frame of the same boxes (see above).
   Status update(const AabbInput& boxes, const ExecConfig& exec = {});
-  /// The pairs of the structure as last built or updated (none before a build).
+  /// The pairs of the structure as last successfully built or updated (none before a
+  /// build); fails while the structure is discarded (see "Failure" above).
   Status pairs(std::vector<BodyPair>* out, const ExecConfig& exec = {});
 
   /// The structure asked for (BroadPhaseOptions::kind).
@@ -175,7 +185,8 @@ class BroadPhase {
 
   /// Queries of the structure as of the last build / update / find_pairs, replacing
   /// *out (see "queries" above). Fails with kInvalidArgument before any successful
-  /// build (or after a failed one), on a non-finite value or one beyond 1e18 in
+  /// build, with the failure's code after a build/update that discarded the structure
+  /// (not after one rejected for bad input), on a non-finite value or one beyond 1e18 in
   /// magnitude, min > max, or a negative radius; kSizeMismatch on spans of unequal
   /// length; the message names the query index and field. More than 2^32 - 1 hits in
   /// one batch is kCapacityExceeded (split the batch). On error *out is unchanged.

@@ -36,6 +36,16 @@ struct PlaneHandle {
   friend bool operator==(const PlaneHandle&, const PlaneHandle&) = default;
 };
 
+/// What counts as a unit quaternion wherever the API takes an orientation (BodyDesc,
+/// World::set_orientations, Pose in shape queries, narrow phase and ray scenes): q is
+/// finite and | |q|^2 - 1 | <= kUnitQuaternionTolerance, evaluated in double (|q|
+/// within about 1e-3 of 1: room for a quaternion composed and stored in float many
+/// times, far from any genuine error such as a zero or doubled quaternion). An accepted
+/// q is used as q / |q| (stored normalised). Anything else, NaN, Inf, zero or denormal
+/// components included, is kInvalidArgument naming the body (or object) index and the
+/// field `orientation`, also where the orientation is unused today (plain spheres).
+inline constexpr double kUnitQuaternionTolerance = 2e-3;
+
 /// A body: a sphere of `radius`, or any shape of World::shapes(). Units: m, m/s, 1/kg.
 struct BodyDesc {
   Eigen::Vector3f position = Eigen::Vector3f::Zero();  ///< centre, m
@@ -50,7 +60,8 @@ struct BodyDesc {
   /// stored in its place (BodyArrays::radius). Half-spaces are not bodies (use planes);
   /// a mesh body must be static (inv_mass 0).
   ShapeId shape{};
-  /// Orientation of the shape (a plain sphere's too), a unit quaternion (within 1e-3).
+  /// Orientation of the shape (a plain sphere's too, checked though unused): a unit
+  /// quaternion within kUnitQuaternionTolerance (| |q|^2 - 1 | <= 2e-3), normalised on input.
   Eigen::Quaternionf orientation = Eigen::Quaternionf::Identity();
   /// rad/s, world frame. A body with inv_mass 0 is kinematic when it moves: its
   /// velocity and angular velocity carry it, contacts never change them.

@@ -166,7 +166,8 @@ struct BodyArrays {
   /// Per body: the index of its shape in World::shapes() (ShapeId::index), or
   /// kSphereBody for a plain sphere of `radius`; empty while no body has a shape.
   std::span<const uint32_t> shape;
-  /// Orientation, a unit quaternion (qx, qy, qz, qw); empty while no body has a shape
+  /// Orientation, a unit quaternion (qx, qy, qz, qw; the input normalised, see
+  /// kUnitQuaternionTolerance in include/impact/types.h); empty while no body has a shape
   /// or can rotate (every body is then at the identity orientation).
   std::span<const float> qx, qy, qz, qw;
   /// Angular velocity, rad/s, world frame; empty while no body can rotate (every
@@ -271,8 +272,10 @@ class World {
   Status set_angular_velocities(std::span<const BodyHandle> handles, std::span<const Eigen::Vector3f> values);
   /// Angular velocities, out[i] for handles[i] (zero for every body while none rotates).
   Status get_angular_velocities(std::span<const BodyHandle> handles, std::span<Eigen::Vector3f> out) const;
-  /// Sets orientations (unit quaternions within 1e-3, stored normalised; a teleport).
-  /// All-or-nothing.
+  /// Sets orientations (a teleport), plain spheres' too. Unit means finite with
+  /// | |q|^2 - 1 | <= kUnitQuaternionTolerance (2e-3, include/impact/types.h); stored
+  /// normalised. All-or-nothing: a NaN, Inf, zero or non-unit value is kInvalidArgument
+  /// naming "body i" and "orientation", and nothing changes.
   Status set_orientations(std::span<const BodyHandle> handles, std::span<const Eigen::Quaternionf> values);
   /// Orientations, out[i] for handles[i].
   Status get_orientations(std::span<const BodyHandle> handles, std::span<Eigen::Quaternionf> out) const;

@@ -9,10 +9,11 @@
 //   outside hits the surface where it enters.
 // Triangles are two-sided and infinitely thin. Test: watertight ray-triangle
 //   intersection (Woop, Benthin, Wald, "Watertight Ray/Triangle Intersection", JCGT
-//   2(1), 2013): the triangle is sheared into ray space, the three edge functions are
-//   evaluated in float and re-evaluated in double when one is exactly zero, so a ray
-//   through a shared edge or vertex hits at least one of the triangles around it (no
-//   ray leaks through a closed mesh). Edge rule: points on an edge or vertex belong to
+//   2(1), 2013): the triangle is sheared into ray space (sheared vertex coordinates
+//   rounded to float), and the three edge functions are evaluated exactly in double
+//   (the paper's double fallback, taken always), so their signs do not depend on FMA
+//   contraction and a ray through a shared edge or vertex hits at least one of the
+//   triangles around it (no ray leaks through a closed mesh). Edge rule: points on an edge or vertex belong to
 //   every triangle that contains them (edge functions >= 0 on both orientations); the
 //   closest-hit reduction then breaks the tie between equal t by the lower primitive
 //   index. A ray lying in the triangle's plane (det == 0) misses it.
@@ -170,31 +171,40 @@ IMPACT_INLINE RayShear ray_shear(const RayQuery& q) {
 }
 
 /// Distance to the triangle (v0, v1, v2) along the ray, or -1 on a miss within tmax.
+/// Watertight whatever the compiler does with FMA contraction: every step whose bits
+/// decide an edge's sign is one rounding of an exact value. A vertex's sheared
+/// coordinates are float(p_k - s_k p_z) evaluated in double, where the product of two
+/// floats is exact, so fused or not they are the same bits in every triangle using the
+/// vertex; the edge functions are products of those floats, again exact in double, so
+/// their signs are the exact signs and an edge seen from its two triangles gives exactly
+/// opposite values (in float, a contracted a*b - c*d rounds the two products
+/// differently on the two sides and a ray through the edge can miss both). This is the
+/// double re-evaluation of Woop et al. made unconditional: on scalar SSE/NEON code a
+/// double multiply-add costs what a float one does.
 IMPACT_INLINE float ray_triangle(const RayQuery& q, const RayShear& s, const float* v0, const float* v1,
                                  const float* v2) {
   const float A[3] = {v0[0] - q.o[0], v0[1] - q.o[1], v0[2] - q.o[2]};
   const float B[3] = {v1[0] - q.o[0], v1[1] - q.o[1], v1[2] - q.o[2]};
   const float C[3] = {v2[0] - q.o[0], v2[1] - q.o[1], v2[2] - q.o[2]};
-  const float ax = A[s.kx] - s.sx * A[s.kz], ay = A[s.ky] - s.sy * A[s.kz];
-  const float bx = B[s.kx] - s.sx * B[s.kz], by = B[s.ky] - s.sy * B[s.kz];
-  const float cx = C[s.kx] - s.sx * C[s.kz], cy = C[s.ky] - s.sy * C[s.kz];
-  float U = cx * by - cy * bx;
-  float V = ax * cy - ay * cx;
-  float W = bx * ay - by * ax;
-  if (U == 0.0f || V == 0.0f || W == 0.0f) {
-    // Exact-enough fallback on edges: the products of floats are exact in double.
-    U = static_cast<float>(static_cast<double>(cx) * by - static_cast<double>(cy) * bx);
-    V = static_cast<float>(static_cast<double>(ax) * cy - static_cast<double>(ay) * cx);
-    W = static_cast<float>(static_cast<double>(bx) * ay - static_cast<double>(by) * ax);
-  }
-  if ((U < 0.0f || V < 0.0f || W < 0.0f) && (U > 0.0f || V > 0.0f || W > 0.0f)) return -1.0f;
-  const float det = U + V + W;
-  if (det == 0.0f) return -1.0f;
-  const float az = s.sz * A[s.kz], bz = s.sz * B[s.kz], cz = s.sz * C[s.kz];
-  const float T = U * az + V * bz + W * cz;
-  if (det > 0.0f ? (T < 0.0f || T > q.tmax * det) : (T > 0.0f || T < q.tmax * det)) return -1.0f;
-  const float t = T / det;
-  return t > q.tmax ? q.tmax : t;  // the division may round just past tmax
+  const double sx = s.sx, sy = s.sy;
+  auto shear = [](const float* P, uint32_t k, double sk, uint32_t kz) {
+    return static_cast<double>(static_cast<float>(static_cast<double>(P[k]) - sk * static_cast<double>(P[kz])));
+  };
+  const double ax = shear(A, s.kx, sx, s.kz), ay = shear(A, s.ky, sy, s.kz);
+  const double bx = shear(B, s.kx, sx, s.kz), by = shear(B, s.ky, sy, s.kz);
+  const double cx = shear(C, s.kx, sx, s.kz), cy = shear(C, s.ky, sy, s.kz);
+  const double U = cx * by - cy * bx;
+  const double V = ax * cy - ay * cx;
+  const double W = bx * ay - by * ax;
+  if ((U < 0.0 || V < 0.0 || W < 0.0) && (U > 0.0 || V > 0.0 || W > 0.0)) return -1.0f;
+  const double det = U + V + W;
+  if (det == 0.0) return -1.0f;
+  const double sz = s.sz;
+  const double T = U * (sz * A[s.kz]) + V * (sz * B[s.kz]) + W * (sz * C[s.kz]);
+  const double t = T / det;
+  if (!(t >= 0.0) || t > static_cast<double>(q.tmax)) return -1.0f;
+  const float tf = static_cast<float>(t);
+  return tf > q.tmax ? q.tmax : tf;  // float rounding may land just past tmax
 }
 
 /// Entry distance into the half-space {x : dot(n, x) <= offset} (n unit), or -1.
