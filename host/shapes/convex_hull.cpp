@@ -9,8 +9,11 @@
 // dropped); triangles merge when their vertices lie within 1e-6 D of the seed plane and
 // their normals agree within ~1.4e-5 rad; a vertex within 1e-6 D of the straight line
 // through its neighbours in every polygon holding it (a point on a hull edge) is dropped.
+// Cost: each step walks its cone (triangle adjacency, no global pass), and only the
+// visible faces' conflict lists are handed on; the edge classes take O(1) expected per
+// edge (a hash grid): O(n log n) in practice, also when every point is a vertex.
 // Deterministic: faces are processed in creation order, ties go to the lowest index;
-// the hash map only answers lookups (its iteration order never shapes the result).
+// the hash grid only answers lookups (its order never shapes the result).
 #include "host/shapes/convex_hull.h"
 
 #include <algorithm>
