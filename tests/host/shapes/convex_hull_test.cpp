@@ -3,13 +3,18 @@
 // properties checked by brute force in double: every input point inside or on it, every
 // vertex an input point and extreme, closed 2-manifold with V - E + F = 2, planar convex
 // faces wound counter-clockwise about outward unit normals, edge directions one per
-// parallel class. Degenerate inputs are rejected with a message.
+// parallel class. Degenerate inputs are rejected with a message. Large clouds (100k
+// points on a sphere, in a cube, lattices, prisms, pancakes, duplicates) are checked by
+// test::check_hull_scalable (tests/support/hull_checks.h), itself checked here to
+// agree with the brute-force checks and to catch corrupted hulls.
+#include <gtest/gtest-spi.h>
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <map>
 #include <random>
 #include <set>
+#include <string>
 #include <vector>
 
 #include <Eigen/Core>
@@ -17,6 +22,7 @@
 
 #include "host/shapes/convex_hull.h"
 #include "host/shapes/shape_store.h"
+#include "support/hull_checks.h"
 #include "support/test_support.h"
 
 namespace impact {
@@ -285,6 +291,169 @@ TEST(ConvexHull, ManyPointsOnASphere) {
   // Triangles but for the odd merged near-cocircular quad: F = 2V - 4 for triangles.
   EXPECT_LE(h.faces.size(), 2 * 2000u - 4);
   EXPECT_GE(h.faces.size(), 2 * 2000u - 40);
+}
+
+std::vector<V> sphere_points(std::mt19937& rng, int n) {
+  std::normal_distribution<float> g;
+  std::vector<V> pts;
+  while (static_cast<int>(pts.size()) < n) {
+    const V p(g(rng), g(rng), g(rng));
+    if (p.norm() > 1e-3f) pts.push_back(p.normalized());
+  }
+  return pts;
+}
+
+/// Points that are all hull vertices: the case that made the hull quadratic (the edge
+/// classes compared every edge with every class kept; every point re-marked every face).
+TEST(ConvexHull, LargeSphereEveryPointAVertex) {
+  std::mt19937 rng(21);
+  const int n = test::kSanitized ? 10000 : 100000;
+  const auto pts = sphere_points(rng, n);
+  const HullData h = build_ok(pts);
+  test::check_hull_scalable(pts, h);
+  // Every point but the odd one within 1e-9 of the extent of a face (dropped as on it).
+  EXPECT_GE(h.vertices.size(), pts.size() - 10);
+  EXPECT_GE(h.faces.size(), 2 * h.vertices.size() - 4 - h.vertices.size() / 100);
+}
+
+/// Uniform in a cube, on a sphere with duplicates and interior points (shuffled), a
+/// lattice (coplanar and collinear points by the thousand), a prism with points along
+/// its side lines, the cube's corners with points on its faces and edges, a pancake
+/// 1e-3 of its width thick, and a sphere 1e3 m from the origin.
+TEST(ConvexHull, LargeAdversarialClouds) {
+  std::mt19937 rng(22);
+  std::uniform_real_distribution<float> u(-1, 1);
+  const int n = test::kSanitized ? 5000 : 50000;
+  {
+    std::vector<V> pts(static_cast<size_t>(n));
+    for (V& p : pts) p = V(u(rng), u(rng), u(rng));
+    SCOPED_TRACE("cube");
+    test::check_hull_scalable(pts, build_ok(pts));
+  }
+  {
+    const auto sphere = sphere_points(rng, n / 2);
+    std::vector<V> pts = sphere;
+    pts.insert(pts.end(), sphere.begin(), sphere.end());
+    for (int i = 0; i < n / 4; ++i) pts.push_back(0.999f * sphere[static_cast<size_t>(i)]);
+    std::shuffle(pts.begin(), pts.end(), rng);
+    SCOPED_TRACE("sphere with duplicates");
+    const HullData h = build_ok(pts);
+    test::check_hull_scalable(pts, h);
+    EXPECT_EQ(h.vertices.size(), sphere.size());
+  }
+  {
+    const int k = test::kSanitized ? 16 : 36;
+    std::vector<V> pts;
+    for (int i = 0; i < k; ++i)
+      for (int j = 0; j < k; ++j)
+        for (int l = 0; l < k; ++l) pts.emplace_back(static_cast<float>(i), static_cast<float>(j), static_cast<float>(l));
+    std::shuffle(pts.begin(), pts.end(), rng);
+    SCOPED_TRACE("lattice");
+    const HullData h = build_ok(pts);
+    test::check_hull_scalable(pts, h);
+    EXPECT_EQ(h.vertices.size(), 8u);
+    EXPECT_EQ(h.faces.size(), 6u);
+    EXPECT_EQ(h.edge_dirs.size(), 3u);
+  }
+  {
+    const int sides = 64;
+    std::vector<V> pts;
+    for (int i = 0; i < n; ++i) {
+      const int s = i % sides;
+      const float a = static_cast<float>(s) * 6.2831853f / sides;
+      const float z = i < 2 * sides ? (i < sides ? -2.0f : 2.0f) : 2.0f * u(rng);
+      pts.emplace_back(std::cos(a), std::sin(a), z);
+    }
+    std::shuffle(pts.begin(), pts.end(), rng);
+    SCOPED_TRACE("prism");
+    const HullData h = build_ok(pts);
+    test::check_hull_scalable(pts, h);
+    EXPECT_EQ(h.vertices.size(), 2u * sides);
+    EXPECT_EQ(h.faces.size(), sides + 2u);
+  }
+  {
+    std::vector<V> pts = cube_corners();
+    for (int i = 0; i < n; ++i) {
+      V p(u(rng), u(rng), u(rng));
+      p[i % 3] = (i & 8) ? 1.0f : -1.0f;
+      if (i % 5 == 0) p[(i + 1) % 3] = (i & 16) ? 1.0f : -1.0f;  // on an edge
+      pts.push_back(p);
+    }
+    std::shuffle(pts.begin(), pts.end(), rng);
+    SCOPED_TRACE("cube faces");
+    const HullData h = build_ok(pts);
+    test::check_hull_scalable(pts, h);
+    EXPECT_EQ(h.vertices.size(), 8u);
+    EXPECT_EQ(h.faces.size(), 6u);
+  }
+  {
+    std::vector<V> pts(static_cast<size_t>(n));
+    for (V& p : pts) p = V(u(rng), u(rng), 1e-3f * u(rng));
+    SCOPED_TRACE("pancake");
+    test::check_hull_scalable(pts, build_ok(pts));
+  }
+  {
+    std::vector<V> pts = sphere_points(rng, n / 5);
+    for (V& p : pts) p = 10.0f * p + V(1e3f, -1e3f, 5e2f);
+    SCOPED_TRACE("far sphere");
+    test::check_hull_scalable(pts, build_ok(pts));
+  }
+}
+
+/// The messages of the failures check_hull_scalable(pts, h) reports (none reach the
+/// test's own result).
+std::string scalable_check_failures(const std::vector<V>& pts, const HullData& h) {
+  ::testing::TestPartResultArray results;
+  {
+    const ::testing::ScopedFakeTestPartResultReporter reporter(
+        ::testing::ScopedFakeTestPartResultReporter::INTERCEPT_ONLY_CURRENT_THREAD, &results);
+    test::check_hull_scalable(pts, h);
+  }
+  std::string all;
+  for (int i = 0; i < results.size(); ++i) all += std::string(results.GetTestPartResult(i).message()) + "\n";
+  return all;
+}
+
+/// check_hull_scalable agrees with the brute-force checks on small clouds, and fails on
+/// hulls corrupted in each way it checks (a point outside, a face dropped, a concave
+/// edge, a vertex not an input point, a missing edge class).
+TEST(ConvexHull, ScalableCheckAgreesAndCatchesFaults) {
+  std::mt19937 rng(23);
+  for (int t = 0; t < 10; ++t) {
+    const auto pts = sphere_points(rng, 50 + 40 * t);
+    const HullData h = build_ok(pts);
+    check_hull(pts, h);
+    EXPECT_EQ(scalable_check_failures(pts, h), "");
+  }
+  const auto pts = sphere_points(rng, 2000);
+  const HullData good = build_ok(pts);
+  {
+    std::vector<V> more = pts;
+    more.push_back(V(0.0f, 0.0f, 1.01f));  // outside
+    EXPECT_NE(scalable_check_failures(more, good).find("outside"), std::string::npos);
+  }
+  {
+    HullData bad = good;
+    bad.faces.pop_back();
+    bad.face_normals.pop_back();
+    bad.face_offsets.pop_back();
+    EXPECT_NE(scalable_check_failures(pts, bad).find("open_edges"), std::string::npos);
+  }
+  {
+    HullData bad = good;  // the plane of face 0 pushed inward: its neighbours rise above it
+    bad.face_offsets[0] -= 0.01f;
+    EXPECT_NE(scalable_check_failures(pts, bad).find("concave"), std::string::npos);
+  }
+  {
+    HullData bad = good;
+    bad.vertices[0] *= 1.0f + 1e-6f;
+    EXPECT_NE(scalable_check_failures(pts, bad).find("not_input"), std::string::npos);
+  }
+  {
+    HullData bad = good;
+    bad.edge_dirs.erase(bad.edge_dirs.begin() + 7);
+    EXPECT_NE(scalable_check_failures(pts, bad).find("uncovered"), std::string::npos);
+  }
 }
 
 TEST(ConvexHull, RejectsDegenerateInput) {
