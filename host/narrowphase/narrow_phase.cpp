@@ -150,7 +150,7 @@ struct host::NarrowRunner::State {
   Box3 leaf_bounds(uint32_t obj, uint32_t child) const;
   void mesh_query(const MeshData& m, const Posed& pose, const Box3& world_box,
                   std::vector<uint32_t>* tris) const;
-  void mesh_below_plane(const MeshData& m, const Posed& pose, const Eigen::Vector3f& n, float d,
+  void mesh_below_plane(const MeshData& m, const Posed& pose, const Eigen::Vector3f& n, double d,
                         std::vector<uint32_t>* tris) const;
   /// The one leaf pair of a pair of two plain shapes.
   LeafPair plain_record(uint32_t pair_index) const {
@@ -173,7 +173,40 @@ struct host::NarrowRunner::State {
   /// plain shape from its PosedObject line alone; the others through fill_general.
   void fill(LeafArrays& s, size_t k, uint32_t obj, uint32_t child) const;
   void fill_general(LeafArrays& s, size_t k, uint32_t obj, uint32_t child) const;
+  /// Whether a leaf pair of these objects is posed relative to an anchor (below): one
+  /// side a half-space, a mesh or a compound, whose leaves the gather derives.
+  bool anchored(uint32_t obj_a, uint32_t obj_b) const {
+    auto derived = [&](uint32_t o) {
+      const ShapeType t = types[o];
+      return t == ShapeType::kHalfSpace || t == ShapeType::kMesh || t == ShapeType::kCompound;
+    };
+    return derived(obj_a) || derived(obj_b);
+  }
+  /// The anchor of a leaf pair whose kernel side A is object obj (child): its pose's
+  /// position (an input, exact), or for a mesh its triangle's first corner (the mesh's
+  /// pose may lie far from its triangles), rounded once.
+  Eigen::Vector3f anchor_of(uint32_t obj, uint32_t child) const;
+  /// Lane k of s: the leaf as fill() writes it, but every world position taken relative
+  /// to the anchor o and rounded once from double: positions p - o, compound children
+  /// (R c + p) - o, triangle corners (R v + p) - o, and for a half-space the point of its
+  /// plane nearest o (the plane's height over o along the normal, in double).
+  void fill_relative(LeafArrays& s, size_t k, uint32_t obj, uint32_t child, const Eigen::Vector3f& o) const;
 };
+
+namespace {
+/// The box widened by 2^-21 of each coordinate's magnitude: the float posing of a
+/// bound (R c + p, then +- the rotated extents) rounds each coordinate by at most ~2
+/// ulps of its magnitude, which far from the origin exceeds a shallow contact's depth
+/// (half an ulp is 3.9 mm at 1e5 m); the widened boxes cull no touching leaf pair.
+Box3 widened(Box3 b) {
+  for (int i = 0; i < 3; ++i) {
+    const float slack = 0x1p-21f * (std::fabs(b.lo[i]) + std::fabs(b.hi[i]));
+    b.lo[i] -= slack;
+    b.hi[i] += slack;
+  }
+  return b;
+}
+}  // namespace
 
 Box3 host::NarrowRunner::State::leaf_bounds(uint32_t obj, uint32_t child) const {
   const ShapeRecord& r = shape(obj);
@@ -184,7 +217,7 @@ Box3 host::NarrowRunner::State::leaf_bounds(uint32_t obj, uint32_t child) const 
     const ShapeRecord& cr = store->shapes[c.shape.index];
     host::posed_bounds(cr, P.R * c.local.orientation.toRotationMatrix(), P.R * c.local.position + P.p,
                        store->hulls, &b.lo, &b.hi);
-    return b;
+    return widened(b);
   }
   if (r.type == ShapeType::kMesh && child != kNoChild) {
     const MeshData& m = store->meshes[r.ref];
@@ -195,10 +228,10 @@ Box3 host::NarrowRunner::State::leaf_bounds(uint32_t obj, uint32_t child) const 
       b.lo = b.lo.cwiseMin(v);
       b.hi = b.hi.cwiseMax(v);
     }
-    return b;
+    return widened(b);
   }
   host::posed_bounds(r, P.R, P.p, store->hulls, &b.lo, &b.hi);
-  return b;
+  return widened(b);
 }
 
 void host::NarrowRunner::State::mesh_query(const MeshData& m, const Posed& pose, const Box3& world_box,
@@ -236,11 +269,12 @@ void host::NarrowRunner::State::mesh_query(const MeshData& m, const Posed& pose,
 }
 
 void host::NarrowRunner::State::mesh_below_plane(const MeshData& m, const Posed& pose, const Eigen::Vector3f& n,
-                                         float d, std::vector<uint32_t>* tris) const {
+                                         double d, std::vector<uint32_t>* tris) const {
   tris->clear();
-  // Plane in the mesh frame: n_l . x <= d_l.
+  // Plane in the mesh frame: n_l . x <= d_l (d_l in double: far from the origin d and
+  // n.p cancel, and in float each rounds by more than the slack below).
   const Eigen::Vector3f nl = pose.R.transpose() * n;
-  const float dl = d - n.dot(pose.p);
+  const auto dl = static_cast<float>(d - n.cast<double>().dot(pose.p.cast<double>()));
   uint32_t stack[64];
   uint32_t top = 0;
   stack[top++] = 0;
@@ -310,18 +344,19 @@ void host::NarrowRunner::State::expand(uint32_t pair_index, std::vector<LeafPair
     out->push_back(lp);
   };
   // One side a half-space: the other side's children that reach below the plane.
-  auto plane_of = [&](uint32_t obj, Eigen::Vector3f* n, float* d) {
+  auto plane_of = [&](uint32_t obj, Eigen::Vector3f* n, double* d) {
     const ShapeRecord& r = shape(obj);
     *n = posed[obj].R * Eigen::Vector3f(r.e[0], r.e[1], r.e[2]);
-    *d = r.offset + n->dot(posed[obj].p);
+    *d = static_cast<double>(r.offset) + n->cast<double>().dot(posed[obj].p.cast<double>());
   };
-  auto children_below = [&](uint32_t obj, const Eigen::Vector3f& n, float d, std::vector<uint32_t>* list) {
+  auto children_below = [&](uint32_t obj, const Eigen::Vector3f& n, double dd, std::vector<uint32_t>* list) {
     const ShapeRecord& r = shape(obj);
     list->clear();
     if (r.type == ShapeType::kMesh) {
-      mesh_below_plane(store->meshes[r.ref], posed[obj], n, d, list);
+      mesh_below_plane(store->meshes[r.ref], posed[obj], n, dd, list);
       return;
     }
+    const auto d = static_cast<float>(dd);
     const uint32_t count = store->child_begin[r.ref + 1] - store->child_begin[r.ref];
     for (uint32_t c = 0; c < count; ++c) {
       const Box3 bx = leaf_bounds(obj, c);
@@ -336,7 +371,7 @@ void host::NarrowRunner::State::expand(uint32_t pair_index, std::vector<LeafPair
   if (ra.type == ShapeType::kHalfSpace || rb.type == ShapeType::kHalfSpace) {
     const bool plane_is_a = ra.type == ShapeType::kHalfSpace;
     Eigen::Vector3f n;
-    float d;
+    double d;
     plane_of(plane_is_a ? a : b, &n, &d);
     children_below(plane_is_a ? b : a, n, d, ca);
     for (uint32_t c : *ca) plane_is_a ? emit(kNoChild, c) : emit(c, kNoChild);
@@ -426,6 +461,81 @@ void host::NarrowRunner::State::fill_general(LeafArrays& s, size_t k, uint32_t o
       return;
     }
     default:  // capsule, box, cylinder, ellipsoid (compound children)
+      put_p(s, k, p);
+      put_r(s, k, R);
+      put_e(s, k, e);
+      return;
+  }
+}
+
+Eigen::Vector3f host::NarrowRunner::State::anchor_of(uint32_t obj, uint32_t child) const {
+  const ShapeRecord& r = shape(obj);
+  const Posed& P = posed[obj];
+  if (r.type != ShapeType::kMesh || child == kNoChild) return P.p;
+  const MeshData& m = store->meshes[r.ref];
+  const Eigen::Vector3d v = P.R.cast<double>() * m.vertices[m.indices[3 * child]].cast<double>() + P.p.cast<double>();
+  return v.cast<float>();
+}
+
+void host::NarrowRunner::State::fill_relative(LeafArrays& s, size_t k, uint32_t obj, uint32_t child,
+                                              const Eigen::Vector3f& o) const {
+  const ShapeRecord* r = &shape(obj);
+  const Posed& P = posed[obj];
+  // The object's pose relative to o, in double: differences of floats are exact there.
+  const Eigen::Vector3d od = o.cast<double>();
+  Eigen::Matrix3f R = P.R;
+  Eigen::Vector3d pd = P.p.cast<double>() - od;
+  if (r->type == ShapeType::kCompound) {
+    const CompoundChild& c = store->children[store->child_begin[r->ref] + child];
+    pd += P.R.cast<double>() * c.local.position.cast<double>();
+    R = P.R * c.local.orientation.toRotationMatrix();
+    r = &store->shapes[c.shape.index];
+  }
+  const Eigen::Vector3f p = pd.cast<float>();
+  const float* e = r->type == ShapeType::kCompound ? nullptr : r->e;
+  switch (r->type) {
+    case ShapeType::kSphere:
+      put_p(s, k, p);
+      s.f[12][k] = e[0];
+      return;
+    case ShapeType::kAabb:
+      put_p(s, k, p);
+      put_r(s, k, Eigen::Matrix3f::Identity());
+      put_e(s, k, e);
+      return;
+    case ShapeType::kConvex:
+      put_p(s, k, p);
+      put_r(s, k, R);
+      s.ref[k] = r->ref;
+      return;
+    case ShapeType::kHalfSpace: {
+      // The plane { x : nn.(x - q) <= 0 }, q = p + R (el offset), nn = R el / |R el| as
+      // put_plane poses it; its height over o is h = nn.(o - p) - offset nn.(R el), and
+      // -nn h the point of the plane nearest o. Rounded once, the plane moves by ~1e-7
+      // of |h| (the distance to o), not by the rounding of a world coordinate.
+      const Eigen::Vector3f el(e[0], e[1], e[2]);
+      const Eigen::Vector3f n = R * el;
+      const Eigen::Vector3f nn = n / n.norm();
+      const Eigen::Vector3d nd = nn.cast<double>();
+      const double h = -nd.dot(pd) - static_cast<double>(r->offset) * nd.dot(R.cast<double>() * el.cast<double>());
+      put_p(s, k, (-h * nd).cast<float>());
+      const float ne[3] = {nn[0], nn[1], nn[2]};
+      put_e(s, k, ne);
+      return;
+    }
+    case ShapeType::kMesh: {
+      const MeshData& m = store->meshes[r->ref];
+      const Eigen::Matrix3d Rd = R.cast<double>();
+      Eigen::Vector3f v[3];
+      for (int j = 0; j < 3; ++j) v[j] = (Rd * m.vertices[m.indices[3 * child + j]].cast<double>() + pd).cast<float>();
+      put_p(s, k, v[0]);
+      for (int i = 0; i < 3; ++i) {
+        s.f[15 + i][k] = v[1][i];
+        s.f[18 + i][k] = v[2][i];
+      }
+      return;
+    }
+    default:  // capsule, box, cylinder, ellipsoid (plain or compound children)
       put_p(s, k, p);
       put_r(s, k, R);
       put_e(s, k, e);
@@ -585,20 +695,41 @@ Status host::NarrowRunner::State::run(const host::Executor& exec, const host::Na
       scratch[0].resize(kLaneBlock, host::LeafArrays::kPhaseA);
       scratch[1].resize(kLaneBlock, host::LeafArrays::kPhaseB);
     }
+    // Lanes with a derived leaf (half-space, mesh triangle, compound child) are posed
+    // relative to an anchor, a point of the pair (anchor_of), and their points moved
+    // back after the kernel: posed in world floats, such a leaf would round by half an
+    // ulp of its coordinates (3.9 mm at 1e5 m), while the kernels compute relative to a
+    // point of the pair and lose nothing on exact inputs (tests/host/narrowphase/
+    // far_from_origin_test.cpp).
+    thread_local uint32_t anchored_lanes[kLaneBlock];
+    thread_local float anchors[kLaneBlock][3];
+    uint32_t n_anchored = 0;
     for (uint32_t s = blk.begin; s < blk.end; ++s) {
       const LeafPair& lp = records[record_at(s)];
       const kernels::Pair& pr = pairs[lp.pair];
       const uint32_t k = s - blk.begin;
-      if (lp.swapped) {
-        fill(scratch[0], k, pr.b, lp.child_b);
-        fill(scratch[1], k, pr.a, lp.child_a);
+      const uint32_t obj0 = lp.swapped ? pr.b : pr.a, obj1 = lp.swapped ? pr.a : pr.b;
+      const uint32_t child0 = lp.swapped ? lp.child_b : lp.child_a, child1 = lp.swapped ? lp.child_a : lp.child_b;
+      if (anchored(obj0, obj1)) {
+        const Eigen::Vector3f o = anchor_of(obj0, child0);
+        fill_relative(scratch[0], k, obj0, child0, o);
+        fill_relative(scratch[1], k, obj1, child1, o);
+        anchored_lanes[n_anchored] = k;
+        for (int d = 0; d < 3; ++d) anchors[n_anchored][d] = o[d];
+        ++n_anchored;
       } else {
-        fill(scratch[0], k, pr.a, lp.child_a);
-        fill(scratch[1], k, pr.b, lp.child_b);
+        fill(scratch[0], k, obj0, child0);
+        fill(scratch[1], k, obj1, child1);
       }
     }
     kernel(scratch[0].view(0), scratch[1].view(0), manifold.view(blk.begin), kernels::Range{0, blk.end - blk.begin},
            cfg);
+    for (uint32_t i = 0; i < n_anchored; ++i) {
+      const uint32_t s = blk.begin + anchored_lanes[i];
+      const uint32_t count = std::min<uint32_t>(manifold.count[s], kernels::kMaxManifoldPoints);
+      for (uint32_t j = 0; j < count; ++j)
+        for (uint32_t d = 0; d < 3; ++d) manifold.f[4 + 3 * j + d][s] += anchors[i][d];
+    }
   });
 
   // Output in record order: touching records and their points counted per chunk,

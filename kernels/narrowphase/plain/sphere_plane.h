@@ -3,7 +3,8 @@
 // straight from the body and plane stores, written as one-point manifolds of
 // kernels/common/contact_manifolds.h (plain: no children or feature arrays).
 //
-// sphere_plane_count  per range of pairs: how many touch (h = n.p - offset < r)
+// sphere_plane_count  per range of pairs: how many touch (h = n.p - offset < r, h in
+//                     double, rounded once: exact far from the origin)
 // sphere_plane_write  the same pairs again: manifold c = point c from out's index
 //                     `offset`, pair index pair_base + k, a = the body, b = the plane
 //                     index (pair.b - plane_base) with b_is_plane set, normal -n (from

@@ -52,9 +52,11 @@ void sphere_sphere_write(const Pair* IMPACT_RESTRICT pairs, SphereView s, uint32
     out.normal[2][c] = nz;
     out.depth[c] = depth;
     out.count[c] = 1;
-    out.point[0][c] = 0.5f * (s.pos_x[a] + s.pos_x[b]) + nx * h;
-    out.point[1][c] = 0.5f * (s.pos_y[a] + s.pos_y[b]) + ny * h;
-    out.point[2][c] = 0.5f * (s.pos_z[a] + s.pos_z[b]) + nz * h;
+    // The midpoint from a's centre (a + d / 2, not (a + b) / 2: the world sum rounds at
+    // twice the coordinates' magnitude, a whole ulp more far from the origin).
+    out.point[0][c] = s.pos_x[a] + (0.5f * dx + nx * h);
+    out.point[1][c] = s.pos_y[a] + (0.5f * dy + ny * h);
+    out.point[2][c] = s.pos_z[a] + (0.5f * dz + nz * h);
     out.point_depth[c] = depth;
     ++c;
   }

@@ -12,7 +12,9 @@
 // Cost: ~15 flops and two random body reads a pair; count is vectorised.
 // Preconditions: finite positions, radii > 0 (validated at the API).
 // The posed-shape kernel of the same pair (collide_sphere_sphere) computes the same
-// contact relative to a's centre; this one keeps the world's own arithmetic.
+// contact relative to a's centre; so does this one (d = b - a, the point a + d / 2 +
+// n (r_a - r_b) / 2), so far from the origin the point rounds once, at the world
+// coordinate.
 #pragma once
 
 #include "kernels/common/body_views.h"
