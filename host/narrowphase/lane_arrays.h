@@ -68,6 +68,24 @@ inline void put_plane(LeafArrays& s, size_t k, const Eigen::Matrix3f& R, const E
   put_e(s, k, ne);
 }
 
+/// A half-space (local unit normal e, plane offset) with rotation R at position p_rel
+/// relative to an anchor o (p - o, in double), posed relative to o: the point of its plane
+/// nearest o and the world normal, renormalised. The plane is { x : nn.(x - q) <= 0 },
+/// q = p + R (e offset), nn = R e / |R e| (put_plane's); its height over o is
+/// h = nn.(o - p) - offset nn.(R e), and -nn h the point. Rounded once, the plane moves by
+/// ~1e-7 of |h| (the distance to o), not by the rounding of a world coordinate.
+inline void put_plane_relative(LeafArrays& s, size_t k, const Eigen::Matrix3f& R, const Eigen::Vector3d& p_rel,
+                               const float* e, float offset) {
+  const Eigen::Vector3f el(e[0], e[1], e[2]);
+  const Eigen::Vector3f n = R * el;
+  const Eigen::Vector3f nn = n / n.norm();
+  const Eigen::Vector3d nd = nn.cast<double>();
+  const double h = -nd.dot(p_rel) - static_cast<double>(offset) * nd.dot(R.cast<double>() * el.cast<double>());
+  put_p(s, k, (-h * nd).cast<float>());
+  const float ne[3] = {nn[0], nn[1], nn[2]};
+  put_e(s, k, ne);
+}
+
 /// The kernels' results: count, then f = depth, n[3], point[4][3], pdepth[4].
 struct ManifoldArrays {
   static constexpr uint32_t kPhase = 44;

@@ -39,8 +39,9 @@ Raw raw_of(const PoseArrays& p) {
 
 // Lane k of side s: object i as the kernels' leaf (the fields NarrowRunner's fill
 // writes for the same record and pose, so both calls give the same bytes).
-IMPACT_INLINE void fill(LeafArrays& s, size_t k, const ShapeRecord& r, const Raw& p, uint32_t i) {
-  const Eigen::Vector3f pos(p.px[i], p.py[i], p.pz[i]);
+// pos: the position written (object i's own, or relative to an anchor).
+IMPACT_INLINE void fill(LeafArrays& s, size_t k, const ShapeRecord& r, const Eigen::Vector3f& pos, const Raw& p,
+                        uint32_t i) {
   switch (r.type) {
     case ShapeType::kSphere:
       put_p(s, k, pos);
@@ -65,6 +66,21 @@ IMPACT_INLINE void fill(LeafArrays& s, size_t k, const ShapeRecord& r, const Raw
       put_e(s, k, r.e);
       return;
   }
+}
+
+// fill() for a pair with a half-space side, every position relative to the anchor o (a
+// point of the pair: the kernel A side's position), from double and rounded once, and a
+// half-space as the point of its plane nearest o: NarrowRunner's fill_relative for the
+// same leaf, so the far-from-origin accuracy and the bytes are those of collide().
+void fill_relative(LeafArrays& s, size_t k, const ShapeRecord& r, const Raw& p, uint32_t i,
+                   const Eigen::Vector3f& o) {
+  const Eigen::Vector3d pd = Eigen::Vector3d(p.px[i], p.py[i], p.pz[i]) - o.cast<double>();
+  const Eigen::Vector3f pos = pd.cast<float>();
+  if (r.type != ShapeType::kHalfSpace) {
+    fill(s, k, r, pos, p, i);
+    return;
+  }
+  put_plane_relative(s, k, rotation_of(Eigen::Quaternionf(p.qw[i], p.qx[i], p.qy[i], p.qz[i])), pd, r.e, r.offset);
 }
 
 kernels::ManifoldSoA out_view(const PairContactArrays& o, size_t offset) {
@@ -219,18 +235,35 @@ Status ArrayRunner::run(const Executor& exec, const ShapeStore& store, std::span
       side[1].resize(kLaneBlock, LeafArrays::kPhaseB);
       lanes.resize(kLaneBlock);
     }
+    // A bucket with a half-space side is posed relative to a point of each pair, and
+    // its points moved back after the kernel (docs/narrowphase.md, "Far from the origin").
+    const bool anchored = ta == kernels::kLeafHalfSpace || tb == kernels::kLeafHalfSpace;
+    thread_local float anchor[kLaneBlock][3];
     for (uint32_t s = begin; s < end; ++s) {
       const auto k = static_cast<uint32_t>(keys[s]);
       const ShapePair pr = pairs[k];
       const bool swap = leaf_[pr.a] != ta;  // the kernel's A is the lower leaf type
       const uint32_t a = swap ? pr.b : pr.a, b = swap ? pr.a : pr.b;
-      fill(side[0], s - begin, records[shape_of[a].index], raw, a);
-      fill(side[1], s - begin, records[shape_of[b].index], raw, b);
+      if (anchored) {
+        const Eigen::Vector3f o(raw.px[a], raw.py[a], raw.pz[a]);
+        fill_relative(side[0], s - begin, records[shape_of[a].index], raw, a, o);
+        fill_relative(side[1], s - begin, records[shape_of[b].index], raw, b, o);
+        for (int d = 0; d < 3; ++d) anchor[s - begin][d] = o[d];
+      } else {
+        fill(side[0], s - begin, records[shape_of[a].index], Eigen::Vector3f(raw.px[a], raw.py[a], raw.pz[a]), raw, a);
+        fill(side[1], s - begin, records[shape_of[b].index], Eigen::Vector3f(raw.px[b], raw.py[b], raw.pz[b]), raw, b);
+      }
     }
     const uint32_t m = end - begin;
     // In pair order the kernel writes the caller's slots begin .. end itself.
     const kernels::ManifoldSoA o = sorted ? out_view(out, begin) : lanes.view(0);
     kernel(side[0].view(0), side[1].view(0), o, kernels::Range{0, m}, cfg);
+    if (anchored)
+      for (uint32_t l = 0; l < m; ++l) {
+        const uint32_t count = std::min<uint32_t>(o.count[l], kernels::kMaxManifoldPoints);
+        for (uint32_t j = 0; j < count; ++j)
+          for (int d = 0; d < 3; ++d) o.point[j][d][l] += anchor[l][d];
+      }
     if (sorted && ta == tb) return;  // in place, and no lane is swapped
     for (uint32_t l = 0; l < m; ++l) {
       const auto k = static_cast<uint32_t>(keys[begin + l]);

@@ -508,21 +508,9 @@ void host::NarrowRunner::State::fill_relative(LeafArrays& s, size_t k, uint32_t 
       put_r(s, k, R);
       s.ref[k] = r->ref;
       return;
-    case ShapeType::kHalfSpace: {
-      // The plane { x : nn.(x - q) <= 0 }, q = p + R (el offset), nn = R el / |R el| as
-      // put_plane poses it; its height over o is h = nn.(o - p) - offset nn.(R el), and
-      // -nn h the point of the plane nearest o. Rounded once, the plane moves by ~1e-7
-      // of |h| (the distance to o), not by the rounding of a world coordinate.
-      const Eigen::Vector3f el(e[0], e[1], e[2]);
-      const Eigen::Vector3f n = R * el;
-      const Eigen::Vector3f nn = n / n.norm();
-      const Eigen::Vector3d nd = nn.cast<double>();
-      const double h = -nd.dot(pd) - static_cast<double>(r->offset) * nd.dot(R.cast<double>() * el.cast<double>());
-      put_p(s, k, (-h * nd).cast<float>());
-      const float ne[3] = {nn[0], nn[1], nn[2]};
-      put_e(s, k, ne);
+    case ShapeType::kHalfSpace:
+      put_plane_relative(s, k, R, pd, e, r->offset);
       return;
-    }
     case ShapeType::kMesh: {
       const MeshData& m = store->meshes[r->ref];
       const Eigen::Matrix3d Rd = R.cast<double>();
