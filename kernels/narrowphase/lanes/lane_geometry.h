@@ -23,6 +23,12 @@ using simd::V3;
 /// rounding of unit directions, with room.
 inline constexpr float kNormalConeSlack = 1e-5f;
 
+/// Closest-feature directions shorter than this times the coordinates' magnitude are put
+/// back into their normal cone; longer ones lie off it by less than ~2e-5 rad (float
+/// rounding / kConeReach: an overlap left of 2e-5 of the size at most), so they keep their
+/// bytes and a block with none skips the work.
+inline constexpr float kConeReach = 0.01f;
+
 /// Squared lengths below this are treated as zero (normalising them would lose all
 /// precision): the smallest normal float.
 inline constexpr float kTinySq = FLT_MIN;

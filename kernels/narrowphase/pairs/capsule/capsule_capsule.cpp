@@ -72,44 +72,47 @@ IMPACT_INLINE void capsule_capsule_block(const LeafSoA& a, const LeafSoA& b, con
   closest_segment_segment(ca, ua, ha, cb, ub, hb, s, t);
   const V3<F> qa = ua * s;
   const V3<F> qb = madd(cb, t, ub);
-  // The line both cores are perpendicular to: ua x ub, or across A's axis where ua x ub
-  // is rounding noise (near-parallel axes); made perpendicular to both axes (Gram-Schmidt:
-  // the cross product's rounding, ~1e-7 / |ua x ub| rad, would tilt it along an axis,
-  // where each core adds its half length times the tilt to the overlap).
+  // Fallback normal where the axes meet: ua x ub towards B (or any perpendicular).
   const V3<F> c = cross(ua, ub);
   const F c2 = length_sq(c);
   F cl;
   const V3<F> cu = normalize_or(c, any_perpendicular(ua), cl);
-  V3<F> base = select(c2 > F(kCrossSq), cu, any_perpendicular(ua));
-  base = madd(base, -dot(base, ua), ua);
-  base = madd(base, -dot(base, ub), ub);
-  F bl;
-  const V3<F> ln = normalize_or(base, any_perpendicular(ua), bl);
-  const V3<F> fb = select(dot(ln, cb) < zero, -ln, ln);  // towards B
+  const V3<F> fb = select(dot(cu, cb) < zero, -cu, cu);
   const V3<F> dq = qb - qa;
   F dist;
-  normalize_or(dq, fb, dist);
-  // dq moved into the cone of normals both closest points' optimality allows
-  // (segment_half_cone: across an axis where its point is inside, outwards at an end):
-  // where the cores meet or run parallel and touch, dq is rounding noise in any
-  // direction, the axes' included, along which the overlap is far larger. Slack:
-  // kNormalConeSlack, and for near-parallel cores |ua x ub| (the parallel rule's s is the
-  // overlap's middle, off A's optimum by that).
-  const F slack = (F(kNormalConeSlack) + select(c2 < F(1e-6f), cl, zero)) * dist;
-  const V3<F> mc = project_to_cone(dq, segment_half_cone(ua, s, ha, true), segment_half_cone(ub, t, hb, false),
-                                   ln, slack);
-  F ml;
-  V3<F> n = normalize_or(mc, fb, ml);
+  V3<F> n = normalize_or(dq, fb, dist);
+  // Within kConeReach of the coordinates' size, dq is moved into the cone of normals both
+  // closest points' optimality allows (segment_half_cone: across an axis where its point
+  // is inside, outwards at an end): where the cores meet or run parallel and touch, dq
+  // is rounding noise in any direction, the axes' included, along which the overlap is
+  // far larger. Slack: kNormalConeSlack, and for near-parallel cores |ua x ub| (the
+  // parallel rule's s is the overlap's middle, off A's optimum by that). The line across
+  // both axes: ua x ub, or across A's axis where ua x ub is rounding noise, made
+  // perpendicular to both (Gram-Schmidt: the cross product's rounding, ~1e-7 / |ua x ub|
+  // rad, would tilt it along an axis, each core adding its half length times the tilt).
+  const auto near = dist < F(kConeReach) * (ha + hb + abs(cb.x) + abs(cb.y) + abs(cb.z));
+  if (any(near)) {
+    V3<F> base = select(c2 > F(kCrossSq), cu, any_perpendicular(ua));
+    base = madd(base, -dot(base, ua), ua);
+    base = madd(base, -dot(base, ub), ub);
+    F bl;
+    const V3<F> ln = normalize_or(base, any_perpendicular(ua), bl);
+    const V3<F> fl = select(dot(ln, cb) < zero, -ln, ln);  // towards B
+    const F slack = (F(kNormalConeSlack) + select(c2 < F(1e-6f), cl, zero)) * dist;
+    const V3<F> mc = project_to_cone(dq, segment_half_cone(ua, s, ha, true), segment_half_cone(ub, t, hb, false),
+                                     ln, slack);
+    F ml;
+    n = select(near, normalize_or(mc, fl, ml), n);
+  }
   // Closest points inside both segments: qb - qa is along ua x ub exactly, so take that
   // direction (oriented by qb - qa, or towards B where qb - qa is rounding noise): from
   // qb - qa alone it turns by rounding / |qb - qa| as the cores come to cross.
   {
-    const F dc = dot(ln, dq);
+    const F dc = dot(cu, dq);
     const F noise = F(kEdgeRound) * (ha + hb + abs(cb.x) + abs(cb.y) + abs(cb.z));
-    // |ua x ub| > 1e-3: ln's direction is good to ~1e-4 rad within the plane across both
-    // axes (float rounding / |ua x ub|), and across each axis to rounding
+    // |ua x ub| > 1e-3: its direction is good to ~1e-4 rad (float rounding / |ua x ub|)
     const auto inner = (abs(s) < ha) & (abs(t) < hb) & (c2 > F(1e-6f));
-    const V3<F> nc = select(abs(dc) > noise, select(dc < zero, -ln, ln), fb);
+    const V3<F> nc = select(abs(dc) > noise, select(dc < zero, -cu, cu), fb);
     n = select(inner, nc, n);
     dist = select(inner, abs(dc), dist);
   }

@@ -41,7 +41,10 @@ IMPACT_INLINE void sphere_capsule_block(const LeafSoA& a, const LeafSoA& b, cons
   const V3<F> origin{F(0.0f), F(0.0f), F(0.0f)};
   const F t = closest_on_segment(cb, u, hb, origin);
   // closest axis point, relative to the sphere centre; -q runs from it to the centre
-  const V3<F> q = -into_segment_cone(-madd(cb, t, u), u, t, hb);
+  V3<F> q = madd(cb, t, u);
+  const F reach = F(kConeReach) * (hb + abs(cb.x) + abs(cb.y) + abs(cb.z));
+  const auto near = length_sq(q) < reach * reach;
+  if (any(near)) q = select(near, -into_segment_cone(-q, u, t, hb), q);
   F dist;
   const V3<F> n = normalize_or(q, any_perpendicular(u), dist);
   store(out, k, one_point(n, ra + rb - dist, n * ra, q - n * rb), pa);
