@@ -2,7 +2,9 @@
 // across pairs (one lane = one pair).
 // Method: lying on another rests on two points. Closest points inside both segments (|ua
 // x ub| > 1e-3): n = +-ua x ub, exact where qb - qa is rounding noise (cores crossing);
-// axes that meet and are parallel: a perpendicular.
+// elsewhere qb - qa moved into the cone of normals the closest points' optimality allows
+// (parallel or meeting cores: across the axes, never along them); axes that meet and are
+// parallel: a perpendicular.
 //
 // Inputs: LeafSoA lanes per leaf.h (A a capsule: p, R column 2 = axis, e0 = radius, e1 =
 // half length). Outputs: ManifoldSoA lanes of the Range, point slots 0 and 1
@@ -79,6 +81,29 @@ IMPACT_INLINE void capsule_capsule_block(const LeafSoA& a, const LeafSoA& b, con
   const V3<F> dq = qb - qa;
   F dist;
   V3<F> n = normalize_or(dq, fb, dist);
+  // Within kConeReach of the coordinates' size, dq is moved into the cone of normals both
+  // closest points' optimality allows (segment_half_cone: across an axis where its point
+  // is inside, outwards at an end): where the cores meet or run parallel and touch, dq
+  // is rounding noise in any direction, the axes' included, along which the overlap is
+  // far larger. Slack: kNormalConeSlack, and for near-parallel cores |ua x ub| (the
+  // parallel rule's s is the overlap's middle, off A's optimum by that). The line across
+  // both axes: ua x ub, or across A's axis where ua x ub is rounding noise, made
+  // perpendicular to both (Gram-Schmidt: the cross product's rounding, ~1e-7 / |ua x ub|
+  // rad, would tilt it along an axis, each core adding its half length times the tilt).
+  const auto near = dist < F(kConeReach) * (ha + hb + abs(cb.x) + abs(cb.y) + abs(cb.z));
+  if (any(near)) {
+    V3<F> base = select(c2 > F(kCrossSq), cu, any_perpendicular(ua));
+    base = madd(base, -dot(base, ua), ua);
+    base = madd(base, -dot(base, ub), ub);
+    F bl;
+    const V3<F> ln = normalize_or(base, any_perpendicular(ua), bl);
+    const V3<F> fl = select(dot(ln, cb) < zero, -ln, ln);  // towards B
+    const F slack = (F(kNormalConeSlack) + select(c2 < F(1e-6f), cl, zero)) * dist;
+    const V3<F> mc = project_to_cone(dq, segment_half_cone(ua, s, ha, true), segment_half_cone(ub, t, hb, false),
+                                     ln, slack);
+    F ml;
+    n = select(near, normalize_or(mc, fl, ml), n);
+  }
   // Closest points inside both segments: qb - qa is along ua x ub exactly, so take that
   // direction (oriented by qb - qa, or towards B where qb - qa is rounding noise): from
   // qb - qa alone it turns by rounding / |qb - qa| as the cores come to cross.

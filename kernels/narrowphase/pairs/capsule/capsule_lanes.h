@@ -20,6 +20,10 @@ inline constexpr float kEdgeRound = 2e-7f;
 /// |ua x ub| below this: capsule axes near-parallel enough for a 2-point manifold.
 inline constexpr float kParallelSin = 0.05f;
 
+/// |ua x ub|^2 above this: the cross product's direction is good to ~1e-2 rad (float
+/// rounding / |ua x ub|), a normal for cores that meet; below it, a perpendicular of A's axis.
+inline constexpr float kCrossSq = 1e-10f;
+
 template <class F>
 using L2 = Lanes<F, 2>;
 

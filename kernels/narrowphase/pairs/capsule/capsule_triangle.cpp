@@ -50,13 +50,19 @@ IMPACT_INLINE void capsule_triangle_block(const LeafSoA& a, const LeafSoA& b, co
   // features rather than from the difference of two nearly equal points: an end point
   // over the face's interior -> the face normal; a segment interior against an edge
   // interior -> their common perpendicular u x edge.
-  Mask face0, face1;
+  // `winner` names the winner for its normal cone (0, 1: an end point; 2 + i: edge i).
+  TriangleRegion<F> reg0, reg1;
+  const auto face_of = [](const TriangleRegion<F>& g) IMPACT_LAMBDA_INLINE {
+    return ~(g.in_a | g.in_b | g.in_ab | g.in_c | g.in_ac | g.in_bc);
+  };
   const V3<F> e0 = u * (-ha), e1 = u * ha;
-  V3<F> bp = e0, bq = closest_on_triangle(v[0], v[1], v[2], e0, nf, face0);
+  V3<F> bp = e0, bq = closest_on_triangle(v[0], v[1], v[2], e0, nf, reg0);
+  const Mask face0 = face_of(reg0);
   F bd = length_sq(bq - bp);
   Mask by_face = face0, by_edge = Mask(false);
   V3<F> edge_axis = nf;
-  auto consider = [&](const V3<F>& p, const V3<F>& q, Mask is_face, Mask is_edge, const V3<F>& axis) {
+  F winner = zero;
+  auto consider = [&](const V3<F>& p, const V3<F>& q, Mask is_face, Mask is_edge, const V3<F>& axis, float id) {
     const F d = length_sq(q - p);
     const Mask take = d < bd;
     bd = select(take, d, bd);
@@ -65,11 +71,12 @@ IMPACT_INLINE void capsule_triangle_block(const LeafSoA& a, const LeafSoA& b, co
     by_face = select(take, is_face, by_face);
     by_edge = select(take, is_edge, by_edge);
     edge_axis = select(take, axis, edge_axis);
+    winner = select(take, F(id), winner);
   };
-  const V3<F> q1 = closest_on_triangle(v[0], v[1], v[2], e1, nf, face1);
-  consider(e1, q1, face1, Mask(false), nf);
+  const V3<F> q1 = closest_on_triangle(v[0], v[1], v[2], e1, nf, reg1);
+  consider(e1, q1, face_of(reg1), Mask(false), nf, 1.0f);
   V3<F> ed[3], em[3];
-  F eh[3];
+  F eh[3], es[3], et[3];
   for (int i = 0; i < 3; ++i) {
     const V3<F> d = v[(i + 1) % 3] - v[i];
     F len;
@@ -78,10 +85,13 @@ IMPACT_INLINE void capsule_triangle_block(const LeafSoA& a, const LeafSoA& b, co
     em[i] = (v[i] + v[(i + 1) % 3]) * half;
     F s, t;
     closest_segment_segment(c, u, ha, em[i], ed[i], eh[i], s, t);
+    es[i] = s;
+    et[i] = t;
     const V3<F> l = cross(u, ed[i]);
     const F l2 = length_sq(l);
     const Mask interior = (abs(s) < ha) & (abs(t) < eh[i]) & (l2 > F(1e-10f));
-    consider(u * s, madd(em[i], t, ed[i]), Mask(false), interior, l * (one / sqrt(select(interior, l2, one))));
+    consider(u * s, madd(em[i], t, ed[i]), Mask(false), interior, l * (one / sqrt(select(interior, l2, one))),
+             static_cast<float>(2 + i));
   }
   // segment crossing the triangle's interior
   const F hc = -dot(nf, v[0]);  // height of the centre above the plane
@@ -105,6 +115,44 @@ IMPACT_INLINE void capsule_triangle_block(const LeafSoA& a, const LeafSoA& b, co
   const F dist = sqrt(bd);
   const V3<F> gap = bq - bp;
   V3<F> n_sh = gap * (one / select(shallow, dist, one));
+  // Within kConeReach of the size, the gap goes back into the winner's normal cone: the
+  // core's constraint at its parameter, and the edge segment's (segment pairs) or the
+  // triangle region's (an end point against the triangle, then the end's own): rounding
+  // of a core end on an edge or a vertex otherwise tilts it along the core or the edge,
+  // each adding its length times the tilt to the overlap.
+  const Mask near = shallow & (dist < F(kConeReach) * (size + abs(v[0].x) + abs(v[0].y) + abs(v[0].z)));
+  if (any(near)) {
+    const F slack = F(kNormalConeSlack) * dist;
+    const Mask seg = winner >= F(1.5f), end1 = winner == one;
+    V3<F> bed = ed[0];
+    F bs = select(end1, ha, -ha), bt = et[0], beh = eh[0];
+    for (int i = 0; i < 3; ++i) {
+      const Mask w = winner == F(static_cast<float>(2 + i));
+      bed = select(w, ed[i], bed);
+      bs = select(w, es[i], bs);
+      bt = select(w, et[i], bt);
+      beh = select(w, eh[i], beh);
+    }
+    const HalfCone<F> core = segment_half_cone(u, bs, ha, true);
+    V3<F> lb = cross(u, bed);
+    lb = madd(lb, -dot(lb, u), u);
+    lb = madd(lb, -dot(lb, bed), bed);
+    F ll;
+    const V3<F> lseg = normalize_or(lb, any_perpendicular(u), ll);
+    const V3<F> g_seg = project_to_cone(gap, core, segment_half_cone(bed, bt, beh, false), lseg, slack);
+    TriangleRegion<F> breg;
+    breg.in_a = select(end1, reg1.in_a, reg0.in_a);
+    breg.in_b = select(end1, reg1.in_b, reg0.in_b);
+    breg.in_c = select(end1, reg1.in_c, reg0.in_c);
+    breg.in_ab = select(end1, reg1.in_ab, reg0.in_ab);
+    breg.in_ac = select(end1, reg1.in_ac, reg0.in_ac);
+    breg.in_bc = select(end1, reg1.in_bc, reg0.in_bc);
+    HalfCone<F> ta, tb;
+    triangle_half_cones(v[0], v[1], v[2], nf, breg, ta, tb);
+    const V3<F> g_tri = into_segment_cone(-project_to_cone(-gap, ta, tb, nf, slack), u, bs, ha);
+    F gl;
+    n_sh = select(near, normalize_or(select(seg, g_seg, g_tri), n_sh, gl), n_sh);
+  }
   const V3<F> feature_axis = select(by_face, nf, edge_axis);
   const V3<F> n_feat = select(dot(feature_axis, gap) >= zero, feature_axis, -feature_axis);
   n_sh = select(by_face | by_edge, n_feat, n_sh);

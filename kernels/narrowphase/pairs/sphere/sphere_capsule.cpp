@@ -2,7 +2,10 @@
 // pairs (one lane = one pair).
 // Method: the closest point of B's core segment to the centre (Ericson, Real-Time
 // Collision Detection (2005) 5.1.2); n from the centre to it, depth = the radii's sum -
-// the distance; a centre on the core takes a deterministic perpendicular of the axis.
+// the distance. On or near the core (the closest point's offset as small as rounding) the
+// offset keeps only its part in the cone of valid normals (into_segment_cone: across the
+// axis inside, outwards at an end), so the normal never turns along the axis; a centre
+// exactly on the core takes a deterministic perpendicular of the axis.
 //
 // Inputs: LeafSoA lanes per leaf.h (A a sphere: p = centre, e0 = radius; B a capsule: p,
 // R column 2 = axis, e0 = radius, e1 = half length), Range r of the bucket.
@@ -37,7 +40,11 @@ IMPACT_INLINE void sphere_capsule_block(const LeafSoA& a, const LeafSoA& b, cons
   const F ra = ld<F>(a.e[0], k), rb = ld<F>(b.e[0], k), hb = ld<F>(b.e[1], k);
   const V3<F> origin{F(0.0f), F(0.0f), F(0.0f)};
   const F t = closest_on_segment(cb, u, hb, origin);
-  const V3<F> q = madd(cb, t, u);  // closest axis point, relative to the sphere centre
+  // closest axis point, relative to the sphere centre; -q runs from it to the centre
+  V3<F> q = madd(cb, t, u);
+  const F reach = F(kConeReach) * (hb + abs(cb.x) + abs(cb.y) + abs(cb.z));
+  const auto near = length_sq(q) < reach * reach;
+  if (any(near)) q = select(near, -into_segment_cone(-q, u, t, hb), q);
   F dist;
   const V3<F> n = normalize_or(q, any_perpendicular(u), dist);
   store(out, k, one_point(n, ra + rb - dist, n * ra, q - n * rb), pa);
