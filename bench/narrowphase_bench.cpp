@@ -881,16 +881,22 @@ bool add_body(const nb::PairScene& s, const nb::Body& b, ApiScene* out) {
   return true;
 }
 
+// Pair k of the scene as objects 2k and 2k + 1; false (api->error set) on a bad body.
+bool api_scene(const nb::PairScene& s, uint32_t n, ApiScene* api) {
+  for (uint32_t k = 0; k < n; ++k) {
+    if (!add_body(s, s.a[k], api) || !add_body(s, s.b[k], api)) return false;
+    api->pairs.push_back({2 * k, 2 * k + 1});
+  }
+  return true;
+}
+
 void BM_Collide(benchmark::State& state, uint8_t ka, uint8_t kb) {
   const uint32_t n = static_cast<uint32_t>(state.range(0));
   const nb::PairScene& s = nb::pair_scene(ka, kb, n);
   ApiScene api;
-  for (uint32_t k = 0; k < n; ++k) {
-    if (!add_body(s, s.a[k], &api) || !add_body(s, s.b[k], &api)) {
-      state.SkipWithError(api.error.c_str());
-      return;
-    }
-    api.pairs.push_back({2 * k, 2 * k + 1});
+  if (!api_scene(s, n, &api)) {
+    state.SkipWithError(api.error.c_str());
+    return;
   }
   impact::NarrowPhaseOptions options;
   options.exec.threads = static_cast<uint32_t>(state.range(1));
@@ -918,12 +924,9 @@ void BM_CollideArrays(benchmark::State& state, uint8_t ka, uint8_t kb) {
   const uint32_t n = static_cast<uint32_t>(state.range(0));
   const nb::PairScene& s = nb::pair_scene(ka, kb, n);
   ApiScene api;
-  for (uint32_t k = 0; k < n; ++k) {
-    if (!add_body(s, s.a[k], &api) || !add_body(s, s.b[k], &api)) {
-      state.SkipWithError(api.error.c_str());
-      return;
-    }
-    api.pairs.push_back({2 * k, 2 * k + 1});
+  if (!api_scene(s, n, &api)) {
+    state.SkipWithError(api.error.c_str());
+    return;
   }
   std::vector<float> pose[7];
   for (const impact::Pose& p : api.poses) {
