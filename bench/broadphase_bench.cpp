@@ -57,6 +57,8 @@
 #include <map>
 #include <memory>
 #include <string>
+#include <tuple>
+#include <utility>
 #include <vector>
 
 #include "bench/bench_threads.h"
@@ -204,6 +206,59 @@ const int kAutoChoiceRegistered = [] {
           ->ArgsProduct({{10000, 100000, 1000000}, {1}})
           ->UseRealTime()
           ->Unit(benchmark::kMillisecond);
+    }
+  }
+  return 0;
+}();
+
+// --- far outliers ----------------------------------------------------------------------------
+
+// BM_Outliers/<count>_at_<distance>/<grid|lbvh|auto>/<bodies>/<threads>: the uniform
+// scene with `count` of its boxes (every n/count-th, 0: none) moved, unchanged in size,
+// to `distance` m from the origin along alternating axis directions (the outliers
+// overlap each other in pairs; 1e18 m is the largest coordinate the API accepts). The grid's extent used to follow them (docs/broadphase.md).
+const impact::bench::UniformBoxes& outlier_boxes(uint32_t n, uint32_t count, double distance) {
+  static std::map<std::tuple<uint32_t, uint32_t, double>, impact::bench::UniformBoxes> cache;
+  const auto key = std::make_tuple(n, count, distance);
+  if (auto it = cache.find(key); it != cache.end()) return it->second;
+  impact::bench::UniformBoxes b = scene_boxes(BoxScene::kUniform, n);
+  for (uint32_t j = 0; j < count; ++j) {
+    const uint32_t i = static_cast<uint32_t>(static_cast<uint64_t>(j) * n / count);
+    const float d = static_cast<float>((j / 2) % 2 == 0 ? distance : -distance);
+    const int axis = static_cast<int>((j / 4) % 3);
+    float* lo[3] = {&b.min_x[i], &b.min_y[i], &b.min_z[i]};
+    float* hi[3] = {&b.max_x[i], &b.max_y[i], &b.max_z[i]};
+    for (int k = 0; k < 3; ++k) {
+      const float half = 0.5f * (*hi[k] - *lo[k]);
+      const float c = k == axis ? d : 0.0f;
+      *lo[k] = c - half;
+      *hi[k] = c + half + (j % 2 == 0 ? 0.0f : half);  // outliers j, j+1 overlap
+    }
+  }
+  return cache.emplace(key, std::move(b)).first->second;
+}
+
+const int kOutliersRegistered = [] {
+  const std::pair<const char*, impact::BroadPhaseKind> kinds[] = {{"grid", impact::BroadPhaseKind::kGrid},
+                                                                  {"lbvh", impact::BroadPhaseKind::kLbvh},
+                                                                  {"auto", impact::BroadPhaseKind::kAuto}};
+  const uint32_t counts[] = {0, 1, 10};
+  const std::pair<const char*, double> distances[] = {{"1e9", 1e9}, {"1e12", 1e12}, {"1e18", 1e18}};
+  for (uint32_t count : counts) {
+    for (const auto& [dist_name, dist] : distances) {
+      if (count == 0 && dist != 1e9) continue;  // no outlier: one row
+      for (const auto& [kind_name, kind] : kinds) {
+        const std::string name = "BM_Outliers/" + std::to_string(count) + "_at_" + dist_name + "/" + kind_name;
+        benchmark::RegisterBenchmark(name.c_str(),
+                                     [count, dist, kind](benchmark::State& state) {
+                                       run_broad_phase(state, kind,
+                                                       outlier_boxes(static_cast<uint32_t>(state.range(0)),
+                                                                     count, dist));
+                                     })
+            ->ArgsProduct({{10000, 100000}, {1}})
+            ->UseRealTime()
+            ->Unit(benchmark::kMillisecond);
+      }
     }
   }
   return 0;

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <vector>
 
 #include "host/scan.h"
 #include "kernels/broadphase/bounds.h"
@@ -13,15 +14,13 @@ namespace {
 
 constexpr uint64_t kMaxPairs = 0xffffffffull;  // kernels index pairs with uint32
 
-kernels::GridParams choose_grid(const kernels::BoundsSummary& s, uint32_t n, GridInfo* info) {
+kernels::GridParams choose_grid(kernels::AabbSoA boxes, const kernels::BoundsSummary& s, uint32_t n,
+                                GridInfo* info) {
   kernels::GridParams g{};
   double extent[3];
   double max_extent = 0;
-  for (int k = 0; k < 3; ++k) {
-    g.origin[k] = s.lo[k];
-    extent[k] = static_cast<double>(s.hi[k]) - static_cast<double>(s.lo[k]);
-    max_extent = std::max(max_extent, extent[k]);
-  }
+  grid_extent(boxes, n, s, static_cast<double>(s.max_edge) * (1.0 + 0x1p-20), g.origin, extent);
+  for (int k = 0; k < 3; ++k) max_extent = std::max(max_extent, extent[k]);
   // The cell must exceed the largest box edge (see grid.h); the small relative
   // margin absorbs the rounding of the double cell computation.
   double cell = static_cast<double>(s.max_edge) * (1.0 + 0x1p-20);
@@ -75,6 +74,50 @@ kernels::GridParams choose_grid(const kernels::BoundsSummary& s, uint32_t n, Gri
 
 }  // namespace
 
+void grid_extent(kernels::AabbSoA boxes, uint32_t n, const kernels::BoundsSummary& s, double cell,
+                 double origin[3], double extent[3]) {
+  double max_extent = 0;
+  for (int k = 0; k < 3; ++k) {
+    origin[k] = s.lo[k];
+    extent[k] = static_cast<double>(s.hi[k]) - static_cast<double>(s.lo[k]);
+    max_extent = std::max(max_extent, extent[k]);
+  }
+  const double limit = static_cast<double>(kernels::kGridMaxDim - 2);
+  // Point sets (cell 0) take about one cell per box (choose_grid): the core is then
+  // worth finding whenever the extent is not tiny against the crowd's spread, which
+  // only the sample can tell; use it for them whenever there are enough boxes.
+  const bool capped = cell > 0.0 ? max_extent > limit * cell : n >= 64;
+  if (n < 2 || !capped) return;
+  constexpr uint32_t kSample = 4096;
+  const uint32_t m = std::min(n, kSample);
+  std::vector<float> v(m);
+  const float* mins[3] = {boxes.min_x, boxes.min_y, boxes.min_z};
+  for (int k = 0; k < 3; ++k) {
+    for (uint32_t j = 0; j < m; ++j) v[j] = mins[k][static_cast<uint64_t>(j) * n / m];
+    // Order statistics of a fixed sample: the values are unique whatever the
+    // selection algorithm does with ties.
+    const uint32_t r = m / 16;
+    std::nth_element(v.begin(), v.begin() + r, v.end());
+    const double q_lo = v[r];
+    std::nth_element(v.begin(), v.begin() + (m - 1 - r), v.end());
+    const double q_hi = v[m - 1 - r];
+    const double w = std::max(q_hi - q_lo, 64.0 * cell);
+    const double a = q_lo - w, b = q_hi + w;
+    double lo = std::numeric_limits<double>::infinity(), hi = -lo;
+    const float* x = mins[k];
+    for (uint32_t i = 0; i < n; ++i) {
+      const double u = x[i];
+      if (u >= a && u <= b) {
+        lo = std::min(lo, u);
+        hi = std::max(hi, u);
+      }
+    }
+    // The quantiles are sampled min corners, so the window holds at least one box.
+    origin[k] = lo;
+    extent[k] = hi - lo;
+  }
+}
+
 kernels::BoundsSummary summarize_bounds(const Executor& exec, kernels::AabbSoA boxes, uint32_t n,
                                         Buffer<kernels::BoundsSummary>& partials) {
   constexpr uint32_t kGrain = GridBroadPhase::kKeyGrain;
@@ -114,7 +157,7 @@ void GridBroadPhase::build_grid(const Executor& exec, kernels::AabbSoA boxes, ke
                                 const uint32_t* original_index, uint32_t n,
                                 const kernels::BoundsSummary& sum) {
   built_n_ = n;
-  const kernels::GridParams g = choose_grid(sum, n, &info_);
+  const kernels::GridParams g = choose_grid(boxes, sum, n, &info_);
 
   // Sort by bucket (kernels/broadphase/grid.h): count per block, scan, partition
   // by block, then a counting sort inside each block that also fills the bucket ranges.

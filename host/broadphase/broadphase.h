@@ -31,6 +31,22 @@ struct GridInfo {
 /// buckets; a scene needing more, even with cells coarsened 2x, is hashed.
 inline double grid_dense_limit(uint64_t n) { return std::max(4.0 * static_cast<double>(n), 4096.0); }
 
+/// The range a grid over `boxes` spans: per axis an origin and an extent holding the
+/// boxes' min corners. Normally the summary's bounds. When `cell` (the grid's cell
+/// before any coarsening; 0 for point sets) would need more than kGridMaxDim - 2
+/// cells across the summary (a few far outliers would then force cells so coarse
+/// that the crowd shares a handful of them), the range is the "core" instead: per
+/// axis, quantiles 1/16 and 15/16 of the min corners of up to 4096 boxes at fixed
+/// indices (i * n / 4096) bound a window widened by their spread (at least 64
+/// cells) on each side, and the core is the exact range of the min corners inside
+/// that window. Boxes outside the core are clamped into its boundary cells (still
+/// exact: clamping keeps two cells at most one apart), so outliers cost their
+/// boundary cells' neighbours, not the crowd. Deterministic (fixed sample, exact
+/// min/max); cost O(4096 log 4096 + n) when the core is used, nothing otherwise.
+/// Fewer than 1/16 of the sampled boxes far away cannot widen the core.
+void grid_extent(kernels::AabbSoA boxes, uint32_t n, const kernels::BoundsSummary& s, double cell,
+                 double origin[3], double extent[3]);
+
 class GridBroadPhase {
  public:
   GridBroadPhase();

@@ -46,8 +46,10 @@ BroadPhaseKind BroadPhaseStage::choose(const Executor& exec, kernels::AabbSoA bo
   uint64_t total[L] = {};
   for (uint32_t c = 0; c < chunks; ++c)
     for (uint32_t l = 0; l < L; ++l) total[l] += counts[static_cast<size_t>(c) * L + l];
-  double extent[3];
-  for (int k = 0; k < 3; ++k) extent[k] = static_cast<double>(sum.hi[k]) - static_cast<double>(sum.lo[k]);
+  // The extent the grid itself would span (grid_extent: far outliers do not widen
+  // it), so one far body cannot make a dense scene look sparse.
+  double origin[3], extent[3];
+  grid_extent(boxes, n, sum, static_cast<double>(sum.max_edge), origin, extent);
   return choose_broad_phase(total, n, extent, sum.max_edge);
 }
 

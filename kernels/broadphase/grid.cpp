@@ -222,15 +222,14 @@ void grid_bucket_count(const GridParams& g, GridBlocks blocks, AabbSoA boxes,
   if (g.dense) {
     // bucket_of(box_cell(..)) spelled out for dense grids (row-major cell index).
     const double ox = g.origin[0], oy = g.origin[1], oz = g.origin[2], inv = g.inv_cell;
-    const int64_t dx = g.dims[0], dy = g.dims[1], dz = g.dims[2];
+    const int64_t dx = g.dims[0], dy = g.dims[1];
+    const double tx = g.dims[0] - 1.0, ty = g.dims[1] - 1.0, tz = g.dims[2] - 1.0;
+    // Clamped in double as axis_cell does (outliers beyond the grid's range).
 #pragma omp simd
     for (uint32_t i = r.begin; i < r.end; ++i) {
-      int64_t cx = static_cast<int64_t>((static_cast<double>(x[i]) - ox) * inv);
-      int64_t cy = static_cast<int64_t>((static_cast<double>(y[i]) - oy) * inv);
-      int64_t cz = static_cast<int64_t>((static_cast<double>(z[i]) - oz) * inv);
-      cx = std::clamp<int64_t>(cx, 0, dx - 1);
-      cy = std::clamp<int64_t>(cy, 0, dy - 1);
-      cz = std::clamp<int64_t>(cz, 0, dz - 1);
+      const int64_t cx = static_cast<int64_t>(std::clamp((static_cast<double>(x[i]) - ox) * inv, 0.0, tx));
+      const int64_t cy = static_cast<int64_t>(std::clamp((static_cast<double>(y[i]) - oy) * inv, 0.0, ty));
+      const int64_t cz = static_cast<int64_t>(std::clamp((static_cast<double>(z[i]) - oz) * inv, 0.0, tz));
       out_bucket[i] = static_cast<uint32_t>(cx + dx * (cy + dy * cz));
     }
   } else {
@@ -334,11 +333,12 @@ uint64_t grid_query_pairs(const GridView& g, const SortedBox* IMPACT_RESTRICT qu
   // Cell range [lo, hi] on one axis holding the min corners of boxes that can
   // overlap [q_min, q_max]: those corners lie in [q_min - cell, q_max].
   auto axis_range = [&](float q_min, float q_max, int axis, int64_t* lo, int64_t* hi) {
+    // Both ends clamped in double to the grid (boxes outside its range sit in the
+    // boundary cells, axis_cell), so the range is never empty.
     const double o = g.params.origin[axis], inv = g.params.inv_cell;
-    *lo = static_cast<int64_t>(std::floor((static_cast<double>(q_min) - o) * inv - 1.0));
-    *hi = static_cast<int64_t>(std::floor((static_cast<double>(q_max) - o) * inv));
-    if (*lo < 0) *lo = 0;
-    if (*hi > dims[axis] - 1) *hi = dims[axis] - 1;
+    const double top = static_cast<double>(dims[axis] - 1);
+    *lo = static_cast<int64_t>(std::clamp(std::floor((static_cast<double>(q_min) - o) * inv - 1.0), 0.0, top));
+    *hi = static_cast<int64_t>(std::clamp(std::floor((static_cast<double>(q_max) - o) * inv), 0.0, top));
     return *lo <= *hi;
   };
   auto run = [&]<bool kDense>() {

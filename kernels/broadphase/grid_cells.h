@@ -10,14 +10,17 @@ namespace impact::kernels::grid_cells {
 
 inline constexpr uint64_t kAxisMask = (1ull << kGridAxisBits) - 1;
 
-/// Cell of coordinate v on one axis, clamped to [0, dim).
+/// Cell of coordinate v on one axis, clamped to [0, dim). The grid's range may
+/// leave far outliers outside it (host grid_extent); they land in the boundary
+/// cells. Clamping is monotone and 1-Lipschitz on cell indices, so two boxes whose
+/// cells differ by at most one still do, and the neighbourhood passes stay exact.
+/// The clamp is done in double, before the integer conversion (no overflow).
 IMPACT_INLINE uint32_t axis_cell(float v, double origin, double inv_cell, uint32_t dim) {
-  const double u = (static_cast<double>(v) - origin) * inv_cell;
-  // u >= 0 because origin is the minimum; the clamps only guard rounding at the ends.
-  int64_t c = static_cast<int64_t>(u);
-  c = c < 0 ? 0 : c;
-  c = c >= static_cast<int64_t>(dim) ? static_cast<int64_t>(dim) - 1 : c;
-  return static_cast<uint32_t>(c);
+  double u = (static_cast<double>(v) - origin) * inv_cell;
+  const double top = static_cast<double>(dim) - 1.0;
+  u = u > 0.0 ? u : 0.0;
+  u = u < top ? u : top;
+  return static_cast<uint32_t>(u);
 }
 
 IMPACT_INLINE uint64_t cell_id(uint64_t cx, uint64_t cy, uint64_t cz) {

@@ -1,5 +1,6 @@
 #include "kernels/broadphase/grid_query.h"
 
+#include <algorithm>
 #include <cmath>
 
 #include "kernels/broadphase/grid_cells.h"
@@ -10,16 +11,17 @@ namespace {
 using namespace grid_cells;  // NOLINT: the grid's cell arithmetic, shared with grid.cpp
 
 // Cells [lo, hi] on one axis that can hold the min corner of a box overlapping
-// [q_min, q_max] (see grid_query.h); false when the range misses the grid. Clamped in
-// double before the integer conversion, so far-away queries cannot overflow it.
+// [q_min, q_max] (see grid_query.h). Both ends are clamped to the grid, never
+// rejected: boxes outside the grid's range sit in its boundary cells (axis_cell), so
+// a query beyond the range still visits them. Clamped in double before the integer
+// conversion, so far-away queries cannot overflow it. Always true.
 IMPACT_INLINE bool axis_range(const GridParams& g, int axis, float q_min, float q_max, int64_t* lo,
                               int64_t* hi) {
   const double o = g.origin[axis], inv = g.inv_cell, top = static_cast<double>(g.dims[axis]) - 1.0;
   const double a = std::floor((static_cast<double>(q_min) - o) * inv) - 1.0;
   const double b = std::floor((static_cast<double>(q_max) - o) * inv);
-  if (b < 0.0 || a > top) return false;
-  *lo = static_cast<int64_t>(a < 0.0 ? 0.0 : a);
-  *hi = static_cast<int64_t>(b > top ? top : b);
+  *lo = static_cast<int64_t>(std::clamp(a, 0.0, top));
+  *hi = static_cast<int64_t>(std::clamp(b, 0.0, top));
   return true;
 }
 

@@ -179,6 +179,32 @@ TEST(BroadPhaseQueries, AdversarialPlacements) {
   check_all(filtered(lattice, 8), sets, "touching lattice filtered");
 }
 
+TEST(BroadPhaseQueries, FarOutliers) {
+  // The grid spans the crowd and clamps far outliers into its boundary cells
+  // (host::grid_extent), so queries beyond its range must still visit those cells:
+  // queries at and around every outlier, far beyond them, and random ones.
+  for (bool long_box : {false, true}) {
+    const Boxes b = test::outlier_boxes(scaled(2000), 91, {1e9f, 1e15f}, long_box);  // queries <= 1e18
+    std::vector<Queries> sets = random_sets(b, 2.0f, 200, 17);
+    Queries near[3];
+    near[0].shape = QShape::kAabb, near[1].shape = QShape::kSphere, near[2].shape = QShape::kPoint;
+    for (size_t i = scaled(2000); i < b.size(); ++i) {
+      const float x = b.min_x[i], y = b.min_y[i], z = b.min_z[i];
+      near[0].add_box(x - 1.0f, y - 1.0f, z - 1.0f, x + 1.0f, y + 1.0f, z + 1.0f);
+      near[0].add_box(x, y, z, x, y, z);
+      near[0].add_box(2.0f * x, 2.0f * y, 2.0f * z, 2.0f * x + 1.0f, 2.0f * y + 1.0f, 2.0f * z + 1.0f);
+      near[1].add_sphere(x, y, z, 1.0f);
+      near[1].add_sphere(x, y, z, 0.0f);
+      near[2].add_point(x, y, z);
+      near[2].add_point(b.max_x[i], b.max_y[i], b.max_z[i]);
+    }
+    near[0].add_box(-1e18f, -1e18f, -1e18f, 1e18f, 1e18f, 1e18f);  // everything
+    for (Queries& q : near) sets.push_back(q);
+    check_all(b, sets, long_box ? "far outliers, long box" : "far outliers");
+    check_all(filtered(b, 5), sets, "far outliers filtered");
+  }
+}
+
 TEST(BroadPhaseQueries, SweptBoxesAreQueried) {
   // In swept mode the stored boxes are the unions of start and moved boxes.
   Boxes b = test::uniform_boxes(scaled(1500), 9, 0.2f, 0.5f);

@@ -198,6 +198,16 @@ TEST(BroadPhaseStage, AutoChoosesByTheSizeSpread) {
     for (int i = 0; i < 3; ++i) b.add(10.0f * static_cast<float>(i), 0.0f, 0.0f, 30.0f, 30.0f, 30.0f);
     cases.push_back({std::move(b), BroadPhaseKind::kGrid, "few huge"});
   }
+  // Far outliers do not make a dense scene look sparse (the rule measures the extent
+  // the grid spans, host::grid_extent): still the grid, which they no longer slow
+  // (BM_Outliers), while 10 of them slow the LBVH ~20x (its Morton codes span them).
+  // Before, one outlier at 1e9 m or beyond turned the choice to the LBVH.
+  for (int count : {1, 10}) {
+    Boxes b = test::uniform_boxes(scaled(4000), 31, 0.3f, 0.6f);
+    for (int i = 0; i < count; ++i)
+      b.add(i % 2 ? -1e12f : 1e9f, static_cast<float>(i), 0.0f, 0.5f, 0.5f, 0.5f);
+    cases.push_back({std::move(b), BroadPhaseKind::kGrid, count == 1 ? "one far outlier" : "ten far outliers"});
+  }
   for (const Case& c : cases) {
     SCOPED_TRACE(c.what);
     BroadPhase bp(BroadPhaseKind::kAuto);

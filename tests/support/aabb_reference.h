@@ -163,6 +163,40 @@ inline Boxes uniform_boxes(uint32_t n, uint32_t seed, float half_lo, float half_
   return b;
 }
 
+/// A crowd of n uniform boxes (uniform_boxes(n, seed, 0.2, 1)) plus far outliers:
+/// clumps of four mutually overlapping boxes of the crowd's sizes at +-d on each axis
+/// for each d in `distances` (in range on the other axes: inside the crowd's span
+/// there; far out, float rounds them to coincident points, which still touch); a
+/// chain of 20 overlapping unit boxes from 1.5 crowd widths past it along +x (just
+/// outside the grid's core range when the far outliers make it use one); a clump of
+/// zero-size boxes at one far point; and, when `long_box`, one box from inside the
+/// crowd to the first distance along +y (it overlaps crowd boxes and the +y clump
+/// region; a size outlier too, so the grid goes hierarchical). Appended after the
+/// crowd, so outliers have the highest indices.
+inline Boxes outlier_boxes(uint32_t n, uint32_t seed, const std::vector<float>& distances, bool long_box) {
+  Boxes b = uniform_boxes(n, seed, 0.2f, 1.0f);
+  const float side = 2.2f * std::cbrt(static_cast<float>(n));
+  std::mt19937 rng(seed + 1);
+  std::uniform_real_distribution<float> in(-0.4f * side, 0.4f * side);
+  for (float d : distances) {
+    for (int axis = 0; axis < 3; ++axis)
+      for (float sign : {1.0f, -1.0f}) {
+        float c[3] = {in(rng), in(rng), in(rng)};
+        c[axis] = sign * d;
+        b.add(c[0], c[1], c[2], 0.5f, 0.5f, 0.5f);
+        b.add(c[0], c[1], c[2], 0.3f, 0.7f, 0.3f);
+        b.add(c[0], c[1], c[2], 0.7f, 0.3f, 0.7f);
+        b.add(c[0] + 0.9f, c[1], c[2], 0.5f, 0.5f, 0.5f);
+      }
+  }
+  for (int j = 0; j < 20; ++j) b.add(2.0f * side + 1.5f * static_cast<float>(j), 0.0f, 0.0f, 1.0f, 1.0f, 1.0f);
+  if (!distances.empty()) {
+    for (int j = 0; j < 4; ++j) b.add(-distances[0], distances[0], 0.0f, 0.0f, 0.0f, 0.0f);
+    if (long_box) b.add_box(-0.5f, -0.5f, -0.5f, 0.5f, distances[0], 0.5f);
+  }
+  return b;
+}
+
 /// n points on a 13^3 lattice of step 0.5 (touching = same point), many repeated, with
 /// every 50th a unit box instead.
 inline Boxes point_lattice_boxes(uint32_t n, uint32_t seed) {

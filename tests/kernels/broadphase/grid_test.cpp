@@ -12,6 +12,7 @@
 #include <cmath>
 #include <numeric>
 #include <random>
+#include <string>
 #include <vector>
 
 #include "host/broadphase/broadphase.h"
@@ -439,6 +440,57 @@ TEST(GridBroadPhase, LevelDecisionSameWithOrWithoutSmallestEdge) {
     EXPECT_EQ(with.hierarchical(), without.hierarchical()) << small_edge;
     EXPECT_EQ(with.hierarchical(), small_edge == 1.0f) << small_edge;
   }
+}
+
+
+// Far outliers (1e9 m and beyond) must not coarsen the crowd's cells: the grid spans
+// a core range (host::grid_extent) and clamps outliers into its boundary cells. The
+// old grid spanned the outliers, so its cell grew to extent / 2^21 (~477 m at 1e9,
+// the whole crowd in one cell, ~80x slower): the cell check below fails there.
+// Pairs: the reference's set and one byte order for every executor (run_grid).
+TEST(GridBroadPhase, FarOutliersKeepTheCrowdsCells) {
+  const uint32_t n = test::scaled(4000);
+  const std::vector<std::vector<float>> cases = {{1e9f}, {1e12f}, {1e18f}, {1e9f, 1e12f, 1e18f}, {3e6f}};
+  for (const std::vector<float>& d : cases) {
+    const Boxes b = test::outlier_boxes(n, 77, d, /*long_box=*/false);
+    const PairVec ref = test::reference_pairs(b);
+    // Pairs among the outliers themselves (indices >= n) are part of the set.
+    size_t far_pairs = 0;
+    for (const auto& p : ref) far_pairs += p.first >= n && p.second >= n;
+    EXPECT_GE(far_pairs, 30u * d.size());
+    uint32_t levels = 0;
+    const host::GridInfo info = run_grid(b, ("outliers at " + std::to_string(d.back())).c_str(), &levels);
+    EXPECT_EQ(levels, 1u);
+    EXPECT_LE(info.cell, 2.0 * 2.0 * 1.0001) << "cell follows the outliers, not the crowd";
+    EXPECT_TRUE(info.dense);
+  }
+}
+
+// One long box from the crowd to the outliers (a size outlier too: hierarchical
+// levels) pairs with crowd boxes and with the far clump it reaches; zero-size
+// outliers (point sets) take the same core range.
+TEST(GridBroadPhase, FarOutliersWithLevelsAndPointSets) {
+  const uint32_t n = test::scaled(3000);
+  for (float d : {1e9f, 1e18f}) {
+    const Boxes b = test::outlier_boxes(n, 78, {d}, /*long_box=*/true);
+    const PairVec ref = test::reference_pairs(b);
+    const uint32_t long_box = static_cast<uint32_t>(b.size() - 1);
+    size_t with_crowd = 0;
+    for (const auto& p : ref) with_crowd += p.second == long_box && p.first < n;
+    EXPECT_GT(with_crowd, 0u);
+    uint32_t levels = 0;
+    run_grid(b, "long box", &levels);
+    EXPECT_GT(levels, 1u);
+  }
+  // Points on a lattice plus far points, some coincident (touching).
+  Boxes pts;
+  for (int z = 0; z < 16; ++z)
+    for (int y = 0; y < 16; ++y)
+      for (int x = 0; x < 16; ++x)
+        for (int r = 0; r < 1 + (x + y + z) % 2; ++r) pts.add(0.5f * static_cast<float>(x), 0.5f * static_cast<float>(y), 0.5f * static_cast<float>(z), 0, 0, 0);
+  for (int j = 0; j < 5; ++j) pts.add(1e12f, 2.0f, -1e15f * static_cast<float>(j % 2), 0, 0, 0);
+  const host::GridInfo info = run_grid(pts, "point set with far points");
+  EXPECT_LE(info.cell, 8.0) << "point cell follows the outliers";
 }
 
 }  // namespace
