@@ -1,7 +1,9 @@
-// Probe for GCC 12's SLP folding of (double)(float)x into a copy: runs the test
-// references' float roundings and the library's mixed-precision paths on fixed random
-// inputs and prints a 64-bit FNV-1a hash of every output's bytes (the naive control excluded), plus one line per
-// probe that disagrees with an unvectorisable (volatile) rounding. Built twice by
+// Probe for GCC 12's SLP folding of (double)(float)x into a copy (docs/narrowphase.md
+// "Float roundings in double code"): runs the tests' float roundings
+// (test::round_to_float, shared_targets' edge midpoints) and ray_triangle's sheared
+// coordinates on fixed random inputs and prints a 64-bit FNV-1a hash of every output's
+// bytes, plus one line per rounding that disagrees with a volatile one. A naive
+// cast<float>().cast<double>() runs as a control, counted, not hashed. Built twice by
 // scripts/slp_probe.sh (project flags, then with -fno-tree-slp-vectorize); the two
 // hashes must match. Not part of the CMake build.
 #include <Eigen/Core>
@@ -13,8 +15,8 @@
 #include <vector>
 
 #include "kernels/raycast/ray_primitives.h"
-#include "tests/support/mesh_input.h"
-#include "tests/support/test_support.h"
+#include "support/mesh_input.h"
+#include "support/test_support.h"
 
 namespace {
 
@@ -44,10 +46,6 @@ __attribute__((noinline)) Eigen::Vector3d naive_round(const Eigen::Vector3d& v) 
 __attribute__((noinline)) Eigen::Vector3d guarded_round(const Eigen::Vector3d& v) {
   return impact::test::round_to_float(v);
 }
-// tests/support/mesh_input.h shared_targets: the float-rounded edge midpoint.
-__attribute__((noinline)) Eigen::Vector3d midpoint_round(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
-  return ((a + b) * 0.5).cast<float>().cast<double>();
-}
 __attribute__((noinline)) float ray_tri(const impact::kernels::RayQuery& q, const float* v0, const float* v1,
                                         const float* v2) {
   return impact::kernels::ray_triangle(q, impact::kernels::ray_shear(q), v0, v1, v2);
@@ -65,13 +63,24 @@ int main() {
     const Eigen::Vector3d w(static_cast<double>(static_cast<float>(u(g))) * static_cast<float>(u(g)), s * u(g),
                             s * u(g));
     for (const Eigen::Vector3d& x : {v, w}) {
-      const Eigen::Vector3d a = naive_round(x), b = guarded_round(x), c = midpoint_round(x, v);
+      const Eigen::Vector3d a = naive_round(x), b = guarded_round(x);
       mix(b.data(), sizeof(double) * 3);
-      mix(c.data(), sizeof(double) * 3);
       for (int i = 0; i < 3; ++i) g_control += a[i] != vround(x[i]);
       expect_rounded("test::round_to_float", b, x);
-      expect_rounded("mesh_input midpoint", c, ((x + v) * 0.5).eval());
     }
+  }
+  // tests/support/mesh_input.h shared_targets: per interior edge the float-rounded
+  // midpoint first, then three unrounded points.
+  for (const double c : {0.0, 1e5}) {
+    std::mt19937 rng(5);
+    const impact::test::TriMesh m = impact::test::make_icosphere(3, 1.0, Eigen::Vector3d(c, -c, 0.5 * c), rng);
+    const auto edges = impact::test::interior_edges(m);
+    const auto t = impact::test::shared_targets(m, 1e-6, rng);
+    for (size_t e = 0; e < edges.size(); ++e) {
+      const Eigen::Vector3d a = m.v.col(edges[e][0]).cast<double>(), b = m.v.col(edges[e][1]).cast<double>();
+      expect_rounded("shared_targets midpoint", t[4 * e].p, ((a + b) * 0.5).eval());
+    }
+    for (const auto& x : t) mix(x.p.data(), sizeof(double) * 3);
   }
   // ray_triangle: rays at 1e5 and near the unit cube, through shared edges of a fan.
   int hits = 0;

@@ -7,7 +7,7 @@ set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 out=${TMPDIR:-/tmp}/impact_slp_probe
 mkdir -p "$out"
-flags=(-std=c++20 -O3 -DNDEBUG -march=native -fno-math-errno -fopenmp-simd -I"$root" -I"$root/include"
+flags=(-std=c++20 -O3 -DNDEBUG -march=native -fno-math-errno -fopenmp-simd -I"$root" -I"$root/include" -I"$root/tests"
        -I/usr/include/eigen3 "$@")
 g++ "${flags[@]}" "$root/scripts/slp_probe.cpp" -o "$out/slp" -lgtest -lpthread
 g++ "${flags[@]}" -fno-tree-slp-vectorize "$root/scripts/slp_probe.cpp" -o "$out/noslp" -lgtest -lpthread
