@@ -23,6 +23,8 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
+#include "support/test_support.h"
+
 namespace impact::test {
 
 /// A mesh as RayScene::add_mesh takes it.
@@ -149,7 +151,7 @@ inline std::vector<MeshTarget> shared_targets(const TriMesh& m, double offset, s
   auto vd = [&](uint32_t i) { return Eigen::Vector3d(m.v.col(i).cast<double>()); };
   for (const auto& e : interior_edges(m)) {
     const Eigen::Vector3d a = vd(e[0]), b = vd(e[1]);
-    out.push_back({((a + b) * 0.5).cast<float>().cast<double>(), false});
+    out.push_back({round_to_float((a + b) * 0.5), false});
     const Eigen::Vector3d q = a + s01(rng) * (b - a);
     out.push_back({q, false});
     out.push_back({q + offset * (vd(e[2]) - q), false});
