@@ -189,9 +189,8 @@ void WorldImpl::enable_rigid() {
 void WorldImpl::wake(std::span<const uint32_t> slots) {
   host::BodyStore& s = bodies;
   frozen = false;
-  bool any_asleep = false;
-  for (uint32_t i = 0; i < s.size() && !any_asleep; ++i) any_asleep = s.asleep[i] != 0;
-  if (any_asleep && contacts.manifolds > 0) {
+  // Neighbours can be asleep only if the last step left bodies asleep.
+  if (last.asleep_bodies > 0 && contacts.manifolds > 0) {
     std::vector<uint8_t> moved(s.size(), 0);
     for (const uint32_t k : slots) moved[k] = 1;
     const kernels::ContactManifoldArrays c = contacts.view();

@@ -56,22 +56,11 @@ inline void put_r(LeafArrays& s, size_t k, const Eigen::Matrix3f& R) {
 inline void put_e(LeafArrays& s, size_t k, const float* e) {
   for (int i = 0; i < 3; ++i) s.f[12 + i][k] = e[i];
 }
-/// A half-space (local unit normal e, plane offset) posed by R, p: a point of the plane
-/// and the world normal, renormalised.
-inline void put_plane(LeafArrays& s, size_t k, const Eigen::Matrix3f& R, const Eigen::Vector3f& p,
-                      const float* e, float offset) {
-  const Eigen::Vector3f el(e[0], e[1], e[2]);
-  const Eigen::Vector3f n = R * el;
-  const Eigen::Vector3f nn = n / n.norm();
-  put_p(s, k, p + R * (el * offset));
-  const float ne[3] = {nn[0], nn[1], nn[2]};
-  put_e(s, k, ne);
-}
 
 /// A half-space (local unit normal e, plane offset) with rotation R at position p_rel
 /// relative to an anchor o (p - o, in double), posed relative to o: the point of its plane
 /// nearest o and the world normal, renormalised. The plane is { x : nn.(x - q) <= 0 },
-/// q = p + R (e offset), nn = R e / |R e| (put_plane's); its height over o is
+/// q = p + R (e offset), nn = R e / |R e|; its height over o is
 /// h = nn.(o - p) - offset nn.(R e), and -nn h the point. Rounded once, the plane moves by
 /// ~1e-7 of |h| (the distance to o), not by the rounding of a world coordinate.
 inline void put_plane_relative(LeafArrays& s, size_t k, const Eigen::Matrix3f& R, const Eigen::Vector3d& p_rel,

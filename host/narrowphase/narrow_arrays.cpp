@@ -37,9 +37,10 @@ Raw raw_of(const PoseArrays& p) {
   return {p.px.data(), p.py.data(), p.pz.data(), p.qx.data(), p.qy.data(), p.qz.data(), p.qw.data()};
 }
 
-// Lane k of side s: object i as the kernels' leaf (the fields NarrowRunner's fill
-// writes for the same record and pose, so both calls give the same bytes).
-// pos: the position written (object i's own, or relative to an anchor).
+// Lane k of side s: object i, a convex shape other than a half-space, as the kernels'
+// leaf (the fields NarrowRunner's fill writes for the same record and pose, so both
+// calls give the same bytes); pos: the position written (object i's own, or relative to
+// an anchor). Half-space buckets take fill_relative.
 IMPACT_INLINE void fill(LeafArrays& s, size_t k, const ShapeRecord& r, const Eigen::Vector3f& pos, const Raw& p,
                         uint32_t i) {
   switch (r.type) {
@@ -56,9 +57,6 @@ IMPACT_INLINE void fill(LeafArrays& s, size_t k, const ShapeRecord& r, const Eig
       put_p(s, k, pos);
       put_r(s, k, rotation_of(Eigen::Quaternionf(p.qw[i], p.qx[i], p.qy[i], p.qz[i])));
       s.ref[k] = r.ref;
-      return;
-    case ShapeType::kHalfSpace:
-      put_plane(s, k, rotation_of(Eigen::Quaternionf(p.qw[i], p.qx[i], p.qy[i], p.qz[i])), pos, r.e, r.offset);
       return;
     default:  // capsule, box, cylinder, ellipsoid
       put_p(s, k, pos);

@@ -169,10 +169,9 @@ struct host::NarrowRunner::State {
   void child_list(uint32_t obj, const Box3& other, std::vector<uint32_t>* out) const;
 
   // --- gather ------------------------------------------------------------------------
-  /// Lane k of s: object obj's leaf (child: of a compound or mesh, else kNoChild). A
-  /// plain shape from its PosedObject line alone; the others through fill_general.
-  void fill(LeafArrays& s, size_t k, uint32_t obj, uint32_t child) const;
-  void fill_general(LeafArrays& s, size_t k, uint32_t obj, uint32_t child) const;
+  /// Lane k of s: object obj's leaf, a plain convex shape (not a half-space), from its
+  /// PosedObject line alone. Lanes with a derived leaf take fill_relative.
+  void fill(LeafArrays& s, size_t k, uint32_t obj) const;
   /// Whether a leaf pair of these objects is posed relative to an anchor (below): one
   /// side a half-space, a mesh or a compound, whose leaves the gather derives.
   bool anchored(uint32_t obj_a, uint32_t obj_b) const {
@@ -388,21 +387,19 @@ void host::NarrowRunner::State::expand(uint32_t pair_index, std::vector<LeafPair
 }
 
 
-IMPACT_INLINE void host::NarrowRunner::State::fill(LeafArrays& s, size_t k, uint32_t obj, uint32_t child) const {
-  // Plain shapes (every leaf of a pair list without meshes or compounds): the pose as it
-  // is, and the record's fields from the same line.
+IMPACT_INLINE void host::NarrowRunner::State::fill(LeafArrays& s, size_t k, uint32_t obj) const {
+  // Lanes of two plain convex leaves (anchored() is false: no half-space, mesh or
+  // compound, whose lanes take fill_relative): the pose as it is, and the record's fields
+  // from the same line.
   const Posed& P = posed[obj];
   switch (types[obj]) {
     case ShapeType::kSphere:
       put_p(s, k, P.p);
       s.f[12][k] = P.leaf.e[0];
       return;
-    case ShapeType::kCapsule:
-    case ShapeType::kBox:
-    case ShapeType::kCylinder:
-    case ShapeType::kEllipsoid:
+    case ShapeType::kAabb:
       put_p(s, k, P.p);
-      put_r(s, k, P.R);
+      put_r(s, k, Eigen::Matrix3f::Identity());
       put_e(s, k, P.leaf.e);
       return;
     case ShapeType::kConvex:
@@ -410,60 +407,10 @@ IMPACT_INLINE void host::NarrowRunner::State::fill(LeafArrays& s, size_t k, uint
       put_r(s, k, P.R);
       s.ref[k] = P.leaf.ref;
       return;
-    case ShapeType::kHalfSpace:
-      put_plane(s, k, P.R, P.p, P.leaf.e, P.offset);
-      return;
-    default:
-      fill_general(s, k, obj, child);
-  }
-}
-
-void host::NarrowRunner::State::fill_general(LeafArrays& s, size_t k, uint32_t obj, uint32_t child) const {
-  const ShapeRecord* r = &shape(obj);
-  const Posed& P = posed[obj];
-  Eigen::Matrix3f R = P.R;
-  Eigen::Vector3f p = P.p;
-  if (r->type == ShapeType::kCompound) {
-    const CompoundChild& c = store->children[store->child_begin[r->ref] + child];
-    p = R * c.local.position + p;
-    R = R * c.local.orientation.toRotationMatrix();
-    r = &store->shapes[c.shape.index];
-  }
-  float e[3] = {r->e[0], r->e[1], r->e[2]};
-  switch (r->type) {
-    case ShapeType::kSphere:
-      put_p(s, k, p);
-      s.f[12][k] = e[0];
-      return;
-    case ShapeType::kAabb:
-      put_p(s, k, p);
-      put_r(s, k, Eigen::Matrix3f::Identity());
-      put_e(s, k, e);
-      return;
-    case ShapeType::kConvex:
-      put_p(s, k, p);
-      put_r(s, k, R);
-      s.ref[k] = r->ref;
-      return;
-    case ShapeType::kHalfSpace:
-      put_plane(s, k, R, p, e, r->offset);
-      return;
-    case ShapeType::kMesh: {
-      const MeshData& m = store->meshes[r->ref];
-      const Eigen::Vector3f v0 = R * m.vertices[m.indices[3 * child]] + p;
-      const Eigen::Vector3f v1 = R * m.vertices[m.indices[3 * child + 1]] + p;
-      const Eigen::Vector3f v2 = R * m.vertices[m.indices[3 * child + 2]] + p;
-      put_p(s, k, v0);
-      for (int i = 0; i < 3; ++i) {
-        s.f[15 + i][k] = v1[i];
-        s.f[18 + i][k] = v2[i];
-      }
-      return;
-    }
-    default:  // capsule, box, cylinder, ellipsoid (compound children)
-      put_p(s, k, p);
-      put_r(s, k, R);
-      put_e(s, k, e);
+    default:  // capsule, box, cylinder, ellipsoid
+      put_p(s, k, P.p);
+      put_r(s, k, P.R);
+      put_e(s, k, P.leaf.e);
       return;
   }
 }
@@ -706,8 +653,8 @@ Status host::NarrowRunner::State::run(const host::Executor& exec, const host::Na
         for (int d = 0; d < 3; ++d) anchors[n_anchored][d] = o[d];
         ++n_anchored;
       } else {
-        fill(scratch[0], k, obj0, child0);
-        fill(scratch[1], k, obj1, child1);
+        fill(scratch[0], k, obj0);
+        fill(scratch[1], k, obj1);
       }
     }
     kernel(scratch[0].view(0), scratch[1].view(0), manifold.view(blk.begin), kernels::Range{0, blk.end - blk.begin},
