@@ -71,7 +71,7 @@ Status validate(const IntegrateDesc& d, const ParticleArrays& p) {
 struct State6 {
   std::vector<float> a[6];
   void resize(size_t n) {
-    for (auto& v : a) v.assign(n, 0.0f);
+    for (auto& v : a) v.resize(n);
   }
   kernels::ParticleState view() {
     return {a[0].data(), a[1].data(), a[2].data(), a[3].data(), a[4].data(), a[5].data()};
@@ -173,16 +173,16 @@ class Integrator_ {
         const float h[3] = {0.5f * dt, 0.5f * dt, dt};
         const float weight[4] = {1.0f, 2.0f, 2.0f, 1.0f};
         for (uint32_t s = 0; s < d_.steps; ++s) {
-          for (auto& v : acc.a) std::fill(v.begin(), v.end(), 0.0f);
-          // k1 at io; k2, k3, k4 at stage = io + h k_prev.
-          kernels::ParticleState cur = io;
-          for (int k = 0; k < 4; ++k) {
+          // k1 at io; k2, k3, k4 at stage = io + h k_prev (1 x k1 + 2 k2 + 2 k3 + 1 k4 in acc).
+          accelerations(io, av, w);
+          each([&](kernels::Range r) { kernels::rk4_begin(h[0], io, av, sv[0], accv, r); });
+          for (int k = 1; k < 4; ++k) {
+            const kernels::ParticleState cur = sv[(k - 1) & 1];
             accelerations(cur, av, w);
             each([&](kernels::Range r) {
               kernels::rk4_accumulate(weight[k], cur, av, accv, r);
               if (k < 3) kernels::rk4_stage_state(h[k], io, cur, av, sv[k & 1], r);
             });
-            cur = sv[k & 1];
           }
           each([&](kernels::Range r) { kernels::rk4_finish(dt, accv, io, r); });
         }

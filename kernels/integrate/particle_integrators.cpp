@@ -110,6 +110,25 @@ void rk4_stage_state(float h, const ParticleState& base, const ParticleState& kv
   }
 }
 
+void rk4_begin(float h, const ParticleState& base, const Vec3Arrays& ka, ParticleState out,
+               ParticleState acc, Range r) {
+#pragma omp simd
+  for (uint32_t i = r.begin; i < r.end; ++i) {
+    acc.px[i] = base.vx[i];
+    acc.py[i] = base.vy[i];
+    acc.pz[i] = base.vz[i];
+    acc.vx[i] = ka.x[i];
+    acc.vy[i] = ka.y[i];
+    acc.vz[i] = ka.z[i];
+    out.px[i] = base.px[i] + h * base.vx[i];
+    out.py[i] = base.py[i] + h * base.vy[i];
+    out.pz[i] = base.pz[i] + h * base.vz[i];
+    out.vx[i] = base.vx[i] + h * ka.x[i];
+    out.vy[i] = base.vy[i] + h * ka.y[i];
+    out.vz[i] = base.vz[i] + h * ka.z[i];
+  }
+}
+
 void rk4_accumulate(float weight, const ParticleState& kv, const Vec3Arrays& ka,
                     ParticleState io, Range r) {
 #pragma omp simd

@@ -76,6 +76,10 @@ void verlet_kick(float dt, const Vec3Arrays& a, ParticleState io, Range r);
 void rk4_stage_state(float h, const ParticleState& base, const ParticleState& kv,
                      const Vec3Arrays& ka, ParticleState out, Range r);
 
+/// RK4 first stage: out_acc = (v, a) of base (k1), out_stage = base + h k1.
+void rk4_begin(float h, const ParticleState& base, const Vec3Arrays& ka, ParticleState out_stage,
+               ParticleState out_acc, Range r);
+
 /// RK4 accumulation: acc_v += weight k_v, acc_a += weight k_a (acc starts at 0).
 void rk4_accumulate(float weight, const ParticleState& kv, const Vec3Arrays& ka,
                     ParticleState io_acc, Range r);
