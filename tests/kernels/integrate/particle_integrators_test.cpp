@@ -277,6 +277,20 @@ TEST(ParticleIntegrators, RejectsBadInput) {
   EXPECT_EQ(code(d, q.arrays()), StatusCode::kInvalidArgument);
 }
 
+TEST(ParticleIntegrators, EmptyAndZeroStepsLeaveStateAlone) {
+  for (Integrator s : kAll) {
+    Particles e(0);
+    EXPECT_TRUE(integrate_particles(desc_of(s, 0.01f, 3), e.arrays()).ok());
+    Particles p(2);
+    p.x = {1.0f, -2.0f};
+    p.vy = {3.0f, 4.0f};
+    const Particles before = p;
+    EXPECT_TRUE(integrate_particles(desc_of(s, 0.01f, 0, {0.0f, -9.81f, 0.0f}), p.arrays()).ok());
+    EXPECT_EQ(p.x, before.x);
+    EXPECT_EQ(p.vy, before.vy);
+  }
+}
+
 TEST(ParticleIntegrators, SameBytesForAnyThreadCount) {
   const uint32_t n = 20000;
   std::mt19937 rng(7);
