@@ -6,6 +6,7 @@
 #include "impact/world.h"
 #include "impact/broadphase.h"
 #include "impact/firing.h"
+#include "impact/integrators.h"
 #include "impact/narrowphase.h"
 #include "impact/raycast.h"
 #include "impact/shape_queries.h"
