@@ -132,6 +132,11 @@ Status check_desc(const WorldDesc& d) {
   if (!(std::isfinite(d.lbvh_refit_sah_limit) && d.lbvh_refit_sah_limit >= 1.0))
     return invalid(w, "lbvh_refit_sah_limit must be finite and >= 1, got " +
                           std::to_string(d.lbvh_refit_sah_limit));
+  const ContinuousDesc& c = d.ccd;
+  if (c.mode != ContinuousMode::kOff && c.mode != ContinuousMode::kSpeculative)
+    return invalid(w, "ccd.mode is not a known ContinuousMode");
+  if (!(std::isfinite(c.speculative_margin) && c.speculative_margin >= 0.0f))
+    return invalid(w, "ccd.speculative_margin must be finite and >= 0, got " + fmt_float(c.speculative_margin));
   NarrowPhaseOptions narrow = d.narrow_phase;
   narrow.exec = {};  // ignored: the world's backend runs the passes
   if (Status st = host::validate_options(narrow); !st.ok()) return invalid(w, "narrow_phase." + st.message());

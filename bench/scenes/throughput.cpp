@@ -43,6 +43,7 @@ struct Options {
   impact::BroadPhaseKind broad_phase = impact::BroadPhaseKind::kGrid;
   std::optional<uint32_t> iterations;  // unset: the library default
   std::optional<impact::SolverKind> solver;  // unset: the library default
+  impact::ContinuousMode ccd = impact::ContinuousMode::kOff;
   bool sleep = true;
   uint64_t seed = impact::bench::kDefaultSeed;
   std::string json_path;
@@ -73,6 +74,7 @@ void print_usage(std::FILE* f) {
                "                       wall, pyramids, column, hulls and mixed, which need rotation\n"
                "                       and friction; otherwise the library default)\n"
                "  --no-sleep           soft step: islands and sleeping off (default on)\n"
+               "  --ccd NAME           off | speculative: continuous collision (default off)\n"
                "  --seed N             scene seed (default %" PRIu64
                ")\n"
                "  --json FILE          also write every figure as JSON to FILE\n"
@@ -132,6 +134,15 @@ int parse_args(int argc, char** argv, Options* o) {
         o->solver = impact::SolverKind::kSoftStep;
       } else {
         return fail("--solver must be jacobi or soft, got '" + std::string(value) + "'");
+      }
+    } else if (arg == "--ccd") {
+      if (!need_value()) return fail("--ccd needs a value");
+      if (value == "off") {
+        o->ccd = impact::ContinuousMode::kOff;
+      } else if (value == "speculative") {
+        o->ccd = impact::ContinuousMode::kSpeculative;
+      } else {
+        return fail("--ccd must be off or speculative, got '" + std::string(value) + "'");
       }
     } else if (arg == "--seed") {
       if (!need_value()) return fail("--seed needs a value");
@@ -285,6 +296,7 @@ int main(int argc, char** argv) {
   desc.broad_phase = opt.broad_phase;
   if (opt.iterations) desc.solver.velocity_iterations = *opt.iterations;
   desc.solver.sleep = opt.sleep;
+  desc.ccd.mode = opt.ccd;
   if (opt.solver)
     desc.solver.kind = *opt.solver;
   else if (scene.rigid)

@@ -1,7 +1,7 @@
 // The bounds stage: one axis-aligned box per body for the broad phase, and their
 // union and largest edge. A plain sphere's box is [p - r, p + r]; a shaped body's is
-// its shape's posed bounds (host/shapes/pose.h). With WorldDesc::swept_bounds
-// each box covers the body's motion over the step (p to p + v dt, v after gravity).
+// its shape's posed bounds (host/shapes/pose.h). With WorldDesc::swept_bounds (or any
+// continuous-collision mode) each box covers the body's motion over the step (p to p + v dt, v after gravity).
 // Finite inputs can still integrate out of range (a huge speed for long enough): the
 // stage fails, naming the body, before Inf or NaN reaches the grid's cell arithmetic
 // or the sort keys. Cost: one streaming pass (spheres), one posed-bounds evaluation
@@ -74,7 +74,8 @@ Status bounds_stage(StepContext& ctx) {
   Buffer<float>* box = ctx.scratch.box;
   const kernels::AabbSoAOut out{scratch(box[0], n), scratch(box[1], n), scratch(box[2], n),
                                 scratch(box[3], n), scratch(box[4], n), scratch(box[5], n)};
-  if (ctx.desc.swept_bounds) {
+  const bool swept = swept_step(ctx.desc);
+  if (swept) {
     ctx.exec.for_each_chunk(n, kBodyGrain, [&](uint32_t b, uint32_t e, uint32_t) {
       kernels::swept_sphere_bounds(s.pos_x.data(), s.pos_y.data(), s.pos_z.data(), s.vel_x.data(), s.vel_y.data(),
                                    s.vel_z.data(), s.radius.data(), ctx.dt, out, {b, e});
@@ -84,7 +85,7 @@ Status bounds_stage(StepContext& ctx) {
       kernels::sphere_bounds(s.pos_x.data(), s.pos_y.data(), s.pos_z.data(), s.radius.data(), out, {b, e});
     });
   }
-  if (ctx.shaped_count > 0) shaped_bounds(ctx, out, ctx.desc.swept_bounds ? ctx.dt : 0.0f);
+  if (ctx.shaped_count > 0) shaped_bounds(ctx, out, swept ? ctx.dt : 0.0f);
   ctx.boxes = kernels::AabbSoA{out.min_x, out.min_y, out.min_z, out.max_x, out.max_y, out.max_z};
   ctx.summary = summarize_bounds(ctx.exec, ctx.boxes, n, ctx.scratch.bounds_partials);
   if (n > 0 && !in_range(ctx.summary)) {

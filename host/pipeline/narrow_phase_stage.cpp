@@ -13,6 +13,7 @@
 // World::contacts() documents). Cost: the filter is one pass per plane over the
 // bodies; the rest is the runner's (docs/narrowphase.md).
 #include <algorithm>
+#include <cmath>
 #include <string>
 
 #include "host/pipeline/step_context.h"
@@ -80,6 +81,21 @@ Status narrow_phase_stage(StepContext& ctx) {
   const auto n = static_cast<uint32_t>(s.size());
   const kernels::SphereView spheres{s.pos_x.data(), s.pos_y.data(), s.pos_z.data(), s.radius.data()};
   const kernels::PlaneView pv = ctx.planes.view();
+  // Continuous collision: a body meets a plane its travel this step could reach.
+  kernels::SphereView reach = spheres;
+  if (ctx.desc.ccd.mode != ContinuousMode::kOff && pv.count > 0) {
+    float* r = scratch(ns.speculative.reach_radius, n);
+    const float dt = ctx.dt, margin = ctx.desc.ccd.speculative_margin;
+    const bool spins = s.on(FieldSet::kRigid);
+    ctx.exec.for_each_chunk(n, kBodyGrain, [&](uint32_t b, uint32_t e, uint32_t) {
+      for (uint32_t i = b; i < e; ++i) {
+        const float v = std::sqrt(s.vel_x[i] * s.vel_x[i] + s.vel_y[i] * s.vel_y[i] + s.vel_z[i] * s.vel_z[i]);
+        const float w = spins ? std::sqrt(s.wx[i] * s.wx[i] + s.wy[i] * s.wy[i] + s.wz[i] * s.wz[i]) : 0.0f;
+        r[i] = s.radius[i] + (v + w * s.radius[i]) * dt + margin;
+      }
+    });
+    reach.radius = r;
+  }
   const kernels::BodyFilter bf{s.inv_mass.data(), s.layer.data(), s.mask.data()};
 
   // The plane filter: per-body masks and their counts, scan, write.
@@ -88,7 +104,7 @@ Status narrow_phase_stage(StepContext& ctx) {
     const uint32_t words = kernels::plane_mask_words(pv.count);
     uint32_t* masks = scratch(ns.plane_masks, static_cast<size_t>(words) * n);
     n_plane_pairs = count_and_scan(ctx.exec, n, kBodyGrain, ns.plane_offsets, [&](uint32_t b, uint32_t e) {
-      return kernels::plane_pair_masks(spheres, bf, pv, masks, n, {b, e});
+      return kernels::plane_pair_masks(reach, bf, pv, masks, n, {b, e});
     });
     kernels::Pair* out = scratch(ns.plane_pairs, n_plane_pairs);
     ctx.exec.for_each_chunk(n, kBodyGrain, [&](uint32_t b, uint32_t e, uint32_t k) {
@@ -110,7 +126,12 @@ Status narrow_phase_stage(StepContext& ctx) {
     objects.first_plane = n;
     st = ns.runner.run(ctx.exec, objects, pairs, config_of(ctx.desc.narrow_phase), &ctx.contacts);
   }
+  ns.body_plane_pairs = n_plane_pairs;
   if (!st.ok()) return st;
+  return count_contacts(ctx);
+}
+
+Status count_contacts(StepContext& ctx) {
   // Two CSR keys per contact point index the solver's adjacency with 32 bits.
   const ContactManifolds& c = ctx.contacts;
   if (c.points > 0x7fffffffull) {

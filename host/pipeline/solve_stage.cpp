@@ -13,7 +13,8 @@ Status solve_velocities_stage(StepContext& ctx) {
     if (ctx.bodies.on(FieldSet::kForces)) clear_forces(ctx);
     return Status();
   }
-  ctx.solver.solve_velocities(ctx.exec, ctx.desc.solver, ctx.contacts, ctx.bodies, ctx.planes.restitution.data());
+  ctx.solver.solve_velocities(ctx.exec, ctx.desc.solver, ctx.contacts, ctx.bodies, ctx.planes.restitution.data(),
+                              ctx.dt);
   return Status();
 }
 

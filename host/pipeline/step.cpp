@@ -8,8 +8,9 @@
 //   narrow phase          body-plane pairs by the plane filter, then the contact
 //                         manifolds of every pair, on the poses the step starts from
 //                                                                     (narrow_phase_stage.cpp)
+//   speculative contacts  WorldDesc::ccd: one-point contacts across the gaps that could
+//                         close within the step                   (speculative_stage.cpp)
 //   sleep                 islands; which sleep, which wake           (sleep_stage.cpp)
-//   (continuous collision will run here, between the narrow phase and the solve)
 //   solve velocities      warm start + iterations on the manifolds' points (solve_stage.cpp)
 //   integrate positions   x += v dt with the solved velocities        (integrate_stage.cpp)
 //   correct positions     iterations on displacements                 (solve_stage.cpp)
@@ -43,6 +44,7 @@ constexpr Stage kStages[] = {
     {"bounds", &host::bounds_stage, &PassTimes::bounds},
     {"broad phase", &host::broad_phase_stage, &PassTimes::broad_phase},
     {"narrow phase", &host::narrow_phase_stage, &PassTimes::narrow_phase},
+    {"speculative contacts", &host::speculative_contacts_stage, &PassTimes::ccd},
     {"sleep", &host::sleep_stage, &PassTimes::solve},
     {"solve velocities", &host::solve_velocities_stage, &PassTimes::solve},
     {"integrate positions", &host::integrate_positions_stage, &PassTimes::integrate},

@@ -42,6 +42,25 @@ struct StepScratch {
   Buffer<uint8_t> kept_awake;
 };
 
+/// One pair's speculative contact (valid when keep).
+struct SpeculativeGap {
+  float gap;       // m, > 0
+  float n[3];      // unit, a to b
+  float p[3];      // world, midway across the gap
+  uint32_t child_a, child_b;
+  bool keep;
+};
+
+/// The speculative-contact stage's state (host/pipeline/speculative_stage.cpp).
+struct SpeculativeStage {
+  Buffer<float> reach_radius;   // plane filter: radius + travel + margin per body
+  Buffer<uint8_t> touched;      // per pair (body pairs, then plane pairs): has a manifold
+  Buffer<uint64_t> offsets;     // count -> scan over chunks of pairs
+  std::vector<SpeculativeGap> rows;  // per pair: its gap when it has no manifold
+  ContactManifolds gaps;        // the speculative manifolds, in pair order
+  ContactManifolds merged;      // the narrow phase's and the speculative ones, in pair order
+};
+
 /// The narrow-phase stage's state: the runner and the arrays it is given.
 struct NarrowStage {
   NarrowRunner runner;
@@ -52,6 +71,8 @@ struct NarrowStage {
   std::vector<ShapeType> types;
   std::vector<PosedObject> poses;
   std::vector<ShapeRecord> records;             // sphere records of plain bodies, then plane records
+  uint64_t body_plane_pairs = 0;                // this step's plane pairs (plane_pairs' valid prefix)
+  SpeculativeStage speculative;
 };
 
 struct StepContext {
@@ -81,17 +102,25 @@ struct StepContext {
   const float* solver_inv_mass = nullptr;
 };
 
+/// The broad phase sees each body's motion over the step: asked for, or continuous
+/// collision on (WorldDesc::ccd).
+inline bool swept_step(const WorldDesc& d) { return d.swept_bounds || d.ccd.mode != ContinuousMode::kOff; }
+
 /// The stages, in step order (host/pipeline/step.cpp).
 Status reorder_bodies_stage(StepContext& ctx);
 Status integrate_velocities_stage(StepContext& ctx);
 Status bounds_stage(StepContext& ctx);
 Status broad_phase_stage(StepContext& ctx);
 Status narrow_phase_stage(StepContext& ctx);
+Status speculative_contacts_stage(StepContext& ctx);
 Status sleep_stage(StepContext& ctx);
 Status solve_velocities_stage(StepContext& ctx);
 Status integrate_positions_stage(StepContext& ctx);
 Status correct_positions_stage(StepContext& ctx);
 
+/// StepStats::manifolds, contacts and plane_contacts of ctx.contacts (pair order, the
+/// plane pairs after the body pairs); kCapacityExceeded past 2^31 - 1 points.
+Status count_contacts(StepContext& ctx);
 /// Zeroes the force and torque accumulators (World::apply_forces) once a step used them.
 void clear_forces(StepContext& ctx);
 

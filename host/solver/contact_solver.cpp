@@ -16,8 +16,8 @@ constexpr uint32_t kBodyGrain = 1u << 14;      // bodies per chunk
 constexpr uint32_t kManifoldGrain = 1u << 13;  // manifolds per chunk
 constexpr uint32_t kEntryGrain = 1u << 13;     // CSR entries, keys or points per chunk
 
-kernels::SolverParams params_of(const SolverDesc& d) {
-  return {d.restitution_threshold, d.position_correction, d.penetration_slop};
+kernels::SolverParams params_of(const SolverDesc& d, float dt = 0.0f) {
+  return {d.restitution_threshold, d.position_correction, d.penetration_slop, dt};
 }
 
 }  // namespace
@@ -38,7 +38,7 @@ void ContactSolver::iterate(const Executor& exec, const kernels::ContactManifold
 }
 
 void ContactSolver::solve_velocities(const Executor& exec, const SolverDesc& desc, const ContactManifolds& contacts,
-                                     BodyStore& s, const float* plane_restitution) {
+                                     BodyStore& s, const float* plane_restitution, float dt) {
   const auto n = static_cast<uint32_t>(s.size());
   const auto nm = static_cast<uint32_t>(contacts.manifolds);
   const auto np = static_cast<uint32_t>(contacts.points);
@@ -75,7 +75,7 @@ void ContactSolver::solve_velocities(const Executor& exec, const SolverDesc& des
   });
   scratch(entry_delta_, 4ull * nk);
   const kernels::BodyContacts adj{start, pos, entry_delta_.data()};
-  const kernels::SolverParams sp = params_of(desc);
+  const kernels::SolverParams sp = params_of(desc, dt);
   exec.for_each_chunk(nm, kManifoldGrain, [&](uint32_t b, uint32_t e, uint32_t) {
     kernels::contact_prepare(sp, c, r, state, n, s.restitution.data(), plane_restitution, adj, {b, e});
   });

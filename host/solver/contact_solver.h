@@ -30,9 +30,10 @@ class ContactSolver {
   /// Builds the rows of c's points, warm starts them from last step's impulses, runs
   /// desc.velocity_iterations and writes the velocities of `bodies` back; keeps the
   /// impulses for the next step's warm start and for impulses(). plane_restitution:
-  /// per plane of c's b_is_plane manifolds.
+  /// per plane of c's b_is_plane manifolds. dt: the step, for speculative points
+  /// (depth < 0: kernels::SolverParams::dt); 0 when c has none.
   void solve_velocities(const Executor& exec, const SolverDesc& desc, const ContactManifolds& c,
-                        BodyStore& bodies, const float* plane_restitution);
+                        BodyStore& bodies, const float* plane_restitution, float dt);
   /// After the positions moved with the solved velocities: desc.position_iterations on
   /// displacements toward position_correction * (depth left - slop), added to the
   /// positions. A no-op when position correction is off or there were no contacts.

@@ -170,7 +170,7 @@ void SoftStepSolver::step(const Executor& exec, const WorldDesc& desc, const Con
       if (colour[m] != kLeftOut) order[next[colour[m]]++] = m;
     gather_deep(c, nm, deep_depth, colour);
     if (deep_.manifolds > 0)
-      recovery_.solve_velocities(exec, sd, deep_, s, planes.restitution.data());
+      recovery_.solve_velocities(exec, sd, deep_, s, planes.restitution.data(), 0.0f);
     else
       recovery_.clear_impulses();
   }

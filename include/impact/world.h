@@ -33,6 +33,29 @@ enum class SolverKind : uint8_t {
   kJacobi,
 };
 
+/// How a World keeps fast bodies from tunnelling (docs/ccd.md has the design and the
+/// measured cost and error of each mode).
+enum class ContinuousMode : uint8_t {
+  /// Contacts only where shapes overlap at the step's start: a body whose travel in a
+  /// step exceeds the size of what it meets can pass through it.
+  kOff,
+  /// Speculative contacts (Catto, "Continuous collision", GDC 2013): every candidate
+  /// pair (broad phase on swept bounds) whose gap could close within the step gets a
+  /// one-point contact at its closest points with a negative depth (the gap), which
+  /// the solver lets close but not cross. Cheap; misses what a gap along the step's
+  /// start normal does not see (a fast spinning plank, a sphere that slides round a
+  /// corner first).
+  kSpeculative,
+};
+
+/// Continuous collision settings (WorldDesc::ccd).
+struct ContinuousDesc {
+  ContinuousMode mode = ContinuousMode::kOff;
+  /// m, >= 0: gap added to every pair's reach (|relative velocity| dt plus the spin
+  /// bound) under which a speculative contact is made.
+  float speculative_margin = 0.01f;
+};
+
 /// Accuracy knobs of the contact solver (docs/solver.md has their measured cost and error).
 struct SolverDesc {
   SolverKind kind = SolverKind::kSoftStep;
@@ -112,6 +135,8 @@ struct WorldDesc {
   /// that meet within the step become candidate pairs even when fast. More pairs
   /// for slow scenes; the input continuous collision needs.
   bool swept_bounds = false;
+  /// Continuous collision (kOff: none). Any mode but kOff implies swept_bounds.
+  ContinuousDesc ccd{};
   /// Accuracy knobs of the general narrow phase that runs once a body has a shape
   /// (BodyDesc::shape): GJK / EPA iteration caps and tolerances, SIMD or scalar
   /// kernels (docs/narrowphase.md has their cost and error). Its `exec` is ignored:
@@ -129,6 +154,7 @@ struct PassTimes {
   double broad_phase = 0;   ///< candidate body pairs
   double narrow_phase = 0;  ///< the plane filter and the contact manifolds
   double solve = 0;         ///< velocity solve and position correction
+  double ccd = 0;           ///< speculative contacts (WorldDesc::ccd)
   double total = 0;         ///< the whole step (every stage, the re-sort included)
 };
 
@@ -140,6 +166,7 @@ struct StepStats {
   uint64_t plane_contacts = 0; ///< of which body-plane
   uint64_t asleep_bodies = 0;  ///< bodies asleep after the step (SolverDesc::sleep)
   bool skipped = false;        ///< every dynamic body slept: the step ran no stage
+  uint64_t speculative = 0;    ///< of the manifolds, speculative ones (a gap, depth < 0)
   PassTimes ms;                ///< wall time per pass
 };
 
@@ -199,7 +226,8 @@ struct PlaneArrays {
 /// compound child / mesh triangle pair), in a deterministic order: body-body manifolds
 /// in broad-phase pair order, then body-plane ones by body slot then plane. Manifold m:
 /// bodies a[m] and b[m] (b[m] is a plane index when b_is_plane[m]), a unit normal from
-/// a to b, depth[m] > 0 the overlap; the safe (overlap-free) positions are
+/// a to b, depth[m] > 0 the overlap (depth[m] < 0: a speculative contact of
+/// WorldDesc::ccd, its one point midway across the gap -depth[m]); the safe (overlap-free) positions are
 /// a - normal*depth*wa and b + normal*depth*wb with w = inv_mass / (inv_mass_a +
 /// inv_mass_b). Its point_count[m] points (1 to 4) are entries first_point(m) ..
 /// first_point(m) + point_count[m] - 1 of the point arrays: each midway between the two
@@ -209,7 +237,7 @@ struct ContactArrays {
   std::span<const uint32_t> b;        ///< body slot, or plane index if b_is_plane
   std::span<const uint8_t> b_is_plane;  ///< 1: b is a plane index
   std::span<const float> normal_x, normal_y, normal_z;  ///< unit, from a to b
-  std::span<const float> depth;       ///< m, the manifold's (deepest point's) overlap
+  std::span<const float> depth;       ///< m, the manifold's (deepest point's) overlap; < 0: a gap
   std::span<const uint8_t> point_count;  ///< 1 to 4
   /// Per manifold: its first point. Empty when every manifold has one point, whose
   /// index is then the manifold's (a world of plain spheres); see first_point().

@@ -107,7 +107,8 @@ void contact_prepare(const SolverParams& p, const ContactManifoldArrays& c, Solv
     }
     rows.mass[k] = w > 0.0f ? 1.0f / w : 0.0f;
     const float vn = normal_velocity(c, s, body_count, m);
-    rows.target[k] = vn < -p.restitution_threshold ? -e * vn : 0.0f;
+    const float gap = -c.point_depth[k];
+    rows.target[k] = (gap > 0.0f && p.dt > 0.0f) ? -gap / p.dt : (vn < -p.restitution_threshold ? -e * vn : 0.0f);
     rows.impulse[k] = 0.0f;
   });
 }

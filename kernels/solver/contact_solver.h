@@ -53,6 +53,10 @@ struct SolverParams {
   float restitution_threshold;  ///< m/s
   float position_correction;    ///< fraction in [0, 1]
   float penetration_slop;       ///< m
+  /// s, the step (contact_prepare): a speculative point (point_depth < 0, a gap g)
+  /// targets the approach speed g / dt, so the gap may close within the step but not
+  /// cross, and takes no restitution until it touches (0: no speculative points).
+  float dt = 0.0f;
 };
 
 /// Hot per-body solver state, 16 bytes: the velocity (or, in the position phase,
