@@ -14,7 +14,7 @@ Status solve_velocities_stage(StepContext& ctx) {
     return Status();
   }
   ctx.solver.solve_velocities(ctx.exec, ctx.desc.solver, ctx.contacts, ctx.bodies, ctx.planes.restitution.data(),
-                              ctx.dt);
+                              ctx.desc.ccd.mode != ContinuousMode::kOff ? ctx.dt : 0.0f);
   return Status();
 }
 

@@ -31,7 +31,8 @@ class ContactSolver {
   /// desc.velocity_iterations and writes the velocities of `bodies` back; keeps the
   /// impulses for the next step's warm start and for impulses(). plane_restitution:
   /// per plane of c's b_is_plane manifolds. dt: the step, for speculative points
-  /// (depth < 0: kernels::SolverParams::dt); 0 when c has none.
+  /// (depth < 0: kernels::SolverParams::dt) when WorldDesc::ccd asks for them; 0 keeps
+  /// the points of a manifold that lie apart (clipped box faces) on the plain target.
   void solve_velocities(const Executor& exec, const SolverDesc& desc, const ContactManifolds& c,
                         BodyStore& bodies, const float* plane_restitution, float dt);
   /// After the positions moved with the solved velocities: desc.position_iterations on
