@@ -145,6 +145,8 @@ Status speculative_contacts_stage(StepContext& ctx) {
   const auto npl = static_cast<uint32_t>(ns.body_plane_pairs);
   const uint32_t np = nb + npl;
   const auto n = static_cast<uint32_t>(ctx.bodies.size());
+  ctx.stats.speculative = 0;
+  if (np == 0) return Status();
   // Pairs that already have a manifold (serial: a pair's manifolds are adjacent).
   uint8_t* touched = scratch(sp.touched, np);
   std::memset(touched, 0, np);
