@@ -8,6 +8,7 @@
 
 #include <Eigen/Geometry>
 
+#include "host/shapes/posed_leaf.h"
 #include "kernels/ccd/time_of_impact.h"
 
 namespace impact::host {
@@ -33,43 +34,13 @@ Eigen::Matrix3d rotation_vector(const Eigen::Vector3d& w) {
   return Eigen::AngleAxisd(a, w / a).toRotationMatrix();
 }
 
-// A convex record (or half-space) posed at (R, p), p relative to the origin.
+// A convex record (or half-space) posed at (R, p), p relative to the origin; an AABB
+// keeps the world axes whatever R.
 Leaf make_leaf(const ShapeRecord& r, const Eigen::Matrix3d& R, const Eigen::Vector3d& p,
                const kernels::HullView* hv) {
-  Leaf l;
-  l.p = v3(p);
-  for (int c = 0; c < 3; ++c) l.ax[c] = v3(Eigen::Vector3d(R.col(c)));
-  for (int i = 0; i < 3; ++i) l.e[i] = r.e[i];
-  switch (r.type) {
-    case ShapeType::kSphere: l.type = kernels::kLeafSphere; break;
-    case ShapeType::kCapsule: l.type = kernels::kLeafCapsule; break;
-    case ShapeType::kBox: l.type = kernels::kLeafBox; break;
-    case ShapeType::kAabb:
-      l.type = kernels::kLeafBox;
-      l.ax[0] = V3{1, 0, 0};
-      l.ax[1] = V3{0, 1, 0};
-      l.ax[2] = V3{0, 0, 1};
-      break;
-    case ShapeType::kConvex:
-      l.type = kernels::kLeafConvex;
-      l.hulls = hv;
-      l.hull = r.ref;
-      break;
-    case ShapeType::kCylinder: l.type = kernels::kLeafCylinder; break;
-    case ShapeType::kEllipsoid: l.type = kernels::kLeafEllipsoid; break;
-    case ShapeType::kHalfSpace: {
-      // Local { n.x <= offset }, n unit: world normal R n through p + R n offset.
-      const Eigen::Vector3d n = (R * Eigen::Vector3d(r.e[0], r.e[1], r.e[2])).normalized();
-      l.type = kernels::kLeafHalfSpace;
-      l.p = v3(Eigen::Vector3d(p + n * double(r.offset)));
-      l.e[0] = float(n.x());
-      l.e[1] = float(n.y());
-      l.e[2] = float(n.z());
-      break;
-    }
-    default: break;
-  }
-  return l;
+  const Eigen::Matrix3f Rf = r.type == ShapeType::kAabb ? Eigen::Matrix3f(Eigen::Matrix3f::Identity())
+                                                         : Eigen::Matrix3f(R.cast<float>());
+  return posed_leaf(r, Rf, p.cast<float>(), hv);
 }
 
 struct Side {

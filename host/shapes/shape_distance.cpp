@@ -5,6 +5,7 @@
 #include <limits>
 
 #include "host/shapes/pose.h"
+#include "host/shapes/posed_leaf.h"
 #include "kernels/distance/leaf_distance.h"
 
 namespace impact::host {
@@ -22,38 +23,6 @@ Eigen::Vector3f ev(V3 v) { return Eigen::Vector3f(v.x, v.y, v.z); }
 // The rotation a record is posed with: an AABB ignores the pose's orientation.
 Eigen::Matrix3f effective_rotation(const ShapeRecord& r, const Eigen::Matrix3f& R) {
   return r.type == ShapeType::kAabb ? Eigen::Matrix3f::Identity() : R;
-}
-
-// A convex or half-space record posed at (R, p) (R effective), minus origin o.
-Leaf make_leaf(const ShapeStore& s, const ShapeRecord& r, const Eigen::Matrix3f& R, const Eigen::Vector3f& p,
-               const Eigen::Vector3f& o, const kernels::HullView* hv) {
-  Leaf l;
-  l.p = v3(p - o);
-  for (int c = 0; c < 3; ++c) l.ax[c] = v3(R.col(c));
-  for (int i = 0; i < 3; ++i) l.e[i] = r.e[i];
-  switch (r.type) {
-    case ShapeType::kSphere: l.type = kernels::kLeafSphere; break;
-    case ShapeType::kCapsule: l.type = kernels::kLeafCapsule; break;
-    case ShapeType::kBox:
-    case ShapeType::kAabb: l.type = kernels::kLeafBox; break;
-    case ShapeType::kConvex:
-      l.type = kernels::kLeafConvex;
-      l.hulls = hv;
-      l.hull = r.ref;
-      break;
-    case ShapeType::kCylinder: l.type = kernels::kLeafCylinder; break;
-    case ShapeType::kEllipsoid: l.type = kernels::kLeafEllipsoid; break;
-    case ShapeType::kHalfSpace: {
-      l.type = kernels::kLeafHalfSpace;
-      const Eigen::Vector3f n = R * Eigen::Vector3f(r.e[0], r.e[1], r.e[2]);
-      l.p = v3(p + n * r.offset - o);
-      for (int i = 0; i < 3; ++i) l.e[i] = n[i];
-      break;
-    }
-    default: break;
-  }
-  (void)s;
-  return l;
 }
 
 PosedDistance from_leaf(const kernels::dist::LeafDistance& d, const Eigen::Vector3f& o) {
@@ -120,7 +89,7 @@ PosedDistance mesh_vs(const ShapeStore& s, const ShapeRecord& ra, const Eigen::M
   const kernels::HullView hv = s.hulls.view();
   // The origin: B's centre (in the mesh frame), so triangle coordinates stay small.
   const Eigen::Vector3f o = prel;
-  const Leaf lb = make_leaf(s, rb, Rrel, prel, o, &hv);
+  const Leaf lb = posed_leaf(rb, Rrel, prel - o, &hv);
   float bound = max_distance;
   uint32_t stack[64];
   uint32_t top = 0;
@@ -213,8 +182,8 @@ PosedDistance distance_posed(const ShapeStore& s, const ShapeRecord& ra, const E
   const kernels::HullView hv = s.hulls.view();
   // The origin: A's position (B's when A is a half-space, whose point may be far).
   const Eigen::Vector3f o = ha ? pb : pa;
-  const Leaf la = make_leaf(s, ra, effective_rotation(ra, Ra), pa, o, &hv);
-  const Leaf lb = make_leaf(s, rb, effective_rotation(rb, Rb), pb, o, &hv);
+  const Leaf la = posed_leaf(ra, effective_rotation(ra, Ra), pa - o, &hv);
+  const Leaf lb = posed_leaf(rb, effective_rotation(rb, Rb), pb - o, &hv);
   PosedDistance r = from_leaf(kernels::dist::leaf_distance(la, lb, cfg), o);
   if (!r.overlap && r.distance > max_distance) return far_result();
   return r;
